@@ -1,0 +1,119 @@
+"""Calibration of both axes: the result object the CLI, the trajectory and the reports use."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from calib.conventions import AXES, G, JOINT_PARAM_NAMES, PARAM_NAMES
+from calib.io import Ensayo
+from calib.ls import FitResult, fit_axis, fit_joint
+
+Method = Literal["ols", "wls"]
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Bias and scale of both accelerometers with their joint covariance.
+
+    Attributes
+    ----------
+    method : "ols" (per-axis, course method) or "wls" (joint four-parameter WLS).
+    g : gravity used for the reference, m/s².
+    fits : per-axis :class:`FitResult` (``("bias", "scale")``); for WLS the marginal blocks.
+    joint : the joint four-parameter fit (WLS), or None.
+    n : number of samples.
+
+    ``params`` and ``cov`` are ordered ``[bias_x, scale_x, bias_y, scale_y]``.
+    """
+
+    method: Method
+    g: float
+    fits: dict[str, FitResult]
+    n: int
+    joint: FitResult | None = None
+
+    @property
+    def params(self) -> np.ndarray:
+        if self.joint is not None:
+            return self.joint.params.copy()
+        return np.concatenate([self.fits[a].params for a in AXES])
+
+    @property
+    def cov(self) -> np.ndarray:
+        if self.joint is not None:
+            return self.joint.cov.copy()
+        c = np.zeros((4, 4))
+        c[:2, :2], c[2:, 2:] = self.fits["x"].cov, self.fits["y"].cov
+        return c
+
+    @property
+    def bias(self) -> np.ndarray:
+        """(2,) bias [x, y], m/s²."""
+        return self.params[[0, 2]]
+
+    @property
+    def scale(self) -> np.ndarray:
+        """(2,) scale factor error [x, y], dimensionless."""
+        return self.params[[1, 3]]
+
+    def to_dict(self) -> dict:
+        """The documented ``calibrate --json`` object."""
+        axes = {}
+        for a in AXES:
+            f = self.fits[a]
+            axes[a] = {
+                "bias": f.param("bias"), "bias_std": float(f.std[0]),
+                "scale": f.param("scale"), "scale_std": float(f.std[1]),
+                "cov": f.cov.tolist(), "sigma2": f.sigma2.item(),
+                "sigma2_source": f.sigma2_source, "chi2_dof": f.chi2_dof, "n": self.n,
+            }
+        return {"method": self.method, "g": self.g, "axes": axes}
+
+    def summary(self, level: float = 0.95) -> str:
+        title = {"ols": "per-axis OLS (course method)", "wls": "joint WLS (4 parameters)"}
+        out = [f"Calibration: {title[self.method]}, g = {self.g} m/s², N = {self.n}"]
+        for a in AXES:
+            out.append(f"-- axis {a}")
+            out.append(self.fits[a].summary(level))
+        return "\n".join(out)
+
+
+def calibrate(
+    ensayo: Ensayo, noise_var=None, method: Method = "ols", g: float = G
+) -> Calibration:
+    """Estimate bias and scale of both axes from a calibration run.
+
+    Parameters
+    ----------
+    ensayo : the run (θ in rad, readings in m/s²).
+    noise_var : (2,) noise variances [σx², σy²] (m/s²)², a 2×2 covariance (WLS only), or
+        None to estimate them from the residuals.
+    method : "ols" — per axis, ``A_m - A_r = bias + scale·A_r`` (course method);
+        "wls" — joint four-parameter WLS weighted by the noise covariance.
+    """
+    if method not in ("ols", "wls"):
+        raise ValueError(f"method must be 'ols' or 'wls', got {method!r}")
+    if method == "ols":
+        nv = [None, None] if noise_var is None else np.asarray(noise_var, dtype=float)
+        if noise_var is not None and nv.shape == (2, 2):
+            nv = np.diag(nv)
+        fits = {a: fit_axis(ensayo.tita, ensayo.datos[:, k], a,
+                            None if nv[k] is None else float(nv[k]), g)
+                for k, a in enumerate(AXES)}
+        return Calibration("ols", g, fits, ensayo.n)
+    joint = fit_joint(ensayo.tita, ensayo.datos, noise_var, g)
+    n = ensayo.n
+    fits = {}
+    for k, a in enumerate(AXES):
+        sl = slice(2 * k, 2 * k + 2)
+        r = joint.residuals[:, k]
+        s2 = joint.sigma2[k]
+        fits[a] = FitResult(PARAM_NAMES, joint.params[sl], joint.cov[sl, sl], r, s2,
+                            joint.sigma2_source, n - 2, 2, joint.cond, float(r @ r / s2))
+    return Calibration("wls", g, fits, n, joint=joint)
+
+
+__all__ = ["Calibration", "calibrate", "JOINT_PARAM_NAMES"]

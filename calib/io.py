@@ -1,0 +1,300 @@
+"""Validated readers for the course files, and atomic writers.
+
+Every reader rejects what would silently give a wrong answer: wrong shapes, NaN/Inf,
+non-monotonic time, angles that look like degrees. Messages name the file, the variable,
+what is wrong and the fix.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+TWO_PI = 2.0 * np.pi
+
+
+class DataError(ValueError):
+    """Input data that cannot be used as given (message names file, variable and fix)."""
+
+
+@dataclass(frozen=True)
+class Ensayo:
+    """A calibration run ("ensayo").
+
+    Attributes
+    ----------
+    tita : (N,) float, rad — table angle reported by the encoder.
+    datos : (N, 2) float, m/s² — measured [A_mx, A_my].
+    t : (N,) float, s, or None — sample times (sweeps); None for the course file.
+    source : str — where it came from (for messages).
+    """
+
+    tita: np.ndarray
+    datos: np.ndarray
+    t: np.ndarray | None = None
+    source: str = "<memory>"
+
+    def __post_init__(self) -> None:
+        for name in ("tita", "datos", "t"):
+            value = getattr(self, name)
+            if value is not None:
+                arr = np.array(value, dtype=float)
+                arr.setflags(write=False)
+                object.__setattr__(self, name, arr)
+
+    @property
+    def n(self) -> int:
+        return int(self.tita.shape[0])
+
+
+@dataclass(frozen=True)
+class Acel:
+    """A vehicle run: ``t`` (M,) s, uniformly sampled; ``aerr`` (M, 2) m/s², uncorrected."""
+
+    t: np.ndarray
+    aerr: np.ndarray
+    source: str = "<memory>"
+
+    def __post_init__(self) -> None:
+        for name in ("t", "aerr"):
+            arr = np.array(getattr(self, name), dtype=float)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
+
+@dataclass(frozen=True)
+class Datos:
+    """Contents of the course ``datos.txt``: initial position (m), velocity (m/s), noise var."""
+
+    p0: np.ndarray
+    v0: np.ndarray
+    noise_var: np.ndarray
+
+
+def _loadmat(path: Path) -> dict:
+    import scipy.io
+
+    path = Path(path)
+    if not path.exists():
+        raise DataError(f"{path}: file not found")
+    try:
+        return scipy.io.loadmat(str(path))
+    except Exception as exc:  # scipy raises several types for a bad file
+        raise DataError(f"{path}: not a readable MATLAB .mat file ({exc})") from exc
+
+
+def _get(mat: dict, path: Path, name: str) -> np.ndarray:
+    if name not in mat:
+        found = sorted(k for k in mat if not k.startswith("__"))
+        raise DataError(f"{path}: variable '{name}' is missing (found: {', '.join(found)})")
+    return np.asarray(mat[name], dtype=float)
+
+
+def check_finite(arr: np.ndarray, where: str, name: str) -> None:
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        idx = np.argwhere(bad)[0]
+        raise DataError(
+            f"{where}: variable '{name}' has {int(bad.sum())} NaN/Inf value(s), first at "
+            f"index {tuple(int(i) for i in idx)}; remove or repair those samples"
+        )
+
+
+def check_angles(tita: np.ndarray, where: str, name: str = "tita") -> None:
+    """Reject angles that cannot be radians (|θ| > 2π: probably degrees)."""
+    big = float(np.max(np.abs(tita))) if tita.size else 0.0
+    if big > TWO_PI * (1 + 1e-9):
+        raise DataError(
+            f"{where}: variable '{name}' reaches |θ| = {big:.6g}, more than 2π; angles must be in "
+            f"radians (degrees? multiply by π/180)"
+        )
+
+
+def check_time(t: np.ndarray, where: str, name: str = "t") -> None:
+    d = np.diff(t)
+    if np.any(d <= 0):
+        i = int(np.argmax(d <= 0))
+        raise DataError(
+            f"{where}: variable '{name}' is not strictly increasing (t[{i}] = {t[i]:.6g}, "
+            f"t[{i + 1}] = {t[i + 1]:.6g}); samples must be in time order"
+        )
+
+
+def _column(arr: np.ndarray, where: str, name: str) -> np.ndarray:
+    if arr.ndim == 2 and 1 in arr.shape:
+        arr = arr.ravel()
+    if arr.ndim != 1:
+        raise DataError(f"{where}: variable '{name}' must be N×1, got shape {arr.shape}")
+    return arr
+
+
+def _two_columns(arr: np.ndarray, where: str, name: str) -> np.ndarray:
+    if arr.ndim != 2 or 2 not in arr.shape:
+        raise DataError(f"{where}: variable '{name}' must be N×2 (x, y), got shape {arr.shape}")
+    if arr.shape[1] != 2:  # stored 2×N: transpose, columns are x and y
+        arr = arr.T
+    return arr
+
+
+def validate_ensayo(
+    tita: np.ndarray, datos: np.ndarray, t: np.ndarray | None = None, where: str = "<memory>"
+) -> Ensayo:
+    """Check shapes, finiteness, units and time order; return an :class:`Ensayo`."""
+    tita = _column(np.asarray(tita, dtype=float), where, "tita")
+    datos = _two_columns(np.asarray(datos, dtype=float), where, "datos")
+    if datos.shape[0] != tita.shape[0]:
+        raise DataError(
+            f"{where}: 'tita' has {tita.shape[0]} samples but 'datos' has {datos.shape[0]}; "
+            "they must have one row per sample"
+        )
+    if tita.shape[0] < 3:
+        raise DataError(f"{where}: only {tita.shape[0]} samples; at least 3 are needed")
+    check_finite(tita, where, "tita")
+    check_finite(datos, where, "datos")
+    check_angles(tita, where)
+    if t is not None:
+        t = _column(np.asarray(t, dtype=float), where, "t")
+        if t.shape[0] != tita.shape[0]:
+            raise DataError(f"{where}: 't' has {t.shape[0]} samples, 'tita' {tita.shape[0]}")
+        check_finite(t, where, "t")
+        check_time(t, where)
+    return Ensayo(tita=tita, datos=datos, t=t, source=where)
+
+
+def read_ensayo(path: str | os.PathLike) -> Ensayo:
+    """Read a course ``ensayo.mat``: ``tita`` (N×1, rad), ``datos`` (N×2, m/s²), optional ``t``."""
+    path = Path(path)
+    mat = _loadmat(path)
+    t = _get(mat, path, "t") if "t" in mat else None
+    return validate_ensayo(_get(mat, path, "tita"), _get(mat, path, "datos"), t, str(path))
+
+
+def read_acel(path: str | os.PathLike) -> Acel:
+    """Read a course ``acel.mat``: ``t`` (M×1, s, uniform), ``Aerr`` (M×2, m/s²)."""
+    path = Path(path)
+    mat = _loadmat(path)
+    where = str(path)
+    t = _column(_get(mat, path, "t"), where, "t")
+    aerr = _two_columns(_get(mat, path, "Aerr"), where, "Aerr")
+    if aerr.shape[0] != t.shape[0]:
+        raise DataError(f"{where}: 't' has {t.shape[0]} samples but 'Aerr' has {aerr.shape[0]}")
+    check_finite(t, where, "t")
+    check_finite(aerr, where, "Aerr")
+    check_time(t, where)
+    d = np.diff(t)
+    if d.size and np.max(np.abs(d - d.mean())) > 1e-6 * max(d.mean(), 1e-12) + 1e-9:
+        raise DataError(f"{where}: 't' is not uniformly sampled; resample before integrating")
+    return Acel(t=t, aerr=aerr, source=where)
+
+
+def read_puntos(path: str | os.PathLike) -> dict[str, np.ndarray]:
+    """Read a course ``puntos.mat``: candidate points (1×2 each, m), named by letter."""
+    path = Path(path)
+    mat = _loadmat(path)
+    out = {}
+    for name in sorted(k for k in mat if not k.startswith("__")):
+        p = np.asarray(mat[name], dtype=float).ravel()
+        if p.shape != (2,):
+            raise DataError(f"{path}: variable '{name}' must be 1×2 (x, y), got {p.shape}")
+        check_finite(p, str(path), name)
+        out[name] = p
+    if len(out) < 2:
+        raise DataError(f"{path}: needs at least two candidate points, found {len(out)}")
+    return out
+
+
+_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+def read_datos(path: str | os.PathLike) -> Datos:
+    """Read the course ``datos.txt`` (Spanish wording; three bracketed pairs).
+
+    Lines: ``Posición inicial = [x y]``, ``Velocidad inicial = [vx vy]``,
+    ``varianza del ruido de los acelerómetros = [σx² σy²]``. Matching is by keyword
+    (``posici``, ``velocidad``, ``varianza``), so accents and spacing do not matter.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise DataError(f"{path}: file not found")
+    text = path.read_bytes().decode("utf-8", errors="replace")
+    found: dict[str, np.ndarray] = {}
+    for line in text.splitlines():
+        low = line.lower()
+        m = re.search(r"\[([^\]]*)\]", line)
+        if not m:
+            continue
+        nums = [float(v) for v in re.findall(_NUM, m.group(1))]
+        key = "p0" if "posici" in low else "v0" if "velocidad" in low else (
+            "noise_var" if "varianza" in low else None)
+        if key is None:
+            continue
+        if len(nums) != 2:
+            raise DataError(f"{path}: line {line.strip()!r} must hold two numbers in [ ]")
+        found[key] = np.array(nums)
+    missing = [k for k in ("p0", "v0", "noise_var") if k not in found]
+    if missing:
+        raise DataError(f"{path}: could not find {', '.join(missing)} (initial position, "
+                        "initial velocity, noise variances) in the course wording")
+    if np.any(found["noise_var"] <= 0):
+        raise DataError(f"{path}: noise variances must be positive, got {found['noise_var']}")
+    return Datos(**found)
+
+
+def parse_pair(text: str, what: str) -> np.ndarray:
+    """Parse 'a,b' (command line) into a (2,) array."""
+    try:
+        vals = [float(v) for v in text.replace(" ", "").split(",")]
+    except ValueError:
+        raise DataError(f"{what}: expected two numbers 'x,y', got {text!r}") from None
+    if len(vals) != 2 or not np.all(np.isfinite(vals)):
+        raise DataError(f"{what}: expected two finite numbers 'x,y', got {text!r}")
+    return np.array(vals)
+
+
+def atomic_write_bytes(path: str | os.PathLike, data: bytes, force: bool = False) -> Path:
+    """Write ``data`` to ``path`` through a temporary file and a rename.
+
+    Refuses to replace an existing file unless ``force``; a crash never leaves half a file.
+    """
+    path = Path(path)
+    if path.exists() and not force:
+        raise FileExistsError(f"{path}: exists; pass --force to overwrite")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def atomic_write_text(path: str | os.PathLike, text: str, force: bool = False) -> Path:
+    return atomic_write_bytes(path, text.encode("utf-8"), force=force)
+
+
+def to_jsonable(obj):
+    """Convert numpy scalars/arrays in nested containers to plain Python for ``json``."""
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return obj
+
+
+def dumps(obj) -> str:
+    """Stable JSON text (sorted keys, repr floats) so the same data gives the same bytes."""
+    return json.dumps(to_jsonable(obj), indent=2, sort_keys=True) + "\n"

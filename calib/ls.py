@@ -1,0 +1,362 @@
+"""Least-squares calibration of the tilt-table accelerometers.
+
+Model (course; IEEE Std 1293 K0 = bias, K1 = 1 + scale), per axis a ∈ {x, y}::
+
+    A_m,a[i] = bias_a + (1 + scale_a) · A_r,a(θ_i) + v_a[i],     v_a ~ N(0, σ_a²) white
+
+with ``A_rx = -g sin θ``, ``A_ry = -g cos θ``. Subtracting the reference gives the linear
+model solved here, ``y = A_m - A_r = H p + v`` with ``H = [1, A_r]`` and ``p = [bias, scale]``.
+
+Numerics: never ``inv(HᵀH)``. The regressors are centred on the intercept (an exact
+reparametrisation ``p = M p_c``), the columns equilibrated, and the problem solved with
+``numpy.linalg.lstsq``; the covariance is ``σ² · R⁻¹R⁻ᵀ`` from the QR factor ``R`` of the
+(whitened) centred design, mapped back with ``M``. Rank and conditioning are checked: a
+parameter the design cannot identify raises :class:`NotIdentifiableError` naming it; a poorly
+identified one warns with the condition number and the resulting standard deviation.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+from scipy import linalg as sla
+from scipy import stats
+
+from calib.conventions import AXES, G, JOINT_PARAM_NAMES, PARAM_NAMES, reference_accel
+
+Sigma2Source = Literal["given", "estimated"]
+
+POOR_SPAN_FRACTION = 1e-3
+"""An axis whose reference acceleration spans less than ``g · 1e-3`` (θ spanning < 1e-3 rad
+where that axis is most sensitive) identifies its scale only poorly: warn."""
+
+COND_WARN = 1e8
+"""Condition number (column-equilibrated design) above which a fit warns."""
+
+
+class NotIdentifiableError(ValueError):
+    """The design matrix is rank-deficient: some parameter cannot be estimated."""
+
+
+class PoorlyIdentifiedWarning(UserWarning):
+    """The design identifies a parameter only poorly (large condition number or std)."""
+
+
+def _readonly(a) -> np.ndarray:
+    arr = np.array(a, dtype=float)
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Result of a linear least-squares fit (statsmodels-like, frozen, holds no data).
+
+    Attributes
+    ----------
+    param_names : names of the parameters, e.g. ``("bias", "scale")``; bias in m/s²,
+        scale dimensionless.
+    params : (p,) estimates.
+    cov : (p, p) covariance of the estimates, ``σ² (HᵀWH)⁻¹`` computed from the QR factor.
+    residuals : (n,) or (n, 2) data - model, m/s².
+    sigma2 : noise variance used (per axis for joint fits), (m/s²)².
+    sigma2_source : "given" (normal quantiles) or "estimated" from residuals (t quantiles).
+    dof : n_obs - p.  rank : rank of the design.  cond : condition number of the
+        column-equilibrated design.  chi2 : Σ whitened residual² with the given/used σ².
+    """
+
+    param_names: tuple[str, ...]
+    params: np.ndarray
+    cov: np.ndarray
+    residuals: np.ndarray
+    sigma2: np.ndarray
+    sigma2_source: Sigma2Source
+    dof: int
+    rank: int
+    cond: float
+    chi2: float
+    extra: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        for name in ("params", "cov", "residuals", "sigma2"):
+            object.__setattr__(self, name, _readonly(getattr(self, name)))
+
+    @property
+    def std(self) -> np.ndarray:
+        """Standard deviations of the estimates, sqrt(diag(cov))."""
+        return np.sqrt(np.diag(self.cov))
+
+    @property
+    def chi2_dof(self) -> float:
+        """χ²/dof of the residuals with the noise variance used (≈ 1 if the model fits)."""
+        return self.chi2 / self.dof if self.dof > 0 else float("nan")
+
+    def quantile(self, level: float) -> float:
+        """Two-sided quantile: normal when σ² is given, Student t (dof) when estimated."""
+        if not 0 < level < 1:
+            raise ValueError(f"level must be in (0, 1), got {level}")
+        q = 0.5 + level / 2
+        return float(stats.norm.ppf(q) if self.sigma2_source == "given"
+                     else stats.t.ppf(q, self.dof))
+
+    def conf_int(self, level: float = 0.95) -> np.ndarray:
+        """(p, 2) two-sided confidence intervals at ``level`` for each parameter."""
+        half = self.quantile(level) * self.std
+        return np.column_stack([self.params - half, self.params + half])
+
+    def param(self, name: str) -> float:
+        return float(self.params[self.param_names.index(name)])
+
+    def summary(self, level: float = 0.95) -> str:
+        ci = self.conf_int(level)
+        pct = f"{100 * level:g}%"
+        lines = [f"{'param':<10}{'estimate':>14}{'std':>13}{'[' + pct:>14}{pct + ']':>14}"]
+        for i, name in enumerate(self.param_names):
+            lines.append(f"{name:<10}{self.params[i]:>14.6g}{self.std[i]:>13.4g}"
+                         f"{ci[i, 0]:>14.6g}{ci[i, 1]:>14.6g}")
+        s2 = np.atleast_1d(self.sigma2)
+        lines.append(f"σ² = {', '.join(f'{v:.4g}' for v in s2)} ({self.sigma2_source}); "
+                     f"χ²/dof = {self.chi2_dof:.4f}; dof = {self.dof}; cond = {self.cond:.3g}")
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        return {
+            "param_names": list(self.param_names),
+            "params": self.params.tolist(),
+            "std": self.std.tolist(),
+            "cov": self.cov.tolist(),
+            "sigma2": self.sigma2.tolist(),
+            "sigma2_source": self.sigma2_source,
+            "chi2_dof": self.chi2_dof,
+            "dof": self.dof,
+            "cond": self.cond,
+        }
+
+
+def _equilibrated_cond(H: np.ndarray) -> float:
+    norms = np.linalg.norm(H, axis=0)
+    norms[norms == 0] = 1.0
+    s = np.linalg.svd(H / norms, compute_uv=False)
+    return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
+
+
+def _solve_centred(
+    Hc: np.ndarray, y: np.ndarray, M: np.ndarray, names: tuple[str, ...]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Solve ``y ≈ Hc p_c`` (rows already whitened), return ``p = M p_c``, unit covariance.
+
+    The unit covariance ``M R⁻¹R⁻ᵀ Mᵀ`` (σ² = 1) comes from the QR factor of the
+    equilibrated design, never from inverting ``HᵀH``.
+    """
+    norms = np.linalg.norm(Hc, axis=0)
+    scale = np.where(norms > 0, norms, 1.0)
+    Hs = Hc / scale
+    pc_s, _, rank, _ = np.linalg.lstsq(Hs, y, rcond=None)
+    if rank < Hs.shape[1] or np.any(norms == 0):
+        _raise_rank(Hs, names, M)
+    R = np.linalg.qr(Hs, mode="r")
+    Ri = sla.solve_triangular(R, np.eye(R.shape[0]))
+    cov_cs = Ri @ Ri.T
+    Mi = M / scale  # p = M diag(1/scale) p_cs
+    params = Mi @ pc_s
+    cov = Mi @ cov_cs @ Mi.T
+    resid = y - Hs @ pc_s
+    return params, 0.5 * (cov + cov.T), resid, int(rank)
+
+
+def _raise_rank(Hs: np.ndarray, names: tuple[str, ...], M: np.ndarray) -> None:
+    _, s, vt = np.linalg.svd(Hs, full_matrices=False)
+    null = vt[-1]
+    # Parameters taking part in the null direction (mapped back through M) are the
+    # ones the design cannot tell apart.
+    involved = [names[i] for i in np.flatnonzero(np.abs(M @ null) > 1e-6)] or list(names)
+    raise NotIdentifiableError(
+        "design matrix is rank-deficient: cannot identify "
+        + " / ".join(involved)
+        + " (they are confounded in this experiment; the design needs more distinct θ)"
+    )
+
+
+def fit_linear(
+    H: np.ndarray,
+    y: np.ndarray,
+    names: tuple[str, ...],
+    sigma2: float | None = None,
+    intercept: int | None = 0,
+) -> FitResult:
+    """Ordinary least squares ``y = H p + v``, ``v ~ N(0, σ² I)``.
+
+    Parameters
+    ----------
+    H : (n, p) design; column ``intercept`` (if not None) must be all ones.
+    y : (n,) observations.
+    names : parameter names, one per column.
+    sigma2 : known noise variance; ``None`` estimates it as RSS/(n - p).
+    intercept : index of the constant column. The other columns are centred on it (an exact
+        reparametrisation) so that a design with a large constant offset in a regressor
+        (e.g. ``A_ry ≈ -g`` for small θ) loses no digits.
+
+    Raises
+    ------
+    NotIdentifiableError : the design is rank-deficient (message names the parameters).
+    """
+    H = np.asarray(H, dtype=float)
+    y = np.asarray(y, dtype=float)
+    n, p = H.shape
+    if y.shape != (n,):
+        raise ValueError(f"y must have shape ({n},), got {y.shape}")
+    if n <= p:
+        raise NotIdentifiableError(f"{n} samples cannot identify {p} parameters ({', '.join(names)})")
+    M = np.eye(p)
+    Hc = H.copy()
+    if intercept is not None:
+        if not np.all(H[:, intercept] == 1.0):
+            raise ValueError(f"column {intercept} is not an intercept (all ones)")
+        means = H.mean(axis=0)
+        for j in range(p):
+            if j != intercept:
+                Hc[:, j] = H[:, j] - means[j]
+                M[intercept, j] = -means[j]  # p_intercept = p_c,intercept - Σ mean_j p_j
+    # A regressor that is constant over the run is exactly collinear with the intercept.
+    for j in range(p):
+        if intercept is not None and j != intercept and np.ptp(H[:, j]) == 0.0:
+            raise NotIdentifiableError(
+                f"cannot identify '{names[j]}': its regressor is constant over the run, so it "
+                f"is confounded with '{names[intercept]}' (all θ equal?); use at least two "
+                "distinct θ"
+            )
+    params, cov1, resid, rank = _solve_centred(Hc, y, M, names)
+    rss = float(resid @ resid)
+    dof = n - p
+    if sigma2 is None:
+        s2, source = rss / dof, "estimated"
+    else:
+        s2, source = float(sigma2), "given"
+        if not np.isfinite(s2) or s2 <= 0:
+            raise ValueError(f"noise variance must be positive and finite, got {sigma2}")
+    return FitResult(
+        param_names=tuple(names), params=params, cov=s2 * cov1, residuals=resid,
+        sigma2=np.array(s2), sigma2_source=source, dof=dof, rank=rank,
+        cond=_equilibrated_cond(H), chi2=rss / s2,
+    )
+
+
+def _check_poor(a_r: np.ndarray, g: float, axis: str, fit: FitResult) -> None:
+    span = float(np.ptp(a_r))
+    if span < POOR_SPAN_FRACTION * g or fit.cond > COND_WARN:
+        warnings.warn(
+            f"axis {axis}: the reference acceleration spans only {span:.3g} m/s² over the run "
+            f"(θ range too small); scale_{axis} is poorly identified: condition number "
+            f"{fit.cond:.3g}, std(scale_{axis}) = {fit.std[1]:.3g}, std(bias_{axis}) = "
+            f"{fit.std[0]:.3g}. Spread θ over a wider range (a full turn is best).",
+            PoorlyIdentifiedWarning, stacklevel=3,
+        )
+
+
+def fit_axis(
+    tita: np.ndarray, a_m: np.ndarray, axis: str = "x", sigma2: float | None = None,
+    g: float = G,
+) -> FitResult:
+    """Per-axis OLS of the course model ``A_m - A_r = bias + scale · A_r + v``.
+
+    Parameters
+    ----------
+    tita : (N,) rad.  a_m : (N,) measured acceleration of ``axis``, m/s².
+    axis : 'x' (A_r = -g sin θ) or 'y' (A_r = -g cos θ).
+    sigma2 : known noise variance (m/s²)² — the course method; ``None`` estimates it.
+    g : gravity, m/s².
+
+    Returns
+    -------
+    FitResult with ``param_names = ("bias", "scale")``; ``cov`` in that order.
+    """
+    tita = np.asarray(tita, dtype=float)
+    a_r = reference_accel(tita, g)[:, AXES.index(axis)]
+    H = np.column_stack([np.ones_like(a_r), a_r])
+    try:
+        fit = fit_linear(H, np.asarray(a_m, dtype=float) - a_r, PARAM_NAMES, sigma2)
+    except NotIdentifiableError as exc:
+        raise NotIdentifiableError(
+            f"axis {axis}: cannot identify scale_{axis} (bias_{axis} and scale_{axis} are "
+            f"confounded): every θ gives the same A_r{axis} "
+            f"({'-g sin θ' if axis == 'x' else '-g cos θ'}); use at least two θ with "
+            f"different A_r{axis}. [{exc}]"
+        ) from None
+    _check_poor(a_r, g, axis, fit)
+    return fit
+
+
+def _noise_cov(noise_var) -> np.ndarray:
+    c = np.asarray(noise_var, dtype=float)
+    c = np.diag(c) if c.shape == (2,) else c
+    if c.shape != (2, 2) or not np.allclose(c, c.T):
+        raise ValueError("noise covariance must be two variances or a symmetric 2×2 matrix")
+    if np.any(np.linalg.eigvalsh(c) <= 0):
+        raise ValueError(f"noise covariance must be positive definite, got {c.tolist()}")
+    return c
+
+
+def fit_joint(
+    tita: np.ndarray, datos: np.ndarray, noise_var=None, g: float = G
+) -> FitResult:
+    """Joint four-parameter WLS (second course report): both axes in one weighted problem.
+
+    ``y = [A_mx - A_rx; A_my - A_ry]``, ``p = [bias_x, scale_x, bias_y, scale_y]``, weights
+    ``W = C⁻¹ ⊗ I_N`` with ``C`` the 2×2 noise covariance (diagonal in the course:
+    diag(0.25, 0.64)). Solved by whitening each sample with the Cholesky factor of ``C``
+    (``C = L Lᵀ``, rows ``L⁻¹[...]``) and a QR least squares — never ``(AᵀGA)⁻¹``. With a
+    diagonal ``C`` this equals the two per-axis fits; a correlated ``C`` couples them.
+
+    ``noise_var=None``: two-stage feasible WLS, per-axis σ² estimated from per-axis OLS
+    residuals (``sigma2_source = "estimated"``).
+    """
+    tita = np.asarray(tita, dtype=float)
+    datos = np.asarray(datos, dtype=float)
+    a_r = reference_accel(tita, g)
+    n = tita.shape[0]
+    source: Sigma2Source = "given"
+    if noise_var is None:
+        source = "estimated"
+        noise_var = [fit_axis(tita, datos[:, k], ax, None, g).sigma2.item()
+                     for k, ax in enumerate(AXES)]
+    C = _noise_cov(noise_var)
+    Li = sla.solve_triangular(np.linalg.cholesky(C), np.eye(2), lower=True)
+    means = a_r.mean(axis=0)
+    # Centred design per sample: rows x and y, columns [bx', sx, by', sy].
+    Hx = np.zeros((n, 4))
+    Hy = np.zeros((n, 4))
+    Hx[:, 0], Hx[:, 1] = 1.0, a_r[:, 0] - means[0]
+    Hy[:, 2], Hy[:, 3] = 1.0, a_r[:, 1] - means[1]
+    for k, ax in enumerate(AXES):
+        if np.ptp(a_r[:, k]) == 0.0:
+            raise NotIdentifiableError(
+                f"axis {ax}: cannot identify scale_{ax} (confounded with bias_{ax}): every θ "
+                f"gives the same A_r{ax}; use at least two θ with different A_r{ax}")
+    Hw = np.concatenate([Li[0, 0] * Hx + Li[0, 1] * Hy, Li[1, 0] * Hx + Li[1, 1] * Hy])
+    r = datos - a_r
+    yw = np.concatenate([Li[0, 0] * r[:, 0] + Li[0, 1] * r[:, 1],
+                         Li[1, 0] * r[:, 0] + Li[1, 1] * r[:, 1]])
+    M = np.eye(4)
+    M[0, 1], M[2, 3] = -means[0], -means[1]
+    params, cov, _, rank = _solve_centred(Hw, yw, M, JOINT_PARAM_NAMES)
+    resid = r - np.column_stack([params[0] + params[1] * a_r[:, 0],
+                                 params[2] + params[3] * a_r[:, 1]])
+    white = resid @ Li.T
+    H_full = np.zeros((2 * n, 4))
+    H_full[:n, 0], H_full[:n, 1], H_full[n:, 2], H_full[n:, 3] = 1, a_r[:, 0], 1, a_r[:, 1]
+    fit = FitResult(
+        param_names=JOINT_PARAM_NAMES, params=params, cov=cov, residuals=resid,
+        sigma2=np.diag(C), sigma2_source=source, dof=2 * n - 4, rank=rank,
+        cond=_equilibrated_cond(H_full), chi2=float(np.sum(white**2)),
+        extra={"noise_cov": C.tolist()},
+    )
+    for k, ax in enumerate(AXES):
+        sub = FitResult(PARAM_NAMES, params[2 * k:2 * k + 2], cov[2 * k:2 * k + 2, 2 * k:2 * k + 2],
+                        resid[:, k], np.array(C[k, k]), source, n - 2, 2,
+                        _equilibrated_cond(H_full[k * n:(k + 1) * n, 2 * k:2 * k + 2]),
+                        float(resid[:, k] @ resid[:, k] / C[k, k]))
+        _check_poor(a_r[:, k], g, ax, sub)
+    return fit
