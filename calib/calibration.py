@@ -7,7 +7,7 @@ from typing import Literal
 
 import numpy as np
 
-from calib.conventions import AXES, G, JOINT_PARAM_NAMES, PARAM_NAMES
+from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G
 from calib.io import Ensayo
 from calib.ls import FitResult, fit_axis, fit_joint
 

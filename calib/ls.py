@@ -25,7 +25,7 @@ import numpy as np
 from scipy import linalg as sla
 from scipy import stats
 
-from calib.conventions import AXES, G, JOINT_PARAM_NAMES, PARAM_NAMES, reference_accel
+from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G, reference_accel
 
 Sigma2Source = Literal["given", "estimated"]
 
@@ -209,7 +209,8 @@ def fit_linear(
     if y.shape != (n,):
         raise ValueError(f"y must have shape ({n},), got {y.shape}")
     if n <= p:
-        raise NotIdentifiableError(f"{n} samples cannot identify {p} parameters ({', '.join(names)})")
+        raise NotIdentifiableError(
+            f"{n} samples cannot identify {p} parameters ({', '.join(names)})")
     M = np.eye(p)
     Hc = H.copy()
     if intercept is not None:
@@ -242,6 +243,12 @@ def fit_linear(
         sigma2=np.array(s2), sigma2_source=source, dof=dof, rank=rank,
         cond=_equilibrated_cond(H), chi2=rss / s2,
     )
+
+
+def _blind(a_r: np.ndarray, g: float) -> bool:
+    """True when the reference is constant to rounding (e.g. sin 0 and sin π): no spread
+    at all relative to g, so the scale is not identifiable, not merely poorly identified."""
+    return float(np.ptp(a_r)) <= 1e-12 * abs(g)
 
 
 def _check_poor(a_r: np.ndarray, g: float, axis: str, fit: FitResult) -> None:
@@ -277,6 +284,8 @@ def fit_axis(
     a_r = reference_accel(tita, g)[:, AXES.index(axis)]
     H = np.column_stack([np.ones_like(a_r), a_r])
     try:
+        if _blind(a_r, g):
+            raise NotIdentifiableError(f"A_r{axis} constant to rounding")
         fit = fit_linear(H, np.asarray(a_m, dtype=float) - a_r, PARAM_NAMES, sigma2)
     except NotIdentifiableError as exc:
         raise NotIdentifiableError(
@@ -330,11 +339,11 @@ def fit_joint(
     Hy = np.zeros((n, 4))
     Hx[:, 0], Hx[:, 1] = 1.0, a_r[:, 0] - means[0]
     Hy[:, 2], Hy[:, 3] = 1.0, a_r[:, 1] - means[1]
-    for k, ax in enumerate(AXES):
-        if np.ptp(a_r[:, k]) == 0.0:
-            raise NotIdentifiableError(
-                f"axis {ax}: cannot identify scale_{ax} (confounded with bias_{ax}): every θ "
-                f"gives the same A_r{ax}; use at least two θ with different A_r{ax}")
+    blind = [ax for k, ax in enumerate(AXES) if _blind(a_r[:, k], g)]
+    if blind:
+        raise NotIdentifiableError("; ".join(
+            f"axis {ax}: cannot identify scale_{ax} (confounded with bias_{ax}): every θ gives "
+            f"the same A_r{ax}" for ax in blind) + "; use at least two θ with different A_r")
     Hw = np.concatenate([Li[0, 0] * Hx + Li[0, 1] * Hy, Li[1, 0] * Hx + Li[1, 1] * Hy])
     r = datos - a_r
     yw = np.concatenate([Li[0, 0] * r[:, 0] + Li[0, 1] * r[:, 1],

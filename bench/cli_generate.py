@@ -1,0 +1,138 @@
+"""``tiltbench generate calibration|vehicle|course|class``: parse, call the library, print."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+import numpy as np
+
+from bench.model import TableEdits
+from bench.sensors import SensorErrorModel
+from bench.tilt import (
+    CalibrationConfig,
+    SweepProfile,
+    ThetaDesign,
+    generate_calibration,
+    write_calibration,
+)
+from calib.io import DataError, dumps, parse_pair
+
+DEFAULT_BIAS = "0.08,-0.02"
+DEFAULT_SCALE = "-0.03,0.01"
+DEFAULT_NOISE = "0.25,0.64"
+
+
+def _theta_list(text: str) -> tuple[float, ...]:
+    try:
+        return tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise DataError(f"--theta-list: expected comma-separated radians, got {text!r}") from None
+
+
+def calibration_config(args: argparse.Namespace) -> CalibrationConfig:
+    """Build the run configuration from the command-line options (validated)."""
+    sensor = SensorErrorModel.from_pairs(parse_pair(args.bias, "--bias"),
+                                         parse_pair(args.scale, "--scale"),
+                                         parse_pair(args.noise_var, "--noise-var"))
+    start, stop = parse_pair(args.theta_range, "--theta-range")
+    for v in (start, stop):
+        if abs(v) > 2 * np.pi * (1 + 1e-9):
+            raise DataError(f"--theta-range: {v} exceeds 2π; angles are in radians "
+                            "(degrees? multiply by π/180)")
+    if args.theta_list is not None:
+        theta = ThetaDesign(kind="list", values=_theta_list(args.theta_list))
+        if np.max(np.abs(theta.values)) > 2 * np.pi * (1 + 1e-9):
+            raise DataError("--theta-list: values exceed 2π; angles are in radians")
+    elif args.positions is not None:
+        theta = ThetaDesign(kind="positions", start=start, stop=stop, positions=args.positions,
+                            per_position=args.per_position)
+    else:
+        theta = ThetaDesign(kind="range", start=start, stop=stop, count=args.count)
+    sweep = SweepProfile(kind=args.profile, start=start, stop=stop, duration=args.duration,
+                         rate=args.rate, cycles=args.cycles)
+    if args.g <= 0:
+        raise DataError(f"--g must be positive, got {args.g}")
+    return CalibrationConfig(mode=args.mode, theta=theta, sweep=sweep, sensor=sensor,
+                             table=TableEdits(g=args.g))
+
+
+def _cmd_calibration(args: argparse.Namespace) -> int:
+    run = generate_calibration(calibration_config(args), args.seed)
+    paths = write_calibration(run, args.out, force=args.force)
+    if getattr(args, "rrd", None):
+        from bench.record import record_calibration_truth  # recordings feature
+
+        paths["rrd"] = str(record_calibration_truth(run, args.rrd, force=args.force))
+    print(dumps({"n": int(run.tita.shape[0]), "mode": run.config.mode, "files": paths}), end="")
+    return 0
+
+
+def _delegate(module: str, func: str):
+    """Handler that calls a library CLI function living beside its feature."""
+
+    def handler(args: argparse.Namespace) -> int:
+        return getattr(importlib.import_module(module), func)(args)
+
+    return handler
+
+
+def add_common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--force", action="store_true", help="overwrite existing files")
+
+
+def add_sensor_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--bias", default=DEFAULT_BIAS, help="true bias x,y in m/s²")
+    p.add_argument("--scale", default=DEFAULT_SCALE, help="true scale-factor error x,y")
+    p.add_argument("--noise-var", default=DEFAULT_NOISE, help="noise variances x,y (m/s²)²")
+    p.add_argument("--g", type=float, default=9.8, help="gravity, m/s² (default 9.8)")
+
+
+def register(sub) -> None:
+    gen = sub.add_parser("generate", help="generate datasets with the simulated bench")
+    kinds = gen.add_subparsers(dest="kind", required=True, metavar="KIND")
+
+    p = kinds.add_parser("calibration", help="a tilt-table calibration run (ensayo.mat)",
+                         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    add_common(p)
+    add_sensor_options(p)
+    p.add_argument("--mode", choices=["static", "sweep"], default="static")
+    p.add_argument("--theta-range", default=f"0,{2 * np.pi!r}",
+                   help="θ range start,stop in rad (static range/positions; sweep)")
+    p.add_argument("--count", type=int, default=20001, help="static: samples over the range")
+    p.add_argument("--theta-list", help="static: explicit θ values in rad, comma separated")
+    p.add_argument("--positions", type=int, help="static: number of discrete held positions")
+    p.add_argument("--per-position", type=int, default=100,
+                   help="static: samples held at each position")
+    p.add_argument("--profile", choices=["constant", "accel", "updown", "sine"],
+                   default="constant", help="sweep: commanded angle profile")
+    p.add_argument("--duration", type=float, default=20.0, help="sweep: duration, s")
+    p.add_argument("--rate", type=float, default=100.0, help="sweep: sample rate, Hz")
+    p.add_argument("--cycles", type=float, default=1.0, help="sweep: up-down/sine cycles")
+    p.add_argument("--rrd", help="also record the truth to this rerun file")
+    p.set_defaults(handler=_cmd_calibration)
+
+    for kind, module, func, text in (
+        ("vehicle", "bench.vehicle", "cli_generate_vehicle", "a planar vehicle run (acel.mat)"),
+        ("course", "bench.course", "cli_generate_course", "a full course set"),
+        ("class", "bench.classset", "cli_generate_class", "K unique course sets + answer key"),
+    ):
+        try:
+            mod = importlib.import_module(module)
+        except ModuleNotFoundError as exc:
+            if exc.name == module:
+                continue
+            raise
+        if not hasattr(mod, "add_cli_options"):
+            continue
+        p = kinds.add_parser(kind, help=text,
+                             formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+        mod.add_cli_options(p)
+        p.set_defaults(handler=_delegate(module, func))
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit("use the tiltbench command")

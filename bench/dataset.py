@@ -1,0 +1,109 @@
+"""Course-compatible files (MATLAB v5 .mat, datos.txt) and the truth manifest.
+
+Same seed and parameters give the same bytes: the .mat header, which scipy stamps with the
+current time, is replaced by a fixed text, and JSON is written with sorted keys.
+Every file is written atomically (temporary file + rename) and never replaces an existing
+file unless ``force``.
+"""
+
+from __future__ import annotations
+
+import io
+import platform
+from pathlib import Path
+
+import numpy as np
+import scipy.io
+
+from calib.io import atomic_write_bytes, atomic_write_text, dumps
+
+MAT_HEADER_LEN = 116  # MATLAB v5: 116 bytes of descriptive text, space padded
+
+
+def versions() -> dict[str, str]:
+    """Versions of everything that shapes a dataset (recorded in every manifest)."""
+    import matplotlib
+    import mujoco
+    import scipy
+
+    import bench
+
+    out = {
+        "tiltbench": bench.__version__,
+        "mujoco": mujoco.__version__,
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "matplotlib": matplotlib.__version__,
+        "python": platform.python_version(),
+    }
+    try:
+        import rerun
+
+        out["rerun-sdk"] = rerun.__version__
+    except Exception:  # rerun is optional for reading datasets
+        pass
+    return out
+
+
+def mat_bytes(variables: dict[str, np.ndarray], note: str = "") -> bytes:
+    """MATLAB v5 bytes of ``variables`` with a fixed, reproducible header.
+
+    Arrays are stored as float64 (as FreeMat/MATLAB write them); 1-D arrays become N×1
+    columns (the course layout), so MATLAB code written for the course files works as is.
+    """
+    buf = io.BytesIO()
+    clean = {}
+    for k, v in variables.items():
+        arr = np.asarray(v, dtype=float)
+        clean[k] = arr.reshape(-1, 1) if arr.ndim == 1 else arr
+    scipy.io.savemat(buf, clean, format="5", oned_as="column")
+    data = bytearray(buf.getvalue())
+    text = f"MATLAB 5.0 MAT-file, written by tiltbench {note}".strip()
+    header = text.encode("ascii", errors="replace")[:MAT_HEADER_LEN].ljust(MAT_HEADER_LEN, b" ")
+    data[:MAT_HEADER_LEN] = header
+    return bytes(data)
+
+
+def save_mat(path: str | Path, variables: dict[str, np.ndarray], force: bool = False) -> Path:
+    """Write a course-compatible .mat file atomically (see :func:`mat_bytes`)."""
+    return atomic_write_bytes(path, mat_bytes(variables), force=force)
+
+
+def write_json(path: str | Path, obj: dict, force: bool = False) -> Path:
+    """Write JSON with sorted keys (stable bytes) atomically."""
+    return atomic_write_text(path, dumps(obj), force=force)
+
+
+def write_truth(path: str | Path, truth: dict, seed: int, force: bool = False) -> Path:
+    """Write ``truth.json``: the given parameters plus the seed and the package versions."""
+    manifest = dict(truth)
+    manifest["seed"] = int(seed)
+    manifest["versions"] = versions()
+    return write_json(path, manifest, force=force)
+
+
+def datos_text(p0, v0, noise_var) -> str:
+    """``datos.txt`` in the course's wording (Spanish, bracketed pairs, UTF-8)."""
+
+    def pair(v):
+        return "[" + " ".join(f"{float(x):g}" for x in v) + "]"
+
+    return (f"Posición inicial = {pair(p0)}\n"
+            f"Velocidad inicial = {pair(v0)}\n"
+            f"varianza del ruido de los acelerómetros = {pair(noise_var)}")
+
+
+def write_datos(path: str | Path, p0, v0, noise_var, force: bool = False) -> Path:
+    return atomic_write_text(path, datos_text(p0, v0, noise_var), force=force)
+
+
+def prepare_out_dir(out: str | Path, names: list[str], force: bool = False) -> Path:
+    """Create ``out``; refuse (before writing anything) if any of ``names`` exists there."""
+    out = Path(out)
+    if not force:
+        clash = [n for n in names if (out / n).exists()]
+        if clash:
+            raise FileExistsError(f"{out}: {', '.join(clash)} already exist(s); pass --force "
+                                  "to overwrite")
+    out.mkdir(parents=True, exist_ok=True)
+    return out

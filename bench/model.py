@@ -1,0 +1,107 @@
+"""The MJCF models: where they live, the names of their elements, load / edit / compile.
+
+``models/*.xml`` is the only hand-edited source. Everything that changes a model goes
+``MjSpec.from_file`` → edit → ``compile()``; an edited model is written with ``to_xml()`` to an
+output directory, never to ``models/``. Elements are looked up by the names defined here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from calib.conventions import G
+
+MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
+TILT_TABLE_XML = MODELS_DIR / "tilt_table.xml"
+VEHICLE_XML = MODELS_DIR / "vehicle.xml"
+
+# Tilt table element names (models/tilt_table.xml).
+TILT_JOINT = "tilt"
+TABLE_BODY = "table"
+SERVO = "servo"
+ENCODER = "encoder"
+ACC_SITES = {"x": "acc_x", "y": "acc_y"}
+ACC_SENSORS = {"x": "accel_x", "y": "accel_y"}
+
+
+def load_spec(path: Path = TILT_TABLE_XML) -> mujoco.MjSpec:
+    """Load an MJCF file as an editable :class:`mujoco.MjSpec`."""
+    if not Path(path).exists():
+        raise FileNotFoundError(f"{path}: model file not found (models/ must sit beside bench/)")
+    return mujoco.MjSpec.from_file(str(path))
+
+
+def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    out = np.zeros(4)
+    mujoco.mju_mulQuat(out, np.asarray(a, float), np.asarray(b, float))
+    return out
+
+
+def _axis_angle_quat(axis, angle: float) -> np.ndarray:
+    q = np.zeros(4)
+    mujoco.mju_axisAngle2Quat(q, np.asarray(axis, float), float(angle))
+    return q
+
+
+@dataclass(frozen=True)
+class TableEdits:
+    """Physical edits of the tilt table, applied through ``MjSpec``.
+
+    Attributes
+    ----------
+    g : magnitude of gravity, m/s² (option gravity = (0, 0, -g)).
+    misalignment : per axis, rotation (rad) of the accelerometer site about the hinge axis
+        (+y, right-handed); the sensitive axis tips towards the other axis' direction.
+    tilt_offset : rad; the table (both sites) is mounted rotated by this angle about the hinge
+        relative to the encoder zero: the sensors see θ_encoder + tilt_offset.
+    lever_arm : per axis, site position (x, z) in the table frame, m, off the hinge axis.
+    cutoff : per axis, sensor range (MuJoCo ``cutoff``: readings clipped to ±cutoff), m/s²;
+        0 means unlimited.
+    """
+
+    g: float = G
+    misalignment: tuple[float, float] = (0.0, 0.0)
+    tilt_offset: float = 0.0
+    lever_arm: tuple[tuple[float, float], tuple[float, float]] = ((0.0, 0.0), (0.0, 0.0))
+    cutoff: tuple[float, float] = (0.0, 0.0)
+
+
+def edit_tilt_table(spec: mujoco.MjSpec, edits: TableEdits) -> mujoco.MjSpec:
+    """Apply :class:`TableEdits` to a tilt-table spec in place and return it."""
+    spec.option.gravity = [0.0, 0.0, -float(edits.g)]
+    hinge_axis = np.array([0.0, 1.0, 0.0])
+    for k, axis in enumerate(("x", "y")):
+        site = spec.site(ACC_SITES[axis])
+        rot = _axis_angle_quat(hinge_axis, edits.misalignment[k] + edits.tilt_offset)
+        site.quat = _quat_mul(rot, np.asarray(site.quat, float))
+        px, pz = edits.lever_arm[k]
+        site.pos = [float(px), 0.0, float(pz)]
+        if edits.cutoff[k] > 0:
+            spec.sensor(ACC_SENSORS[axis]).cutoff = float(edits.cutoff[k])
+    return spec
+
+
+def tilt_table(edits: TableEdits | None = None) -> tuple[mujoco.MjModel, mujoco.MjSpec]:
+    """Compile the tilt table (optionally edited). Returns ``(model, spec)``."""
+    spec = load_spec(TILT_TABLE_XML)
+    edit_tilt_table(spec, edits or TableEdits())
+    return spec.compile(), spec
+
+
+def sensor_slice(model: mujoco.MjModel, name: str) -> slice:
+    """Columns of ``sensordata`` that hold sensor ``name``."""
+    s = model.sensor(name)
+    adr = int(s.adr[0])
+    return slice(adr, adr + int(s.dim[0]))
+
+
+def full_state(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+    """``mjSTATE_FULLPHYSICS`` state vector of ``data`` (the rollout initial-state layout)."""
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(model, spec))
+    mujoco.mj_getState(model, data, state, spec)
+    return state

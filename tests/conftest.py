@@ -1,0 +1,30 @@
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import matplotlib
+import pytest
+
+matplotlib.use("Agg")
+
+REPO = Path(__file__).resolve().parents[1]
+COURSE_DATA = REPO.parent / "shared" / "course-data"
+
+
+@pytest.fixture(scope="session")
+def course_dir() -> Path:
+    """The real course files, read in place from ../shared (never copied into the repo)."""
+    if not (COURSE_DATA / "ensayo.mat").exists():
+        raise RuntimeError(f"course data not found at {COURSE_DATA}; CI must place ../shared "
+                           "beside the checkout")
+    return COURSE_DATA
+
+
+@pytest.fixture(autouse=True)
+def _isolated_home(tmp_path_factory, monkeypatch):
+    """The rerun binary writes analytics settings under the home directory: keep it in tmp."""
+    home = tmp_path_factory.getbasetemp() / "xdg"
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(home / "config"))
+    monkeypatch.setenv("XDG_DATA_HOME", str(home / "data"))
+    monkeypatch.setenv("RERUN_ANALYTICS", os.environ.get("RERUN_ANALYTICS", "0"))
