@@ -1,0 +1,495 @@
+"""How many calibration samples N are needed to decide the arrival point.
+
+Scaling law (θ uniform over [0, 2π))
+------------------------------------
+For ``θ_i = 2π i/N`` (``N ≥ 3``) the sums ``Σ sin θ_i = Σ cos θ_i = 0`` and
+``Σ sin² θ_i = Σ cos² θ_i = N/2`` hold exactly, so the per-axis design ``H = [1, A_r]`` has
+``HᵀH = diag(N, g² N/2)`` and the calibration covariance is (course reports, eq. 54–55, with
+the exact ``N/2``)::
+
+    Σ_c(N) = diag(σx², 2σx²/g², σy², 2σy²/g²) / N  =  Σ_c1 / N
+
+Propagated to the arrival point (:mod:`calib.region`)::
+
+    Σ_P(N) = A / N + B,     A = J Σ_c1 Jᵀ,     B = Σ_noise (vehicle run, independent of N)
+
+``Σ_P(N)`` decreases with N (Loewner order), so every Mahalanobis distance
+``d_i(N)² = δ_iᵀ Σ_P(N)⁻¹ δ_i`` grows monotonically with N; each candidate leaves the level-L
+region at one crossing ``N_i`` (found by bisection on integers) and never comes back.
+
+Two questions
+-------------
+* **Design (before the run)** — the smallest N for which the level-L regions drawn around the
+  candidates are pairwise disjoint: ``|c_i - c_j|_Σ(N) > 2 r`` with ``r² = χ²₂(L)``. Then, by
+  the triangle inequality, when the truth's region contains the estimate (probability L) no
+  other candidate is inside: the decision is made *and* right with probability ≥ L.
+* **A posteriori (this estimate fixed)** — with the estimate ``P̂`` held fixed, exactly one
+  candidate is inside for ``N`` in ``[N_(K-1), N_(K))`` (second-largest and largest crossings).
+  Below it several candidates are inside; above ``N_(K)`` (if finite) none is.
+
+Why no N can guarantee a decision in general
+--------------------------------------------
+* The vehicle-noise term ``B`` does not shrink with the calibration N: if two candidates are
+  closer than ``2r`` in the metric of ``B`` alone, no calibration, however long, separates
+  them (``design`` is then None).
+* Candidates can be arbitrarily close, and the estimate can fall between two of them (the
+  course report WLS, Figure 8): a posteriori the decision depends on where the estimate
+  landed, which no N controls.
+* Everything is at a confidence level: with probability ``1 - L`` the truth is outside its
+  region whatever N is.
+* The linear model itself (white Gaussian noise, bias and scale only, known P0 and V0, no
+  rotation) is an assumption; an unmodelled effect does not average out with N.
+
+Monte Carlo checks: :func:`subsample_analysis` redoes the course reports' experiment (calibrate
+on every k-th sample of the course run) and :func:`simulate_decisions` draws fresh synthetic
+calibration and vehicle runs at a given N.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from calib.calibration import Calibration, calibrate
+from calib.conventions import G, reference_accel
+from calib.io import Acel, Ensayo, validate_ensayo
+from calib.ls import PoorlyIdentifiedWarning
+from calib.region import (
+    ArrivalRegion,
+    arrival_region,
+    chi2_2dof,
+    course_decision,
+    noise_cov_matrix,
+)
+from calib.trajectory import Integrator, compute_trajectory, correct_and_integrate
+
+N_MAX = 10**12
+"""Largest N searched; a crossing beyond it is reported as 'never' (None)."""
+
+COURSE_STEPS = (1, 2, 13, 14)
+"""Subsampling steps of the course report LS (every sample, every 2nd, 13th, 14th)."""
+
+
+def uniform_design_cov(n: int | float, noise_var, g: float = G) -> np.ndarray:
+    """Calibration covariance (4×4, order [b_x, s_x, b_y, s_y]) for N uniform θ.
+
+    ``diag(σx², 2σx²/g², σy², 2σy²/g²)/N`` — exact for ``θ_i = 2π i/N``, N ≥ 3, per-axis OLS
+    with known σ² (module docstring). Units: m²/s⁴ for biases, dimensionless for scales.
+    """
+    c = noise_cov_matrix(noise_var)
+    sx2, sy2 = c[0, 0], c[1, 1]
+    return np.diag([sx2, 2 * sx2 / g**2, sy2, 2 * sy2 / g**2]) / float(n)
+
+
+@dataclass(frozen=True)
+class PositionCovModel:
+    """``Σ_P(N) = A/N + B`` for the arrival point, m² (module docstring)."""
+
+    A: np.ndarray
+    B: np.ndarray
+
+    def cov(self, n: float) -> np.ndarray:
+        return self.A / float(n) + self.B
+
+    @classmethod
+    def from_region(cls, region: ArrivalRegion, g: float = G,
+                    include_noise: bool = True) -> PositionCovModel:
+        """Build from an :class:`ArrivalRegion` (its Jacobian and noise model).
+
+        The calibration noise is taken equal to the vehicle noise (same sensors).
+        """
+        A = region.jacobian @ uniform_design_cov(1, region.noise_var, g) @ region.jacobian.T
+        B = region.cov_noise if include_noise else np.zeros((2, 2))
+        return cls(A=A, B=np.array(B))
+
+
+def _d2(delta: np.ndarray, cov: np.ndarray) -> float:
+    return float(delta @ np.linalg.solve(cov, delta))
+
+
+def crossing_n(delta, model: PositionCovModel, threshold: float, n_lo: int = 3,
+               n_max: int = N_MAX) -> int | None:
+    """Smallest integer ``N ≥ n_lo`` with ``δᵀ Σ_P(N)⁻¹ δ > threshold``; None if none ≤ n_max.
+
+    ``δᵀ Σ_P(N)⁻¹ δ`` is non-decreasing in N, so bisection on integers is exact.
+    """
+    delta = np.asarray(delta, dtype=float)
+
+    def ok(n: int) -> bool:
+        return _d2(delta, model.cov(n)) > threshold
+
+    if ok(n_lo):
+        return n_lo
+    if not ok(n_max):
+        return None
+    lo, hi = n_lo, n_max  # ok(lo) False, ok(hi) True
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if ok(mid):
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
+def design_nmin(candidates: dict[str, np.ndarray], model: PositionCovModel, level: float
+                ) -> dict:
+    """Smallest N making all level-L candidate regions pairwise disjoint (module docstring).
+
+    Returns a dict: ``n`` (None when no N suffices), ``limiting_pair`` and
+    ``limiting_separation`` (the smallest pairwise Mahalanobis distance with ``B`` alone, the
+    N → ∞ limit; None when ``B`` is singular), ``required_separation`` = 2r.
+    """
+    r2 = chi2_2dof(level)
+    names = list(candidates)
+    worst, pair = 0, None
+    limit_min, limit_pair = np.inf, None
+    b_ok = np.linalg.matrix_rank(model.B) == 2
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            delta = np.asarray(candidates[names[i]], float) - np.asarray(candidates[names[j]],
+                                                                          float)
+            if b_ok:
+                lim = np.sqrt(_d2(delta, model.B))
+                if lim < limit_min:
+                    limit_min, limit_pair = lim, (names[i], names[j])
+            n = crossing_n(delta, model, 4.0 * r2)
+            if n is None:
+                worst, pair = None, (names[i], names[j])
+                break
+            if n > worst:
+                worst, pair = n, (names[i], names[j])
+        if worst is None:
+            break
+    return {"n": worst, "binding_pair": list(pair) if pair else None,
+            "limiting_pair": list(limit_pair) if limit_pair else None,
+            "limiting_separation": float(limit_min) if np.isfinite(limit_min) else None,
+            "required_separation": float(2.0 * np.sqrt(r2)), "level": level}
+
+
+def posterior_nrange(estimate, candidates: dict[str, np.ndarray], model: PositionCovModel,
+                     level: float) -> dict:
+    """N range over which exactly one candidate is inside the region around ``estimate``.
+
+    Returns ``{"n_min", "n_max", "letter", "crossings"}``: decided for
+    ``n_min ≤ N ≤ n_max`` (``n_max`` None: for every larger N); ``n_min`` None when never.
+    ``crossings[name]`` is the N at which that candidate leaves the region (None: never).
+    """
+    r2 = chi2_2dof(level)
+    est = np.asarray(estimate, dtype=float)
+    cross = {k: crossing_n(np.asarray(c, float) - est, model, r2) for k, c in candidates.items()}
+    big = float(N_MAX) * 10
+    order = sorted(cross, key=lambda k: big if cross[k] is None else cross[k])
+    last, second = order[-1], order[-2]
+    n_min = cross[second]
+    n_end = cross[last]
+    if n_min is None or (n_end is not None and n_end <= n_min):
+        return {"n_min": None, "n_max": None, "letter": None, "crossings": cross}
+    return {"n_min": int(n_min), "n_max": None if n_end is None else int(n_end) - 1,
+            "letter": last, "crossings": cross}
+
+
+def course_box_nrange(estimate, candidates: dict[str, np.ndarray], box_at_n1: np.ndarray
+                      ) -> dict:
+    """The course criterion's N range with the estimate fixed, box ∝ 1/√N.
+
+    ``box(N) = box(1)/√N`` (uniform θ); candidate i is inside its course ellipse while
+    ``N · |(P̂ - c_i)/box(1)|² ≤ 1``, i.e. it leaves at ``N_i = ⌊1/ρ_i²⌋ + 1``.
+    """
+    est = np.asarray(estimate, dtype=float)
+    cross = {}
+    for k, c in candidates.items():
+        rho2 = float(np.sum(((est - np.asarray(c, float)) / box_at_n1) ** 2))
+        cross[k] = None if rho2 == 0 else int(np.floor(1.0 / rho2)) + 1
+    big = float(N_MAX) * 10
+    order = sorted(cross, key=lambda k: big if cross[k] is None else cross[k])
+    n_min, n_end = cross[order[-2]], cross[order[-1]]
+    return {"n_min": max(int(n_min), 3) if n_min is not None else None,
+            "n_max": None if n_end is None else int(n_end) - 1, "letter": order[-1],
+            "crossings": cross}
+
+
+@dataclass(frozen=True)
+class SubsampleRow:
+    """One subsampled calibration of the course reports' experiment."""
+
+    step: int
+    n: int
+    estimate: np.ndarray
+    std: np.ndarray
+    semi_axes: np.ndarray
+    mahalanobis: dict
+    decision: str | None
+    inside: tuple
+    calibration_only_decision: str | None
+    course_box: np.ndarray
+    course_decision: str | None
+    course_inside: tuple
+
+    def to_dict(self) -> dict:
+        return {"step": self.step, "n": self.n, "estimate": np.asarray(self.estimate).tolist(),
+                "std": np.asarray(self.std).tolist(),
+                "semi_axes": np.asarray(self.semi_axes).tolist(),
+                "mahalanobis": self.mahalanobis, "decision": self.decision,
+                "inside": list(self.inside),
+                "calibration_only_decision": self.calibration_only_decision,
+                "course_box": np.asarray(self.course_box).tolist(),
+                "course_decision": self.course_decision,
+                "course_inside": list(self.course_inside)}
+
+
+def subsample_analysis(
+    ensayo: Ensayo, acel: Acel, candidates: dict[str, np.ndarray],
+    steps: Sequence[int] = COURSE_STEPS, p0=(0.0, 0.0), v0=(1.0, 3.0), noise_var=None,
+    level: float = 0.997, method: str = "ols", integrator: Integrator = "trapezoid",
+    g: float = G,
+) -> list[SubsampleRow]:
+    """Calibrate on every ``step``-th sample (``tita[::step]``, as the course's
+    ``Tita2(1:paso:N2)``), correct, integrate, decide — ours and the course's box criterion.
+    """
+    rows = []
+    for step in steps:
+        if int(step) < 1:
+            raise ValueError(f"subsampling step must be >= 1, got {step}")
+        sub = validate_ensayo(ensayo.tita[::step], ensayo.datos[::step], None,
+                              f"{ensayo.source}[::{step}]")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PoorlyIdentifiedWarning)
+            cal = calibrate(sub, noise_var, method, g)  # type: ignore[arg-type]
+        traj = compute_trajectory(acel, cal, p0, v0, integrator)
+        reg = arrival_region(traj, cal, candidates, noise_var, level)
+        reg0 = arrival_region(traj, cal, candidates, noise_var, level, include_noise=False)
+        cdec, cin = course_decision(reg.estimate, candidates, reg.course_box_bound)
+        rows.append(SubsampleRow(int(step), sub.n, reg.estimate, reg.std,
+                                 reg.ellipse.semi_axes, dict(reg.mahalanobis), reg.decision,
+                                 reg.inside, reg0.decision, reg.course_box_bound, cdec, cin))
+    return rows
+
+
+@dataclass(frozen=True)
+class McRow:
+    """Decisions over ``runs`` fresh synthetic (calibration + vehicle) runs at one N."""
+
+    n: int
+    runs: int
+    right: int
+    wrong: int
+    undecided: int
+    truth_inside: int
+    level: float
+
+    def to_dict(self) -> dict:
+        return {"n": self.n, "runs": self.runs, "right": self.right, "wrong": self.wrong,
+                "undecided": self.undecided, "truth_inside": self.truth_inside,
+                "level": self.level, "right_rate": self.right / self.runs,
+                "coverage": self.truth_inside / self.runs}
+
+
+def synthetic_calibration(n: int, bias, scale, noise_var, rng: np.random.Generator,
+                          g: float = G) -> Ensayo:
+    """Calibration run with ``θ_i = 2π i/N`` and the course sensor model (numpy only).
+
+    ``datos = (1 + scale)·[-g sin θ, -g cos θ] + bias + v``, ``v ~ N(0, diag(noise_var))``.
+    """
+    tita = 2.0 * np.pi * np.arange(n) / n
+    a_r = reference_accel(tita, g)
+    sd = np.sqrt(np.diag(noise_cov_matrix(noise_var)))
+    datos = (1.0 + np.asarray(scale)) * a_r + np.asarray(bias) + sd * rng.standard_normal(
+        a_r.shape)
+    return Ensayo(tita, datos, None, source=f"synthetic N={n}")
+
+
+def simulate_decisions(
+    t: np.ndarray, a_true: np.ndarray, candidates: dict[str, np.ndarray], truth: str,
+    n: int, runs: int, seed: int, bias, scale, noise_var, p0=(0.0, 0.0), v0=(1.0, 3.0),
+    level: float = 0.997, method: str = "ols", integrator: Integrator = "trapezoid",
+    g: float = G,
+) -> McRow:
+    """Decide on ``runs`` fresh synthetic runs at calibration size ``n``.
+
+    Each run draws (from its own stream of ``SeedSequence(seed).spawn(runs)``) a calibration
+    run (:func:`synthetic_calibration`) and the vehicle readings
+    ``A_m = (1 + scale)·a_true + bias + v``; it calibrates (known σ²), corrects, integrates and
+    decides. ``candidates[truth]`` must be the true arrival point.
+    """
+    nv = noise_cov_matrix(noise_var)
+    sd = np.sqrt(np.diag(nv))
+    a_true = np.asarray(a_true, dtype=float)
+    right = wrong = undecided = inside = 0
+    for ss in np.random.SeedSequence(int(seed)).spawn(int(runs)):
+        rng = np.random.default_rng(ss)
+        ens = synthetic_calibration(n, bias, scale, nv, rng, g)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PoorlyIdentifiedWarning)
+            cal: Calibration = calibrate(ens, np.diag(nv), method, g)  # type: ignore[arg-type]
+        a_m = (1.0 + np.asarray(scale)) * a_true + np.asarray(bias) + sd * rng.standard_normal(
+            a_true.shape)
+        traj = correct_and_integrate(t, a_m, cal.bias, cal.scale, p0, v0, integrator)
+        reg = arrival_region(traj, cal, candidates, nv, level)
+        inside += truth in reg.inside
+        if reg.decision is None:
+            undecided += 1
+        elif reg.decision == truth:
+            right += 1
+        else:
+            wrong += 1
+    return McRow(int(n), int(runs), right, wrong, undecided, inside, float(level))
+
+
+@dataclass(frozen=True)
+class NminResult:
+    """Result of the N analysis (see the module docstring for the definitions)."""
+
+    level: float
+    n_data: int
+    estimate: np.ndarray
+    decision: str | None
+    design: dict
+    design_calibration_only: dict
+    posterior: dict
+    posterior_calibration_only: dict
+    posterior_course_box: dict
+    subsample: tuple = ()
+    monte_carlo: tuple = ()
+    notes: tuple = field(default_factory=tuple)
+    area_comparison: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return {
+            "level": self.level, "n_data": self.n_data,
+            "estimate": np.asarray(self.estimate).tolist(), "decision": self.decision,
+            "design": self.design, "design_calibration_only": self.design_calibration_only,
+            "posterior": self.posterior,
+            "posterior_calibration_only": self.posterior_calibration_only,
+            "posterior_course_box": self.posterior_course_box,
+            "subsample": [r.to_dict() for r in self.subsample],
+            "monte_carlo": [r.to_dict() for r in self.monte_carlo],
+            "notes": list(self.notes), "area_comparison": self.area_comparison,
+        }
+
+    def summary(self) -> str:
+        L = f"{100 * self.level:g}%"
+
+        def rng_txt(d: dict) -> str:
+            if d["n_min"] is None:
+                return "never"
+            hi = "∞" if d["n_max"] is None else f"{d['n_max']}"
+            return f"{d['letter']} for {d['n_min']} ≤ N ≤ {hi}"
+
+        def design_txt(d: dict) -> str:
+            if d["n"] is None:
+                lim = d["limiting_separation"]
+                extra = (f"; with infinite N the closest pair {'/'.join(d['limiting_pair'])} "
+                         f"is {lim:.2f} apart, {d['required_separation']:.2f} needed"
+                         if lim is not None else "")
+                return f"no N suffices (pair {'/'.join(d['binding_pair'])}{extra})"
+            return f"N ≥ {d['n']} (binding pair {'/'.join(d['binding_pair'])})"
+
+        out = [
+            f"N analysis at {L} (θ uniform over [0, 2π); data: N = {self.n_data}, "
+            f"decision {self.decision or 'undecided'})",
+            f"  design, full region (decided and right with prob ≥ {L}): "
+            f"{design_txt(self.design)}",
+            f"  design, calibration part only (course assumption, no vehicle noise): "
+            f"{design_txt(self.design_calibration_only)}",
+            f"  a posteriori (this estimate fixed), full region : {rng_txt(self.posterior)}",
+            f"  a posteriori, calibration part only            : "
+            f"{rng_txt(self.posterior_calibration_only)}",
+            f"  a posteriori, course box criterion (3σ)        : "
+            f"{rng_txt(self.posterior_course_box)}",
+        ]
+        if self.area_comparison:
+            a = self.area_comparison
+            out.append(f"  {L} ellipse area / course box area (same level, N = {self.n_data}): "
+                       f"{a['ratio_to_course_box']:.3f}; calibration part alone: "
+                       f"{a['calibration_only_ratio_to_course_box']:.3f}")
+        if self.subsample:
+            out.append("  subsampled course calibration (course report LS, section 3.2.4):")
+            out.append(f"  {'step':>5}{'N':>7}{'x (m)':>9}{'y (m)':>9}{'ours':>7}{'inside':>10}"
+                       f"{'cal-only':>9}{'box x':>8}{'box y':>8}{'course':>8}{'inside':>10}")
+            for r in self.subsample:
+                out.append(
+                    f"  {r.step:>5}{r.n:>7}{r.estimate[0]:>9.1f}{r.estimate[1]:>9.1f}"
+                    f"{r.decision or '-':>7}{','.join(r.inside) or '-':>10}"
+                    f"{r.calibration_only_decision or '-':>9}{r.course_box[0]:>8.1f}"
+                    f"{r.course_box[1]:>8.1f}{r.course_decision or '-':>8}"
+                    f"{','.join(r.course_inside) or '-':>10}")
+        if self.monte_carlo:
+            out.append("  fresh synthetic runs (truth at the decided candidate):")
+            out.append(f"  {'N':>8}{'runs':>6}{'right':>7}{'wrong':>7}{'undecided':>10}"
+                       f"{'truth inside':>14}")
+            for m in self.monte_carlo:
+                out.append(f"  {m.n:>8}{m.runs:>6}{m.right:>7}{m.wrong:>7}{m.undecided:>10}"
+                           f"{m.truth_inside:>14}")
+        out.extend(f"  note: {n}" for n in self.notes)
+        return "\n".join(out)
+
+
+NOTES = (
+    "no N can guarantee a decision in general: the vehicle-noise part of the arrival "
+    "covariance does not shrink with the calibration N, candidates may be arbitrarily close "
+    "(or the estimate may fall between two), and at level L the truth is outside its region "
+    "with probability 1 - L whatever N is",
+    "the design N makes the level-L regions around the candidates pairwise disjoint, so the "
+    "decision is made and right with probability ≥ L; the a-posteriori range holds only for "
+    "this estimate",
+    "the course box bound leaves out the vehicle noise and uses worst-case |a|max: it is too "
+    "wide in the calibration part and too narrow overall",
+)
+
+
+def analyze_nmin(
+    ensayo: Ensayo, acel: Acel, candidates: dict[str, np.ndarray], p0=(0.0, 0.0),
+    v0=(1.0, 3.0), noise_var=None, level: float = 0.997, method: str = "ols",
+    integrator: Integrator = "trapezoid", g: float = G, steps: Sequence[int] = COURSE_STEPS,
+    mc_n: Sequence[int] = (), runs: int = 0, seed: int = 0,
+) -> NminResult:
+    """The whole N analysis on one data set (e.g. the course files).
+
+    Analytic design and a-posteriori N (module docstring), the course's subsampling
+    experiment, and — when ``runs > 0`` — fresh synthetic runs at each N of ``mc_n`` (plus
+    the design N when finite and ≤ 10⁶). Synthetic runs use the corrected accelerations of
+    the data as the true profile, the calibration estimate as the true sensor errors, and the
+    candidates translated so the decided one (or the nearest) is the true arrival point.
+    """
+    cal = calibrate(ensayo, noise_var, method, g)  # type: ignore[arg-type]
+    traj = compute_trajectory(acel, cal, p0, v0, integrator)
+    reg = arrival_region(traj, cal, candidates, noise_var, level)
+    full = PositionCovModel.from_region(reg, g)
+    calonly = PositionCovModel.from_region(reg, g, include_noise=False)
+    box1 = reg.course_box_bound * np.sqrt(ensayo.n)  # box ∝ 1/√N for uniform θ
+    rows = subsample_analysis(ensayo, acel, candidates, steps, p0, v0, noise_var, level,
+                              method, integrator, g) if steps else []
+    mc = []
+    if runs > 0:
+        design = design_nmin(candidates, full, level)
+        ns = list(mc_n)
+        if design["n"] is not None and design["n"] <= 10**6 and design["n"] not in ns:
+            ns.append(int(design["n"]))
+        truth = reg.decision or min(reg.mahalanobis, key=reg.mahalanobis.get)
+        shift = reg.estimate - np.asarray(candidates[truth], float)
+        moved = {k: np.asarray(c, float) + shift for k, c in candidates.items()}
+        for i, n in enumerate(ns):
+            mc.append(simulate_decisions(acel.t, traj.acc_corrected, moved, truth, int(n), runs,
+                                         seed + i, cal.bias, cal.scale, reg.noise_var, p0, v0,
+                                         level, method, integrator, g))
+    return NminResult(
+        level=level, n_data=ensayo.n, estimate=reg.estimate, decision=reg.decision,
+        design=design_nmin(candidates, full, level),
+        design_calibration_only=design_nmin(candidates, calonly, level),
+        posterior=posterior_nrange(reg.estimate, candidates, full, level),
+        posterior_calibration_only=posterior_nrange(reg.estimate, candidates, calonly, level),
+        posterior_course_box=course_box_nrange(reg.estimate, candidates, box1),
+        subsample=tuple(rows), monte_carlo=tuple(mc), notes=NOTES,
+        area_comparison=reg.area_comparison(),
+    )
+
+
+__all__ = [
+    "COURSE_STEPS", "McRow", "NminResult", "PositionCovModel", "SubsampleRow",
+    "analyze_nmin", "course_box_nrange", "crossing_n", "design_nmin", "posterior_nrange",
+    "simulate_decisions", "subsample_analysis", "synthetic_calibration", "uniform_design_cov",
+]
