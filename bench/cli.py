@@ -60,6 +60,9 @@ def main(argv: list[str] | None = None) -> int:
     warnings.showwarning = _warning_to_stderr
     try:
         return int(args.handler(args) or 0)
+    except BrokenPipeError:  # output piped into `head`: not an error
+        sys.stderr.close()
+        return 0
     except (DataError, FileExistsError, FileNotFoundError, ValueError) as exc:
         print(f"tiltbench {args.command}: error: {exc}", file=sys.stderr)
         return 2

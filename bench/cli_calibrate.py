@@ -1,4 +1,4 @@
-"""``tiltbench calibrate`` and ``tiltbench validate``."""
+"""``tiltbench calibrate``: parse, call :func:`calib.calibration.calibrate`, print."""
 
 from __future__ import annotations
 
@@ -32,6 +32,10 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         cal = calibrate(ensayo, nv, args.method, args.g)
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
+    if args.plot:
+        from bench.figures import save_calibration_plot
+
+        save_calibration_plot(args.plot, cal, ensayo, force=args.force, level=args.level)
     if args.rrd:
         from bench.record import record_calibration
 
@@ -58,5 +62,7 @@ def register(sub) -> None:
     p.add_argument("--level", type=float, default=0.95, help="confidence level of intervals")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument("--rrd", help="write a rerun recording of the fit to this file")
-    p.add_argument("--force", action="store_true", help="overwrite an existing --rrd file")
+    p.add_argument("--plot", help="write the fit figure (.png or .svg)")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite an existing --rrd / --plot file")
     p.set_defaults(handler=_cmd_calibrate)

@@ -15,6 +15,7 @@ import warnings
 
 import numpy as np
 
+from bench.record import trajectory_tree
 from calib.calibration import calibrate
 from calib.io import DataError, dumps, parse_pair, read_acel, read_datos, read_ensayo, read_puntos
 from calib.nmin import COURSE_STEPS, analyze_nmin
@@ -84,13 +85,13 @@ def _cmd_trajectory(args: argparse.Namespace) -> int:
         from bench.figures_trajectory import save_trajectory_plot
 
         save_trajectory_plot(args.plot, traj, region, force=args.force)
+    out = trajectory_tree(traj, region, cal, args.method,
+                          "given" if nv is not None else "estimated")
+    if args.rrd:
+        from bench.record import record_trajectory
+
+        record_trajectory(traj, region, cal, args.rrd, force=args.force, tree=out)
     if args.json:
-        out = {**traj.to_dict(), **region.to_dict()}
-        out.update(level=level, method=args.method,
-                   noise_var_source="given" if nv is not None else "estimated",
-                   calibration=cal.to_dict())
-        out["ellipse"] = {k: region.ellipse.to_dict()[k]
-                          for k in ("level", "semi_axes", "angle_rad", "area", "center")}
         print(dumps(out), end="")
         return 0
     print(traj.summary())
@@ -124,7 +125,9 @@ def register(sub) -> None:
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     _add_inputs(p)
     p.add_argument("--plot", help="write a figure (.png or .svg)")
-    p.add_argument("--force", action="store_true", help="overwrite an existing --plot file")
+    p.add_argument("--rrd", help="write a rerun recording of the run to this file")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite an existing --plot / --rrd file")
     p.set_defaults(handler=_cmd_trajectory)
 
     q = sub.add_parser("nmin", help="calibration samples needed to decide the arrival point",

@@ -1,0 +1,205 @@
+"""Class sets: one unique course set per student plus a private answer key.
+
+``tiltbench generate class --count K --seed S --out DIR`` writes::
+
+    DIR/student_001/ ensayo.mat acel.mat puntos.mat datos.txt      (what student 1 gets)
+    ...
+    DIR/student_K/   ...
+    DIR/answer_key.csv    one row per student: seed, answer letter, true parameters
+    DIR/answer_key.json   the same plus every student's full truth.json object
+
+Nothing inside a student folder reveals the truth (no ``truth.json``, no seed; the .mat
+headers are a fixed text). Keep ``answer_key.*`` private: hand out the ``student_*`` folders
+only.
+
+Seeds: ``SeedSequence(S).spawn(K)``; student i gets the 63-bit integer
+``child_i.generate_state(1, uint64)[0] >> 1`` as the seed of its course set
+(:func:`bench.course.make_course_set`), so ``tiltbench generate course --seed <that seed>``
+reproduces the folder byte for byte. The sets are checked to be pairwise different (seeds and
+file contents).
+
+Validate a student's estimates with ``tiltbench validate --truth DIR/answer_key.json
+--student student_007 --estimates est.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import hashlib
+import io
+import json
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from calib.io import DataError, atomic_write_text, dumps
+
+STUDENT_FILES = ("ensayo.mat", "acel.mat", "puntos.mat", "datos.txt")
+KEY_CSV = "answer_key.csv"
+KEY_JSON = "answer_key.json"
+CSV_COLUMNS = ("student", "seed", "answer", "raw_end_decoy", "bias_x", "scale_x", "bias_y",
+               "scale_y", "noise_var_x", "noise_var_y", "true_final_x", "true_final_y",
+               "candidates")
+
+
+def student_seeds(seed: int, count: int) -> list[int]:
+    """Seeds of the ``count`` course sets derived from ``seed`` (module docstring)."""
+    if count < 1:
+        raise DataError(f"--count must be >= 1, got {count}")
+    if seed < 0:
+        raise DataError(f"--seed must be >= 0, got {seed}")
+    out = [int(c.generate_state(1, np.uint64)[0] >> np.uint64(1))
+           for c in np.random.SeedSequence(int(seed)).spawn(int(count))]
+    if len(set(out)) != len(out):  # 2^-63 per pair: would be a bug, not chance
+        raise RuntimeError("derived seeds collide")
+    return out
+
+
+def student_name(i: int, count: int, prefix: str = "student") -> str:
+    """``student_001`` … (zero padded to at least 3 digits)."""
+    return f"{prefix}_{i + 1:0{max(3, len(str(count)))}d}"
+
+
+@dataclass(frozen=True)
+class ClassSet:
+    """What :func:`generate_class` wrote: folders, answer-key paths and the key rows."""
+
+    out: Path
+    folders: dict[str, Path]
+    key_csv: Path
+    key_json: Path
+    rows: list[dict]
+
+
+def _row(name: str, seed: int, truth: dict) -> dict:
+    s = truth["sensor"]
+    return {"student": name, "seed": seed, "answer": truth["answer"],
+            "raw_end_decoy": truth.get("raw_end_decoy"),
+            "bias_x": s["x"]["bias"], "scale_x": s["x"]["scale"],
+            "bias_y": s["y"]["bias"], "scale_y": s["y"]["scale"],
+            "noise_var_x": s["x"]["noise_var"], "noise_var_y": s["y"]["noise_var"],
+            "true_final_x": truth["true_final_position"][0],
+            "true_final_y": truth["true_final_position"][1],
+            "candidates": json.dumps(truth["candidates"], sort_keys=True)}
+
+
+def key_csv_text(rows: list[dict]) -> str:
+    """The CSV answer key (floats written with ``repr``: exact)."""
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=CSV_COLUMNS, lineterminator="\n")
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: repr(v) if isinstance(v, float) else v for k, v in r.items()})
+    return buf.getvalue()
+
+
+def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = False,
+                   config=None, prefix: str = "student",
+                   progress: Callable[[int, int], None] | None = None) -> ClassSet:
+    """Write ``count`` unique course sets and the private answer key into ``out``.
+
+    Parameters
+    ----------
+    out : class directory.  count : number of students K.  seed : class seed S.
+    force : replace existing files (checked for every target before anything is written).
+    config : :class:`bench.course.CourseConfig` shared by all sets (default: the course's).
+    prefix : folder prefix.  progress : called as ``progress(done, count)``.
+    """
+    from bench.course import make_course_set, write_course
+
+    out = Path(out)
+    seeds = student_seeds(seed, count)
+    names = [student_name(i, count, prefix) for i in range(count)]
+    targets = [out / KEY_CSV, out / KEY_JSON] + [out / n / f for n in names
+                                                 for f in (*STUDENT_FILES, "truth.json")]
+    clash = [str(p) for p in targets if p.exists()]
+    if clash and not force:
+        raise FileExistsError(f"{out}: {clash[0]}{' and others' if len(clash) > 1 else ''} "
+                              "already exist(s); pass --force to overwrite")
+    folders, rows, truths, digests = {}, [], {}, {}
+    for i, (name, s) in enumerate(zip(names, seeds, strict=True)):
+        folder = out / name
+        course = make_course_set(config, s)
+        write_course(course, folder, force=True)
+        tpath = folder / "truth.json"
+        truth = json.loads(tpath.read_text(encoding="utf-8"))
+        tpath.unlink()  # the truth never stays in a student folder
+        h = hashlib.sha256()
+        for f in STUDENT_FILES:
+            h.update((folder / f).read_bytes())
+        digest = h.hexdigest()
+        if digest in digests:
+            raise RuntimeError(f"{name} and {digests[digest]} got identical files")
+        digests[digest] = name
+        folders[name] = folder
+        truths[name] = truth
+        rows.append(_row(name, s, truth))
+        if progress:
+            progress(i + 1, count)
+    key_csv = atomic_write_text(out / KEY_CSV, key_csv_text(rows), force=True)
+    from bench.dataset import versions
+
+    key = {"kind": "class", "class_seed": int(seed), "count": int(count),
+           "seed_derivation": "SeedSequence(class_seed).spawn(count)[i]"
+                              ".generate_state(1, uint64)[0] >> 1",
+           "versions": versions(), "columns": list(CSV_COLUMNS),
+           "students": [{"student": r["student"], "folder": r["student"], "seed": r["seed"],
+                         "answer": r["answer"], "truth": truths[r["student"]]} for r in rows]}
+    key_json = atomic_write_text(out / KEY_JSON, dumps(key), force=True)
+    return ClassSet(out, folders, key_csv, key_json, rows)
+
+
+def student_truth(key: dict, student: str) -> dict:
+    """One student's ``truth.json`` object from an ``answer_key.json`` object."""
+    for s in key.get("students", []):
+        if s.get("student") == student:
+            return s["truth"]
+    names = [s.get("student") for s in key.get("students", [])]
+    raise DataError(f"answer key: no student '{student}' (have {', '.join(names[:5])}"
+                    f"{' …' if len(names) > 5 else ''})")
+
+
+def add_cli_options(p: argparse.ArgumentParser) -> None:
+    """Options of ``tiltbench generate class``."""
+    from bench.cli_generate import add_common
+
+    add_common(p)
+    p.add_argument("--count", type=int, required=True, help="number of students K")
+    p.add_argument("--prefix", default="student", help="folder prefix (student_001, …)")
+    p.add_argument("--noise-var", default="0.25,0.64",
+                   help="noise variances x,y (m/s²)² of every set")
+    p.description = ("K unique course sets (one folder each, no truth inside) and the "
+                     "private answer key DIR/answer_key.csv and DIR/answer_key.json.")
+
+
+def cli_generate_class(args: argparse.Namespace) -> int:
+    """Handler of ``tiltbench generate class``: JSON summary (no answers) on stdout."""
+    from bench.course import CourseConfig
+    from calib.io import parse_pair
+
+    nv = parse_pair(args.noise_var, "--noise-var")
+    if np.any(nv <= 0):
+        raise DataError(f"--noise-var: variances must be positive, got {args.noise_var}")
+    if not args.prefix or "/" in args.prefix or "\\" in args.prefix:
+        raise DataError(f"--prefix must be a plain name, got {args.prefix!r}")
+
+    def progress(done: int, total: int) -> None:
+        print(f"\rgenerate class: {done}/{total} sets", end="" if done < total else "\n",
+              file=sys.stderr, flush=True)
+
+    res = generate_class(args.out, args.count, args.seed, args.force,
+                         CourseConfig(noise_var=(float(nv[0]), float(nv[1]))), args.prefix,
+                         progress)
+    print(dumps({"count": len(res.folders),
+                 "folders": {k: str(v) for k, v in res.folders.items()},
+                 "answer_key": {"csv": str(res.key_csv), "json": str(res.key_json)},
+                 "note": "keep answer_key.* private; hand out the student folders"}), end="")
+    return 0
+
+
+__all__ = ["ClassSet", "add_cli_options", "cli_generate_class", "generate_class",
+           "student_seeds", "student_truth"]

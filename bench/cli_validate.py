@@ -1,0 +1,55 @@
+"""``tiltbench validate``: estimates from any tool against the truth of a generated set."""
+
+from __future__ import annotations
+
+import argparse
+
+from calib.io import DataError, dumps
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from bench.validate import load_json, validate
+
+    truth = load_json(args.truth, "truth file")
+    if isinstance(truth, dict) and "students" in truth:  # a class answer key
+        from bench.classset import student_truth
+
+        if not args.student:
+            raise DataError(f"{args.truth}: a class answer key; name the student with "
+                            "--student (e.g. student_001)")
+        truth = student_truth(truth, args.student)
+    est = load_json(args.estimates, "estimates file")
+    theta, src = None, None
+    if args.ensayo:
+        from calib.io import read_ensayo
+
+        theta, src = read_ensayo(args.ensayo).tita, str(args.ensayo)
+    result = validate(truth, est, args.level, args.std, theta, src)
+    if args.json:
+        print(dumps(result.to_dict()), end="")
+    else:
+        print(f"{args.estimates} against {args.truth} at level {args.level:g}")
+        print(result.summary())
+    return 0 if result.passed else 1
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "validate", help="check estimates against the truth (exit 0 pass, 1 fail, 2 bad input)",
+        description="Per-parameter z-scores of bias and scale against truth.json and a joint "
+        "chi-square test at the level (pass probability = level for an honest estimator). "
+        "Exit code 0: pass, 1: fail, 2: bad input. Formats: docs/validate.md.")
+    p.add_argument("--truth", required=True,
+                   help="truth.json of the generated set, or a class answer_key.json")
+    p.add_argument("--student", help="student folder name when --truth is a class "
+                   "answer_key.json (e.g. student_001)")
+    p.add_argument("--estimates", required=True,
+                   help="est.json: the calibrate --json object or {axes: {x: {bias, scale}, "
+                   "y: {...}}}")
+    p.add_argument("--level", type=float, default=0.99, help="test level (default 0.99)")
+    p.add_argument("--std", choices=["auto", "reported", "design"], default="auto",
+                   help="standard deviations: reported in est.json, or recomputed from the "
+                   "design with the true noise variances (auto: reported if present)")
+    p.add_argument("--ensayo", help="ensayo.mat the estimates came from (θ for --std design)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.set_defaults(handler=_cmd_validate)

@@ -1,0 +1,458 @@
+"""``tiltbench demo``: the whole job end to end on embedded defaults.
+
+Steps (each timed, with a progress line on stderr):
+
+1. generate a course set with the bench (:func:`bench.course.make_course_set`, MuJoCo tilt
+   table and vehicle) into ``OUT/data`` — or, with ``course_data``, use real course files;
+2. calibrate ``ensayo.mat`` (per-axis OLS, noise variances from ``datos.txt``: the same as
+   ``tiltbench calibrate OUT/data/ensayo.mat --datos OUT/data/datos.txt --json``);
+3. correct and integrate ``acel.mat``, confidence region of the arrival point and decision
+   (``tiltbench trajectory``), N analysis (:mod:`calib.nmin`);
+4. validate the estimates against ``truth.json`` (:mod:`bench.validate`) and check the
+   honesty of the intervals on fresh synthetic calibrations with the same design (Monte
+   Carlo pass rate of the joint test against its level);
+5. figures (:mod:`bench.figures`), a rerun recording (:mod:`bench.record`, read back to check
+   that truth and estimates are recoverable) and a Markdown report.
+
+Outputs in ``OUT``: ``data/`` (the student's files + ``truth.json``), ``estimates.json``,
+``trajectory.json``, ``validation.json``, ``figures/*.png``, ``demo.rrd``, ``report.md``.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+
+from calib.calibration import Calibration, calibrate
+from calib.conventions import AXES
+from calib.io import (
+    Acel,
+    Ensayo,
+    atomic_write_text,
+    dumps,
+    read_acel,
+    read_datos,
+    read_ensayo,
+    read_puntos,
+)
+from calib.region import ArrivalRegion, arrival_region
+from calib.trajectory import Trajectory, compute_trajectory
+
+DEFAULT_SEED = 0
+"""Seed of the embedded demo (the generators' default seed)."""
+DEFAULT_LEVEL = 0.997
+"""Level of the arrival region (the course's 3σ ≈ 99.7 %)."""
+VALIDATE_LEVEL = 0.99
+"""Level of the ground-truth test (``tiltbench validate`` default)."""
+COVERAGE_RUNS = 300
+"""Fresh synthetic calibrations in the coverage check."""
+COVERAGE_LEVEL = 0.95
+"""Level of the coverage check (0.95: about 15 expected failures in 300 runs, so a rate far
+from the level is visible; at 0.99 the check would have little power)."""
+
+OUTPUT_NAMES = ("estimates.json", "trajectory.json", "validation.json", "demo.rrd",
+                "report.md")
+
+
+class Progress:
+    """Progress lines on a stream: ``[k/n] label ... done (1.23 s)``.
+
+    On a terminal the line is refreshed every 0.25 s with the elapsed time while a step runs;
+    otherwise one line is written when the step ends. ``quiet`` silences it.
+    """
+
+    def __init__(self, total: int, stream: IO[str] | None = None, quiet: bool = False) -> None:
+        self.total = total
+        self.k = 0
+        self.stream = stream or sys.stderr
+        self.quiet = quiet
+        self.t0 = time.perf_counter()
+        self.times: dict[str, float] = {}
+
+    @contextmanager
+    def step(self, label: str) -> Iterator[None]:
+        self.k += 1
+        head = f"[{self.k}/{self.total}] {label}"
+        tty = hasattr(self.stream, "isatty") and self.stream.isatty() and not self.quiet
+        start = time.perf_counter()
+        stop = threading.Event()
+
+        def tick() -> None:
+            while not stop.wait(0.25):
+                self.stream.write(f"\r{head} ... {time.perf_counter() - start:5.1f} s")
+                self.stream.flush()
+
+        thread = threading.Thread(target=tick, daemon=True) if tty else None
+        if thread:
+            thread.start()
+        elif not self.quiet:  # logs: say what is running before it runs
+            self.stream.write(f"{head} ...\n")
+            self.stream.flush()
+        try:
+            yield
+        finally:
+            stop.set()
+            if thread:
+                thread.join()
+            dt = time.perf_counter() - start
+            self.times[label] = dt
+            if not self.quiet:
+                self.stream.write(("\r" if tty else "") + f"{head} ... done ({dt:.2f} s)"
+                                  + (" " * 8 if tty else "") + "\n")
+                self.stream.flush()
+
+    @property
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.t0
+
+
+@dataclass
+class CourseAnalysis:
+    """Calibration, trajectory and decision of one course set (files already read)."""
+
+    ensayo: Ensayo
+    acel: Acel
+    candidates: dict[str, np.ndarray]
+    p0: np.ndarray
+    v0: np.ndarray
+    noise_var: np.ndarray | None
+    cal: Calibration
+    traj: Trajectory
+    region: ArrivalRegion
+    method: str = "ols"
+    warnings: list[str] = field(default_factory=list)
+
+    def trajectory_json(self) -> dict:
+        from bench.record import trajectory_tree
+
+        return trajectory_tree(self.traj, self.region, self.cal, self.method,
+                               "given" if self.noise_var is not None else "estimated")
+
+
+def analyze_course_dir(course_dir: str | Path, level: float = DEFAULT_LEVEL,
+                       method: str = "ols") -> CourseAnalysis:
+    """Read ``ensayo.mat``, ``acel.mat``, ``puntos.mat`` and ``datos.txt`` of a course set and
+    run calibration, trajectory and decision (as ``tiltbench trajectory --datos``)."""
+    d = Path(course_dir)
+    ensayo = read_ensayo(d / "ensayo.mat")
+    acel = read_acel(d / "acel.mat")
+    candidates = read_puntos(d / "puntos.mat")
+    datos = read_datos(d / "datos.txt")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        cal = calibrate(ensayo, datos.noise_var, method)  # type: ignore[arg-type]
+    traj = compute_trajectory(acel, cal, datos.p0, datos.v0)
+    region = arrival_region(traj, cal, candidates, datos.noise_var, level)
+    return CourseAnalysis(ensayo, acel, candidates, datos.p0, datos.v0, datos.noise_var, cal,
+                          traj, region, method, [str(w.message) for w in caught])
+
+
+def coverage_check(truth: dict, runs: int = COVERAGE_RUNS, level: float = COVERAGE_LEVEL,
+                   seed: int = 0) -> dict:
+    """Pass rate of :func:`bench.validate.validate` on fresh synthetic calibrations.
+
+    Each run redraws the readings of the truth's design (θ rebuilt from ``truth.json``) with
+    the course model and the true parameters (numpy, no MuJoCo: the static table reproduces
+    ``[-g sin θ, -g cos θ]`` to 1e-15), calibrates with known σ² and applies the joint test.
+    An honest estimator passes with probability ``level``; the binomial tolerance is
+    ``4·sqrt(level(1 − level)/runs)``.
+    """
+    from bench.validate import design_theta, true_sensor_params, validate
+    from calib.conventions import reference_accel
+
+    tp = true_sensor_params(truth)
+    if tp is None:
+        raise ValueError("truth has no sensor parameters")
+    theta = design_theta(truth)
+    g = float(truth.get("course", {}).get("g", truth.get("g", 9.8)))
+    a_r = reference_accel(theta, g)
+    scale = np.array([tp["scale_x"], tp["scale_y"]])
+    bias = np.array([tp["bias_x"], tp["bias_y"]])
+    nv = np.array([tp["noise_var_x"], tp["noise_var_y"]])
+    clean = (1.0 + scale) * a_r + bias
+    passed = 0
+    each = np.zeros(4)
+    # spawn_key (7,): a stream family of its own, independent of the course set's streams
+    for ss in np.random.SeedSequence(seed, spawn_key=(7,)).spawn(runs):
+        rng = np.random.default_rng(ss)
+        datos = clean + np.sqrt(nv) * rng.standard_normal(clean.shape)
+        cal = calibrate(Ensayo(theta, datos), nv, "ols", g)
+        v = validate(truth, cal.to_dict(), level)
+        passed += v.passed
+        each += v.passed_each
+    tol = 4.0 * np.sqrt(level * (1 - level) / runs)
+    rate = passed / runs
+    return {"runs": runs, "level": level, "pass_rate": rate, "tolerance": tol,
+            "consistent": bool(abs(rate - level) <= tol),
+            "pass_rate_each": dict(zip(("bias_x", "scale_x", "bias_y", "scale_y"),
+                                       (each / runs).tolist(), strict=True)),
+            "n": int(theta.size), "seed": seed}
+
+
+@dataclass
+class DemoResult:
+    """What :func:`run_demo` produced: paths written and the numbers of the summary."""
+
+    out: Path
+    files: dict[str, Path]
+    analysis: CourseAnalysis
+    truth: dict | None
+    validation: Any
+    coverage: dict | None
+    nmin: dict
+    recovered: bool | None
+    times: dict[str, float]
+    elapsed: float
+    source: str
+
+    def summary(self) -> str:
+        return demo_summary(self)
+
+
+def _prepare(out: Path, force: bool, generate: bool) -> None:
+    from bench.course import COURSE_FILES
+
+    names = list(OUTPUT_NAMES) + [f"figures/{n}.png" for n in FIGURE_NAMES]
+    if generate:
+        names += [f"data/{n}" for n in COURSE_FILES]
+    clash = [n for n in names if (out / n).exists()]
+    if clash and not force:
+        raise FileExistsError(f"{out}: {', '.join(clash[:4])}{' …' if len(clash) > 4 else ''} "
+                              "already exist(s); pass --force to overwrite")
+
+
+FIGURE_NAMES = ("calibration_x", "calibration_y", "parameters", "trajectory", "acceleration",
+                "uncertainty_growth", "nmin")
+
+
+def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool = False,
+             course_data: str | Path | None = None, level: float = DEFAULT_LEVEL,
+             coverage_runs: int = COVERAGE_RUNS, quiet: bool = False,
+             stream: IO[str] | None = None) -> DemoResult:
+    """Run the demo (module docstring); return what was written and computed.
+
+    Parameters
+    ----------
+    out : output directory.  seed : seed of the generated course set.
+    force : overwrite existing outputs (checked before anything is written).
+    course_data : directory with real course files (ensayo.mat, acel.mat, puntos.mat,
+        datos.txt; truth.json used if present) instead of generating a set.
+    level : level of the arrival region.  coverage_runs : Monte Carlo runs (0: skip).
+    quiet : no progress lines.  stream : where progress goes (default stderr).
+    """
+    from bench import figures
+    from bench.record import read_recording, record_course
+    from bench.validate import load_json, validate
+
+    out = Path(out)
+    generate = course_data is None
+    _prepare(out, force, generate)
+    steps = 7 if generate else 6
+    prog = Progress(steps, stream, quiet)
+    files: dict[str, Path] = {}
+    true_path = true_acc = None
+    if generate:
+        from bench.course import make_course_set, write_course
+
+        with prog.step(f"generating a course set with the MuJoCo bench (seed {seed})"):
+            course = make_course_set(None, seed)
+            written = write_course(course, out / "data", force=force)
+            files.update({f"data/{Path(p).name}": Path(p) for p in written.values()})
+            true_path, true_acc = course.vehicle.truth.pos, course.vehicle.truth.acc
+        data_dir = out / "data"
+        source = f"generated course set, seed {seed}"
+    else:
+        data_dir = Path(course_data)
+        source = f"course files in {data_dir}"
+    truth = load_json(data_dir / "truth.json", "truth") if (data_dir / "truth.json").exists() \
+        else None
+    if truth is not None and true_path is None:
+        samples = truth.get("vehicle", {}).get("trajectory", {}).get("samples", {})
+        if "pos" in samples:
+            true_path = np.asarray(samples["pos"], dtype=float)
+    with prog.step("calibrating, correcting, integrating and deciding"):
+        ana = analyze_course_dir(data_dir, level)
+        est = ana.cal.to_dict()
+        tj = ana.trajectory_json()
+        files["estimates.json"] = atomic_write_text(out / "estimates.json", dumps(est), True)
+        files["trajectory.json"] = atomic_write_text(out / "trajectory.json", dumps(tj), True)
+        nmin = _nmin(ana)
+    val = cov = None
+    if truth is not None:
+        with prog.step("validating the estimates against truth.json"):
+            val = validate(truth, est, VALIDATE_LEVEL)
+            files["validation.json"] = atomic_write_text(out / "validation.json",
+                                                         dumps(val.to_dict()), True)
+        if generate and coverage_runs > 0:
+            with prog.step(f"coverage check: {coverage_runs} fresh calibrations, same design"):
+                cov = coverage_check(truth, coverage_runs, COVERAGE_LEVEL, seed)
+    true_final = None
+    if truth is not None and "true_final_position" in truth:
+        true_final = np.asarray(truth["true_final_position"], dtype=float)
+    with prog.step("figures"):
+        fdir = out / "figures"
+        files.update({f"figures/{p.name}": p for p in figures.write_calibration_figures(
+            fdir, ana.cal, ana.ensayo, truth, 0.95, "png", True).values()})
+        true_acc_plot = true_acc
+        files.update({f"figures/{p.name}": p for p in figures.write_vehicle_figures(
+            fdir, ana.traj, ana.region, ana.cal, ana.ensayo.n, true_final, true_path,
+            true_acc_plot, "png", True).values()})
+    recovered = None
+    with prog.step("rerun recording (written, then read back)"):
+        rrd = record_course(out / "demo.rrd", cal=ana.cal, ensayo=ana.ensayo, traj=ana.traj,
+                            region=ana.region, force=True, truth=truth, true_path=true_path,
+                            true_acc=true_acc, tree=tj)
+        files["demo.rrd"] = rrd
+        back = read_recording(rrd)
+        recovered = back["estimates"] == _jsonable(est) and back["trajectory"] == _jsonable(tj)
+        if truth is not None:
+            recovered = recovered and back["truth"] == truth
+    result = DemoResult(out, files, ana, truth, val, cov, nmin, recovered, prog.times,
+                        0.0, source)
+    with prog.step("report"):
+        files["report.md"] = atomic_write_text(out / "report.md", report_markdown(result),
+                                               True)
+    result.elapsed = prog.elapsed
+    return result
+
+
+def _jsonable(obj: Any) -> Any:
+    import json
+
+    return json.loads(dumps(obj))
+
+
+def _nmin(ana: CourseAnalysis) -> dict:
+    from calib.nmin import PositionCovModel, design_nmin, posterior_nrange
+
+    model = PositionCovModel.from_region(ana.region, ana.cal.g)
+    cal_only = PositionCovModel.from_region(ana.region, ana.cal.g, include_noise=False)
+    return {"design": design_nmin(ana.region.candidates, model, ana.region.level),
+            "design_calibration_only": design_nmin(ana.region.candidates, cal_only,
+                                                   ana.region.level),
+            "posterior": posterior_nrange(ana.region.estimate, ana.region.candidates, model,
+                                          ana.region.level)}
+
+
+def _param_rows(res: DemoResult) -> list[tuple[str, float | None, float, float, float | None]]:
+    from bench.validate import true_sensor_params
+
+    tp = true_sensor_params(res.truth) if res.truth else None
+    rows = []
+    for a in AXES:
+        f = res.analysis.cal.fits[a]
+        for j, p in enumerate(("bias", "scale")):
+            name = f"{p}_{a}"
+            est, std = float(f.params[j]), float(f.std[j])
+            tv = tp[name] if tp else None
+            rows.append((name, tv, est, std, None if tv is None else (est - tv) / std))
+    return rows
+
+
+def demo_summary(res: DemoResult) -> str:
+    """The text printed at the end of the demo."""
+    ana = res.analysis
+    r = ana.region
+    lines = [f"tiltbench demo — {res.source}", "",
+             f"Calibration (per-axis OLS, σ² from datos.txt, N = {ana.ensayo.n}):",
+             f"  {'parameter':<10}{'true':>14}{'estimate':>14}{'std':>12}{'z':>8}"]
+    for name, tv, est, std, z in _param_rows(res):
+        lines.append(f"  {name:<10}{'—' if tv is None else format(tv, '.6g'):>14}"
+                     f"{est:>14.6g}{std:>12.3g}{'' if z is None else format(z, '+.2f'):>8}")
+    answer = res.truth.get("answer") if res.truth else None
+    lines += ["", f"Arrival ({100 * r.level:g}% region): estimate ({r.estimate[0]:.2f}, "
+              f"{r.estimate[1]:.2f}) m, std ({r.std[0]:.2f}, {r.std[1]:.2f}) m",
+              f"  decision: {r.decision or 'undecided'}"
+              + (f"   true arrival point: {answer}" if answer else "")
+              + f"   (uncorrected path ends at ({ana.traj.final_raw[0]:.1f}, "
+              f"{ana.traj.final_raw[1]:.1f}) m)"]
+    d = res.nmin["design"]
+    dn = (str(d["n"]) if d["n"] is not None else
+          "none suffices (the vehicle-noise part does not shrink with N)")
+    lines.append(f"  N analysis: design N = {dn}; calibration part only: "
+                 f"{res.nmin['design_calibration_only']['n']}")
+    if res.validation is not None:
+        v = res.validation
+        lines += ["", f"Validation against truth.json at {100 * v.level:g}%: "
+                  f"{'PASS' if v.passed else 'FAIL'} (d² = {v.chi2:.2f} ≤ "
+                  f"{v.chi2_limit:.2f} needed)"]
+    if res.coverage is not None:
+        c = res.coverage
+        lines.append(f"Coverage: {c['pass_rate']:.3f} of {c['runs']} fresh calibrations pass "
+                     f"(expected {c['level']:g} ± {c['tolerance']:.3f}) → "
+                     f"{'consistent' if c['consistent'] else 'NOT consistent'}")
+    if res.recovered is not None:
+        lines.append(f"Recording read back: truth and estimates "
+                     f"{'recovered exactly' if res.recovered else 'DIFFER'}")
+    lines += ["", "Reproduce the estimates:",
+              f"  tiltbench calibrate {res.analysis.ensayo.source} --datos "
+              f"{Path(res.analysis.ensayo.source).parent / 'datos.txt'} --json", "",
+              "Files written:"]
+    for k in sorted(res.files):
+        p = res.files[k]
+        lines.append(f"  {p}  ({p.stat().st_size / 1024:.0f} KiB)")
+    lines.append(f"\nDone in {res.elapsed:.1f} s. Open the recording with: "
+                 f"rerun {res.files.get('demo.rrd', '')}")
+    return "\n".join(lines)
+
+
+def report_markdown(res: DemoResult) -> str:
+    """The Markdown report (``report.md``) of a demo run."""
+    ana = res.analysis
+    r = ana.region
+    L = f"{100 * r.level:g}%"
+    nv_text = ana.noise_var.tolist() if ana.noise_var is not None else "estimated"
+    md = ["# tiltbench demo report", "", f"Source: {res.source}.", ""]
+    md += ["## Calibration", "",
+           f"Per-axis least squares of `A_m = (1 + scale)·A_r + bias + v` with "
+           f"`A_rx = -g sin θ`, `A_ry = -g cos θ`, g = {ana.cal.g} m/s², N = {ana.ensayo.n}, "
+           f"noise variances from datos.txt ({nv_text} (m/s²)²).",
+           "", "| parameter | true | estimate | std | z |", "|---|---|---|---|---|"]
+    for name, tv, est, std, z in _param_rows(res):
+        md.append(f"| {name} | {'—' if tv is None else f'{tv:.6g}'} | {est:.6g} | {std:.3g} | "
+                  f"{'—' if z is None else f'{z:+.2f}'} |")
+    md += ["", "χ²/dof: " + ", ".join(f"{a} {ana.cal.fits[a].chi2_dof:.3f}" for a in AXES), ""]
+    md += ["![x axis](figures/calibration_x.png)", "", "![y axis](figures/calibration_y.png)",
+           "", "![parameters](figures/parameters.png)", ""]
+    if res.validation is not None:
+        md += ["## Validation against the truth", "", "```", res.validation.summary(), "```",
+               ""]
+    if res.coverage is not None:
+        c = res.coverage
+        md += [f"Coverage check: {c['runs']} fresh calibrations with the same θ design and "
+               f"true parameters; the joint test passes at rate {c['pass_rate']:.3f} "
+               f"(expected {c['level']:g}, binomial tolerance ±{c['tolerance']:.3f}): "
+               f"{'consistent' if c['consistent'] else 'not consistent'}. Per parameter: "
+               + ", ".join(f"{k} {v:.3f}" for k, v in c["pass_rate_each"].items()) + ".", ""]
+    md += ["## Trajectory and arrival decision", "", "```", ana.traj.summary(), r.summary(),
+           "```", ""]
+    if res.truth and "answer" in res.truth:
+        ok = r.decision == res.truth["answer"]
+        md += [f"True arrival point: **{res.truth['answer']}** — the decision is "
+               f"{'right' if ok else ('undecided' if r.decision is None else 'WRONG')}.", ""]
+    md += ["![trajectory](figures/trajectory.png)", "",
+           "![acceleration](figures/acceleration.png)", "",
+           "![uncertainty growth](figures/uncertainty_growth.png)", "",
+           "## How many calibration samples?", ""]
+    d, dc, p = res.nmin["design"], res.nmin["design_calibration_only"], res.nmin["posterior"]
+    md += [f"* design N making the {L} regions of the candidates disjoint: "
+           f"{d['n'] if d['n'] is not None else 'none suffices'} "
+           f"(calibration part only: {dc['n'] if dc['n'] is not None else 'none'});",
+           f"* with this estimate fixed, exactly one candidate ({p['letter']}) is inside for "
+           f"N ≥ {p['n_min']}" + ("" if p["n_max"] is None else f" up to {p['n_max']}")
+           + "." if p["n_min"] is not None else "* with this estimate fixed: never decided.",
+           "", "![N analysis](figures/nmin.png)", "",
+           "## Files", "", "| file | size |", "|---|---|"]
+    for k in sorted(res.files):
+        md.append(f"| `{k}` | {res.files[k].stat().st_size / 1024:.0f} KiB |")
+    md += ["", "Step times: " + "; ".join(f"{k}: {v:.2f} s" for k, v in res.times.items()), ""]
+    return "\n".join(md)

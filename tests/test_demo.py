@@ -1,0 +1,103 @@
+"""`tiltbench demo`: runs end to end from a fresh directory, lists what it writes, and prints
+the estimates `tiltbench calibrate --json` gives on the generated ensayo.mat."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from bench.cli import main
+from bench.record import read_recording
+
+TILTBENCH = Path(sys.executable).parent / "tiltbench"
+
+
+def run_cli(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
+    exe = [str(TILTBENCH)] if TILTBENCH.exists() else [sys.executable, "-m", "bench.cli"]
+    return subprocess.run(exe + args, cwd=cwd, capture_output=True, text=True, timeout=300)
+
+
+def listed_files(stdout: str, cwd: Path) -> list[Path]:
+    block = stdout.split("Files written:", 1)[1].split("\n\n", 1)[0]
+    out = []
+    for line in block.strip().splitlines():
+        m = re.match(r"\s*(\S+)\s+\(\d+ KiB\)$", line)
+        assert m, line
+        p = Path(m.group(1))
+        out.append(p if p.is_absolute() else cwd / p)
+    return out
+
+
+def printed_estimates(stdout: str) -> dict[str, float]:
+    rows = re.findall(r"^\s+(bias|scale)_([xy])\s+(\S+)\s+(\S+)\s+(\S+)", stdout, re.M)
+    return {f"{p}_{a}": float(est) for p, a, _true, est, _std in rows}
+
+
+@pytest.mark.slow
+def test_demo_from_a_fresh_directory(tmp_path, capsys):
+    """The README's first command (`make demo` = `tiltbench demo --out demo-out --force`)."""
+    res = run_cli(["demo", "--out", "demo-out", "--force"], tmp_path)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "[1/7]" in res.stderr and "done (" in res.stderr  # progress with elapsed time
+    files = listed_files(res.stdout, tmp_path)
+    names = {p.name for p in files}
+    assert {"ensayo.mat", "acel.mat", "puntos.mat", "datos.txt", "truth.json", "demo.rrd",
+            "report.md", "estimates.json", "trajectory.json", "validation.json",
+            "calibration_x.png", "trajectory.png", "nmin.png"} <= names
+    for p in files:
+        assert p.exists() and p.stat().st_size > 0, p
+    out = tmp_path / "demo-out"
+    capsys.readouterr()
+    assert main(["calibrate", str(out / "data" / "ensayo.mat"), "--datos",
+                 str(out / "data" / "datos.txt"), "--json"]) == 0
+    est = json.loads(capsys.readouterr().out)
+    assert json.loads((out / "estimates.json").read_text()) == est
+    printed = printed_estimates(res.stdout)
+    assert len(printed) == 4
+    for a in "xy":
+        for p in ("bias", "scale"):
+            assert printed[f"{p}_{a}"] == pytest.approx(est["axes"][a][p], rel=5e-6, abs=1e-12)
+    back = read_recording(out / "demo.rrd")
+    assert back["estimates"] == est
+    assert back["truth"] == json.loads((out / "data" / "truth.json").read_text())
+    report = (out / "report.md").read_text(encoding="utf-8")
+    for fig in ("calibration_x.png", "trajectory.png", "nmin.png"):
+        assert f"figures/{fig}" in report
+    # a second run without --force refuses before writing anything (exit 2)
+    again = run_cli(["demo", "--out", "demo-out"], tmp_path)
+    assert again.returncode == 2 and "--force" in again.stderr
+
+
+def test_demo_library_truth_beside_estimates(tmp_path):
+    """run_demo on a small budget: decision, validation and recovered recording reported."""
+    from bench.demo import run_demo
+
+    res = run_demo(tmp_path / "d", seed=3, coverage_runs=20, quiet=True)
+    text = res.summary()
+    assert res.recovered is True
+    assert res.truth is not None and res.validation is not None
+    assert f"true arrival point: {res.truth['answer']}" in text
+    assert "Coverage:" in text and res.coverage["runs"] == 20
+    for p in res.files.values():
+        assert p.exists() and p.stat().st_size > 0
+
+
+def test_demo_on_course_data(tmp_path, course_dir):
+    res = run_cli(["demo", "--course-data", str(course_dir), "--out", "cd", "--quiet"],
+                  tmp_path)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "course files in" in res.stdout
+    files = listed_files(res.stdout, tmp_path)
+    assert {"demo.rrd", "report.md", "trajectory.png", "calibration_y.png"} <= {
+        p.name for p in files}
+    assert not (tmp_path / "cd" / "data").exists()  # course data read in place, not copied
+    printed = printed_estimates(res.stdout)
+    # the course answer (FreeMat 2009) to the digits it gives
+    assert printed["scale_x"] == pytest.approx(-0.0301, abs=0.5e-4)
+    assert printed["bias_x"] == pytest.approx(0.0767, abs=0.5e-4)
+    assert read_recording(tmp_path / "cd" / "demo.rrd")["truth"] is None

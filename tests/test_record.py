@@ -1,0 +1,284 @@
+"""Rerun recordings: truth and estimates come back exactly; files verify; entities documented."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from rerun.chunk import RrdReader
+
+from bench.cli import main
+from bench.record import (
+    ENTITY_DOCS,
+    documented,
+    entity_table_markdown,
+    log_tree,
+    open_recording,
+    read_recording,
+    record_calibration,
+    record_course,
+    record_series,
+    recording_entities,
+)
+from bench.tilt import CalibrationConfig, ThetaDesign, generate_calibration, write_calibration
+from calib.calibration import calibrate
+from calib.io import read_ensayo
+
+REPO = Path(__file__).resolve().parents[1]
+RERUN = shutil.which("rerun", path=str(Path(__import__("sys").executable).parent))
+
+
+def _cli_json(capsys, argv: list[str]) -> dict:
+    capsys.readouterr()
+    assert main(argv) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def _small_run(seed: int = 3, count: int = 801):
+    cfg = CalibrationConfig(theta=ThetaDesign(kind="range", count=count))
+    return generate_calibration(cfg, seed)
+
+
+def test_calibration_roundtrip_equals_truth_and_calibrate_json(tmp_path, capsys):
+    """generate → calibrate → record → read back == truth.json and `calibrate --json`."""
+    run = _small_run()
+    paths = write_calibration(run, tmp_path / "set")
+    truth = json.loads(Path(paths["truth"]).read_text())
+    est_cli = _cli_json(capsys, ["calibrate", paths["ensayo"], "--noise-var", "0.25,0.64",
+                                 "--json"])
+    ensayo = read_ensayo(paths["ensayo"])
+    cal = calibrate(ensayo, [0.25, 0.64])
+    rrd = record_calibration(cal, ensayo, tmp_path / "cal.rrd", truth=truth)
+    back = read_recording(rrd)
+    assert back["truth"] == truth
+    assert back["estimates"] == est_cli
+    assert back["trajectory"] is None
+
+
+def test_generate_calibration_rrd_gives_truth_json(tmp_path, capsys):
+    """`tiltbench generate calibration --rrd` records exactly what truth.json holds."""
+    out = tmp_path / "gen"
+    info = _cli_json(capsys, ["generate", "calibration", "--count", "301", "--seed", "11",
+                              "--out", str(out), "--rrd", str(tmp_path / "t.rrd")])
+    truth = json.loads((out / "truth.json").read_text())
+    back = read_recording(info["files"]["rrd"])
+    assert back["truth"] == truth
+    assert back["estimates"] is None
+    ents = recording_entities(tmp_path / "t.rrd")
+    for e in ents:
+        d = documented(e)
+        assert d is not None and "truth-run" in d.kinds, e
+
+
+def test_calibrate_rrd_option(tmp_path, capsys):
+    """`tiltbench calibrate --rrd` writes a recording whose estimates equal --json."""
+    run = _small_run(5, 401)
+    paths = write_calibration(run, tmp_path)
+    rrd = tmp_path / "c.rrd"
+    est = _cli_json(capsys, ["calibrate", paths["ensayo"], "--json", "--rrd", str(rrd)])
+    assert read_recording(rrd)["estimates"] == est
+    # refuses to overwrite without --force (exit 2), replaces with it
+    capsys.readouterr()
+    assert main(["calibrate", paths["ensayo"], "--json", "--rrd", str(rrd)]) == 2
+    assert "exists" in capsys.readouterr().err
+    assert main(["calibrate", paths["ensayo"], "--json", "--rrd", str(rrd), "--force"]) == 0
+
+
+@pytest.fixture(scope="module")
+def course_set(tmp_path_factory):
+    """A generated course set on disk with its analysis (as `tiltbench demo` makes it)."""
+    from bench.course import generate_course
+    from bench.demo import analyze_course_dir
+
+    d = tmp_path_factory.mktemp("course")
+    course = generate_course(d, seed=4)
+    return d, course, analyze_course_dir(d)
+
+
+def test_course_set_roundtrip(course_set, tmp_path, capsys):
+    """Course set: truth.json, `calibrate --json` and `trajectory --json` come back exactly."""
+    d, course, ana = course_set
+    truth = json.loads((d / "truth.json").read_text())
+    rrd = record_course(tmp_path / "course.rrd", cal=ana.cal, ensayo=ana.ensayo, traj=ana.traj,
+                        region=ana.region, truth=truth, true_path=course.vehicle.truth.pos,
+                        true_acc=course.vehicle.truth.acc, tree=ana.trajectory_json())
+    back = read_recording(rrd)
+    assert back["truth"] == truth
+    est = _cli_json(capsys, ["calibrate", str(d / "ensayo.mat"), "--datos",
+                             str(d / "datos.txt"), "--json"])
+    assert back["estimates"] == est
+    traj = _cli_json(capsys, ["trajectory", "--ensayo", str(d / "ensayo.mat"), "--acel",
+                              str(d / "acel.mat"), "--puntos", str(d / "puntos.mat"),
+                              "--datos", str(d / "datos.txt"), "--level",
+                              str(ana.region.level), "--json"])
+    assert back["trajectory"] == traj
+    # the seed is an int, every number bit-exact (dict equality above compares floats with ==)
+    assert isinstance(back["truth"]["seed"], int)
+    # CLI reader gives the same object
+    assert _cli_json(capsys, ["record", "read", str(rrd), "--json"]) == json.loads(
+        json.dumps(back))
+
+
+@pytest.fixture(scope="module")
+def course_data_rrd(course_dir, tmp_path_factory):
+    from bench.demo import analyze_course_dir
+
+    ana = analyze_course_dir(course_dir)
+    path = tmp_path_factory.mktemp("rrd") / "course-data.rrd"
+    record_course(path, cal=ana.cal, ensayo=ana.ensayo, traj=ana.traj, region=ana.region,
+                  tree=ana.trajectory_json())
+    return path, ana
+
+
+def test_course_data_recording_loads_and_verifies(course_data_rrd):
+    path, ana = course_data_rrd
+    reader = RrdReader(str(path))
+    assert len(reader.recordings()) == 1
+    assert len(reader.blueprints()) == 1  # the default layout is in the file
+    chunks = reader.stream().to_chunks()
+    assert sum(c.num_rows for c in chunks) > ana.ensayo.n  # the data, not just metadata
+    assert RERUN is not None, "the rerun binary should sit beside the Python interpreter"
+    res = subprocess.run([RERUN, "rrd", "verify", str(path)], capture_output=True, text=True,
+                         timeout=120)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "without error" in (res.stdout + res.stderr)
+
+
+def test_course_data_entities_are_the_documented_ones(course_data_rrd):
+    """Every entity matches a row of the table; every non-optional row is present."""
+    path, _ = course_data_rrd
+    ents = recording_entities(path)
+    kinds = {"calibration", "vehicle"}
+    for e in ents:
+        d = documented(e)
+        assert d is not None, f"{e} is not in docs/recordings.md"
+        assert kinds & set(d.kinds), f"{e} documented for {d.kinds} only"
+    for d in ENTITY_DOCS:
+        if d.optional or not (kinds & set(d.kinds)):
+            continue
+        assert any(d.regex().match(e.lstrip("/")) for e in ents), f"{d.pattern} missing"
+    assert not any(e.lstrip("/").startswith("truth") for e in ents)  # course data: no truth
+    back = read_recording(path)
+    assert back["truth"] is None and back["estimates"]["axes"]["x"]["n"] == 20001
+
+
+def test_docs_table_is_generated_from_entity_docs():
+    text = (REPO / "docs" / "recordings.md").read_text(encoding="utf-8")
+    start, end = "<!-- entity-table:start -->", "<!-- entity-table:end -->"
+    table = text[text.index(start) + len(start):text.index(end)].strip()
+    assert table == entity_table_markdown()
+
+
+def test_refuses_overwrite_and_leaves_no_partial_file(tmp_path):
+    target = tmp_path / "x.rrd"
+    target.write_bytes(b"old")
+    with pytest.raises(FileExistsError):
+        with open_recording(target) as rec:
+            log_tree(rec, "truth", {"a": 1.0})
+    assert target.read_bytes() == b"old"
+    with pytest.raises(TypeError):
+        with open_recording(tmp_path / "y.rrd") as rec:
+            log_tree(rec, "truth", {"a": {1, 2}})  # a set is not JSON
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.rrd"]
+
+
+def test_two_recordings_in_one_process_stay_separate(tmp_path):
+    a, b = tmp_path / "a.rrd", tmp_path / "b.rrd"
+    with open_recording(a) as ra, open_recording(b) as rb:
+        log_tree(ra, "truth", {"who": "a", "v": 1.5})
+        log_tree(rb, "truth", {"who": "b", "v": -2.5})
+        log_tree(ra, "estimate", {"n": 3})
+    assert read_recording(a)["truth"] == {"who": "a", "v": 1.5}
+    assert read_recording(a)["estimates"] == {"n": 3}
+    assert read_recording(b)["truth"] == {"who": "b", "v": -2.5}
+    assert read_recording(b)["estimates"] is None
+
+
+def test_record_series_values_are_exact(tmp_path):
+    rng = np.random.default_rng(1)
+    before, after = rng.normal(size=500), rng.normal(size=500) * 0.1
+    theta = np.linspace(0, 2 * np.pi, 500)
+    path = record_series(tmp_path / "s.rrd",
+                         {"gap/x/residual/before": before, "gap/x/residual/after": after},
+                         index=np.round(theta * 1e6).astype(int), timeline="theta_urad",
+                         bands={"gap/x/residual/before": 0.5},
+                         trees={"gap": {"effect": "misalignment", "delta": 0.0123}})
+    got = {}
+    for ch in RrdReader(str(path)).stream().to_chunks():
+        rb = ch.to_record_batch()
+        if "Scalars:scalars" in rb.schema.names and "theta_urad" in rb.schema.names:
+            got[ch.entity_path] = np.array([v[0] for v in rb.column("Scalars:scalars")
+                                            .to_pylist()])
+    assert np.array_equal(got["/gap/x/residual/before"], before)
+    assert np.array_equal(got["/gap/x/residual/after"], after)
+    assert np.array_equal(got["/gap/x/residual/before_band/plus"], [0.5, 0.5])
+    assert read_recording(path)["gap"] == {"effect": "misalignment", "delta": 0.0123}
+
+
+JSON_LEAF = (st.none() | st.booleans() | st.integers(-2**63, 2**64)
+             | st.floats(allow_nan=False, allow_infinity=False) | st.text(max_size=12))
+JSON_TREE = st.recursive(JSON_LEAF, lambda kids: st.lists(kids, max_size=4)
+                         | st.dictionaries(st.text(max_size=8), kids, max_size=4), max_leaves=12)
+
+
+@settings(max_examples=25, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(tree=st.dictionaries(st.text(max_size=8), JSON_TREE, max_size=5))
+def test_any_json_tree_roundtrips(tmp_path, tree):
+    """Keys with '/', spaces or unicode, empty containers, None, bools, 64-bit ints, -0.0."""
+    path = tmp_path / "h.rrd"
+    with open_recording(path, force=True) as rec:
+        log_tree(rec, "truth", tree)
+    back = read_recording(path)["truth"]
+    assert back == tree
+    assert json.dumps(back, sort_keys=True) == json.dumps(tree, sort_keys=True)
+
+
+def test_special_floats_roundtrip(tmp_path):
+    tree = {"nan": float("nan"), "neg_zero": -0.0, "tiny": 5e-324, "big": 1.7976931348623157e308}
+    path = tmp_path / "f.rrd"
+    with open_recording(path) as rec:
+        log_tree(rec, "estimate", tree)
+    back = read_recording(path)["estimates"]
+    assert math.isnan(back["nan"])
+    assert math.copysign(1.0, back["neg_zero"]) == -1.0
+    assert back["tiny"] == 5e-324 and back["big"] == tree["big"]
+
+
+def test_record_trajectory_vehicle_only(course_data_rrd, tmp_path):
+    """The vehicle recording (future `trajectory --rrd`): trajectory tree back, documented."""
+    from bench.record import record_trajectory
+
+    _, ana = course_data_rrd
+    tree = ana.trajectory_json()
+    path = record_trajectory(ana.traj, ana.region, ana.cal, tmp_path / "v.rrd", tree=tree)
+    back = read_recording(path)
+    assert back["trajectory"] == json.loads(json.dumps(tree))
+    assert back["estimates"] == json.loads(json.dumps(ana.cal.to_dict()))
+    for e in recording_entities(path):
+        d = documented(e)
+        assert d is not None and "vehicle" in d.kinds, e
+
+
+def test_gap_recording_entities_are_documented(tmp_path, capsys):
+    """The discrepancy workflow's recording (bench/gap.py) uses the documented paths."""
+    run = _small_run(8, 1001)
+    paths = write_calibration(run, tmp_path)
+    rrd = tmp_path / "gap.rrd"
+    assert main(["gap", paths["ensayo"], "--noise-var", "0.25,0.64", "--rrd", str(rrd)]) == 0
+    capsys.readouterr()
+    ents = recording_entities(rrd)
+    assert ents
+    for e in ents:
+        d = documented(e)
+        assert d is not None and "gap" in d.kinds, e
+    for d in ENTITY_DOCS:
+        if "gap" in d.kinds and not d.optional:
+            assert any(d.regex().match(e.lstrip("/")) for e in ents), d.pattern
