@@ -16,8 +16,12 @@ Random streams (all from the user's seed):
 Candidates: exactly one is the true arrival point (MuJoCo's final position); its letter is
 drawn uniformly. One decoy sits near where the **uncorrected** trajectory ends (within
 ``raw_jitter`` m, as point B of the course), pushed out along the raw-minus-true direction if
-that is closer than ``min_separation`` to the truth; the others are at a random bearing and
-``[1, 1.6]·min_separation`` from the truth. All points are at least ``min_separation`` apart.
+that is closer than ``min_separation`` to the truth. The truth and the remaining decoys form
+one cluster in which the truth is not special: a cluster centre ``c`` is drawn uniformly in the
+disc of radius ``cluster_radius`` around the truth, and the decoys uniformly in the disc of the
+same radius around ``c`` (so, seen from ``c``, the truth is distributed like any decoy and
+geometry — "the point in the middle" — does not give the answer away). All points are at least
+``min_separation`` apart.
 """
 
 from __future__ import annotations
@@ -115,7 +119,7 @@ def _unit(rng: np.random.Generator) -> np.ndarray:
 
 def place_candidates(truth, raw_end, rng: np.random.Generator, letters=LETTERS,
                      min_separation: float = 100.0, raw_jitter: float = 10.0,
-                     max_tries: int = 100000) -> tuple[dict[str, np.ndarray], str, str]:
+                     max_tries: int = 100000, cluster_radius: float | None = None) -> tuple[dict[str, np.ndarray], str, str]:
     """Candidate points: the truth under a random letter plus plausible decoys (module doc).
 
     Returns ``(candidates, answer letter, letter of the raw-end decoy)``.
@@ -132,13 +136,15 @@ def place_candidates(truth, raw_end, rng: np.random.Generator, letters=LETTERS,
         direction = d / np.linalg.norm(d) if np.linalg.norm(d) > 0 else _unit(rng)
         near = truth + direction * min_separation * rng.uniform(1.05, 1.3)
     decoys = [near]
+    radius = cluster_radius if cluster_radius is not None else 1.6 * min_separation
+    centre = truth + radius * np.sqrt(rng.uniform()) * _unit(rng)
     tries = 0
     while len(decoys) < k - 1:
         tries += 1
         if tries > max_tries:
             raise RuntimeError("could not place the decoys; lower min_separation")
-        p = truth + min_separation * rng.uniform(1.0, 1.6) * _unit(rng)
-        if all(np.linalg.norm(p - q) >= min_separation for q in decoys):
+        p = centre + radius * np.sqrt(rng.uniform()) * _unit(rng)
+        if all(np.linalg.norm(p - q) >= min_separation for q in [truth, *decoys]):
             decoys.append(p)
     others = [x for x in letters if x != answer]
     order = rng.permutation(len(others))

@@ -244,6 +244,22 @@ def test_answer_letter_is_drawn_from_the_seed():
     assert rng_letters == {"A", "B", "C", "D"}
 
 
+def test_truth_is_not_the_geometric_centre_of_the_decoys():
+    """The truth must not be identifiable from geometry alone. Among the candidates other than
+    the raw-end decoy (k - 1 = 3 points), pick the one closest to the others' centroid: if
+    the truth is exchangeable with the decoys this picks it with probability 1/3. R = 600
+    placements: |rate - 1/3| <= 4 sqrt((1/3)(2/3)/R) = 0.077."""
+    R = 600
+    hits = 0
+    for ss in np.random.SeedSequence(99).spawn(R):
+        cands, answer, raw_letter = place_candidates([0, 0], [400, 0], np.random.default_rng(ss))
+        names = [n for n in cands if n != raw_letter]
+        pts = np.array([cands[n] for n in names])
+        score = [np.linalg.norm(pts[i] - np.delete(pts, i, 0).mean(0)) for i in range(len(pts))]
+        hits += names[int(np.argmin(score))] == answer
+    assert abs(hits / R - 1 / 3) <= 4 * np.sqrt((1 / 3) * (2 / 3) / R)
+
+
 def test_course_profile_is_the_default_for_vehicle_runs():
     assert VehicleConfig().profile == COURSE_PROFILE
     truth = simulate_vehicle()
