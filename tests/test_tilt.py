@@ -133,3 +133,12 @@ def test_all_equal_theta_cli_names_parameter(tmp_path, capsys):
                  str(tmp_path)]) == 0
     assert main(["calibrate", str(tmp_path / "ensayo.mat"), "--noise-var", "0.25,0.64"]) == 2
     assert "scale_x" in capsys.readouterr().err
+
+
+def test_files_have_the_course_layout(course_dir, tmp_path):
+    """Same MATLAB v5 layout as the course file: names, classes, shapes, version and endian."""
+    assert main(["generate", "calibration", "--out", str(tmp_path)]) == 0
+    ours, theirs = tmp_path / "ensayo.mat", course_dir / "ensayo.mat"
+    assert scipy.io.whosmat(ours) == scipy.io.whosmat(theirs)
+    assert ours.read_bytes()[124:128] == theirs.read_bytes()[124:128]  # version 0x0100, 'IM'
+    assert ours.read_bytes()[:10] == b"MATLAB 5.0"
