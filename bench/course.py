@@ -119,7 +119,8 @@ def _unit(rng: np.random.Generator) -> np.ndarray:
 
 def place_candidates(truth, raw_end, rng: np.random.Generator, letters=LETTERS,
                      min_separation: float = 100.0, raw_jitter: float = 10.0,
-                     max_tries: int = 100000, cluster_radius: float | None = None) -> tuple[dict[str, np.ndarray], str, str]:
+                     max_tries: int = 100000, cluster_radius: float | None = None,
+                     ) -> tuple[dict[str, np.ndarray], str, str]:
     """Candidate points: the truth under a random letter plus plausible decoys (module doc).
 
     Returns ``(candidates, answer letter, letter of the raw-end decoy)``.
