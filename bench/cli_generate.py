@@ -54,8 +54,13 @@ def calibration_config(args: argparse.Namespace) -> CalibrationConfig:
                          rate=args.rate, cycles=args.cycles)
     if args.g <= 0:
         raise DataError(f"--g must be positive, got {args.g}")
-    return CalibrationConfig(mode=args.mode, theta=theta, sweep=sweep, sensor=sensor,
-                             table=TableEdits(g=args.g))
+    config = CalibrationConfig(mode=args.mode, theta=theta, sweep=sweep, sensor=sensor,
+                               table=TableEdits(g=args.g))
+    if getattr(args, "effect", None):  # effect catalog (docs/effects.md), bench/effects.py
+        from bench.effects import apply_effects, parse_effect_option
+
+        config = apply_effects(config, [parse_effect_option(e) for e in args.effect])
+    return config
 
 
 def _cmd_calibration(args: argparse.Namespace) -> int:
@@ -112,6 +117,9 @@ def register(sub) -> None:
     p.add_argument("--duration", type=float, default=20.0, help="sweep: duration, s")
     p.add_argument("--rate", type=float, default=100.0, help="sweep: sample rate, Hz")
     p.add_argument("--cycles", type=float, default=1.0, help="sweep: up-down/sine cycles")
+    p.add_argument("--effect", action="append", metavar="NAME:AXIS:KEY=VALUE[,KEY=VALUE]",
+                   help="add a catalog effect (repeatable), e.g. misalignment:x:delta=0.02, "
+                        "tilt_offset:both:delta=0.01, lever_arm:x:pos_x=0.2 (docs/effects.md)")
     p.add_argument("--rrd", help="also record the truth to this rerun file")
     p.set_defaults(handler=_cmd_calibration)
 

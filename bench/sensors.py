@@ -99,6 +99,8 @@ class AxisErrors:
 
     @classmethod
     def from_dict(cls, d: dict) -> AxisErrors:
+        if any(t["name"] not in TERM_REGISTRY for t in d.get("terms", ())):
+            import bench.effects  # noqa: F401  (registers the catalog terms)
         terms = tuple(TERM_REGISTRY[t["name"]](**{k: v for k, v in t.items() if k != "name"})
                       for t in d.get("terms", ()))
         return cls(float(d["bias"]), float(d["scale"]), float(d["noise_var"]), terms)
