@@ -51,7 +51,6 @@ import mujoco
 import mujoco.rollout
 import numpy as np
 from scipy.interpolate import CubicSpline
-from scipy.stats import norm
 
 from bench.effects import CATALOG, EffectSpec, apply_to_model
 from bench.model import (
@@ -67,6 +66,7 @@ from bench.model import (
 from bench.sensors import AxisErrors, SensorContext, SensorErrorModel
 from bench.tilt import static_readings
 from calib.conventions import AXES
+from calib.gap import quantized_moments
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
@@ -275,28 +275,6 @@ def fit_bias_scale(y: np.ndarray, x: np.ndarray) -> tuple[float, float, np.ndarr
     gain = float(xc @ (y - y.mean()) / sxx) if sxx > 0 else 1.0
     bias = float(y.mean() - gain * x.mean())
     return bias, gain - 1.0, y - (bias + gain * x)
-
-
-def quantized_moments(mu: np.ndarray, sigma2: float, lsb: float
-                      ) -> tuple[np.ndarray, np.ndarray]:
-    """Mean and variance of ``lsb·round((μ + v)/lsb)``, v ~ N(0, σ²), per sample.
-
-    Sums over the lattice points within ±8σ of μ (the rest has probability < 1e-15).
-    """
-    s = np.sqrt(sigma2)
-    if s == 0:
-        q = lsb * np.floor(mu / lsb + 0.5)
-        return q, np.zeros_like(mu)
-    span = int(np.ceil(8 * s / lsb)) + 1
-    base = np.floor(mu / lsb + 0.5)
-    m1 = np.zeros_like(mu)
-    m2 = np.zeros_like(mu)
-    for j in range(-span, span + 1):
-        level = (base + j) * lsb
-        p = norm.cdf((level + lsb / 2 - mu) / s) - norm.cdf((level - lsb / 2 - mu) / s)
-        m1 += p * level
-        m2 += p * level * level
-    return m1, np.maximum(m2 - m1 * m1, 0.0)
 
 
 def kalman_innovations(r: np.ndarray, t: np.ndarray | None, sigma2: float, q: float,

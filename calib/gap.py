@@ -343,10 +343,15 @@ def _walk_filter(z: np.ndarray, sigma2: float, qk: np.ndarray
     return innov, float(ms), float(ps)
 
 
-def _quantized_moments(mu: np.ndarray, sigma2: float, lsb: float
-                       ) -> tuple[np.ndarray, np.ndarray]:
-    """Mean and variance of ``lsb·round((μ + v)/lsb)``, v ~ N(0, σ²) (lattice within ±8σ)."""
+def quantized_moments(mu: np.ndarray, sigma2: float, lsb: float
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and variance of ``lsb·round((μ + v)/lsb)``, v ~ N(0, σ²), per sample.
+
+    Sums over the lattice points within ±8σ of μ (the rest has probability < 1e-15).
+    """
     s = np.sqrt(sigma2)
+    if s == 0:
+        return lsb * np.floor(mu / lsb + 0.5), np.zeros_like(mu)
     span = int(np.ceil(8 * s / lsb)) + 1
     base = np.floor(mu / lsb + 0.5)
     m1 = np.zeros_like(mu)
@@ -464,7 +469,7 @@ class _Reporter:
             return self.innov[k] * np.sqrt(s2)
         y, mu = self.run.datos[:, k], self.mean(k)
         if st.lsb > 2.0 * np.sqrt(st.sigma2):  # Sheppard no longer holds: exact moments
-            m1, var = _quantized_moments(mu, st.sigma2, st.lsb)
+            m1, var = quantized_moments(mu, st.sigma2, st.lsb)
             return (y - m1) * np.sqrt(s2 / var)
         return y - mu
 
