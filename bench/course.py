@@ -245,6 +245,7 @@ def add_cli_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--min-separation", type=float, default=100.0,
                    help="smallest distance between candidate points, m")
     p.add_argument("--g", type=float, default=G, help="gravity, m/s²")
+    p.add_argument("--rrd", help="also record the set next to its truth to this rerun file")
     p.epilog = ("Without --profile the acceleration profile is drawn from the seed "
                 "(--profile course gives the course's).")
 
@@ -276,6 +277,10 @@ def cli_generate_course(args: argparse.Namespace) -> int:
     """Handler of ``tiltbench generate course``; prints a JSON summary (no answer) on stdout."""
     course = make_course_set(course_config_from_args(args), args.seed)
     paths = write_course(course, args.out, force=args.force)
+    if args.rrd:
+        from bench.record import record_course_truth
+
+        paths["rrd"] = str(record_course_truth(course, args.rrd, force=args.force))
     print(dumps({"files": paths, "n_calibration": int(course.calibration.tita.shape[0]),
                  "n_vehicle": int(course.vehicle.t.shape[0])}), end="")
     return 0

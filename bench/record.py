@@ -49,7 +49,9 @@ from calib.io import to_jsonable
 if TYPE_CHECKING:
     import rerun as rr
 
+    from bench.course import CourseSet
     from bench.tilt import CalibrationRun
+    from bench.vehicle import VehicleRun
     from calib.calibration import Calibration
     from calib.io import Ensayo
     from calib.region import ArrivalRegion
@@ -102,6 +104,7 @@ class EntityDoc:
 
 
 _CAL = ("calibration", "truth-run")
+_VEH = ("vehicle", "truth-run")
 ENTITY_DOCS: tuple[EntityDoc, ...] = (
     EntityDoc("calibration/{axis}/measured", "Scalars + SeriesPoints", "sample, theta_urad",
               "measured A_m, m/s²", _CAL),
@@ -127,17 +130,17 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
     EntityDoc("calibration/{axis}/vs_ar/ideal", "LineStrips2D", "static",
               "ideal sensor A_m = A_r, m/s²", _CAL),
     EntityDoc("vehicle/acceleration/{k}/{axis}", "Scalars + SeriesLines", "time",
-              "acceleration: k = measured (A_m), corrected (Â_r) or true, m/s²", ("vehicle",)),
+              "acceleration: k = measured (A_m), corrected (Â_r) or true, m/s²", _VEH),
     EntityDoc("vehicle/position_std/{axis}", "Scalars + SeriesLines", "time",
               "standard deviation of the corrected position (calibration + noise), m",
               ("vehicle",)),
-    EntityDoc("vehicle/plane", "Transform3D", "static", "2-D frame with +y up", ("vehicle",)),
+    EntityDoc("vehicle/plane", "Transform3D", "static", "2-D frame with +y up", _VEH),
     EntityDoc("vehicle/plane/path/{k}", "LineStrips2D", "static",
-              "trajectory, k = raw (uncorrected), corrected or true, m", ("vehicle",)),
+              "trajectory, k = raw (uncorrected), corrected or true, m", _VEH),
     EntityDoc("vehicle/plane/position/{k}", "Points2D", "time",
-              "position at the current time, k = raw, corrected or true, m", ("vehicle",)),
+              "position at the current time, k = raw, corrected or true, m", _VEH),
     EntityDoc("vehicle/plane/candidates", "Points2D (labels)", "static",
-              "candidate arrival points (puntos.mat), m", ("vehicle",)),
+              "candidate arrival points (puntos.mat), m", _VEH),
     EntityDoc("vehicle/plane/arrival/estimate", "Points2D", "static",
               "corrected arrival point, m", ("vehicle",)),
     EntityDoc("vehicle/plane/arrival/ellipse", "LineStrips2D", "static",
@@ -591,6 +594,63 @@ def record_calibration_truth(run: CalibrationRun, path: str | os.PathLike,
 
 
 # --------------------------------------------------------------------------- vehicle
+
+def record_vehicle_truth(run: VehicleRun, path: str | os.PathLike, force: bool = False,
+                         candidates: Mapping[str, np.ndarray] | None = None,
+                         calibration: CalibrationRun | None = None,
+                         truth: Mapping | None = None) -> Path:
+    """Record a generated vehicle run (or a whole course set) next to its truth, no estimation.
+
+    Logs the measured and MuJoCo's true accelerations against time, the true and the raw
+    (uncorrected, integrated twice) paths with the position along time, the candidate points
+    when given, the calibration run's readings and true model when given (as
+    :func:`record_calibration_truth`), and ``truth/`` = the ``truth.json`` object (``truth``,
+    default the vehicle's own manifest; seed and versions added).
+    """
+    import rerun as rr
+
+    from calib.trajectory import integrate_twice
+
+    manifest = truth_manifest(truth if truth is not None else run.truth_dict(), run.seed)
+    blueprint = _vehicle_blueprint(calibration is not None)
+    with open_recording(path, force, blueprint, "truth") as rec:
+        tl = {TIME_TIMELINE: run.t - run.t[0]}
+        for name, acc in (("measured", run.aerr), ("true", run.truth.acc)):
+            for k, a in enumerate(AXES):
+                log_series(rec, f"vehicle/acceleration/{name}/{a}", acc[:, k], tl, "line",
+                           COLORS["raw" if name == "measured" else name], f"{name} {a}")
+        rec.log("vehicle/plane", rr.Transform3D(scale=FLIP_Y), static=True)
+        raw, _ = integrate_twice(run.t, run.aerr, run.config.p0, run.config.v0)
+        for name, p in (("raw", raw), ("true", run.truth.pos)):
+            p = np.asarray(p, dtype=float)
+            rec.log(f"vehicle/plane/path/{name}", rr.LineStrips2D(
+                [p], radii=0.6, colors=COLORS[name], labels=name), static=True)
+            rec.send_columns(f"vehicle/plane/position/{name}",
+                             indexes=[rr.TimeColumn(TIME_TIMELINE, duration=tl[TIME_TIMELINE])],
+                             columns=rr.Points2D.columns(positions=p,
+                                                         radii=np.full(len(p), 3.0)))
+        if candidates is not None:
+            names = list(candidates)
+            rec.log("vehicle/plane/candidates", rr.Points2D(
+                np.array([candidates[k] for k in names]), labels=names, radii=4.0,
+                colors=COLORS["candidate"], show_labels=True), static=True)
+        if calibration is not None:
+            a_r = reference_accel(calibration.tita, calibration.config.g)
+            for k, a in enumerate(AXES):
+                err = calibration.config.sensor.axis(a)
+                _log_axis_data(rec, a, calibration.tita, calibration.datos[:, k], a_r[:, k],
+                               None, (err.bias, err.scale), calibration.a_true[:, k],
+                               float(np.sqrt(err.noise_var)))
+        log_tree(rec, "truth", manifest)
+    return Path(path)
+
+
+def record_course_truth(course: CourseSet, path: str | os.PathLike,
+                        force: bool = False) -> Path:
+    """Record a generated course set next to its truth (``tiltbench generate course --rrd``)."""
+    return record_vehicle_truth(course.vehicle, path, force, course.candidates,
+                                course.calibration, course.truth())
+
 
 def position_cov_along(traj: Trajectory, cal: Calibration, noise_var,
                        indices) -> np.ndarray:

@@ -326,6 +326,7 @@ def add_cli_options(p: argparse.ArgumentParser) -> None:
     add_common(p)
     add_sensor_options(p)
     add_vehicle_options(p)
+    p.add_argument("--rrd", help="also record the run next to its truth to this rerun file")
 
 
 def vehicle_config_from_args(args: argparse.Namespace, sensor: SensorErrorModel,
@@ -348,6 +349,10 @@ def cli_generate_vehicle(args: argparse.Namespace) -> int:
     cfg = vehicle_config_from_args(args, sensor, parse_profile(args.profile))
     run = make_vehicle_run(cfg, args.seed)
     paths = write_vehicle(run, args.out, force=args.force)
+    if args.rrd:
+        from bench.record import record_vehicle_truth
+
+        paths["rrd"] = str(record_vehicle_truth(run, args.rrd, force=args.force))
     print(dumps({"n": int(run.t.shape[0]), "files": paths,
                  "final_position": run.truth.final_position.tolist()}), end="")
     return 0

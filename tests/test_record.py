@@ -282,3 +282,23 @@ def test_gap_recording_entities_are_documented(tmp_path, capsys):
     for d in ENTITY_DOCS:
         if "gap" in d.kinds and not d.optional:
             assert any(d.regex().match(e.lstrip("/")) for e in ents), d.pattern
+
+
+@pytest.mark.parametrize("kind", ["vehicle", "course"])
+def test_generate_vehicle_and_course_rrd_give_truth_json(tmp_path, capsys, kind):
+    """`tiltbench generate vehicle|course --rrd` records exactly what truth.json holds, with
+    only documented truth-run entities."""
+    out = tmp_path / "gen"
+    extra = ["--count", "301"] if kind == "course" else []
+    info = _cli_json(capsys, ["generate", kind, "--seed", "4", "--out", str(out), *extra,
+                              "--rrd", str(tmp_path / "t.rrd")])
+    truth = json.loads((out / "truth.json").read_text())
+    back = read_recording(info["files"]["rrd"])
+    assert back["truth"] == truth
+    assert back["estimates"] is None
+    ents = recording_entities(tmp_path / "t.rrd")
+    assert "/vehicle/plane/path/true" in ents
+    assert ("/vehicle/plane/candidates" in ents) == (kind == "course")
+    for e in ents:
+        d = documented(e)
+        assert d is not None and "truth-run" in d.kinds, e
