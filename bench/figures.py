@@ -74,7 +74,8 @@ def save_figure(fig: Figure, path: str | Path, force: bool = False) -> Path:
     return atomic_write_bytes(path, buf.getvalue(), force=force)
 
 
-def _binned_mean(x: np.ndarray, y: np.ndarray, bins: int = 60) -> tuple[np.ndarray, np.ndarray]:
+def binned_mean(x: np.ndarray, y: np.ndarray, bins: int = 60) -> tuple[np.ndarray, np.ndarray]:
+    """Mean of ``y`` in equal-width bins of ``x``: (centres, means); empty bins dropped."""
     edges = np.linspace(np.min(x), np.max(x), bins + 1)
     if edges[-1] == edges[0]:
         return np.array([x[0]]), np.array([y.mean()])
@@ -148,7 +149,7 @@ def _axis_panels(fig, cal: Calibration, ensayo: Ensayo, axis: str,
         rx.axhspan(-sigma, sigma, color="tab:orange", alpha=0.18, label=f"±σ = ±{sigma:.3g}")
         for sgn in (-1, 1):
             rx.axhline(sgn * sigma, color="tab:orange", lw=1)
-        bx, by = _binned_mean(xv, resid)
+        bx, by = binned_mean(xv, resid)
         half = 2.0 * sigma / np.sqrt(max(1.0, xv.size / 60))
         rx.plot(bx, by, color="k", lw=1.3, label=f"binned mean (±2σ/√n: ±{half:.2g})")
         rx.fill_between(bx, -half, half, color="k", alpha=0.12, lw=0)
@@ -248,9 +249,9 @@ def acceleration_figure(traj: Trajectory, true_acc: np.ndarray | None = None,
         ax = axs[k]
         ax.plot(traj.t, traj.acc_raw[:, k], color="tab:blue", lw=0.4, alpha=0.25,
                 label="measured A_m (samples)")
-        mx, my = _binned_mean(traj.t, traj.acc_raw[:, k], bins)
+        mx, my = binned_mean(traj.t, traj.acc_raw[:, k], bins)
         ax.plot(mx, my, color="0.35", lw=1.4, label=f"measured, {bin_s:g} s mean")
-        cx, cy = _binned_mean(traj.t, traj.acc_corrected[:, k], bins)
+        cx, cy = binned_mean(traj.t, traj.acc_corrected[:, k], bins)
         ax.plot(cx, cy, color="navy", lw=1.6,
                 label=f"corrected (A_m − bias)/(1 + scale), {bin_s:g} s mean")
         if true_acc is not None:

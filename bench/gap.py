@@ -885,17 +885,6 @@ def _effects_label(report: GapReport) -> str:
                      for e in report.effects)
 
 
-def _binned(x: np.ndarray, y: np.ndarray, bins: int = 72) -> tuple[np.ndarray, np.ndarray]:
-    edges = np.linspace(np.min(x), np.max(x), bins + 1)
-    if edges[-1] == edges[0]:
-        return np.array([x[0]]), np.array([y.mean()])
-    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
-    cnt = np.bincount(idx, minlength=bins)
-    tot = np.bincount(idx, weights=y, minlength=bins)
-    ok = cnt > 0
-    return 0.5 * (edges[1:] + edges[:-1])[ok], tot[ok] / cnt[ok]
-
-
 def gap_figure(report: GapReport) -> Figure:
     """Residuals against θ before and after, per axis, with the ±σ band and binned means.
 
@@ -905,6 +894,8 @@ def gap_figure(report: GapReport) -> Figure:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    from bench.figures import binned_mean
 
     theta = report.replay.tita
     fig, axs = plt.subplots(2, 2, figsize=(11, 7), sharex=True, constrained_layout=True)
@@ -918,7 +909,7 @@ def gap_figure(report: GapReport) -> Figure:
                             else report.after[ax_name].sigma2)
             ax.plot(theta, res[:, k], ".", ms=1.5, color=(0.35, 0.55, 0.85) if j else
                     (0.55, 0.55, 0.55), alpha=0.6, rasterized=True, label="data − simulation")
-            cx, cy = _binned(theta, res[:, k])
+            cx, cy = binned_mean(theta, res[:, k], 72)
             ax.plot(cx, cy, "-", color=(0.85, 0.2, 0.15), lw=1.5, label="binned mean")
             ax.axhspan(-sigma, sigma, color=(0.95, 0.7, 0.2), alpha=0.25, label="±σ")
             for sign in (-1.0, 1.0):
