@@ -99,6 +99,18 @@ def _cmd_trajectory(args: argparse.Namespace) -> int:
     return 0
 
 
+def _progress():
+    """Progress lines on stderr with the elapsed time (stdout stays clean for --json)."""
+    import time
+
+    t0 = time.perf_counter()
+
+    def say(msg: str) -> None:
+        print(f"[nmin {time.perf_counter() - t0:5.1f} s] {msg}", file=sys.stderr, flush=True)
+
+    return say
+
+
 def _cmd_nmin(args: argparse.Namespace) -> int:
     level = _check_level(args.level)
     ensayo, acel, candidates, p0, v0, nv = _inputs(args)
@@ -112,7 +124,8 @@ def _cmd_nmin(args: argparse.Namespace) -> int:
     if args.runs < 0:
         raise DataError(f"--runs must be >= 0, got {args.runs}")
     res = analyze_nmin(ensayo, acel, candidates, p0, v0, nv, level, args.method,
-                       args.integrator, args.g, steps, mc_n, args.runs, args.seed)
+                       args.integrator, args.g, steps, mc_n, args.runs, args.seed,
+                       progress=_progress())
     if args.json:
         print(dumps(res.to_dict()), end="")
     else:

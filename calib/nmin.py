@@ -48,7 +48,7 @@ calibration and vehicle runs at a given N.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -446,6 +446,7 @@ def analyze_nmin(
     v0=(1.0, 3.0), noise_var=None, level: float = 0.997, method: str = "ols",
     integrator: Integrator = "trapezoid", g: float = G, steps: Sequence[int] = COURSE_STEPS,
     mc_n: Sequence[int] = (), runs: int = 0, seed: int = 0,
+    progress: Callable[[str], None] | None = None,
 ) -> NminResult:
     """The whole N analysis on one data set (e.g. the course files).
 
@@ -454,13 +455,16 @@ def analyze_nmin(
     the design N when finite and ≤ 10⁶). Synthetic runs use the corrected accelerations of
     the data as the true profile, the calibration estimate as the true sensor errors, and the
     candidates translated so the decided one (or the nearest) is the true arrival point.
+    ``progress`` (optional) is called with a short message before each long step.
     """
+    say = progress or (lambda _msg: None)
     cal = calibrate(ensayo, noise_var, method, g)  # type: ignore[arg-type]
     traj = compute_trajectory(acel, cal, p0, v0, integrator)
     reg = arrival_region(traj, cal, candidates, noise_var, level)
     full = PositionCovModel.from_region(reg, g)
     calonly = PositionCovModel.from_region(reg, g, include_noise=False)
     box1 = reg.course_box_bound * np.sqrt(ensayo.n)  # box ∝ 1/√N for uniform θ
+    say(f"subsampling the calibration (steps {list(steps)})")
     rows = subsample_analysis(ensayo, acel, candidates, steps, p0, v0, noise_var, level,
                               method, integrator, g) if steps else []
     mc = []
@@ -473,6 +477,7 @@ def analyze_nmin(
         shift = reg.estimate - np.asarray(candidates[truth], float)
         moved = {k: np.asarray(c, float) + shift for k, c in candidates.items()}
         for i, n in enumerate(ns):
+            say(f"synthetic runs {i + 1}/{len(ns)}: {runs} calibrations of N = {int(n)}")
             mc.append(simulate_decisions(acel.t, traj.acc_corrected, moved, truth, int(n), runs,
                                          seed + i, cal.bias, cal.scale, reg.noise_var, p0, v0,
                                          level, method, integrator, g))
