@@ -2,8 +2,9 @@
 
 Each feature registers its sub-commands from its own ``bench/cli_*.py`` module through a
 ``register(subparsers)`` function; a handler receives the parsed args and returns an exit code.
-Errors from bad input (:class:`calib.io.DataError`, ``FileExistsError``, ``ValueError``) are
-printed to stderr as one line and give exit code 2.
+Errors from bad input (:class:`calib.io.DataError`, ``ValueError``, ``OSError`` such as
+``FileExistsError`` or a directory given for a file) are printed to stderr as one line and give
+exit code 2.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
 import importlib
+import re
 import sys
 import warnings
 
@@ -33,8 +35,30 @@ COMMAND_MODULES = (
 )
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse that takes negative number pairs as option values: ``--bias -0.02,0.08``.
+
+    Plain argparse (< 3.13) only treats ``-5`` or ``-0.5`` as a value, so ``--p0 -5,3`` was an
+    "expected one argument" error. Sub-parsers inherit the class.
+    """
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-\.?\d[\d.eE+\-,\s]*$")
+
+
+def _os_error_message(exc: OSError) -> str:
+    """One line naming the path: a directory where a file is expected, permissions, …"""
+    if exc.filename is None or not exc.strerror:
+        return str(exc)
+    hint = {IsADirectoryError: "; expected a file",
+            NotADirectoryError: "; a part of the path is a file, not a directory",
+            FileExistsError: " and is not a directory"}.get(type(exc), "")
+    return f"{exc.filename}: {exc.strerror}{hint}"
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="tiltbench",
         description="Simulated-hardware accelerometer test bench (MuJoCo tilt table + LS).",
     )
@@ -63,7 +87,10 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into `head`: not an error
         sys.stderr.close()
         return 0
-    except (DataError, FileExistsError, FileNotFoundError, ValueError) as exc:
+    except OSError as exc:  # FileExistsError, FileNotFoundError, IsADirectoryError, …
+        print(f"tiltbench {args.command}: error: {_os_error_message(exc)}", file=sys.stderr)
+        return 2
+    except (DataError, ValueError) as exc:
         print(f"tiltbench {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

@@ -7,14 +7,22 @@ import sys
 import warnings
 
 from calib.calibration import calibrate
-from calib.io import DataError, dumps, parse_pair, read_datos, read_ensayo
+from calib.io import (
+    DataError,
+    check_positive,
+    dumps,
+    parse_pair,
+    read_datos,
+    read_ensayo,
+    refuse_overwrite,
+)
 
 
 def noise_var_from_args(args: argparse.Namespace):
     """σ² from --noise-var or --datos; None means 'estimate from the residuals'."""
-    if getattr(args, "noise_var", None) and getattr(args, "datos", None):
+    if getattr(args, "noise_var", None) is not None and getattr(args, "datos", None):
         raise DataError("give either --noise-var or --datos, not both")
-    if getattr(args, "noise_var", None):
+    if getattr(args, "noise_var", None) is not None:
         nv = parse_pair(args.noise_var, "--noise-var")
         if (nv <= 0).any():
             raise DataError(f"--noise-var: variances must be positive, got {args.noise_var}")
@@ -25,6 +33,10 @@ def noise_var_from_args(args: argparse.Namespace):
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
+    if not 0.0 < args.level < 1.0:
+        raise DataError(f"--level must be in (0, 1), e.g. 0.95, got {args.level}")
+    check_positive(args.g, "--g")
+    refuse_overwrite([args.plot, args.rrd], args.force)
     ensayo = read_ensayo(args.ensayo)
     nv = noise_var_from_args(args)
     with warnings.catch_warnings(record=True) as caught:

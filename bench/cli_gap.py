@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from calib.io import DataError, dumps, read_ensayo
+from calib.io import DataError, check_positive, dumps, read_ensayo
 
 EPILOG = """\
 effects and their timing needs (docs/effects.md):
@@ -36,8 +36,7 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     if args.rate is not None and ensayo.t is not None:
         print(f"warning: {args.ensayo} has sample times 't'; --rate {args.rate} is ignored",
               file=sys.stderr)
-    if args.g <= 0:
-        raise DataError(f"--g must be positive, got {args.g}")
+    check_positive(args.g, "--g")
     report = run_gap(ensayo, nv, g=args.g, rate=None if ensayo.t is not None else args.rate,
                      report_dir=args.report, rrd=args.rrd, force=args.force, progress=True)
     if args.json:

@@ -17,7 +17,7 @@ from bench.tilt import (
     generate_calibration,
     write_calibration,
 )
-from calib.io import DataError, dumps, parse_pair
+from calib.io import DataError, check_positive, dumps, parse_pair, refuse_overwrite
 
 DEFAULT_BIAS = "0.08,-0.02"
 DEFAULT_SCALE = "-0.03,0.01"
@@ -26,9 +26,12 @@ DEFAULT_NOISE = "0.25,0.64"
 
 def _theta_list(text: str) -> tuple[float, ...]:
     try:
-        return tuple(float(v) for v in text.split(","))
+        values = tuple(float(v) for v in text.split(","))
     except ValueError:
         raise DataError(f"--theta-list: expected comma-separated radians, got {text!r}") from None
+    if not np.all(np.isfinite(values)):
+        raise DataError(f"--theta-list: values must be finite, got {text!r}")
+    return values
 
 
 def calibration_config(args: argparse.Namespace) -> CalibrationConfig:
@@ -52,8 +55,7 @@ def calibration_config(args: argparse.Namespace) -> CalibrationConfig:
         theta = ThetaDesign(kind="range", start=start, stop=stop, count=args.count)
     sweep = SweepProfile(kind=args.profile, start=start, stop=stop, duration=args.duration,
                          rate=args.rate, cycles=args.cycles)
-    if args.g <= 0:
-        raise DataError(f"--g must be positive, got {args.g}")
+    check_positive(args.g, "--g")
     config = CalibrationConfig(mode=args.mode, theta=theta, sweep=sweep, sensor=sensor,
                                table=TableEdits(g=args.g))
     if getattr(args, "effect", None):  # effect catalog (docs/effects.md), bench/effects.py
@@ -64,6 +66,7 @@ def calibration_config(args: argparse.Namespace) -> CalibrationConfig:
 
 
 def _cmd_calibration(args: argparse.Namespace) -> int:
+    refuse_overwrite([getattr(args, "rrd", None)], args.force)
     run = generate_calibration(calibration_config(args), args.seed)
     paths = write_calibration(run, args.out, force=args.force)
     if getattr(args, "rrd", None):

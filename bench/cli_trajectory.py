@@ -17,7 +17,17 @@ import numpy as np
 
 from bench.record import trajectory_tree
 from calib.calibration import calibrate
-from calib.io import DataError, dumps, parse_pair, read_acel, read_datos, read_ensayo, read_puntos
+from calib.io import (
+    DataError,
+    check_positive,
+    dumps,
+    parse_pair,
+    read_acel,
+    read_datos,
+    read_ensayo,
+    read_puntos,
+    refuse_overwrite,
+)
 from calib.nmin import COURSE_STEPS, analyze_nmin
 from calib.region import arrival_region
 from calib.trajectory import COURSE_P0, COURSE_V0, INTEGRATORS, compute_trajectory
@@ -31,6 +41,7 @@ def _check_level(level: float) -> float:
 
 def _inputs(args: argparse.Namespace):
     """Read files; return ensayo, acel, candidates, p0, v0, noise_var (None = estimate)."""
+    check_positive(args.g, "--g")
     ensayo = read_ensayo(args.ensayo)
     acel = read_acel(args.acel)
     candidates = read_puntos(args.puntos)
@@ -38,14 +49,15 @@ def _inputs(args: argparse.Namespace):
     if args.datos:
         d = read_datos(args.datos)
         p0, v0, nv = d.p0, d.v0, d.noise_var
-    else:
-        print("note: no --datos: noise variances estimated from the calibration residuals; "
-              f"P0 = {list(COURSE_P0)} m, V0 = {list(COURSE_V0)} m/s (course values)",
-              file=sys.stderr)
     if args.p0:
         p0 = parse_pair(args.p0, "--p0")
     if args.v0:
         v0 = parse_pair(args.v0, "--v0")
+    if not args.datos:
+        p0_src, v0_src = ("given" if opt else "course value" for opt in (args.p0, args.v0))
+        print("note: no --datos: noise variances estimated from the calibration residuals; "
+              f"P0 = {p0.tolist()} m ({p0_src}), V0 = {v0.tolist()} m/s ({v0_src})",
+              file=sys.stderr)
     return ensayo, acel, candidates, p0, v0, nv
 
 
@@ -77,6 +89,7 @@ def _calibrate(ensayo, nv, method, g):
 
 def _cmd_trajectory(args: argparse.Namespace) -> int:
     level = _check_level(args.level)
+    refuse_overwrite([args.plot, args.rrd], args.force)
     ensayo, acel, candidates, p0, v0, nv = _inputs(args)
     cal = _calibrate(ensayo, nv, args.method, args.g)
     traj = compute_trajectory(acel, cal, p0, v0, args.integrator)

@@ -24,7 +24,8 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         from calib.io import read_ensayo
 
         theta, src = read_ensayo(args.ensayo).tita, str(args.ensayo)
-    result = validate(truth, est, args.level, args.std, theta, src)
+    result = validate(truth, est, args.level, args.std, theta, src,
+                      truth_name=str(args.truth), est_name=str(args.estimates))
     if args.json:
         print(dumps(result.to_dict()), end="")
     else:

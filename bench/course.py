@@ -43,7 +43,7 @@ from bench.vehicle import (
     make_vehicle_run,
 )
 from calib.conventions import G
-from calib.io import DataError, dumps, parse_pair
+from calib.io import DataError, dumps, parse_pair, refuse_overwrite
 
 COURSE_FILES = ("ensayo.mat", "acel.mat", "puntos.mat", "datos.txt", "truth.json")
 LETTERS = ("A", "B", "C", "D")
@@ -275,6 +275,7 @@ def course_config_from_args(args: argparse.Namespace) -> CourseConfig:
 
 def cli_generate_course(args: argparse.Namespace) -> int:
     """Handler of ``tiltbench generate course``; prints a JSON summary (no answer) on stdout."""
+    refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
     course = make_course_set(course_config_from_args(args), args.seed)
     paths = write_course(course, args.out, force=args.force)
     if args.rrd:

@@ -36,6 +36,7 @@ from calib.calibration import Calibration, calibrate
 from calib.conventions import AXES
 from calib.io import (
     Acel,
+    DataError,
     Ensayo,
     atomic_write_text,
     dumps,
@@ -255,6 +256,10 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
 
     out = Path(out)
     generate = course_data is None
+    if not 0.0 < level < 1.0:  # options are checked before anything is written
+        raise DataError(f"--level must be in (0, 1), e.g. 0.997, got {level}")
+    if coverage_runs < 0:
+        raise DataError(f"--coverage-runs must be >= 0, got {coverage_runs}")
     _prepare(out, force, generate)
     steps = 7 if generate else 6
     prog = Progress(steps, stream, quiet)

@@ -884,7 +884,12 @@ def recording_entities(path: str | os.PathLike) -> list[str]:
     """Sorted entity paths of the first recording store (without ``/__properties``)."""
     from rerun.chunk import RrdReader
 
-    ents = {ch.entity_path for ch in RrdReader(str(path)).stream().to_chunks()}
+    if not Path(path).exists():
+        raise FileNotFoundError(f"{path}: file not found")
+    try:
+        ents = {ch.entity_path for ch in RrdReader(str(path)).stream().to_chunks()}
+    except Exception as exc:
+        raise ValueError(f"{path}: not a readable rerun recording ({exc})") from exc
     return sorted(e for e in ents if not e.startswith("/__properties"))
 
 

@@ -185,7 +185,10 @@ def parse_estimates(est: Mapping, where: str = "est.json") -> dict[str, Any]:
             else:
                 have_std = False
         if "cov" in ax:
-            c = np.asarray(ax["cov"], dtype=float)
+            try:
+                c = np.asarray(ax["cov"], dtype=float)
+            except (TypeError, ValueError):
+                c = np.full((0,), np.nan)  # reported below with the expected form
             if c.shape != (2, 2) or not np.all(np.isfinite(c)) or not np.allclose(c, c.T) \
                     or np.any(np.linalg.eigvalsh(c) <= 0):
                 raise DataError(f"{where}: axes.{a}.cov must be a symmetric positive definite "
@@ -253,7 +256,8 @@ class Validation:
 
 def validate(truth: Mapping, estimates: Mapping, level: float = 0.99,
              std_source: StdSource = "auto", theta: np.ndarray | None = None,
-             theta_source: str | None = None) -> Validation:
+             theta_source: str | None = None, truth_name: str = "truth.json",
+             est_name: str = "est.json") -> Validation:
     """Compare estimates with the truth (module docstring for the definitions).
 
     Parameters
@@ -264,20 +268,21 @@ def validate(truth: Mapping, estimates: Mapping, level: float = 0.99,
         "design".
     theta : (N,) rad, the run's θ for a design covariance (default: rebuilt from truth).
     theta_source : label of where θ came from (for the report).
+    truth_name, est_name : file names used in error messages.
     """
     if not 0.0 < level < 1.0:
         raise DataError(f"--level must be in (0, 1), got {level}")
     tp = true_sensor_params(truth)
     if tp is None:
-        raise DataError("truth.json: no sensor.{x,y}.{bias,scale} found")
-    est = parse_estimates(estimates)
+        raise DataError(f"{truth_name}: no sensor.{{x,y}}.{{bias,scale}} found")
+    est = parse_estimates(estimates, est_name)
     p_true = np.array([tp[n] for n in JOINT_PARAM_NAMES])
     g = float(_find_key(truth, "g") or est["g"])
 
     def dcov() -> tuple[np.ndarray, str]:
         nv = [tp.get(f"noise_var_{a}") for a in AXES]
         if any(v is None or v <= 0 for v in nv):
-            raise DataError("truth.json: positive sensor noise variances are needed to "
+            raise DataError(f"{truth_name}: positive sensor noise variances are needed to "
                             "recompute the standard deviations from the design")
         if theta is not None:
             return design_cov(theta, nv, g), theta_source or "given θ"
@@ -289,7 +294,7 @@ def validate(truth: Mapping, estimates: Mapping, level: float = 0.99,
     t_src = None
     if src == "reported":
         if est["std"] is None:
-            raise DataError("est.json: no bias_std/scale_std/cov reported; use the design "
+            raise DataError(f"{est_name}: no bias_std/scale_std/cov reported; use the design "
                             "standard deviations (--std design)")
         if est["cov"] is not None:
             cov = est["cov"]
@@ -320,6 +325,8 @@ def load_json(path: str | Path, what: str) -> Any:
     path = Path(path)
     if not path.exists():
         raise DataError(f"{path}: {what} not found")
+    if path.is_dir():
+        raise DataError(f"{path}: is a directory; expected the {what} (JSON)")
     try:
         return json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:

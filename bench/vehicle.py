@@ -30,7 +30,7 @@ import numpy as np
 from bench.model import VEHICLE_XML, full_state, load_spec, sensor_slice
 from bench.sensors import SensorErrorModel
 from calib.conventions import AXES, G
-from calib.io import Acel, DataError, dumps, parse_pair
+from calib.io import Acel, DataError, check_positive, dumps, parse_pair, refuse_overwrite
 from calib.trajectory import COURSE_P0, COURSE_V0, integrate_twice
 
 # Element names of models/vehicle.xml (defined once; looked up by name).
@@ -331,8 +331,7 @@ def add_cli_options(p: argparse.ArgumentParser) -> None:
 
 def vehicle_config_from_args(args: argparse.Namespace, sensor: SensorErrorModel,
                              profile: tuple[Segment, ...]) -> VehicleConfig:
-    if args.g <= 0:
-        raise DataError(f"--g must be positive, got {args.g}")
+    check_positive(args.g, "--g")
     cfg = VehicleConfig(duration=args.duration, rate=args.rate,
                         p0=tuple(parse_pair(args.p0, "--p0")),
                         v0=tuple(parse_pair(args.v0, "--v0")), profile=profile,
@@ -343,6 +342,7 @@ def vehicle_config_from_args(args: argparse.Namespace, sensor: SensorErrorModel,
 
 def cli_generate_vehicle(args: argparse.Namespace) -> int:
     """Handler of ``tiltbench generate vehicle``; prints a JSON summary on stdout."""
+    refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
     sensor = SensorErrorModel.from_pairs(parse_pair(args.bias, "--bias"),
                                          parse_pair(args.scale, "--scale"),
                                          parse_pair(args.noise_var, "--noise-var"))

@@ -9,7 +9,7 @@ import numpy as np
 
 from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G
 from calib.io import Ensayo
-from calib.ls import FitResult, fit_axis, fit_joint
+from calib.ls import FitResult, NotIdentifiableError, fit_axis, fit_joint
 
 Method = Literal["ols", "wls"]
 
@@ -96,6 +96,15 @@ def calibrate(
     """
     if method not in ("ols", "wls"):
         raise ValueError(f"method must be 'ols' or 'wls', got {method!r}")
+    try:
+        return _calibrate(ensayo, noise_var, method, g)
+    except NotIdentifiableError as exc:  # name the file the design came from
+        if ensayo.source == "<memory>" or str(exc).startswith(ensayo.source):
+            raise
+        raise NotIdentifiableError(f"{ensayo.source}: {exc}") from exc
+
+
+def _calibrate(ensayo: Ensayo, noise_var, method: Method, g: float) -> Calibration:
     if method == "ols":
         nv = [None, None] if noise_var is None else np.asarray(noise_var, dtype=float)
         if noise_var is not None and nv.shape == (2, 2):

@@ -83,6 +83,8 @@ def _loadmat(path: Path) -> dict:
     path = Path(path)
     if not path.exists():
         raise DataError(f"{path}: file not found")
+    if path.is_dir():
+        raise DataError(f"{path}: is a directory; expected a MATLAB .mat file")
     try:
         return scipy.io.loadmat(str(path))
     except Exception as exc:  # scipy raises several types for a bad file
@@ -93,7 +95,17 @@ def _get(mat: dict, path: Path, name: str) -> np.ndarray:
     if name not in mat:
         found = sorted(k for k in mat if not k.startswith("__"))
         raise DataError(f"{path}: variable '{name}' is missing (found: {', '.join(found)})")
-    return np.asarray(mat[name], dtype=float)
+    return _numeric(mat[name], path, name)
+
+
+def _numeric(value, where, name: str) -> np.ndarray:
+    """A .mat variable as a real float array; text, cells, structs and complex are errors."""
+    arr = np.asarray(value)
+    if arr.dtype.kind not in "biuf":
+        what = {"c": "complex", "U": "text", "S": "text", "O": "a cell array or struct",
+                "V": "a struct"}.get(arr.dtype.kind, f"of type {arr.dtype}")
+        raise DataError(f"{where}: variable '{name}' is {what}; expected real numbers")
+    return arr.astype(float)
 
 
 def check_finite(arr: np.ndarray, where: str, name: str) -> None:
@@ -199,7 +211,7 @@ def read_puntos(path: str | os.PathLike) -> dict[str, np.ndarray]:
     mat = _loadmat(path)
     out = {}
     for name in sorted(k for k in mat if not k.startswith("__")):
-        p = np.asarray(mat[name], dtype=float).ravel()
+        p = _numeric(mat[name], path, name).ravel()
         if p.shape != (2,):
             raise DataError(f"{path}: variable '{name}' must be 1×2 (x, y), got {p.shape}")
         check_finite(p, str(path), name)
@@ -222,6 +234,8 @@ def read_datos(path: str | os.PathLike) -> Datos:
     path = Path(path)
     if not path.exists():
         raise DataError(f"{path}: file not found")
+    if path.is_dir():
+        raise DataError(f"{path}: is a directory; expected the course datos.txt")
     text = path.read_bytes().decode("utf-8", errors="replace")
     found: dict[str, np.ndarray] = {}
     for line in text.splitlines():
@@ -257,16 +271,44 @@ def parse_pair(text: str, what: str) -> np.ndarray:
     return np.array(vals)
 
 
+def check_positive(value: float, what: str) -> float:
+    """``value`` if it is a positive finite number, else :class:`DataError` naming ``what``."""
+    if not (np.isfinite(value) and value > 0):
+        raise DataError(f"{what} must be a positive finite number, got {value}")
+    return float(value)
+
+
+def refuse_overwrite(paths, force: bool = False) -> None:
+    """Check output files before any work, so that a refused run writes nothing.
+
+    ``paths``: output file paths (None entries are skipped). A directory is never a valid
+    output file; an existing file needs ``force``.
+    """
+    for p in paths:
+        if p is None:
+            continue
+        p = Path(p)
+        if p.is_dir():
+            raise DataError(f"{p}: is a directory; expected an output file name")
+        if p.exists() and not force:
+            raise FileExistsError(f"{p}: exists; pass --force to overwrite")
+
+
 def atomic_write_bytes(path: str | os.PathLike, data: bytes, force: bool = False) -> Path:
     """Write ``data`` to ``path`` through a temporary file and a rename.
 
     Refuses to replace an existing file unless ``force``; a crash never leaves half a file.
     """
     path = Path(path)
+    if path.is_dir():
+        raise DataError(f"{path}: is a directory; expected an output file name")
     if path.exists() and not force:
         raise FileExistsError(f"{path}: exists; pass --force to overwrite")
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    except OSError as exc:  # name the file asked for, not the temporary one
+        raise type(exc)(exc.errno, exc.strerror, str(path)) from exc
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
