@@ -31,3 +31,18 @@ def _isolated_home(tmp_path_factory, monkeypatch):
     monkeypatch.setenv("XDG_CONFIG_HOME", str(home / "config"))
     monkeypatch.setenv("XDG_DATA_HOME", str(home / "data"))
     monkeypatch.setenv("RERUN_ANALYTICS", os.environ.get("RERUN_ANALYTICS", "0"))
+
+
+@pytest.fixture(scope="session")
+def course(course_dir):
+    """The course files read and calibrated the course way (σ² = 0.25, 0.64, per-axis OLS):
+    ``(ensayo, acel, puntos, calibration, trajectory)``."""
+    from calib.calibration import calibrate
+    from calib.io import read_acel, read_ensayo, read_puntos
+    from calib.trajectory import compute_trajectory
+    from tests.reference import course_2009 as ref
+
+    ensayo = read_ensayo(course_dir / "ensayo.mat")
+    acel = read_acel(course_dir / "acel.mat")
+    cal = calibrate(ensayo, ref.NOISE_VAR)
+    return ensayo, acel, read_puntos(course_dir / "puntos.mat"), cal, compute_trajectory(acel, cal)

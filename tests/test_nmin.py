@@ -9,7 +9,6 @@ import pytest
 
 from bench.cli import main
 from calib.calibration import calibrate
-from calib.io import read_acel, read_ensayo, read_puntos
 from calib.nmin import (
     PositionCovModel,
     crossing_n,
@@ -21,22 +20,12 @@ from calib.nmin import (
     uniform_design_cov,
 )
 from calib.region import arrival_region, chi2_2dof
-from calib.trajectory import compute_trajectory
 from tests.reference import course_2009 as ref
 
 # Course report LS, section 3.2.4: subsampling every 13th sample leaves N = 1539 and the
 # decision (C) is still unique; every 14th, N = 1429, and it is not (regions overlap).
 REPORT_STEPS = {1: 20001, 2: 10001, 13: 1539, 14: 1429}
 
-
-@pytest.fixture(scope="module")
-def course(course_dir):
-    ensayo = read_ensayo(course_dir / "ensayo.mat")
-    acel = read_acel(course_dir / "acel.mat")
-    puntos = read_puntos(course_dir / "puntos.mat")
-    cal = calibrate(ensayo, ref.NOISE_VAR)
-    traj = compute_trajectory(acel, cal)
-    return ensayo, acel, puntos, cal, traj
 
 
 @pytest.mark.parametrize("n", [3, 7, 100, 1001])

@@ -10,7 +10,6 @@ import pytest
 from bench.course import CourseConfig, make_course_set
 from bench.vehicle import COURSE_SENSOR, simulate_vehicle
 from calib.calibration import calibrate
-from calib.io import read_acel, read_ensayo, read_puntos
 from calib.nmin import synthetic_calibration
 from calib.region import (
     ArrivalRegion,
@@ -39,14 +38,6 @@ LEVELS = (0.95, 0.997)
 REPORT_BOX_Y = (45.18, 2)
 REPORT_AMAX = ((2.378, 3), (3.2571, 4))
 
-
-@pytest.fixture(scope="module")
-def course(course_dir):
-    ensayo = read_ensayo(course_dir / "ensayo.mat")
-    acel = read_acel(course_dir / "acel.mat")
-    puntos = read_puntos(course_dir / "puntos.mat")
-    cal = calibrate(ensayo, ref.NOISE_VAR)
-    return ensayo, acel, puntos, cal, compute_trajectory(acel, cal)
 
 
 # --- the Jacobian ----------------------------------------------------------------------------

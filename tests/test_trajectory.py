@@ -10,8 +10,6 @@ import numpy as np
 import pytest
 
 from bench.cli import main
-from calib.calibration import calibrate
-from calib.io import read_acel, read_ensayo, read_puntos
 from calib.trajectory import (
     INTEGRATORS,
     Trajectory,
@@ -32,17 +30,9 @@ COURSE_RAW = (594.3, 9.25)
 COURSE_TOL = 0.5  # m, as stated in the issue
 
 
-@pytest.fixture(scope="module")
-def course(course_dir):
-    ensayo = read_ensayo(course_dir / "ensayo.mat")
-    acel = read_acel(course_dir / "acel.mat")
-    puntos = read_puntos(course_dir / "puntos.mat")
-    cal = calibrate(ensayo, ref.NOISE_VAR)
-    return ensayo, acel, puntos, cal
-
 
 def test_course_final_positions(course):
-    _, acel, puntos, cal = course
+    _, acel, puntos, cal, _ = course
     traj = compute_trajectory(acel, cal)
     assert np.linalg.norm(traj.final_corrected - COURSE_CORRECTED) <= COURSE_TOL
     assert np.linalg.norm(traj.final_raw - COURSE_RAW) <= COURSE_TOL
@@ -57,7 +47,7 @@ def test_course_simpson_differs_from_trapezoid_by_the_noise_it_weights_different
     noise differently (Simpson's 1-4-2-4 pattern): the difference of the final positions is
     Σ (w_S - w_T)_k v_k / k, normal with std σ ‖w_S - w_T‖ / (1 + s). Check it within 4σ
     (and that Simpson's noise variance Σ w² is the larger one)."""
-    _, acel, _, cal = course
+    _, acel, _, cal, _ = course
     a = compute_trajectory(acel, cal, integrator="trapezoid").final_corrected
     b = compute_trajectory(acel, cal, integrator="simpson").final_corrected
     ws, wt = (double_integral_weights(acel.t, i) for i in ("simpson", "trapezoid"))
@@ -151,7 +141,7 @@ def test_correction_inverts_the_sensor_model():
 
 
 def test_result_is_frozen_and_serialisable(course):
-    _, acel, _, cal = course
+    _, acel, _, cal, _ = course
     traj = compute_trajectory(acel, cal)
     assert isinstance(traj, Trajectory)
     with pytest.raises(AttributeError):
