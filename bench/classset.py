@@ -179,11 +179,9 @@ def add_cli_options(p: argparse.ArgumentParser) -> None:
 def cli_generate_class(args: argparse.Namespace) -> int:
     """Handler of ``tiltbench generate class``: JSON summary (no answers) on stdout."""
     from bench.course import CourseConfig
-    from calib.io import parse_pair
+    from calib.io import parse_variances
 
-    nv = parse_pair(args.noise_var, "--noise-var")
-    if np.any(nv <= 0):
-        raise DataError(f"--noise-var: variances must be positive, got {args.noise_var}")
+    nv = parse_variances(args.noise_var)
     if not args.prefix or "/" in args.prefix or "\\" in args.prefix:
         raise DataError(f"--prefix must be a plain name, got {args.prefix!r}")
 

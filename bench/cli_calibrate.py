@@ -11,7 +11,7 @@ from calib.io import (
     DataError,
     check_positive,
     dumps,
-    parse_pair,
+    parse_variances,
     read_datos,
     read_ensayo,
     refuse_overwrite,
@@ -23,10 +23,7 @@ def noise_var_from_args(args: argparse.Namespace):
     if getattr(args, "noise_var", None) is not None and getattr(args, "datos", None):
         raise DataError("give either --noise-var or --datos, not both")
     if getattr(args, "noise_var", None) is not None:
-        nv = parse_pair(args.noise_var, "--noise-var")
-        if (nv <= 0).any():
-            raise DataError(f"--noise-var: variances must be positive, got {args.noise_var}")
-        return nv
+        return parse_variances(args.noise_var)
     if getattr(args, "datos", None):
         return read_datos(args.datos).noise_var
     return None

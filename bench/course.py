@@ -43,7 +43,7 @@ from bench.vehicle import (
     make_vehicle_run,
 )
 from calib.conventions import G
-from calib.io import DataError, dumps, parse_pair, refuse_overwrite
+from calib.io import DataError, dumps, parse_pair, parse_variances, refuse_overwrite
 
 COURSE_FILES = ("ensayo.mat", "acel.mat", "puntos.mat", "datos.txt", "truth.json")
 LETTERS = ("A", "B", "C", "D")
@@ -253,9 +253,7 @@ def add_cli_options(p: argparse.ArgumentParser) -> None:
 def course_config_from_args(args: argparse.Namespace) -> CourseConfig:
     from bench.vehicle import parse_profile, vehicle_config_from_args
 
-    nv = parse_pair(args.noise_var, "--noise-var")
-    if np.any(nv <= 0):
-        raise DataError(f"--noise-var: variances must be positive, got {args.noise_var}")
+    nv = parse_variances(args.noise_var)
     if (args.bias is None) != (args.scale is None):
         raise DataError("give both --bias and --scale, or neither (drawn from the seed)")
     sensor = None

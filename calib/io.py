@@ -271,6 +271,14 @@ def parse_pair(text: str, what: str) -> np.ndarray:
     return np.array(vals)
 
 
+def parse_variances(text: str, what: str = "--noise-var") -> np.ndarray:
+    """Parse 'σx²,σy²' (command line) into a (2,) array of positive variances, (m/s²)²."""
+    nv = parse_pair(text, what)
+    if np.any(nv <= 0):
+        raise DataError(f"{what}: variances must be positive, got {text}")
+    return nv
+
+
 def check_positive(value: float, what: str) -> float:
     """``value`` if it is a positive finite number, else :class:`DataError` naming ``what``."""
     if not (np.isfinite(value) and value > 0):
