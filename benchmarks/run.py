@@ -13,15 +13,19 @@
 
 from __future__ import annotations
 
-import time
+import os
 
-import mujoco
-import numpy as np
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # as the CLI does (bench/cli.py)
 
-from bench.model import ACC_SENSORS, tilt_table
-from bench.tilt import ThetaDesign, static_readings
-from calib.conventions import reference_accel
-from calib.ls import fit_axis
+import time  # noqa: E402
+
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+
+from bench.model import ACC_SENSORS, tilt_table  # noqa: E402
+from bench.tilt import ThetaDesign, static_readings  # noqa: E402
+from calib.conventions import reference_accel  # noqa: E402
+from calib.ls import fit_axis  # noqa: E402
 
 
 def best_of(fn, repeat: int = 5) -> float:
