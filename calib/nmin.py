@@ -467,9 +467,9 @@ def analyze_nmin(
     say(f"subsampling the calibration (steps {list(steps)})")
     rows = subsample_analysis(ensayo, acel, candidates, steps, p0, v0, noise_var, level,
                               method, integrator, g) if steps else []
+    design = design_nmin(candidates, full, level)
     mc = []
     if runs > 0:
-        design = design_nmin(candidates, full, level)
         ns = list(mc_n)
         if design["n"] is not None and design["n"] <= 10**6 and design["n"] not in ns:
             ns.append(int(design["n"]))
@@ -483,7 +483,7 @@ def analyze_nmin(
                                          level, method, integrator, g))
     return NminResult(
         level=level, n_data=ensayo.n, estimate=reg.estimate, decision=reg.decision,
-        design=design_nmin(candidates, full, level),
+        design=design,
         design_calibration_only=design_nmin(candidates, calonly, level),
         posterior=posterior_nrange(reg.estimate, candidates, full, level),
         posterior_calibration_only=posterior_nrange(reg.estimate, candidates, calonly, level),

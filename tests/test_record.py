@@ -35,6 +35,14 @@ REPO = Path(__file__).resolve().parents[1]
 RERUN = shutil.which("rerun", path=str(Path(__import__("sys").executable).parent))
 
 
+
+def _assert_documented(entities, kinds: set[str]) -> None:
+    """Every entity is in docs/recordings.md, documented for one of ``kinds``."""
+    for e in entities:
+        d = documented(e)
+        assert d is not None, f"{e} is not in docs/recordings.md"
+        assert kinds & set(d.kinds), f"{e} documented for {d.kinds} only"
+
 def _cli_json(capsys, argv: list[str]) -> dict:
     capsys.readouterr()
     assert main(argv) == 0
@@ -71,10 +79,7 @@ def test_generate_calibration_rrd_gives_truth_json(tmp_path, capsys):
     back = read_recording(info["files"]["rrd"])
     assert back["truth"] == truth
     assert back["estimates"] is None
-    ents = recording_entities(tmp_path / "t.rrd")
-    for e in ents:
-        d = documented(e)
-        assert d is not None and "truth-run" in d.kinds, e
+    _assert_documented(recording_entities(tmp_path / "t.rrd"), {"truth-run"})
 
 
 def test_calibrate_rrd_option(tmp_path, capsys):
@@ -156,10 +161,7 @@ def test_course_data_entities_are_the_documented_ones(course_data_rrd):
     path, _ = course_data_rrd
     ents = recording_entities(path)
     kinds = {"calibration", "vehicle"}
-    for e in ents:
-        d = documented(e)
-        assert d is not None, f"{e} is not in docs/recordings.md"
-        assert kinds & set(d.kinds), f"{e} documented for {d.kinds} only"
+    _assert_documented(ents, kinds)
     for d in ENTITY_DOCS:
         if d.optional or not (kinds & set(d.kinds)):
             continue
@@ -262,9 +264,7 @@ def test_record_trajectory_vehicle_only(course_data_rrd, tmp_path):
     back = read_recording(path)
     assert back["trajectory"] == json.loads(json.dumps(tree))
     assert back["estimates"] == json.loads(json.dumps(ana.cal.to_dict()))
-    for e in recording_entities(path):
-        d = documented(e)
-        assert d is not None and "vehicle" in d.kinds, e
+    _assert_documented(recording_entities(path), {"vehicle"})
 
 
 def test_gap_recording_entities_are_documented(tmp_path, capsys):
@@ -276,9 +276,7 @@ def test_gap_recording_entities_are_documented(tmp_path, capsys):
     capsys.readouterr()
     ents = recording_entities(rrd)
     assert ents
-    for e in ents:
-        d = documented(e)
-        assert d is not None and "gap" in d.kinds, e
+    _assert_documented(ents, {"gap"})
     for d in ENTITY_DOCS:
         if "gap" in d.kinds and not d.optional:
             assert any(d.regex().match(e.lstrip("/")) for e in ents), d.pattern
@@ -299,6 +297,4 @@ def test_generate_vehicle_and_course_rrd_give_truth_json(tmp_path, capsys, kind)
     ents = recording_entities(tmp_path / "t.rrd")
     assert "/vehicle/plane/path/true" in ents
     assert ("/vehicle/plane/candidates" in ents) == (kind == "course")
-    for e in ents:
-        d = documented(e)
-        assert d is not None and "truth-run" in d.kinds, e
+    _assert_documented(ents, {"truth-run"})
