@@ -15,7 +15,11 @@ import numpy as np
 
 from calib.conventions import G
 
-MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
+# A source checkout (and an editable install) reads models/ beside bench/; a wheel carries the
+# same files as bench/models/ (pyproject.toml maps one to the other).
+_BENCH_DIR = Path(__file__).resolve().parent
+_CANDIDATES = (_BENCH_DIR / "models", _BENCH_DIR.parent / "models")
+MODELS_DIR = next((d for d in _CANDIDATES if d.is_dir()), _CANDIDATES[-1])
 TILT_TABLE_XML = MODELS_DIR / "tilt_table.xml"
 VEHICLE_XML = MODELS_DIR / "vehicle.xml"
 
