@@ -35,14 +35,30 @@ COMMAND_MODULES = (
 )
 
 
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Shows an option's default when it has one worth showing (not None, not a flag's False)
+    and its help text does not already state it."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if any(action.default is v for v in (None, False, argparse.SUPPRESS)) or "default" in text:
+            return text
+        return super()._get_help_string(action)
+
+
+class RawDescriptionHelpFormatter(argparse.RawDescriptionHelpFormatter, HelpFormatter):
+    """:class:`HelpFormatter` that keeps the description's and epilog's line breaks."""
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse that takes negative number pairs as option values: ``--bias -0.02,0.08``.
 
     Plain argparse (< 3.13) only treats ``-5`` or ``-0.5`` as a value, so ``--p0 -5,3`` was an
-    "expected one argument" error. Sub-parsers inherit the class.
+    "expected one argument" error. Sub-parsers inherit the class (and the help formatter).
     """
 
     def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("formatter_class", HelpFormatter)
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = re.compile(r"^-\.?\d[\d.eE+\-,\s]*$")
 

@@ -21,7 +21,6 @@ def register(sub) -> None:
     p = sub.add_parser(
         "demo", help="the whole job end to end: generate, calibrate, decide, validate, "
         "figures, report, recording",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
         description="Generates a course set with the MuJoCo bench (or uses --course-data), "
         "calibrates, corrects and integrates the vehicle run, decides the arrival point, "
         "validates against the truth, writes figures, a Markdown report and a rerun "

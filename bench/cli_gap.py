@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from bench.cli import RawDescriptionHelpFormatter
 from calib.io import DataError, check_positive, dumps, read_ensayo
 
 EPILOG = """\
@@ -50,14 +51,14 @@ def _cmd_gap(args: argparse.Namespace) -> int:
 def register(sub) -> None:
     p = sub.add_parser("gap", help="find the effect the model is missing (discrepancy "
                        "workflow)", epilog=EPILOG,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+                       formatter_class=RawDescriptionHelpFormatter)
     p.add_argument("ensayo", help="ensayo.mat with tita (N×1, rad), datos (N×2, m/s²), "
                    "optional t (N×1, s)")
     p.add_argument("--noise-var", help="stated noise variances x,y in (m/s²)², e.g. 0.25,0.64")
     p.add_argument("--datos", help="course datos.txt (noise variances are read from it)")
     p.add_argument("--rate", type=float, help="sample rate in Hz of a file without t "
                    "(samples in time order)")
-    p.add_argument("--g", type=float, default=9.8, help="gravity, m/s² (default 9.8)")
+    p.add_argument("--g", type=float, default=9.8, help="gravity, m/s²")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument("--report", help="write gap.json, gap.md, gap.png, gap.svg and "
                    "model_after.xml into this directory")

@@ -87,7 +87,7 @@ def _delegate(module: str, func: str):
 
 
 def add_common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=int, default=0, help="random seed")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--force", action="store_true", help="overwrite existing files")
 
@@ -96,18 +96,18 @@ def add_sensor_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--bias", default=DEFAULT_BIAS, help="true bias x,y in m/s²")
     p.add_argument("--scale", default=DEFAULT_SCALE, help="true scale-factor error x,y")
     p.add_argument("--noise-var", default=DEFAULT_NOISE, help="noise variances x,y (m/s²)²")
-    p.add_argument("--g", type=float, default=9.8, help="gravity, m/s² (default 9.8)")
+    p.add_argument("--g", type=float, default=9.8, help="gravity, m/s²")
 
 
 def register(sub) -> None:
     gen = sub.add_parser("generate", help="generate datasets with the simulated bench")
     kinds = gen.add_subparsers(dest="kind", required=True, metavar="KIND")
 
-    p = kinds.add_parser("calibration", help="a tilt-table calibration run (ensayo.mat)",
-                         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = kinds.add_parser("calibration", help="a tilt-table calibration run (ensayo.mat)")
     add_common(p)
     add_sensor_options(p)
-    p.add_argument("--mode", choices=["static", "sweep"], default="static")
+    p.add_argument("--mode", choices=["static", "sweep"], default="static",
+                   help="static: held poses; sweep: servo-driven rotation, θ from the encoder")
     p.add_argument("--theta-range", default=f"0,{2 * np.pi!r}",
                    help="θ range start,stop in rad (static range/positions; sweep)")
     p.add_argument("--count", type=int, default=20001, help="static: samples over the range")
@@ -139,8 +139,7 @@ def register(sub) -> None:
             raise
         if not hasattr(mod, "add_cli_options"):
             continue
-        p = kinds.add_parser(kind, help=text,
-                             formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+        p = kinds.add_parser(kind, help=text)
         mod.add_cli_options(p)
         p.set_defaults(handler=_delegate(module, func))
 

@@ -147,8 +147,7 @@ def _cmd_nmin(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("trajectory", help="correct, integrate and decide the arrival point",
-                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = sub.add_parser("trajectory", help="correct, integrate and decide the arrival point")
     _add_inputs(p)
     p.add_argument("--plot", help="write a figure (.png or .svg)")
     p.add_argument("--rrd", help="write a rerun recording of the run to this file")
@@ -156,8 +155,7 @@ def register(sub) -> None:
                    help="overwrite an existing --plot / --rrd file")
     p.set_defaults(handler=_cmd_trajectory)
 
-    q = sub.add_parser("nmin", help="calibration samples needed to decide the arrival point",
-                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    q = sub.add_parser("nmin", help="calibration samples needed to decide the arrival point")
     _add_inputs(q)
     q.add_argument("--steps", default=",".join(map(str, COURSE_STEPS)),
                    help="subsampling steps of the course experiment (every k-th sample)")

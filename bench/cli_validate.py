@@ -47,7 +47,7 @@ def register(sub) -> None:
     p.add_argument("--estimates", required=True,
                    help="est.json: the calibrate --json object or {axes: {x: {bias, scale}, "
                    "y: {...}}}")
-    p.add_argument("--level", type=float, default=0.99, help="test level (default 0.99)")
+    p.add_argument("--level", type=float, default=0.99, help="test level")
     p.add_argument("--std", choices=["auto", "reported", "design"], default="auto",
                    help="standard deviations: reported in est.json, or recomputed from the "
                    "design with the true noise variances (auto: reported if present)")

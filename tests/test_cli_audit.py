@@ -209,3 +209,21 @@ def test_unwritable_output_names_the_requested_file(capsys, tmp_path, monkeypatc
     png = tmp_path / "fit.png"
     msg = _error(capsys, "calibrate", ensayo, "--plot", png, "--json")
     assert f"{png}: Permission denied" in msg and ".tmp" not in msg
+
+
+HELP_COMMANDS = [["generate", "calibration"], ["generate", "vehicle"], ["generate", "course"],
+                 ["generate", "class"], ["calibrate"], ["trajectory"], ["nmin"], ["validate"],
+                 ["gap"], ["record", "read"], ["demo"]]
+
+
+@pytest.mark.parametrize("command", HELP_COMMANDS, ids=" ".join)
+def test_help_states_each_default_once(capsys, command):
+    with pytest.raises(SystemExit) as exit_:
+        main([*command, "--help"])
+    assert exit_.value.code == 0
+    text = " ".join(capsys.readouterr().out.split())  # undo argparse's line wrapping
+    assert "(default: None)" not in text and "(default: False)" not in text
+    assert "(default " not in text  # defaults are stated by the formatter, not by hand
+    if "--seed" in text:
+        assert "--seed SEED random seed" in text or "--seed SEED seed" in text
+        assert "(default: 0)" in text
