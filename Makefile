@@ -5,7 +5,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test lint bench octave-check clean
+.PHONY: demo test lint bench octave-check data clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -27,6 +27,11 @@ bench: $(STAMP)
 
 octave-check: $(STAMP)
 	BIN=$(BIN) tools/octave_check.sh
+
+# Regenerates the shipped datasets with the commands listed in data/README.md.
+data: $(STAMP)
+	sed -n '/^```sh$$/,/^```$$/p' data/README.md | grep '^tiltbench ' | \
+	  (cd data && PATH="$(CURDIR)/$(BIN):$$PATH" bash -e > /dev/null)
 
 clean:
 	rm -rf $(VENV) demo-out .pytest_cache
