@@ -404,10 +404,15 @@ def demo_summary(res: DemoResult) -> str:
               "Files written:"]
     for k in sorted(res.files):
         p = res.files[k]
-        lines.append(f"  {p}  ({p.stat().st_size / 1024:.0f} KiB)")
+        lines.append(f"  {p}  ({_size(p)})")
     lines.append(f"\nDone in {res.elapsed:.1f} s. Open the recording with: "
                  f"rerun {res.files.get('demo.rrd', '')}")
     return "\n".join(lines)
+
+
+def _size(path: Path) -> str:
+    n = path.stat().st_size
+    return f"{n} B" if n < 1024 else f"{n / 1024:.0f} KiB"
 
 
 def report_markdown(res: DemoResult) -> str:
@@ -458,6 +463,6 @@ def report_markdown(res: DemoResult) -> str:
            "", "![N analysis](figures/nmin.png)", "",
            "## Files", "", "| file | size |", "|---|---|"]
     for k in sorted(res.files):
-        md.append(f"| `{k}` | {res.files[k].stat().st_size / 1024:.0f} KiB |")
+        md.append(f"| `{k}` | {_size(res.files[k])} |")
     md += ["", "Step times: " + "; ".join(f"{k}: {v:.2f} s" for k, v in res.times.items()), ""]
     return "\n".join(md)
