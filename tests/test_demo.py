@@ -26,7 +26,7 @@ def listed_files(stdout: str, cwd: Path) -> list[Path]:
     block = stdout.split("Files written:", 1)[1].split("\n\n", 1)[0]
     out = []
     for line in block.strip().splitlines():
-        m = re.match(r"\s*(\S+)\s+\(\d+ KiB\)$", line)
+        m = re.match(r"\s*(\S+)\s+\(\d+ (?:B|KiB)\)$", line)
         assert m, line
         p = Path(m.group(1))
         out.append(p if p.is_absolute() else cwd / p)
