@@ -8,8 +8,9 @@ import argparse
 def _cmd_demo(args: argparse.Namespace) -> int:
     from bench.demo import run_demo
 
+    formats = ("png", "svg") if args.figures == "both" else (args.figures,)
     res = run_demo(args.out, args.seed, args.force, args.course_data, args.level,
-                   args.coverage_runs, args.quiet)
+                   args.coverage_runs, args.quiet, formats=formats)
     print(res.summary())
     ok = res.recovered is not False and (res.validation is None or res.validation.passed)
     return 0 if ok else 1
@@ -36,5 +37,7 @@ def register(sub) -> None:
                    help="confidence level of the arrival region")
     p.add_argument("--coverage-runs", type=int, default=COVERAGE_RUNS,
                    help="fresh synthetic calibrations in the coverage check (0: skip)")
+    p.add_argument("--figures", choices=["png", "svg", "both"], default="both",
+                   help="figure format(s) written to OUT/figures")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(handler=_cmd_demo)

@@ -15,7 +15,8 @@ Steps (each timed, with a progress line on stderr):
    that truth and estimates are recoverable) and a Markdown report.
 
 Outputs in ``OUT``: ``data/`` (the student's files + ``truth.json``), ``estimates.json``,
-``trajectory.json``, ``validation.json``, ``figures/*.png``, ``demo.rrd``, ``report.md``.
+``trajectory.json``, ``validation.json``, ``figures/*.png`` and ``*.svg``, ``demo.rrd``,
+``report.md``.
 """
 
 from __future__ import annotations
@@ -219,10 +220,10 @@ class DemoResult:
         return demo_summary(self)
 
 
-def _prepare(out: Path, force: bool, generate: bool) -> None:
+def _prepare(out: Path, force: bool, generate: bool, formats: tuple[str, ...]) -> None:
     from bench.course import COURSE_FILES
 
-    names = list(OUTPUT_NAMES) + [f"figures/{n}.png" for n in FIGURE_NAMES]
+    names = list(OUTPUT_NAMES) + [f"figures/{n}.{f}" for n in FIGURE_NAMES for f in formats]
     if generate:
         names += [f"data/{n}" for n in COURSE_FILES]
     clash = [n for n in names if (out / n).exists()]
@@ -231,6 +232,7 @@ def _prepare(out: Path, force: bool, generate: bool) -> None:
                               "already exist(s); pass --force to overwrite")
 
 
+FIGURE_FORMATS = ("png", "svg")
 FIGURE_NAMES = ("calibration_x", "calibration_y", "parameters", "trajectory", "acceleration",
                 "uncertainty_growth", "nmin")
 
@@ -238,7 +240,8 @@ FIGURE_NAMES = ("calibration_x", "calibration_y", "parameters", "trajectory", "a
 def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool = False,
              course_data: str | Path | None = None, level: float = DEFAULT_LEVEL,
              coverage_runs: int = COVERAGE_RUNS, quiet: bool = False,
-             stream: IO[str] | None = None) -> DemoResult:
+             stream: IO[str] | None = None,
+             formats: tuple[str, ...] = FIGURE_FORMATS) -> DemoResult:
     """Run the demo (module docstring); return what was written and computed.
 
     Parameters
@@ -249,6 +252,7 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
         datos.txt; truth.json used if present) instead of generating a set.
     level : level of the arrival region.  coverage_runs : Monte Carlo runs (0: skip).
     quiet : no progress lines.  stream : where progress goes (default stderr).
+    formats : figure formats written side by side ("png", "svg").
     """
     from bench import figures
     from bench.record import read_recording, record_course
@@ -260,7 +264,9 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
         raise DataError(f"--level must be in (0, 1), e.g. 0.997, got {level}")
     if coverage_runs < 0:
         raise DataError(f"--coverage-runs must be >= 0, got {coverage_runs}")
-    _prepare(out, force, generate)
+    if not formats or set(formats) - {"png", "svg"}:
+        raise DataError(f"figure formats must be png and/or svg, got {', '.join(formats)}")
+    _prepare(out, force, generate, formats)
     steps = 7 if generate else 6
     prog = Progress(steps, stream, quiet)
     files: dict[str, Path] = {}
@@ -303,14 +309,14 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
     true_final = None
     if truth is not None and "true_final_position" in truth:
         true_final = np.asarray(truth["true_final_position"], dtype=float)
-    with prog.step("figures"):
+    with prog.step(f"figures ({', '.join(formats)})"):
         fdir = out / "figures"
-        files.update({f"figures/{p.name}": p for p in figures.write_calibration_figures(
-            fdir, ana.cal, ana.ensayo, truth, 0.95, "png", True).values()})
-        true_acc_plot = true_acc
-        files.update({f"figures/{p.name}": p for p in figures.write_vehicle_figures(
-            fdir, ana.traj, ana.region, ana.cal, ana.ensayo.n, true_final, true_path,
-            true_acc_plot, "png", True).values()})
+        for fmt in formats:
+            files.update({f"figures/{p.name}": p for p in figures.write_calibration_figures(
+                fdir, ana.cal, ana.ensayo, truth, 0.95, fmt, True).values()})
+            files.update({f"figures/{p.name}": p for p in figures.write_vehicle_figures(
+                fdir, ana.traj, ana.region, ana.cal, ana.ensayo.n, true_final, true_path,
+                true_acc, fmt, True).values()})
     recovered = None
     with prog.step("rerun recording (written, then read back)"):
         rrd = record_course(out / "demo.rrd", cal=ana.cal, ensayo=ana.ensayo, traj=ana.traj,

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import matplotlib
@@ -12,11 +11,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (backend chosen first)
 import numpy as np  # noqa: E402
 
-from calib.io import atomic_write_bytes  # noqa: E402
+from bench.figures import FORMATS, save_figure  # noqa: E402
 from calib.region import ArrivalRegion  # noqa: E402
 from calib.trajectory import Trajectory  # noqa: E402
-
-FORMATS = {".png": "png", ".svg": "svg"}
 
 
 def trajectory_figure(traj: Trajectory, region: ArrivalRegion, title: str | None = None,
@@ -57,14 +54,8 @@ def trajectory_figure(traj: Trajectory, region: ArrivalRegion, title: str | None
 
 def save_trajectory_plot(path: str | Path, traj: Trajectory, region: ArrivalRegion,
                          force: bool = False, **kwargs) -> Path:
-    """Write the figure as PNG or SVG (by extension), atomically."""
-    path = Path(path)
-    fmt = FORMATS.get(path.suffix.lower())
-    if fmt is None:
+    """Write the figure as PNG or SVG (by extension), atomically (see
+    :func:`bench.figures.save_figure`)."""
+    if FORMATS.get(Path(path).suffix.lower()) is None:  # before drawing anything
         raise ValueError(f"{path}: plot format must be .png or .svg")
-    fig = trajectory_figure(traj, region, **kwargs)
-    buf = io.BytesIO()
-    metadata = {"Date": None} if fmt == "svg" else {"Software": None}
-    fig.savefig(buf, format=fmt, dpi=120, metadata=metadata)
-    plt.close(fig)
-    return atomic_write_bytes(path, buf.getvalue(), force=force)
+    return save_figure(trajectory_figure(traj, region, **kwargs), path, force=force)

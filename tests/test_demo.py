@@ -49,6 +49,8 @@ def test_demo_from_a_fresh_directory(tmp_path, capsys):
     assert {"ensayo.mat", "acel.mat", "puntos.mat", "datos.txt", "truth.json", "demo.rrd",
             "report.md", "estimates.json", "trajectory.json", "validation.json",
             "calibration_x.png", "trajectory.png", "nmin.png"} <= names
+    from bench.demo import FIGURE_NAMES
+    assert {f"{n}.{f}" for n in FIGURE_NAMES for f in ("png", "svg")} <= names
     for p in files:
         assert p.exists() and p.stat().st_size > 0, p
     out = tmp_path / "demo-out"

@@ -1,0 +1,213 @@
+"""Honesty of the std that ``calib.gap`` prints for the linear-extension effects (Monte Carlo).
+
+``analyze_gap`` reports every named effect as ``estimate ± std``. For the effects that are
+extra linear terms of the model (``misalignment``, ``tilt_offset``, ``nonlinearity_k2``,
+``cross_axis``, ``bias_drift``) and for ``noise_level`` (its std ``σ̂²·sqrt(2/dof)`` is
+printed too) this file checks by Monte Carlo that the printed std has the coverage it claims.
+The random walk is checked in ``tests/test_gap_calib.py``; saturation, low-pass and
+quantization in ``benchmarks/gap_uncertainty_mc.py``.
+
+Design
+------
+Synthetic runs are generated here in plain numpy straight from the equations of
+``docs/effects.md`` (never through ``calib`` or the bench): a static full turn (θ uniform over
+[0, 2π), sorted, no timing), N = 1000, random bias U(-0.3, 0.3) m/s² and scale U(-0.03, 0.03)
+on both axes, white noise of the course (σ² = 0.25, 0.64 (m/s²)², the stated values), and ONE
+effect. Per-axis effects alternate between x (even replicates) and y (odd ones); the size on
+each axis is about 10 of its printed std (``|estimate - null|/std`` ≈ 10, null = 0, or the
+stated σ² for noise_level), far above the selection threshold (per-step α ≈ 2.6e-4, z ≈ 3.7),
+so the workflow names it in essentially every run. ``analyze_gap`` runs end to end and
+``z = (estimate - truth)/std`` is taken from the printed ``params`` / ``std``.
+
+R = 100 replicates per effect (50 per axis), R_tot = 600 in all, on two spawned workers with
+one BLAS thread each (≈ 0.15 s per run; ≈ 50 s wall in all, hence ``slow``). Seeds:
+``np.random.default_rng([SEED, effect index, replicate])``, fixed, never searched.
+
+Tolerances (derived, not tuned)
+-------------------------------
+For an honest Gaussian estimate z ~ N(0, 1); over R runs (R = the runs that name the effect):
+
+* coverage of ``estimate ± 1.96 std``: hits H ~ Binomial(R, 0.95), so
+  ``|H/R - 0.95| ≤ 4·sqrt(0.95·0.05/R)`` (4 binomial standard errors; 0.087 at R = 100);
+* ``mean(z²)`` (NEES, one parameter): var z² = 2, so ``|mean(z²) - 1| ≤ 4·sqrt(2/R)``
+  (0.57 at R = 100);
+* ``mean(z)``: ``|mean(z)| ≤ 4/sqrt(R)`` (a bias the std does not cover).
+
+Each holds per effect (R = 100, the weaker tolerance) and pooled over the six effects
+(R_tot = 600: 0.036 for the coverage, 0.23 for mean z², 0.16 for mean z; the replicates are
+independent, so the pooled z are i.i.d. N(0, 1) under honest stds). Each check fails an honest
+estimator with P ≲ 1e-4 (4 standard errors), ≲ 2e-3 for the 21 checks together.
+
+Known small departures, all far inside these bands: misalignment and tilt offset are
+generated as exact rotations ``-g sin(θ+δ)`` (the fit is exact through ``δ = atan2``, and the
+tilt's ``arcsin`` of a ``tan δ`` coefficient is off by δ³/2 ≈ 0.002 std); the ratio effects
+(k2, k_ip) use the delta method for ``c/(1 + s)``; noise_level's std is σ̂²·sqrt(2/dof) (a
+skew of order sqrt(2/N) ≈ 0.045 in z).
+
+Naming: a run is right when it names exactly the true effect on the true axis. A correct
+selector errs when it adds a spurious effect (P ≤ family_alpha = 0.005 per run, Bonferroni)
+or misses the effect or names another one in its place (at ~10 std: P(miss) ≈ Φ(3.7 - 10)
+< 1e-9; a swap needs the alternative's LR to beat the truth's, several std away for these
+signatures). With p = 0.005 the wrong runs K ~ Binomial(R, p) and the test asserts
+``K ≤ binom.ppf(0.999, R, 0.005)`` (4 at R = 100; a correct selector fails with P ≤ 0.001)
+and lists the wrong runs in the message. The z statistics use every run that names the true
+effect (a spurious extra effect only adds a column; its std stays honest).
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from calib.gap import analyze_gap
+from calib.io import Ensayo
+
+G = 9.8
+TWO_PI = 2.0 * np.pi
+STATED = (0.25, 0.64)
+SEED = 20240617
+N = 1000
+R_PER_EFFECT = 100
+Z95 = float(stats.norm.ppf(0.975))
+FAMILY_ALPHA = 0.005  # analyze_gap's default false-alarm rate per run
+
+# (effect, printed key, {axis: true value}): about 10 printed std on each axis at N = 1000
+# (std: misalignment σ/(g·sqrt(N/2)); tilt 1/sqrt(Σ_a g²N/(2σ_a²)); k2, k_ip ≈ 2σ/(g²·
+# sqrt(N/2)); drift per sample ≈ σ·sqrt(12/N³), ×1.6 on x where the ramp shares its sin θ
+# component with the scale column; σ² sqrt(2/N)).
+CASES: tuple[tuple[str, str, dict[str, float]], ...] = (
+    ("misalignment", "delta", {"x": 0.023, "y": -0.037}),
+    ("tilt_offset", "delta", {"both": 0.019}),
+    ("nonlinearity_k2", "k2", {"x": 0.0047, "y": -0.0076}),
+    ("cross_axis", "k_ip", {"x": -0.0047, "y": 0.0075}),
+    ("bias_drift", "rate_per_sample", {"x": 8.8e-4, "y": -8.8e-4}),
+    ("noise_level", "sigma2", {"x": 0.36, "y": 0.44}),
+)
+
+
+# ------------------------------------------------------------------ synthetic runs (numpy)
+
+def synth(name: str, axis: str, value: float, rng: np.random.Generator
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """One run with one effect, from docs/effects.md: (θ (N,) rad, readings (N, 2) m/s²).
+
+    True specific force ``[-g sin(θ + δ_x), -g cos(θ + δ_y)]`` (misalignment: δ on one axis;
+    tilt offset: the same δ on both), response terms ``k2·a_i²`` and ``k_ip·a_i·a_p``, then
+    ``(1 + scale)·(…) + bias + v``, v ~ N(0, σ²) (noise_level: the true σ² instead of the
+    stated one), then the drift ``rate_per_sample·k`` at the bias level (k the sample index).
+    """
+    th = np.sort(rng.uniform(0.0, TWO_PI, N))
+    bias = rng.uniform(-0.3, 0.3, 2)
+    scale = rng.uniform(-0.03, 0.03, 2)
+    s2 = np.array(STATED)
+    delta = np.zeros(2)
+    k = None if axis == "both" else "xy".index(axis)
+    if name == "tilt_offset":
+        delta[:] = value
+    elif name == "misalignment":
+        delta[k] = value
+    elif name == "noise_level":
+        s2[k] = value
+    a = np.column_stack([-G * np.sin(th + delta[0]), -G * np.cos(th + delta[1])])
+    out = np.empty((N, 2))
+    for j in range(2):
+        x = a[:, j].copy()
+        if j == k and name == "nonlinearity_k2":
+            x = x + value * x * x
+        if j == k and name == "cross_axis":
+            x = x + value * x * a[:, 1 - j]
+        x = (1.0 + scale[j]) * x + bias[j] + np.sqrt(s2[j]) * rng.standard_normal(N)
+        if j == k and name == "bias_drift":
+            x = x + value * np.arange(N)
+        out[:, j] = x
+    return th, out
+
+
+def _axis_of(case: int, i: int) -> str:
+    axes = list(CASES[case][2])
+    return axes[i % len(axes)]
+
+
+def _replicate(job: tuple[int, int]) -> tuple[int, int, str, list, float, float]:
+    """Run i of effect ``case`` through analyze_gap: (case, i, axis, named, estimate, std)."""
+    case, i = job
+    name, key, truth = CASES[case]
+    axis = _axis_of(case, i)
+    rng = np.random.default_rng([SEED, case, i])
+    th, y = synth(name, axis, truth[axis], rng)
+    res = analyze_gap(Ensayo(th, y), STATED)
+    try:
+        est = res.effect(name, axis)
+    except KeyError:
+        return case, i, axis, res.named, float("nan"), float("nan")
+    return case, i, axis, res.named, float(est.params[key]), float(est.std[key])
+
+
+# ------------------------------------------------------------------------------ the test
+
+def _stats(z: np.ndarray) -> dict[str, float]:
+    r = z.size
+    return {"R": r, "cover": float(np.mean(np.abs(z) <= Z95)), "mean_z2": float(np.mean(z * z)),
+            "mean_z": float(np.mean(z)), "sd_z": float(np.std(z, ddof=1)),
+            "band_cover": 4.0 * np.sqrt(0.95 * 0.05 / r), "band_z2": 4.0 * np.sqrt(2.0 / r),
+            "band_z": 4.0 / np.sqrt(r)}
+
+
+def _fails(s: dict[str, float]) -> list[str]:
+    out = []
+    if abs(s["cover"] - 0.95) > s["band_cover"]:
+        out.append(f"coverage {s['cover']:.3f} not within 0.95 ± {s['band_cover']:.3f}")
+    if abs(s["mean_z2"] - 1.0) > s["band_z2"]:
+        out.append(f"mean z² {s['mean_z2']:.3f} not within 1 ± {s['band_z2']:.3f}")
+    if abs(s["mean_z"]) > s["band_z"]:
+        out.append(f"mean z {s['mean_z']:+.3f} not within 0 ± {s['band_z']:.3f}")
+    return out
+
+
+def _line(label: str, s: dict[str, float]) -> str:
+    return (f"{label:16s} R = {s['R']:3d}  cover = {s['cover']:.3f}  mean z² = "
+            f"{s['mean_z2']:.3f}  mean z = {s['mean_z']:+.3f}  sd z = {s['sd_z']:.3f}")
+
+
+@pytest.mark.slow
+def test_linear_effect_std_has_its_coverage():
+    """Per effect (R = 100) and pooled (R = 600): coverage of ``estimate ± 1.96 std``, mean z²
+    and mean z within their binomial / χ² bands; the true effect and axis (alone) named in all
+    but ``binom.ppf(0.999, R, 0.005)`` runs (module docstring)."""
+    jobs = [(c, i) for i in range(R_PER_EFFECT) for c in range(len(CASES))]
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # inherited by the spawned workers
+    with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as ex:
+        results = list(ex.map(_replicate, jobs, chunksize=10))
+
+    k_max = int(stats.binom.ppf(0.999, R_PER_EFFECT, FAMILY_ALPHA))
+    lines, problems, pooled = [], [], []
+    for c, (name, key, truth) in enumerate(CASES):
+        rows = [r for r in results if r[0] == c]
+        wrong = [(i, ax, named) for _, i, ax, named, _, _ in rows if named != [(name, ax)]]
+        if len(wrong) > k_max:
+            problems.append(f"{name}: {len(wrong)} runs name the wrong thing (> {k_max}): "
+                            f"{wrong}")
+        est = np.array([r[4] for r in rows])
+        std = np.array([r[5] for r in rows])
+        true = np.array([truth[r[2]] for r in rows])
+        ok = np.isfinite(est)
+        z = (est[ok] - true[ok]) / std[ok]
+        null = np.array([STATED["xy".index(r[2])] if name == "noise_level" else 0.0
+                         for r in rows])[ok]
+        size = float(np.median(np.abs(est[ok] - null) / std[ok]))
+        if size < 8.0:  # the design's premise: a clearly detectable effect
+            problems.append(f"{name}: median |estimate - null|/std = {size:.1f} < 8")
+        pooled.append(z)
+        s = _stats(z)
+        lines.append(_line(f"{name}.{key}", s) + f"  size = {size:.1f}  wrong = {len(wrong)}")
+        problems += [f"{name}: {f}" for f in _fails(s)]
+    s = _stats(np.concatenate(pooled))
+    lines.append(_line("pooled", s))
+    problems += [f"pooled: {f}" for f in _fails(s)]
+    print("\n" + "\n".join(lines))
+    assert not problems, "\n".join(problems + [""] + lines)
