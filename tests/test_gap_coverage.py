@@ -28,7 +28,7 @@ R = 80 replicates per effect (40 per axis), R_tot = 480 in all, on two spawned w
 one BLAS thread each (≈ 0.23 s of CPU per run, ≈ 115 s of CPU in all: ≈ 60 s wall on two idle
 cores, ~70 s on a loaded machine; hence ``slow``). Seeds:
 ``np.random.default_rng([SEED, effect index, replicate])``, fixed, never searched. The
-measured numbers are printed (``pytest -s``) and are in every failure message.
+measured numbers are in every failure message.
 
 Tolerances (derived, not tuned)
 -------------------------------
@@ -226,5 +226,4 @@ def test_linear_effect_std_has_its_coverage():
     s = _stats(np.concatenate(pooled))
     lines.append(_line("pooled", s))
     problems += [f"pooled: {f}" for f in _fails(s)]
-    print("\n" + "\n".join(lines))
     assert not problems, "\n".join(problems + [""] + lines)
