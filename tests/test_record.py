@@ -21,6 +21,7 @@ from bench.record import (
     entity_table_markdown,
     log_tree,
     open_recording,
+    read_blueprint,
     read_recording,
     record_calibration,
     record_course,
@@ -42,6 +43,63 @@ def _assert_documented(entities, kinds: set[str]) -> None:
         d = documented(e)
         assert d is not None, f"{e} is not in docs/recordings.md"
         assert kinds & set(d.kinds), f"{e} documented for {d.kinds} only"
+
+def _entity_index(path) -> dict[str, tuple[set, set]]:
+    """Entity → (timelines, columns) over all chunks of the recording."""
+    out: dict[str, tuple[set, set]] = {}
+    for ch in RrdReader(str(path)).stream().to_chunks():
+        tls, cols = out.setdefault(ch.entity_path.lstrip("/"), (set(), set()))
+        tls.update(ch.timeline_names)
+        cols.update(ch.to_record_batch().schema.names)
+    return out
+
+
+def _query_matches(expr: str, origin: str, entities) -> set[str]:
+    expr = expr.replace("$origin", origin).removeprefix("+").strip()
+    assert not expr.startswith("-"), expr
+    if expr.endswith("/**"):
+        root = expr[:-3]
+        return {e for e in entities if e == root or e.startswith(root + "/")}
+    return {e for e in entities if e == expr}
+
+
+def _assert_blueprint_shows_content(path) -> dict:
+    """What the viewer needs to show every view on open, checked on the stored blueprint:
+    paused, collapsed time panel on a timeline of the recording; every query names existing
+    entities; text views show one document; time-series views span the whole timeline and
+    plot data of the active timeline; 2-D views have bounds and show static data or data of
+    the active timeline; no JSON tree in any view."""
+    bp = read_blueprint(path)
+    idx = _entity_index(path)
+    tp = bp["time_panel"]
+    assert tp.get("play_state") == "paused" and tp.get("state") == "collapsed", tp
+    active = tp["timeline"]
+    assert any(active in tls for tls, _ in idx.values()), active
+    assert bp["views"]
+    for v in bp["views"]:
+        shown: set[str] = set()
+        for expr in v["contents"]:
+            hit = _query_matches(expr, v["origin"], idx)
+            assert hit, f"{v['name']}: {expr} matches no entity"
+            shown |= hit
+        assert not any(e.split("/", 1)[0] in ("truth", "estimate", "trajectory", "gap_report")
+                       for e in shown), v["name"]
+        data = {e for e in shown if any(":" in c for c in idx[e][1])}
+        if v["class"] == "TextDocument":
+            texts = [e for e in shown if "TextDocument:text" in idx[e][1]]
+            assert len(texts) == 1, (v["name"], texts)
+        elif v["class"] == "TimeSeries":
+            assert v["time_axis"] == ("Infinite", "Infinite"), v["name"]
+            series = [e for e in data if "Scalars:scalars" in idx[e][1]]
+            assert series, v["name"]
+            assert all(active in idx[e][0] for e in series), (v["name"], active)
+        elif v["class"] == "2D":
+            assert v["visual_bounds"], v["name"]
+            assert data and all(not idx[e][0] or active in idx[e][0] for e in data), v["name"]
+        else:
+            raise AssertionError(f"unexpected view class {v['class']}")
+    return bp
+
 
 def _cli_json(capsys, argv: list[str]) -> dict:
     capsys.readouterr()
@@ -80,6 +138,7 @@ def test_generate_calibration_rrd_gives_truth_json(tmp_path, capsys):
     assert back["truth"] == truth
     assert back["estimates"] is None
     _assert_documented(recording_entities(tmp_path / "t.rrd"), {"truth-run"})
+    _assert_blueprint_shows_content(tmp_path / "t.rrd")
 
 
 def test_calibrate_rrd_option(tmp_path, capsys):
@@ -89,6 +148,10 @@ def test_calibrate_rrd_option(tmp_path, capsys):
     rrd = tmp_path / "c.rrd"
     est = _cli_json(capsys, ["calibrate", paths["ensayo"], "--json", "--rrd", str(rrd)])
     assert read_recording(rrd)["estimates"] == est
+    bp = _assert_blueprint_shows_content(rrd)
+    assert bp["time_panel"]["timeline"] == "theta_urad"
+    # θ plots are static 2-D plots (θ in rad), three per axis, plus the estimates text
+    assert sorted(v["class"] for v in bp["views"]) == ["2D"] * 6 + ["TextDocument"]
     # refuses to overwrite without --force (exit 2), replaces with it
     capsys.readouterr()
     assert main(["calibrate", paths["ensayo"], "--json", "--rrd", str(rrd)]) == 2
@@ -169,6 +232,18 @@ def test_course_data_entities_are_the_documented_ones(course_data_rrd):
     assert not any(e.lstrip("/").startswith("truth") for e in ents)  # course data: no truth
     back = read_recording(path)
     assert back["truth"] is None and back["estimates"]["axes"]["x"]["n"] == 20001
+
+
+def test_course_data_blueprint_shows_every_view_on_open(course_data_rrd):
+    """Calibration and vehicle in one file: the active timeline is the vehicle's, so the
+    calibration tab must be static 2-D plots (θ time series would be empty)."""
+    path, _ = course_data_rrd
+    bp = _assert_blueprint_shows_content(path)
+    assert bp["time_panel"]["timeline"] == "time"
+    cal = [v for v in bp["views"] if v["origin"].startswith("calibration/")]
+    assert len(cal) == 6 and all(v["class"] == "2D" for v in cal)
+    assert {v["origin"] for v in bp["views"] if v["class"] == "TextDocument"} == {
+        "summary/decision", "summary/parameters"}
 
 
 def test_docs_table_is_generated_from_entity_docs():
@@ -265,6 +340,8 @@ def test_record_trajectory_vehicle_only(course_data_rrd, tmp_path):
     assert back["trajectory"] == json.loads(json.dumps(tree))
     assert back["estimates"] == json.loads(json.dumps(ana.cal.to_dict()))
     _assert_documented(recording_entities(path), {"vehicle"})
+    bp = _assert_blueprint_shows_content(path)
+    assert not any(v["origin"].startswith("calibration") for v in bp["views"])
 
 
 def test_gap_recording_entities_are_documented(tmp_path, capsys):
@@ -280,6 +357,13 @@ def test_gap_recording_entities_are_documented(tmp_path, capsys):
     for d in ENTITY_DOCS:
         if "gap" in d.kinds and not d.optional:
             assert any(d.regex().match(e.lstrip("/")) for e in ents), d.pattern
+    bp = _assert_blueprint_shows_content(rrd)
+    assert sorted(v["class"] for v in bp["views"]) == ["TextDocument"] + ["TimeSeries"] * 4
+    # the effects text has no image: gap.png is a path relative to the report directory
+    chunk = next(c for c in RrdReader(str(rrd)).stream().to_chunks()
+                 if c.entity_path == "/gap/effects")
+    text = chunk.to_record_batch().column("TextDocument:text").to_pylist()[-1][-1]
+    assert "# Discrepancy workflow" in text and "![" not in text
 
 
 @pytest.mark.parametrize("kind", ["vehicle", "course"])
@@ -298,3 +382,5 @@ def test_generate_vehicle_and_course_rrd_give_truth_json(tmp_path, capsys, kind)
     assert "/vehicle/plane/path/true" in ents
     assert ("/vehicle/plane/candidates" in ents) == (kind == "course")
     _assert_documented(ents, {"truth-run"})
+    bp = _assert_blueprint_shows_content(tmp_path / "t.rrd")
+    assert any(v["origin"].startswith("calibration") for v in bp["views"]) == (kind == "course")
