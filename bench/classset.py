@@ -177,7 +177,8 @@ def add_cli_options(p: argparse.ArgumentParser) -> None:
 
 
 def cli_generate_class(args: argparse.Namespace) -> int:
-    """Handler of ``tiltbench generate class``: JSON summary (no answers) on stdout."""
+    """Handler of ``tiltbench generate class``: summary (no answers) on stdout."""
+    from bench.cli_generate import print_summary
     from bench.course import CourseConfig
     from calib.io import parse_variances
 
@@ -192,10 +193,11 @@ def cli_generate_class(args: argparse.Namespace) -> int:
     res = generate_class(args.out, args.count, args.seed, args.force,
                          CourseConfig(noise_var=(float(nv[0]), float(nv[1]))), args.prefix,
                          progress)
-    print(dumps({"count": len(res.folders),
-                 "folders": {k: str(v) for k, v in res.folders.items()},
-                 "answer_key": {"csv": str(res.key_csv), "json": str(res.key_json)},
-                 "note": "keep answer_key.* private; hand out the student folders"}), end="")
+    print_summary(args, f"generate class: {len(res.folders)} course sets, seed {args.seed}",
+                  {"count": len(res.folders),
+                   "folders": {k: str(v) for k, v in res.folders.items()},
+                   "answer_key": {"csv": str(res.key_csv), "json": str(res.key_json)},
+                   "note": "keep answer_key.* private; hand out the student folders"})
     return 0
 
 

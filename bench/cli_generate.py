@@ -73,7 +73,9 @@ def _cmd_calibration(args: argparse.Namespace) -> int:
         from bench.record import record_calibration_truth  # recordings feature
 
         paths["rrd"] = str(record_calibration_truth(run, args.rrd, force=args.force))
-    print(dumps({"n": int(run.tita.shape[0]), "mode": run.config.mode, "files": paths}), end="")
+    print_summary(args, f"generate calibration: {run.tita.shape[0]} samples ({run.config.mode}), "
+                  f"seed {args.seed}",
+                  {"n": int(run.tita.shape[0]), "mode": run.config.mode, "files": paths})
     return 0
 
 
@@ -90,6 +92,24 @@ def add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--force", action="store_true", help="overwrite existing files")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+
+
+def print_summary(args: argparse.Namespace, title: str, summary: dict) -> None:
+    """What a generate command wrote: one JSON object with ``--json``, else readable lines
+    (the title, scalar entries as ``key: value``, nested mappings one entry per line)."""
+    if getattr(args, "json", False):
+        print(dumps(summary), end="")
+        return
+    lines = [title]
+    for key, value in summary.items():
+        if isinstance(value, dict):
+            lines.append(f"{key}:")
+            width = max(map(len, value), default=0)
+            lines += [f"  {k:<{width}}  {v}" for k, v in value.items()]
+        else:
+            lines.append(f"{key}: {value}")
+    print("\n".join(lines))
 
 
 def add_sensor_options(p: argparse.ArgumentParser) -> None:

@@ -43,7 +43,7 @@ from bench.vehicle import (
     make_vehicle_run,
 )
 from calib.conventions import G
-from calib.io import DataError, dumps, parse_pair, parse_variances, refuse_overwrite
+from calib.io import DataError, parse_pair, parse_variances, refuse_overwrite
 
 COURSE_FILES = ("ensayo.mat", "acel.mat", "puntos.mat", "datos.txt", "truth.json")
 LETTERS = ("A", "B", "C", "D")
@@ -272,7 +272,9 @@ def course_config_from_args(args: argparse.Namespace) -> CourseConfig:
 
 
 def cli_generate_course(args: argparse.Namespace) -> int:
-    """Handler of ``tiltbench generate course``; prints a JSON summary (no answer) on stdout."""
+    """Handler of ``tiltbench generate course``; prints a summary (no answer) on stdout."""
+    from bench.cli_generate import print_summary
+
     refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
     course = make_course_set(course_config_from_args(args), args.seed)
     paths = write_course(course, args.out, force=args.force)
@@ -280,8 +282,10 @@ def cli_generate_course(args: argparse.Namespace) -> int:
         from bench.record import record_course_truth
 
         paths["rrd"] = str(record_course_truth(course, args.rrd, force=args.force))
-    print(dumps({"files": paths, "n_calibration": int(course.calibration.tita.shape[0]),
-                 "n_vehicle": int(course.vehicle.t.shape[0])}), end="")
+    print_summary(args, f"generate course: a course set, seed {args.seed} (the answer is in "
+                  "truth.json only)",
+                  {"files": paths, "n_calibration": int(course.calibration.tita.shape[0]),
+                   "n_vehicle": int(course.vehicle.t.shape[0])})
     return 0
 
 

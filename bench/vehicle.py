@@ -30,7 +30,7 @@ import numpy as np
 from bench.model import VEHICLE_XML, full_state, load_spec, sensor_slice
 from bench.sensors import SensorErrorModel
 from calib.conventions import AXES, G
-from calib.io import Acel, DataError, check_positive, dumps, parse_pair, refuse_overwrite
+from calib.io import Acel, DataError, check_positive, parse_pair, refuse_overwrite
 from calib.trajectory import COURSE_P0, COURSE_V0, integrate_twice
 
 # Element names of models/vehicle.xml (defined once; looked up by name).
@@ -341,7 +341,9 @@ def vehicle_config_from_args(args: argparse.Namespace, sensor: SensorErrorModel,
 
 
 def cli_generate_vehicle(args: argparse.Namespace) -> int:
-    """Handler of ``tiltbench generate vehicle``; prints a JSON summary on stdout."""
+    """Handler of ``tiltbench generate vehicle``; prints a summary on stdout."""
+    from bench.cli_generate import print_summary
+
     refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
     sensor = SensorErrorModel.from_pairs(parse_pair(args.bias, "--bias"),
                                          parse_pair(args.scale, "--scale"),
@@ -353,8 +355,9 @@ def cli_generate_vehicle(args: argparse.Namespace) -> int:
         from bench.record import record_vehicle_truth
 
         paths["rrd"] = str(record_vehicle_truth(run, args.rrd, force=args.force))
-    print(dumps({"n": int(run.t.shape[0]), "files": paths,
-                 "final_position": run.truth.final_position.tolist()}), end="")
+    print_summary(args, f"generate vehicle: {run.t.shape[0]} samples, seed {args.seed}",
+                  {"n": int(run.t.shape[0]), "files": paths,
+                   "final_position": run.truth.final_position.tolist()})
     return 0
 
 

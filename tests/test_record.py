@@ -132,7 +132,7 @@ def test_generate_calibration_rrd_gives_truth_json(tmp_path, capsys):
     """`tiltbench generate calibration --rrd` records exactly what truth.json holds."""
     out = tmp_path / "gen"
     info = _cli_json(capsys, ["generate", "calibration", "--count", "301", "--seed", "11",
-                              "--out", str(out), "--rrd", str(tmp_path / "t.rrd")])
+                              "--out", str(out), "--rrd", str(tmp_path / "t.rrd"), "--json"])
     truth = json.loads((out / "truth.json").read_text())
     back = read_recording(info["files"]["rrd"])
     assert back["truth"] == truth
@@ -373,7 +373,7 @@ def test_generate_vehicle_and_course_rrd_give_truth_json(tmp_path, capsys, kind)
     out = tmp_path / "gen"
     extra = ["--count", "301"] if kind == "course" else []
     info = _cli_json(capsys, ["generate", kind, "--seed", "4", "--out", str(out), *extra,
-                              "--rrd", str(tmp_path / "t.rrd")])
+                              "--rrd", str(tmp_path / "t.rrd"), "--json"])
     truth = json.loads((out / "truth.json").read_text())
     back = read_recording(info["files"]["rrd"])
     assert back["truth"] == truth

@@ -142,3 +142,16 @@ def test_files_have_the_course_layout(course_dir, tmp_path):
     assert scipy.io.whosmat(ours) == scipy.io.whosmat(theirs)
     assert ours.read_bytes()[124:128] == theirs.read_bytes()[124:128]  # version 0x0100, 'IM'
     assert ours.read_bytes()[:10] == b"MATLAB 5.0"
+
+
+def test_generate_prints_a_readable_summary_or_one_json_object(tmp_path, capsys):
+    args = ["generate", "calibration", "--count", "50", "--seed", "3"]
+    assert main([*args, "--out", str(tmp_path / "a")]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("generate calibration: 50 samples (static), seed 3")
+    assert f"ensayo  {tmp_path / 'a' / 'ensayo.mat'}" in text
+    with pytest.raises(json.JSONDecodeError):
+        json.loads(text)
+    assert main([*args, "--out", str(tmp_path / "b"), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["n"] == 50 and info["files"]["truth"] == str(tmp_path / "b" / "truth.json")

@@ -177,7 +177,7 @@ def test_vehicle_same_seed_same_bytes(tmp_path):
 def test_generate_vehicle_cli(tmp_path, capsys):
     args = ["generate", "vehicle", "--seed", "2", "--profile", "10:1,0;10:0,-1",
             "--duration", "20"]
-    assert main([*args, "--out", str(tmp_path / "a")]) == 0
+    assert main([*args, "--out", str(tmp_path / "a"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     truth = json.loads((tmp_path / "a" / "truth.json").read_text())
     # closed form at t = 19.99 s (τ = 9.99 s into the second segment, V0 = (1, 3)):
