@@ -1052,6 +1052,8 @@ def write_recording(report: GapReport, path: PathLike, force: bool = False) -> P
     n = theta.size
     index = {"sample": np.arange(n, dtype=np.int64),
              "theta_urad": np.round(theta * 1e6).astype(np.int64)}
+    # ±σ bands span the θ range (the first and last samples of an up-then-down sweep share θ)
+    ends = {tl: v[[int(np.argmin(theta)), int(np.argmax(theta))]] for tl, v in index.items()}
     with open_recording(path, force=force, blueprint=_recording_blueprint(),
                         name="tiltbench gap") as rec:
         for k, ax in enumerate(AXES):
@@ -1061,7 +1063,6 @@ def write_recording(report: GapReport, path: PathLike, force: bool = False) -> P
                 log_series(rec, f"gap/{ax}/residual_{which}", res[:, k], index,
                            style="points", color=COLORS[which], name=f"residual {which}",
                            size=1.0 if n < 10_000 else 0.5)
-                ends = {tl: v[[0, -1]] for tl, v in index.items()}
                 for part, sign in (("plus", 1.0), ("minus", -1.0)):
                     log_series(rec, f"gap/{ax}/band_{which}/{part}",
                                np.full(2, sign * np.sqrt(s2)), ends, color=COLORS["band"],

@@ -211,7 +211,7 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
               "discrepancy workflow: residual before / after adding the named effects, m/s² "
               "(bench/gap.py)", ("gap",)),
     EntityDoc("gap/{axis}/band_{k}/{k}", "Scalars + SeriesLines", "sample, theta_urad",
-              "±σ band of the before / after model (first and last sample), m/s²", ("gap",)),
+              "±σ band of the before / after model (smallest and largest θ), m/s²", ("gap",)),
     EntityDoc("gap/{axis}/mean_{k}", "Scalars + SeriesLines", "sample, theta_urad",
               "binned mean of the residual before / after (≈ 80 samples per θ bin, at most 100 "
               "bins), m/s²", ("gap",)),
