@@ -5,7 +5,7 @@ so one process can write several; the file is written to a temporary name beside
 and renamed when complete (an existing file is replaced only with ``force``). Large arrays go
 through ``rerun.send_columns`` (one call per entity, not one per sample). A default blueprint
 is stored in the file so it opens in a useful layout: every view shows its content on open
-(time-series views over the whole timeline, the time panel collapsed and paused, one text
+(time-series views over the whole timeline, the time panel collapsed and not playing, one text
 view per document, 2-D views with bounds computed from the data).
 
 What is logged (the full entity table is :data:`ENTITY_DOCS`, rendered in
@@ -418,12 +418,13 @@ def full_time_axis() -> Any:
                                                  end=rrb.TimeRangeBoundary.infinite()))
 
 
-def time_panel(timeline: str) -> Any:
-    """Collapsed, paused time panel on ``timeline`` (the viewer would otherwise start playing
-    and give the panel a quarter of the screen)."""
+def time_panel(timeline: str, play_state: str = "paused") -> Any:
+    """Collapsed time panel on ``timeline`` that does not play (the viewer would otherwise
+    start playing and give the panel a quarter of the screen). ``"following"`` puts the time
+    cursor at the end of the timeline (a vehicle run opens at its arrival, not at t = 0)."""
     import rerun.blueprint as rrb
 
-    return rrb.TimePanel(timeline=timeline, play_state="paused", state="collapsed")
+    return rrb.TimePanel(timeline=timeline, play_state=play_state, state="collapsed")
 
 
 def binned_mean(x: np.ndarray, y: np.ndarray, bins: int = MEAN_BINS
@@ -987,7 +988,7 @@ def _vehicle_blueprint(bounds: Any, *, estimated: bool, acc: tuple[str, ...],
         tabs.append(rrb.Horizontal(_axis_views("x", fit, true), _axis_views("y", fit, true),
                                    name="calibration"))
     return rrb.Blueprint(rrb.Tabs(*tabs) if len(tabs) > 1 else vehicle,
-                         time_panel(TIME_TIMELINE), collapse_panels=True)
+                         time_panel(TIME_TIMELINE, "following"), collapse_panels=True)
 
 
 def decision_markdown(region: ArrivalRegion, true_arrival: str | None = None) -> str:
@@ -1069,7 +1070,7 @@ def _log_vehicle(rec: rr.RecordingStream, traj: Trajectory, region: ArrivalRegio
         draw_order=45.0), static=True)
     rec.log("vehicle/plane/arrival/ellipse", rr.LineStrips2D(
         [region.ellipse.boundary(256)], radii=rr.Radius.ui_points(2.0), colors=COLORS["ellipse"],
-        draw_order=30.0), static=True)
+        draw_order=32.0), static=True)  # above the moving ellipse, which ends on it
     m = t.shape[0]
     idx = np.unique(np.linspace(0, m - 1, min(n_ellipses, m)).round().astype(int))
     covs = position_cov_along(traj, cal, region.noise_var, idx)
