@@ -7,7 +7,8 @@
    baseline of a Python loop calling ``mj_forward`` once per sample.
 2. Held positions (100 positions × 200 samples): one physics evaluation per distinct pose
    against one per sample (the same loop baseline).
-3. Calibration fit (N = 20001): ``calib.ls.fit_axis`` (centred lstsq + QR covariance) against
+3. Calibration fit (N = 20001): ``calib.ls.fit_axis`` (centred design, one Householder QR of
+   the augmented design for solution, rank and covariance, plus the condition number) against
    the MATLAB-style normal equations ``inv(HᵀH)Hᵀy`` — the price of the safe numerics.
 """
 
