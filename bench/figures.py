@@ -38,6 +38,7 @@ import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from scipy import stats  # noqa: E402
 
+from bench.record import binned_mean  # noqa: E402  (the recordings draw the same means)
 from calib.conventions import AXES, reference_accel  # noqa: E402
 from calib.io import atomic_write_bytes  # noqa: E402
 
@@ -49,6 +50,8 @@ if TYPE_CHECKING:
 
 FORMATS = {".png": "png", ".svg": "svg"}
 DPI = 120
+FIGURE_BINS = 60
+"""Bins of the residual binned mean in the calibration figure (equal sample counts)."""
 AXIS_LABEL = {"x": "x (A_rx = −g sin θ)", "y": "y (A_ry = −g cos θ)"}
 
 
@@ -72,19 +75,6 @@ def save_figure(fig: Figure, path: str | Path, force: bool = False) -> Path:
         fig.savefig(buf, format=fmt, dpi=DPI, metadata=metadata)
     plt.close(fig)
     return atomic_write_bytes(path, buf.getvalue(), force=force)
-
-
-def binned_mean(x: np.ndarray, y: np.ndarray, bins: int = 60) -> tuple[np.ndarray, np.ndarray]:
-    """Mean of ``y`` in equal-width bins of ``x``: (centres, means); empty bins dropped."""
-    edges = np.linspace(np.min(x), np.max(x), bins + 1)
-    if edges[-1] == edges[0]:
-        return np.array([x[0]]), np.array([y.mean()])
-    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
-    cnt = np.bincount(idx, minlength=bins)
-    s = np.bincount(idx, weights=y, minlength=bins)
-    ok = cnt > 0
-    centers = 0.5 * (edges[1:] + edges[:-1])
-    return centers[ok], s[ok] / cnt[ok]
 
 
 def _true_params(truth: Mapping | None) -> dict[str, float] | None:
@@ -149,8 +139,8 @@ def _axis_panels(fig, cal: Calibration, ensayo: Ensayo, axis: str,
         rx.axhspan(-sigma, sigma, color="tab:orange", alpha=0.18, label=f"±σ = ±{sigma:.3g}")
         for sgn in (-1, 1):
             rx.axhline(sgn * sigma, color="tab:orange", lw=1)
-        bx, by = binned_mean(xv, resid)
-        half = 2.0 * sigma / np.sqrt(max(1.0, xv.size / 60))
+        bx, by, _ = binned_mean(xv, resid, FIGURE_BINS)
+        half = 2.0 * sigma / np.sqrt(max(1.0, xv.size / FIGURE_BINS))  # equal-count bins
         rx.plot(bx, by, color="k", lw=1.3, label=f"binned mean (±2σ/√n: ±{half:.2g})")
         rx.fill_between(bx, -half, half, color="k", alpha=0.12, lw=0)
         rx.axhline(0.0, color="0.3", lw=0.8)
@@ -249,9 +239,9 @@ def acceleration_figure(traj: Trajectory, true_acc: np.ndarray | None = None,
         ax = axs[k]
         ax.plot(traj.t, traj.acc_raw[:, k], color="tab:blue", lw=0.4, alpha=0.25,
                 label="measured A_m (samples)")
-        mx, my = binned_mean(traj.t, traj.acc_raw[:, k], bins)
+        mx, my, _ = binned_mean(traj.t, traj.acc_raw[:, k], bins)
         ax.plot(mx, my, color="0.35", lw=1.4, label=f"measured, {bin_s:g} s mean")
-        cx, cy = binned_mean(traj.t, traj.acc_corrected[:, k], bins)
+        cx, cy, _ = binned_mean(traj.t, traj.acc_corrected[:, k], bins)
         ax.plot(cx, cy, color="navy", lw=1.6,
                 label=f"corrected (A_m − bias)/(1 + scale), {bin_s:g} s mean")
         if true_acc is not None:

@@ -895,7 +895,7 @@ def gap_figure(report: GapReport) -> Figure:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from bench.figures import binned_mean
+    from bench.record import binned_mean
 
     theta = report.replay.tita
     fig, axs = plt.subplots(2, 2, figsize=(11, 7), sharex=True, constrained_layout=True)
@@ -909,7 +909,7 @@ def gap_figure(report: GapReport) -> Figure:
                             else report.after[ax_name].sigma2)
             ax.plot(theta, res[:, k], ".", ms=1.5, color=(0.35, 0.55, 0.85) if j else
                     (0.55, 0.55, 0.55), alpha=0.6, rasterized=True, label="data − simulation")
-            cx, cy = binned_mean(theta, res[:, k], 72)
+            cx, cy, _ = binned_mean(theta, res[:, k], 72)
             ax.plot(cx, cy, "-", color=(0.85, 0.2, 0.15), lw=1.5, label="binned mean")
             ax.axhspan(-sigma, sigma, color=(0.95, 0.7, 0.2), alpha=0.25, label="±σ")
             for sign in (-1.0, 1.0):
