@@ -39,77 +39,25 @@ Canonical term order inside a stage: :data:`TERM_ORDER`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, ClassVar, Literal
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from bench.model import TableEdits
 from bench.sensors import AxisErrors, SensorContext, SensorErrorModel, Stage, register_term
-from calib.conventions import AXES
+from calib.conventions import AXES, EFFECT_NAMES, EFFECTS, PER_AXIS, EffectInfo, Timing
 from calib.io import DataError
 
 if TYPE_CHECKING:  # pragma: no cover
     from bench.tilt import CalibrationConfig
 
-Timing = Literal["no", "yes", "units"]
-
-
-@dataclass(frozen=True)
-class EffectInfo:
-    """One row of the effect catalog (``docs/effects.md``).
-
-    name : JSON name.  axes : allowed axis values ("x", "y" or "both").
-    keys : parameter keys (JSON), with their units in ``units``.
-    timing : "no", "yes" (cannot be simulated or estimated without sample times) or "units"
-        (with timing the parameter is per second, without it per sample).
-    physical : True when the bench implements it as an MjSpec edit of the model.
-    """
-
-    name: str
-    axes: tuple[str, ...]
-    keys: tuple[str, ...]
-    units: tuple[str, ...]
-    timing: Timing
-    physical: bool
-    summary: str
-
-
-PER_AXIS = ("x", "y")
-CATALOG: dict[str, EffectInfo] = {e.name: e for e in (
-    EffectInfo("noise_level", PER_AXIS, ("sigma2",), ("(m/s²)²",), "no", False,
-               "true white-noise variance differs from the stated σ²"),
-    EffectInfo("misalignment", PER_AXIS, ("delta",), ("rad",), "no", True,
-               "sensitive axis rotated by +δ about the hinge (+y)"),
-    EffectInfo("tilt_offset", ("both",), ("delta",), ("rad",), "no", True,
-               "table angle = encoder + δ (both sensors)"),
-    EffectInfo("nonlinearity_k2", PER_AXIS, ("k2",), ("1/(m/s²)",), "no", False,
-               "second-order response k2·a_i² (IEEE K2/K1)"),
-    EffectInfo("cross_axis", PER_AXIS, ("k_ip",), ("1/(m/s²)",), "no", False,
-               "cross-coupling k_ip·a_i·a_p (IEEE K_ip/K1)"),
-    EffectInfo("bias_drift", PER_AXIS, ("rate", "rate_per_sample"),
-               ("m/s² per s", "m/s² per sample"), "units", False,
-               "linear bias drift rate·(t - t0)"),
-    EffectInfo("bias_random_walk", PER_AXIS, ("q", "q_per_sample"),
-               ("m/s²/√s", "m/s²/√sample"), "units", False,
-               "bias random walk b_k = b_{k-1} + q·√Δt·w_k"),
-    EffectInfo("quantization", PER_AXIS, ("lsb",), ("m/s²",), "no", False,
-               "output rounded to multiples of lsb"),
-    EffectInfo("saturation", PER_AXIS, ("limit",), ("m/s²",), "no", True,
-               "true specific force clipped to ±limit (MuJoCo sensor cutoff)"),
-    EffectInfo("lowpass_lag", PER_AXIS, ("tau",), ("s",), "yes", False,
-               "first-order low-pass τ·dy/dt + y = u"),
-    EffectInfo("lever_arm", PER_AXIS, ("pos_x", "pos_z"), ("m", "m"), "yes", True,
-               "site off the hinge axis: centripetal −ω²·p and tangential α·(ŷ×p)"),
-    EffectInfo("gravity_mismatch", ("both",), ("g",), ("m/s²",), "no", True,
-               "true local gravity differs (absorbed by the scale factors)"),
-)}
-"""Effect name → catalog row, in the order of ``docs/effects.md``."""
-
-EFFECT_NAMES: tuple[str, ...] = tuple(CATALOG)
-
 TERM_ORDER: tuple[str, ...] = ("lowpass_lag", "nonlinearity_k2", "cross_axis", "bias_drift",
                                "bias_random_walk", "quantization")
 """Order in which sensor terms are applied (stage first, then this order)."""
+
+
+CATALOG = EFFECTS
+"""The effect vocabulary (:data:`calib.conventions.EFFECTS`), under the bench's old name."""
 
 
 def needs_timing(name: str) -> Timing:

@@ -1,6 +1,9 @@
-"""Physical constants, axis names and the course sign convention."""
+"""Physical constants, axis names, the course sign convention and the effect vocabulary."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -42,3 +45,69 @@ def axis_index(axis: str) -> int:
         return AXES.index(axis)
     except ValueError:
         raise ValueError(f"axis must be 'x' or 'y', got {axis!r}") from None
+
+
+# ------------------------------------------------------------------ effect vocabulary
+Timing = Literal["no", "yes", "units"]
+
+
+@dataclass(frozen=True)
+class EffectInfo:
+    """One row of the effect catalog (``docs/effects.md``).
+
+    name : JSON name.  axes : allowed axis values ("x", "y" or "both").
+    keys : parameter keys (JSON), with their units in ``units``.
+    timing : "no", "yes" (cannot be simulated or estimated without sample times) or "units"
+        (with timing the parameter is per second, without it per sample).
+    physical : True when the effect acts on the physics (the specific force at the site; the
+        bench makes it by an ``MjSpec`` edit of the model), False when it is in the sensor.
+    """
+
+    name: str
+    axes: tuple[str, ...]
+    keys: tuple[str, ...]
+    units: tuple[str, ...]
+    timing: Timing
+    physical: bool
+    summary: str
+
+
+PER_AXIS = ("x", "y")
+EFFECTS: dict[str, EffectInfo] = {e.name: e for e in (
+    EffectInfo("noise_level", PER_AXIS, ("sigma2",), ("(m/s²)²",), "no", False,
+               "true white-noise variance differs from the stated σ²"),
+    EffectInfo("misalignment", PER_AXIS, ("delta",), ("rad",), "no", True,
+               "sensitive axis rotated by +δ about the hinge (+y)"),
+    EffectInfo("tilt_offset", ("both",), ("delta",), ("rad",), "no", True,
+               "table angle = encoder + δ (both sensors)"),
+    EffectInfo("nonlinearity_k2", PER_AXIS, ("k2",), ("1/(m/s²)",), "no", False,
+               "second-order response k2·a_i² (IEEE K2/K1)"),
+    EffectInfo("cross_axis", PER_AXIS, ("k_ip",), ("1/(m/s²)",), "no", False,
+               "cross-coupling k_ip·a_i·a_p (IEEE K_ip/K1)"),
+    EffectInfo("bias_drift", PER_AXIS, ("rate", "rate_per_sample"),
+               ("m/s² per s", "m/s² per sample"), "units", False,
+               "linear bias drift rate·(t - t0)"),
+    EffectInfo("bias_random_walk", PER_AXIS, ("q", "q_per_sample"),
+               ("m/s²/√s", "m/s²/√sample"), "units", False,
+               "bias random walk b_k = b_{k-1} + q·√Δt·w_k"),
+    EffectInfo("quantization", PER_AXIS, ("lsb",), ("m/s²",), "no", False,
+               "output rounded to multiples of lsb"),
+    EffectInfo("saturation", PER_AXIS, ("limit",), ("m/s²",), "no", True,
+               "true specific force clipped to ±limit (MuJoCo sensor cutoff)"),
+    EffectInfo("lowpass_lag", PER_AXIS, ("tau",), ("s",), "yes", False,
+               "first-order low-pass τ·dy/dt + y = u"),
+    EffectInfo("lever_arm", PER_AXIS, ("pos_x", "pos_z"), ("m", "m"), "yes", True,
+               "site off the hinge axis: centripetal −ω²·p and tangential α·(ŷ×p)"),
+    EffectInfo("gravity_mismatch", ("both",), ("g",), ("m/s²",), "no", True,
+               "true local gravity differs (absorbed by the scale factors)"),
+)}
+"""Effect name → catalog row, in the order of ``docs/effects.md``."""
+
+EFFECT_NAMES: tuple[str, ...] = tuple(EFFECTS)
+"""The effect vocabulary (JSON names), in the order of ``docs/effects.md``."""
+
+NEEDS_TIMING: tuple[str, ...] = tuple(n for n, e in EFFECTS.items() if e.timing == "yes")
+"""Effects that cannot be simulated or estimated without sample times (``t`` or a rate)."""
+
+PER_SAMPLE_UNITS: tuple[str, ...] = tuple(n for n, e in EFFECTS.items() if e.timing == "units")
+"""Effects whose parameter is per second with timing and per sample without it."""

@@ -64,9 +64,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import linalg as sla
-from scipy import optimize, signal, stats
+from scipy import optimize, stats
 
-from calib.conventions import AXES, reference_accel
+from calib.conventions import AXES, EFFECT_NAMES, NEEDS_TIMING, PER_SAMPLE_UNITS, reference_accel
 from calib.diagnostics import (
     LN2,
     angular_rates,
@@ -75,19 +75,8 @@ from calib.diagnostics import (
     hinge_columns,
     hinge_levels,
 )
+from calib.filters import lowpass
 from calib.ls import FitResult, NotIdentifiableError, fit_linear
-
-EFFECT_NAMES: tuple[str, ...] = (
-    "noise_level", "misalignment", "tilt_offset", "nonlinearity_k2", "cross_axis",
-    "bias_drift", "bias_random_walk", "quantization", "saturation", "lowpass_lag",
-    "lever_arm", "gravity_mismatch")
-"""The effect vocabulary (DESIGN.md), in the order of ``docs/effects.md``."""
-
-NEEDS_TIMING: tuple[str, ...] = ("lowpass_lag", "lever_arm")
-"""Effects that cannot be estimated without sample times (``t`` or a sample rate)."""
-
-PER_SAMPLE_UNITS: tuple[str, ...] = ("bias_drift", "bias_random_walk")
-"""Effects reported per sample (``rate_per_sample``, ``q_per_sample``) without timing."""
 
 LINEAR_COLUMNS: dict[str, tuple[str, ...]] = {
     "misalignment": ("c_mis",),
@@ -121,42 +110,6 @@ class UntestableError(NotIdentifiableError):
 
 
 # ---------------------------------------------------------------------------- the run
-
-def lowpass(u: np.ndarray, t: np.ndarray, tau: float, h_uniform: float | None = None
-            ) -> np.ndarray:
-    """First-order low-pass ``τ·dy/dt + y = u`` of sampled inputs (the bench's filter).
-
-    Parameters
-    ----------
-    u : (N,) or (N, m) inputs at times ``t`` (N,), s.  tau : time constant, s (0: identity).
-    h_uniform : the sampling period when ``t`` is uniform (enables a vectorised filter).
-
-    Notes
-    -----
-    Exact for an input linear between samples: with the lag error ``e = y - u``,
-    ``e_0 = 0``, ``e_k = a_k e_{k-1} - τ c_k (1 - a_k)``, ``a_k = e^{-h_k/τ}``,
-    ``c_k = (u_k - u_{k-1})/h_k``. A ramp of slope c lags by τ: ``y = u - τc``.
-    """
-    u = np.asarray(u, dtype=float)
-    if tau <= 0 or u.shape[0] < 2:
-        return u.copy()
-    t = np.asarray(t, dtype=float)
-    h = np.diff(t)
-    shape = (-1,) + (1,) * (u.ndim - 1)
-    c = np.diff(u, axis=0) / h.reshape(shape)
-    e = np.zeros_like(u)
-    if h_uniform is not None:
-        a = float(np.exp(-h_uniform / tau))
-        e[1:] = signal.lfilter([1.0], [1.0, -a], -tau * (1.0 - a) * c, axis=0)
-    else:
-        a = np.exp(-h / tau).reshape(shape)
-        drive = -tau * (1.0 - a) * c
-        prev = np.zeros(u.shape[1:])
-        for k in range(h.size):
-            prev = a[k] * prev + drive[k]
-            e[k + 1] = prev
-    return u + e
-
 
 @dataclass(frozen=True, eq=False)
 class RunData:

@@ -70,6 +70,7 @@ from calib.effects import (
     Trial,
     lowpass,
 )
+from calib.filters import walk_filter
 from calib.io import Ensayo
 from calib.ls import NotIdentifiableError, fit_linear
 
@@ -313,42 +314,6 @@ def _ratio(c: float, s: float, cov2: np.ndarray) -> tuple[float, float]:
     return v, float(np.sqrt(max(grad @ cov2 @ grad, 0.0)))
 
 
-def _walk_filter(z: np.ndarray, sigma2: float, qk: np.ndarray
-                 ) -> tuple[np.ndarray, float, float]:
-    """Kalman filter + smoother of ``z_k = b_k + v_k``, b a random walk, diffuse b_0.
-
-    Parameters
-    ----------
-    z : (N,) reading minus the model's mean without its bias, m/s².
-    sigma2 : white-noise variance.  qk : (N-1,) walk increment variances q²Δt_k.
-
-    Returns
-    -------
-    (innovations, b0, var_b0): normalised innovations (N,) (the first, which only fixes the
-    diffuse level, set to 0), and the smoothed bias at the first sample with its variance.
-    """
-    n = z.size
-    m = np.empty(n)
-    p = np.empty(n)
-    innov = np.zeros(n)
-    m[0], p[0] = z[0], sigma2  # diffuse prior updated with z_0
-    for k in range(1, n):
-        pp = p[k - 1] + qk[k - 1]
-        f = pp + sigma2
-        e = z[k] - m[k - 1]
-        innov[k] = e / np.sqrt(f)
-        gain = pp / f
-        m[k] = m[k - 1] + gain * e
-        p[k] = (1.0 - gain) * pp
-    ms, ps = m[-1], p[-1]
-    for k in range(n - 2, -1, -1):  # Rauch-Tung-Striebel
-        pp = p[k] + qk[k]
-        c = p[k] / pp
-        ms = m[k] + c * (ms - m[k])
-        ps = p[k] + c * c * (ps - pp)
-    return innov, float(ms), float(ps)
-
-
 def quantized_moments(mu: np.ndarray, sigma2: float, lsb: float
                       ) -> tuple[np.ndarray, np.ndarray]:
     """Mean and variance of ``lsb·round((μ + v)/lsb)``, v ~ N(0, σ²), per sample.
@@ -433,7 +398,7 @@ class _Reporter:
             if st.q <= 0:
                 continue
             mean_nb = self._mean(k, names, params, with_bias=False)
-            innov, b0, vb0 = _walk_filter(self.run.datos[:, k] - mean_nb, st.sigma2_eff,
+            innov, b0, vb0 = walk_filter(self.run.datos[:, k] - mean_nb, st.sigma2_eff,
                                           st.q**2 * self.run.dt_walk)
             self.innov[k] = innov
             at = names.index(f"{AXES[k]}.scale")

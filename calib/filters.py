@@ -1,0 +1,83 @@
+"""Linear filters of the sensor model, one home each: the first-order low-pass and the
+random-walk (local-level) Kalman filter with its Rauch-Tung-Striebel smoother.
+
+The bench simulates with them and the estimation side fits with them, so the simulated effect
+and the model of it cannot drift apart.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import signal
+
+
+def lowpass(u: np.ndarray, t: np.ndarray, tau: float, h_uniform: float | None = None
+            ) -> np.ndarray:
+    """First-order low-pass ``τ·dy/dt + y = u`` of sampled inputs (the bench's filter).
+
+    Parameters
+    ----------
+    u : (N,) or (N, m) inputs at times ``t`` (N,), s.  tau : time constant, s (0: identity).
+    h_uniform : the sampling period when ``t`` is uniform (enables a vectorised filter).
+
+    Notes
+    -----
+    Exact for an input linear between samples: with the lag error ``e = y - u``,
+    ``e_0 = 0``, ``e_k = a_k e_{k-1} - τ c_k (1 - a_k)``, ``a_k = e^{-h_k/τ}``,
+    ``c_k = (u_k - u_{k-1})/h_k``. A ramp of slope c lags by τ: ``y = u - τc``.
+    """
+    u = np.asarray(u, dtype=float)
+    if tau <= 0 or u.shape[0] < 2:
+        return u.copy()
+    t = np.asarray(t, dtype=float)
+    h = np.diff(t)
+    shape = (-1,) + (1,) * (u.ndim - 1)
+    c = np.diff(u, axis=0) / h.reshape(shape)
+    e = np.zeros_like(u)
+    if h_uniform is not None:
+        a = float(np.exp(-h_uniform / tau))
+        e[1:] = signal.lfilter([1.0], [1.0, -a], -tau * (1.0 - a) * c, axis=0)
+    else:
+        a = np.exp(-h / tau).reshape(shape)
+        drive = -tau * (1.0 - a) * c
+        prev = np.zeros(u.shape[1:])
+        for k in range(h.size):
+            prev = a[k] * prev + drive[k]
+            e[k + 1] = prev
+    return u + e
+
+
+def walk_filter(z: np.ndarray, sigma2: float, qk: np.ndarray
+                ) -> tuple[np.ndarray, float, float]:
+    """Kalman filter + smoother of ``z_k = b_k + v_k``, b a random walk, diffuse b_0.
+
+    Parameters
+    ----------
+    z : (N,) reading minus the model's mean without its bias, m/s².
+    sigma2 : white-noise variance.  qk : (N-1,) walk increment variances q²Δt_k.
+
+    Returns
+    -------
+    (innovations, b0, var_b0): normalised innovations (N,) (the first, which only fixes the
+    diffuse level, set to 0), and the smoothed bias at the first sample with its variance.
+    """
+    n = z.size
+    m = np.empty(n)
+    p = np.empty(n)
+    innov = np.zeros(n)
+    m[0], p[0] = z[0], sigma2  # diffuse prior updated with z_0
+    for k in range(1, n):
+        pp = p[k - 1] + qk[k - 1]
+        f = pp + sigma2
+        e = z[k] - m[k - 1]
+        innov[k] = e / np.sqrt(f)
+        gain = pp / f
+        m[k] = m[k - 1] + gain * e
+        p[k] = (1.0 - gain) * pp
+    ms, ps = m[-1], p[-1]
+    for k in range(n - 2, -1, -1):  # Rauch-Tung-Striebel
+        pp = p[k] + qk[k]
+        c = p[k] / pp
+        ms = m[k] + c * (ms - m[k])
+        ps = p[k] + c * c * (ps - pp)
+    return innov, float(ms), float(ps)
