@@ -1,0 +1,37 @@
+"""Writing a figure: PNG or SVG by extension, atomically, byte-reproducible."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+from matplotlib.figure import Figure
+
+from calib.io import atomic_write_bytes
+
+FORMATS = {".png": "png", ".svg": "svg"}
+"""File extension → matplotlib format."""
+DPI = 120
+
+
+def save_figure(fig: Figure, path: str | Path, force: bool = False) -> Path:
+    """Write ``fig`` as PNG or SVG (by extension) atomically, then close it.
+
+    Raises ``ValueError`` for another extension and ``FileExistsError`` if ``path`` exists
+    and not ``force``.
+    """
+    path = Path(path)
+    fmt = FORMATS.get(path.suffix.lower())
+    if fmt is None:
+        plt.close(fig)
+        raise ValueError(f"{path}: figure format must be .png or .svg")
+    if path.exists() and not force:
+        plt.close(fig)
+        raise FileExistsError(f"{path}: exists; pass --force to overwrite")
+    buf = io.BytesIO()
+    metadata = {"Date": None} if fmt == "svg" else {"Software": None}
+    with plt.rc_context({"svg.hashsalt": "tiltbench"}):  # SVG ids without random salt
+        fig.savefig(buf, format=fmt, dpi=DPI, metadata=metadata)
+    plt.close(fig)
+    return atomic_write_bytes(path, buf.getvalue(), force=force)

@@ -1,0 +1,129 @@
+"""Default blueprints stored in the recordings: every view shows its content on open.
+
+Time-series views span the whole timeline, the time panel is collapsed and not playing, one
+text view per document, 2-D views have bounds computed from the data.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from bench.record.plot import plot_bounds
+from bench.record.stream import THETA_TIMELINE, TIME_TIMELINE
+from calib.conventions import AXES
+
+
+def full_time_axis() -> Any:
+    """X axis of a time-series view showing the whole timeline, not the cursor ± 1000 default
+    (which shows 3–6 samples on ``theta_urad``, where samples are ~314 µrad apart)."""
+    import rerun.blueprint as rrb
+
+    return rrb.TimeAxis(view_range=rrb.TimeRange(start=rrb.TimeRangeBoundary.infinite(),
+                                                 end=rrb.TimeRangeBoundary.infinite()))
+
+
+def time_panel(timeline: str, play_state: str = "paused") -> Any:
+    """Collapsed time panel on ``timeline`` that does not play (the viewer would otherwise
+    start playing and give the panel a quarter of the screen). ``"following"`` puts the time
+    cursor at the end of the timeline (a vehicle run opens at its arrival, not at t = 0)."""
+    import rerun.blueprint as rrb
+
+    return rrb.TimePanel(timeline=timeline, play_state=play_state, state="collapsed")
+
+
+def axis_views(axis: str, fit: bool = True, true: bool = False) -> Any:
+    """The three views of one axis: data and model, residual ±σ, error against A_r.
+
+    All three are static 2-D plots (θ in rad on the x axis, readable whatever the active
+    timeline: a recording with a vehicle run has ``time``, on which θ series are empty). The
+    same data are also logged as series on ``theta_urad`` for custom time-series views.
+    """
+    import rerun.blueprint as rrb
+
+    o = f"calibration/{axis}"
+    model = ", ".join([*(["fit (red)"] if fit else []), *(["true (green)"] if true else [])])
+    return rrb.Vertical(
+        rrb.Spatial2DView(origin=o, contents=[f"+ {o}/theta_plot/**"],
+                          name=f"{axis}: A_m (blue), {model} vs θ (rad); m/s²",
+                          visual_bounds=plot_bounds()),
+        rrb.Spatial2DView(origin=o, contents=[f"+ {o}/residual_plot/**"],
+                          name=f"{axis}: residual, ±σ (orange), binned mean (white) vs θ "
+                               "(rad); m/s²", visual_bounds=plot_bounds()),
+        rrb.Spatial2DView(origin=o, contents=[f"+ {o}/vs_ar/**"],
+                          name=f"{axis}: A_m − A_r vs A_r: {model}, ideal 0 (grey), binned "
+                               "mean (white); m/s²", visual_bounds=plot_bounds()))
+
+
+def calibration_blueprint(fit: bool = True, true: bool = False) -> Any:
+    import rerun.blueprint as rrb
+
+    return rrb.Blueprint(
+        rrb.Vertical(rrb.Horizontal(axis_views("x", fit, true), axis_views("y", fit, true)),
+                     rrb.TextDocumentView(origin="summary/parameters",
+                                          name="estimates vs truth" if fit else "truth"),
+                     row_shares=[5, 2]),
+        time_panel(THETA_TIMELINE), collapse_panels=True)
+
+
+def plane_bounds(*arrays, margin: float = 0.06) -> Any:
+    """View bounds around all given (n, 2) plane positions (m) with a margin on each side.
+
+    The plane is drawn under ``vehicle/plane`` (scale (1, −1, 1)), so the view's y is −y.
+    """
+    import rerun.blueprint as rrb
+
+    pts = np.concatenate([np.asarray(a, float).reshape(-1, 2) for a in arrays if a is not None])
+    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    pad = margin * max(float(np.max(hi - lo)), 1.0)
+    return rrb.VisualBounds2D(x_range=[lo[0] - pad, hi[0] + pad],
+                              y_range=[-hi[1] - pad, -lo[1] + pad])
+
+
+def vehicle_blueprint(bounds: Any, *, estimated: bool, acc: tuple[str, ...],
+                       paths: tuple[str, ...], candidates: bool,
+                       calibration: tuple[bool, bool] | None, level: float | None = None,
+                       snapshot_dt: float | None = None, texts: tuple[str, ...] = ()) -> Any:
+    """Vehicle tab (and a static calibration tab when ``calibration`` = (fit, true) is given).
+
+    ``estimated``: a corrected run (position std view); ``acc``: the acceleration series
+    logged (measured, corrected, true); ``paths``: the paths drawn; ``texts``: the
+    ``summary/*`` documents, one view each (a text view shows one document). The view name
+    is the legend (labels on the paths overprinted the other labels).
+    """
+    import rerun.blueprint as rrb
+
+    hue = {"true": "green", "corrected": "blue", "raw": "grey"}
+    parts = ["paths: " + ", ".join(f"{k} {hue[k]}" for k in ("true", "corrected", "raw")
+                                   if k in paths)]
+    if candidates:
+        parts.append("candidates magenta")
+    if estimated:
+        pct = f"{100 * level:g}%" if level is not None else ""
+        every = f" every {snapshot_dt:.0f} s" if snapshot_dt else ""
+        parts.append(f"{pct} ellipses: arrival red, along the run orange{every}")
+    plane = rrb.Spatial2DView(origin="vehicle", contents=["+ vehicle/plane/**"],
+                              name="plane (m) — " + "; ".join(parts), visual_bounds=bounds)
+    names = {"decision": "decision", "parameters": "estimates" if estimated else "truth"}
+    side = [rrb.TimeSeriesView(origin="vehicle/acceleration",
+                               contents=[f"+ vehicle/acceleration/{k}/{a}" for k in acc],
+                               name=f"acceleration {a} (m/s²): " + ", ".join(acc),
+                               axis_x=full_time_axis()) for a in AXES]
+    if estimated:
+        side.append(rrb.TimeSeriesView(origin="vehicle/position_std", axis_x=full_time_axis(),
+                                       name="std of the corrected position (m)"))
+    docs = [rrb.TextDocumentView(origin=f"summary/{t}", name=names.get(t, t)) for t in texts]
+    if len(docs) > 1:
+        side.append(rrb.Tabs(*docs))
+    else:
+        side += docs
+    vehicle = rrb.Horizontal(plane, rrb.Vertical(*side), column_shares=[3, 2], name="vehicle")
+    tabs = [vehicle]
+    if calibration is not None:
+        fit, true = calibration
+        tabs.append(rrb.Horizontal(axis_views("x", fit, true), axis_views("y", fit, true),
+                                   name="calibration"))
+    return rrb.Blueprint(rrb.Tabs(*tabs) if len(tabs) > 1 else vehicle,
+                         time_panel(TIME_TIMELINE, "following"), collapse_panels=True)
