@@ -24,6 +24,39 @@ FIGURE_BINS = 60
 AXIS_LABEL = {"x": "x (A_rx = −g sin θ)", "y": "y (A_ry = −g cos θ)"}
 
 
+def _estimates_box(ax, f, axis: str, level: float, tp: Mapping | None) -> None:
+    """Text box: bias and scale ± their level-L half-widths (and the true values)."""
+    b, s, q = f.param("bias"), f.param("scale"), f.quantile(level)
+    lines = [f"bias = {b:.5g} ± {q * f.std[0]:.2g} m/s²",
+             f"scale = {s:.5g} ± {q * f.std[1]:.2g}",
+             f"({100 * level:g}% intervals, σ² {f.sigma2_source})"]
+    if tp:
+        lines.append(f"true: bias {tp[f'bias_{axis}']:.5g}, "
+                     f"scale {tp[f'scale_{axis}']:.5g}")
+    ax.text(0.98, 0.03, "\n".join(lines), transform=ax.transAxes, ha="right",
+            va="bottom", fontsize=8, family="monospace",
+            bbox={"facecolor": "white", "alpha": 0.85, "edgecolor": "0.7"})
+
+
+def _residual_panel(rx, xv: np.ndarray, xlabel: str, resid: np.ndarray, sigma: float) -> None:
+    """Residuals against ``xv`` with the ±σ band and the binned mean with its ±2σ/√n band
+    (:data:`FIGURE_BINS` bins of equal counts, so the band is exact per bin)."""
+    rx.plot(xv, resid, ".", ms=1.2, color="tab:blue", alpha=0.3, rasterized=True,
+            label="residual A_m − fit")
+    rx.axhspan(-sigma, sigma, color="tab:orange", alpha=0.18, label=f"±σ = ±{sigma:.3g}")
+    for sgn in (-1, 1):
+        rx.axhline(sgn * sigma, color="tab:orange", lw=1)
+    bx, by, _ = binned_mean(xv, resid, FIGURE_BINS)
+    half = 2.0 * sigma / np.sqrt(max(1.0, xv.size / FIGURE_BINS))  # equal-count bins
+    rx.plot(bx, by, color="k", lw=1.3, label=f"binned mean (±2σ/√n: ±{half:.2g})")
+    rx.fill_between(bx, -half, half, color="k", alpha=0.12, lw=0)
+    rx.axhline(0.0, color="0.3", lw=0.8)
+    rx.set_xlabel(xlabel)
+    rx.set_ylabel("residual (m/s²)")
+    rx.grid(True, alpha=0.3)
+    rx.legend(loc="upper right", fontsize=7, ncol=3)
+
+
 def _axis_panels(fig, cal: Calibration, ensayo: Ensayo, axis: str,
                  truth: Mapping | None, level: float) -> None:
     """Draw the four panels of one axis into ``fig`` (a Figure or SubFigure)."""
@@ -37,7 +70,6 @@ def _axis_panels(fig, cal: Calibration, ensayo: Ensayo, axis: str,
     resid = a_m - fit
     sigma = float(np.sqrt(f.sigma2))
     tp = true_params(truth)
-    q = f.quantile(level)
     gs = fig.add_gridspec(2, 2, height_ratios=[3, 1.4])
     order = np.argsort(theta, kind="stable")
     for col, (xv, xlabel) in enumerate(((a_r, f"A_r{axis} (m/s²)"), (theta, "θ (rad)"))):
@@ -63,30 +95,8 @@ def _axis_panels(fig, cal: Calibration, ensayo: Ensayo, axis: str,
         ax.grid(True, alpha=0.3)
         ax.legend(loc="upper left" if col == 0 else "best", fontsize=8)
         if col == 0:
-            lines = [f"bias = {b:.5g} ± {q * f.std[0]:.2g} m/s²",
-                     f"scale = {s:.5g} ± {q * f.std[1]:.2g}",
-                     f"({100 * level:g}% intervals, σ² {f.sigma2_source})"]
-            if tp:
-                lines.append(f"true: bias {tp[f'bias_{axis}']:.5g}, "
-                             f"scale {tp[f'scale_{axis}']:.5g}")
-            ax.text(0.98, 0.03, "\n".join(lines), transform=ax.transAxes, ha="right",
-                    va="bottom", fontsize=8, family="monospace",
-                    bbox={"facecolor": "white", "alpha": 0.85, "edgecolor": "0.7"})
-        rx = fig.add_subplot(gs[1, col], sharex=ax)
-        rx.plot(xv, resid, ".", ms=1.2, color="tab:blue", alpha=0.3, rasterized=True,
-                label="residual A_m − fit")
-        rx.axhspan(-sigma, sigma, color="tab:orange", alpha=0.18, label=f"±σ = ±{sigma:.3g}")
-        for sgn in (-1, 1):
-            rx.axhline(sgn * sigma, color="tab:orange", lw=1)
-        bx, by, _ = binned_mean(xv, resid, FIGURE_BINS)
-        half = 2.0 * sigma / np.sqrt(max(1.0, xv.size / FIGURE_BINS))  # equal-count bins
-        rx.plot(bx, by, color="k", lw=1.3, label=f"binned mean (±2σ/√n: ±{half:.2g})")
-        rx.fill_between(bx, -half, half, color="k", alpha=0.12, lw=0)
-        rx.axhline(0.0, color="0.3", lw=0.8)
-        rx.set_xlabel(xlabel)
-        rx.set_ylabel("residual (m/s²)")
-        rx.grid(True, alpha=0.3)
-        rx.legend(loc="upper right", fontsize=7, ncol=3)
+            _estimates_box(ax, cal.fits[axis], axis, level, tp)
+        _residual_panel(fig.add_subplot(gs[1, col], sharex=ax), xv, xlabel, resid, sigma)
 
 
 def calibration_axis_figure(cal: Calibration, ensayo: Ensayo, axis: str,
