@@ -79,7 +79,7 @@ def test_demo_library_truth_beside_estimates(tmp_path):
     """run_demo on a small budget: decision, validation and recovered recording reported."""
     from bench.demo import run_demo
 
-    res = run_demo(tmp_path / "d", seed=3, coverage_runs=20, quiet=True)
+    res = run_demo(tmp_path / "d", seed=3, coverage_runs=20)
     text = res.summary()
     assert res.recovered is True
     assert res.truth is not None and res.validation is not None
