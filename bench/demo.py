@@ -1,6 +1,6 @@
 """``tiltbench demo``: the whole job end to end on embedded defaults.
 
-Steps (each timed, with a progress line on stderr):
+Steps (each timed; its start and end go to the optional progress callback):
 
 1. generate a course set with the bench (:func:`bench.course.make_course_set`, MuJoCo tilt
    table and vehicle) into ``OUT/data`` — or, with ``course_data``, use real course files;
@@ -62,16 +62,11 @@ OUTPUT_NAMES = ("estimates.json", "trajectory.json", "validation.json", "demo.rr
                 "report.md")
 
 
-Progress = Callable[[str], None]
-"""A progress callback: receives one line of text (``bench.cli.progress.Progress`` prints it
-on stderr with the elapsed time)."""
-
-
 class _Steps:
     """Numbered, timed steps: ``[k/total] label ...`` before and ``[k/total] label: done
     (1.23 s)`` after each, through the progress callback; the times go into the report."""
 
-    def __init__(self, labels: list[str], progress: Progress | None) -> None:
+    def __init__(self, labels: list[str], progress: Callable[[str], None] | None) -> None:
         self.labels = labels
         self.progress = progress
         self.k = 0
@@ -307,7 +302,8 @@ def _recording(out: Path, ana: CourseAnalysis, truth: _Truth, est: dict, tj: dic
 
 def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool = False,
              course_data: str | Path | None = None, level: float = DEFAULT_LEVEL,
-             coverage_runs: int = COVERAGE_RUNS, progress: Progress | None = None,
+             coverage_runs: int = COVERAGE_RUNS,
+             progress: Callable[[str], None] | None = None,
              formats: tuple[str, ...] = FIGURE_FORMATS) -> DemoResult:
     """Run the demo (module docstring); return what was written and computed.
 
@@ -320,7 +316,8 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
         datos.txt; truth.json used if present) instead of generating a set.
     level : level of the arrival region, in (0, 1).  coverage_runs : Monte Carlo runs
         (0: skip).
-    progress : called with one line per step start and end (None: silent).
+    progress : called with one line of text at the start and at the end of each step (None:
+        silent); the command line passes :class:`bench.cli.progress.Progress`.
     formats : figure formats written side by side ("png", "svg").
     """
     from bench.validate import validate
