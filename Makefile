@@ -24,6 +24,7 @@ lint: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
+	$(BIN)/python benchmarks/cli_startup.py
 
 octave-check: $(STAMP)
 	BIN=$(BIN) tools/octave_check.sh

@@ -1,6 +1,6 @@
 """Class sets: one unique course set per student plus a private answer key.
 
-``tiltbench generate class --count K --seed S --out DIR`` writes::
+``tiltbench generate class --students K --seed S --out DIR`` writes::
 
     DIR/student_001/ ensayo.mat acel.mat puntos.mat datos.txt      (what student 1 gets)
     ...
@@ -24,12 +24,10 @@ Validate a student's estimates with ``tiltbench validate --truth DIR/answer_key.
 
 from __future__ import annotations
 
-import argparse
 import csv
 import hashlib
 import io
 import json
-import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -49,9 +47,9 @@ CSV_COLUMNS = ("student", "seed", "answer", "raw_end_decoy", "bias_x", "scale_x"
 def student_seeds(seed: int, count: int) -> list[int]:
     """Seeds of the ``count`` course sets derived from ``seed`` (module docstring)."""
     if count < 1:
-        raise DataError(f"--count must be >= 1, got {count}")
+        raise ValueError(f"the number of students must be >= 1, got {count}")
     if seed < 0:
-        raise DataError(f"--seed must be >= 0, got {seed}")
+        raise ValueError(f"the class seed must be >= 0, got {seed}")
     out = [int(c.generate_state(1, np.uint64)[0] >> np.uint64(1))
            for c in np.random.SeedSequence(int(seed)).spawn(int(count))]
     if len(set(out)) != len(out):  # 2^-63 per pair: would be a bug, not chance
@@ -119,7 +117,7 @@ def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = Fal
     clash = [str(p) for p in targets if p.exists()]
     if clash and not force:
         raise FileExistsError(f"{out}: {clash[0]}{' and others' if len(clash) > 1 else ''} "
-                              "already exist(s); pass --force to overwrite")
+                              "already exist(s)")
     folders, rows, truths, digests = {}, [], {}, {}
     for i, (name, s) in enumerate(zip(names, seeds, strict=True)):
         folder = out / name
@@ -163,43 +161,4 @@ def student_truth(key: dict, student: str) -> dict:
                     f"{' …' if len(names) > 5 else ''})")
 
 
-def add_cli_options(p: argparse.ArgumentParser) -> None:
-    """Options of ``tiltbench generate class``."""
-    from bench.cli_generate import add_common
-
-    add_common(p)
-    p.add_argument("--count", type=int, required=True, help="number of students K")
-    p.add_argument("--prefix", default="student", help="folder prefix (student_001, …)")
-    p.add_argument("--noise-var", default="0.25,0.64",
-                   help="noise variances x,y (m/s²)² of every set")
-    p.description = ("K unique course sets (one folder each, no truth inside) and the "
-                     "private answer key DIR/answer_key.csv and DIR/answer_key.json.")
-
-
-def cli_generate_class(args: argparse.Namespace) -> int:
-    """Handler of ``tiltbench generate class``: summary (no answers) on stdout."""
-    from bench.cli_generate import print_summary
-    from bench.course import CourseConfig
-    from calib.io import parse_variances
-
-    nv = parse_variances(args.noise_var)
-    if not args.prefix or "/" in args.prefix or "\\" in args.prefix:
-        raise DataError(f"--prefix must be a plain name, got {args.prefix!r}")
-
-    def progress(done: int, total: int) -> None:
-        print(f"\rgenerate class: {done}/{total} sets", end="" if done < total else "\n",
-              file=sys.stderr, flush=True)
-
-    res = generate_class(args.out, args.count, args.seed, args.force,
-                         CourseConfig(noise_var=(float(nv[0]), float(nv[1]))), args.prefix,
-                         progress)
-    print_summary(args, f"generate class: {len(res.folders)} course sets, seed {args.seed}",
-                  {"count": len(res.folders),
-                   "folders": {k: str(v) for k, v in res.folders.items()},
-                   "answer_key": {"csv": str(res.key_csv), "json": str(res.key_json)},
-                   "note": "keep answer_key.* private; hand out the student folders"})
-    return 0
-
-
-__all__ = ["ClassSet", "add_cli_options", "cli_generate_class", "generate_class",
-           "student_seeds", "student_truth"]
+__all__ = ["ClassSet", "generate_class", "student_seeds", "student_truth"]

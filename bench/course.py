@@ -26,7 +26,6 @@ geometry — "the point in the middle" — does not give the answer away). All p
 
 from __future__ import annotations
 
-import argparse
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -36,14 +35,12 @@ from bench.model import TableEdits
 from bench.sensors import SensorErrorModel
 from bench.tilt import CalibrationConfig, CalibrationRun, ThetaDesign, generate_calibration
 from bench.vehicle import (
-    COURSE_PROFILE,
     Segment,
     VehicleConfig,
     VehicleRun,
     make_vehicle_run,
 )
 from calib.conventions import G
-from calib.io import DataError, parse_pair, parse_variances, refuse_overwrite
 
 COURSE_FILES = ("ensayo.mat", "acel.mat", "puntos.mat", "datos.txt", "truth.json")
 LETTERS = ("A", "B", "C", "D")
@@ -228,65 +225,6 @@ def generate_course(out: str | Path, seed: int = 0, force: bool = False,
     course = make_course_set(config, seed)
     write_course(course, out, force)
     return course
-
-
-# ---------------------------------------------------------------- command line helpers
-def add_cli_options(p: argparse.ArgumentParser) -> None:
-    """Options of ``tiltbench generate course``."""
-    from bench.cli_generate import add_common
-    from bench.vehicle import add_vehicle_options
-
-    add_common(p)
-    add_vehicle_options(p, profile_default=None)
-    p.add_argument("--noise-var", default="0.25,0.64", help="noise variances x,y (m/s²)²")
-    p.add_argument("--bias", help="true bias x,y in m/s²; omitted: drawn from the seed")
-    p.add_argument("--scale", help="true scale-factor error x,y; omitted: drawn from the seed")
-    p.add_argument("--count", type=int, default=20001, help="calibration samples over [0, 2π]")
-    p.add_argument("--min-separation", type=float, default=100.0,
-                   help="smallest distance between candidate points, m")
-    p.add_argument("--g", type=float, default=G, help="gravity, m/s²")
-    p.add_argument("--rrd", help="also record the set next to its truth to this rerun file")
-    p.epilog = ("Without --profile the acceleration profile is drawn from the seed "
-                "(--profile course gives the course's).")
-
-
-def course_config_from_args(args: argparse.Namespace) -> CourseConfig:
-    from bench.vehicle import parse_profile, vehicle_config_from_args
-
-    nv = parse_variances(args.noise_var)
-    if (args.bias is None) != (args.scale is None):
-        raise DataError("give both --bias and --scale, or neither (drawn from the seed)")
-    sensor = None
-    if args.bias is not None:
-        sensor = SensorErrorModel.from_pairs(parse_pair(args.bias, "--bias"),
-                                             parse_pair(args.scale, "--scale"), nv)
-    profile = parse_profile(args.profile) if args.profile else COURSE_PROFILE
-    vcfg = vehicle_config_from_args(args, sensor or SensorErrorModel(), profile)
-    if args.count < 3:
-        raise DataError(f"--count must be >= 3, got {args.count}")
-    if args.min_separation <= 0:
-        raise DataError(f"--min-separation must be positive, got {args.min_separation}")
-    return CourseConfig(vehicle=vcfg, random_profile=args.profile is None, sensor=sensor,
-                        noise_var=tuple(nv), theta=ThetaDesign(count=args.count),
-                        min_separation=args.min_separation, g=args.g)
-
-
-def cli_generate_course(args: argparse.Namespace) -> int:
-    """Handler of ``tiltbench generate course``; prints a summary (no answer) on stdout."""
-    from bench.cli_generate import print_summary
-
-    refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
-    course = make_course_set(course_config_from_args(args), args.seed)
-    paths = write_course(course, args.out, force=args.force)
-    if args.rrd:
-        from bench.record import record_course_truth
-
-        paths["rrd"] = str(record_course_truth(course, args.rrd, force=args.force))
-    print_summary(args, f"generate course: a course set, seed {args.seed} (the answer is in "
-                  "truth.json only)",
-                  {"files": paths, "n_calibration": int(course.calibration.tita.shape[0]),
-                   "n_vehicle": int(course.vehicle.t.shape[0])})
-    return 0
 
 
 __all__ = [

@@ -103,7 +103,6 @@ def prepare_out_dir(out: str | Path, names: list[str], force: bool = False) -> P
     if not force:
         clash = [n for n in names if (out / n).exists()]
         if clash:
-            raise FileExistsError(f"{out}: {', '.join(clash)} already exist(s); pass --force "
-                                  "to overwrite")
+            raise FileExistsError(f"{out}: {', '.join(clash)} already exist(s)")
     out.mkdir(parents=True, exist_ok=True)
     return out

@@ -1,6 +1,6 @@
 """``tiltbench demo``: the whole job end to end on embedded defaults.
 
-Steps (each timed, with a progress line on stderr):
+Steps (each timed; its start and end go to the optional progress callback):
 
 1. generate a course set with the bench (:func:`bench.course.make_course_set`, MuJoCo tilt
    table and vehicle) into ``OUT/data`` — or, with ``course_data``, use real course files;
@@ -21,15 +21,13 @@ Outputs in ``OUT``: ``data/`` (the student's files + ``truth.json``), ``estimate
 
 from __future__ import annotations
 
-import sys
-import threading
 import time
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import numpy as np
 
@@ -37,7 +35,6 @@ from calib.calibration import Calibration, calibrate
 from calib.conventions import AXES
 from calib.io import (
     Acel,
-    DataError,
     Ensayo,
     atomic_write_text,
     dumps,
@@ -65,52 +62,30 @@ OUTPUT_NAMES = ("estimates.json", "trajectory.json", "validation.json", "demo.rr
                 "report.md")
 
 
-class Progress:
-    """Progress lines on a stream: ``[k/n] label ... done (1.23 s)``.
+class _Steps:
+    """Numbered, timed steps: ``[k/total] label ...`` before and ``[k/total] label: done
+    (1.23 s)`` after each, through the progress callback; the times go into the report."""
 
-    On a terminal the line is refreshed every 0.25 s with the elapsed time while a step runs;
-    otherwise one line is written when the step ends. ``quiet`` silences it.
-    """
-
-    def __init__(self, total: int, stream: IO[str] | None = None, quiet: bool = False) -> None:
-        self.total = total
+    def __init__(self, labels: list[str], progress: Callable[[str], None] | None) -> None:
+        self.labels = labels
+        self.progress = progress
         self.k = 0
-        self.stream = stream or sys.stderr
-        self.quiet = quiet
         self.t0 = time.perf_counter()
         self.times: dict[str, float] = {}
 
     @contextmanager
-    def step(self, label: str) -> Iterator[None]:
+    def step(self) -> Iterator[None]:
+        label = self.labels[self.k]
         self.k += 1
-        head = f"[{self.k}/{self.total}] {label}"
-        tty = hasattr(self.stream, "isatty") and self.stream.isatty() and not self.quiet
+        head = f"[{self.k}/{len(self.labels)}] {label}"
+        if self.progress:
+            self.progress(f"{head} ...")
         start = time.perf_counter()
-        stop = threading.Event()
-
-        def tick() -> None:
-            while not stop.wait(0.25):
-                self.stream.write(f"\r{head} ... {time.perf_counter() - start:5.1f} s")
-                self.stream.flush()
-
-        thread = threading.Thread(target=tick, daemon=True) if tty else None
-        if thread:
-            thread.start()
-        elif not self.quiet:  # logs: say what is running before it runs
-            self.stream.write(f"{head} ...\n")
-            self.stream.flush()
-        try:
-            yield
-        finally:
-            stop.set()
-            if thread:
-                thread.join()
-            dt = time.perf_counter() - start
-            self.times[label] = dt
-            if not self.quiet:
-                self.stream.write(("\r" if tty else "") + f"{head} ... done ({dt:.2f} s)"
-                                  + (" " * 8 if tty else "") + "\n")
-                self.stream.flush()
+        yield
+        dt = time.perf_counter() - start
+        self.times[label] = dt
+        if self.progress:
+            self.progress(f"{head}: done ({dt:.2f} s)")
 
     @property
     def elapsed(self) -> float:
@@ -229,7 +204,7 @@ def _prepare(out: Path, force: bool, generate: bool, formats: tuple[str, ...]) -
     clash = [n for n in names if (out / n).exists()]
     if clash and not force:
         raise FileExistsError(f"{out}: {', '.join(clash[:4])}{' …' if len(clash) > 4 else ''} "
-                              "already exist(s); pass --force to overwrite")
+                              "already exist(s)")
 
 
 FIGURE_FORMATS = ("png", "svg")
@@ -237,102 +212,163 @@ FIGURE_NAMES = ("calibration_x", "calibration_y", "parameters", "trajectory", "a
                 "uncertainty_growth", "nmin")
 
 
+def _step_labels(generate: bool, has_truth: bool, coverage: bool, seed: int,
+                 coverage_runs: int, formats: tuple[str, ...]) -> list[str]:
+    """The steps the demo will run, in order (their count is the ``total`` of ``k/total``)."""
+    labels = [f"generating a course set with the MuJoCo bench (seed {seed})"] if generate else []
+    labels.append("calibrating, correcting, integrating and deciding")
+    if has_truth:
+        labels.append("validating the estimates against truth.json")
+    if coverage:
+        labels.append(f"coverage check: {coverage_runs} fresh calibrations, same design")
+    labels += [f"figures ({', '.join(formats)})", "rerun recording (written, then read back)",
+               "report"]
+    return labels
+
+
+@dataclass
+class _Truth:
+    """What the demo knows of the truth: the manifest and the true path / accelerations."""
+
+    manifest: dict | None = None
+    path: np.ndarray | None = None
+    acc: np.ndarray | None = None
+
+    @property
+    def final(self) -> np.ndarray | None:
+        if self.manifest is None or "true_final_position" not in self.manifest:
+            return None
+        return np.asarray(self.manifest["true_final_position"], dtype=float)
+
+
+def _generate(out: Path, seed: int, force: bool, files: dict[str, Path]) -> _Truth:
+    """Generate and write the course set into ``out/data``; return its true path."""
+    from bench.course import make_course_set, write_course
+
+    course = make_course_set(None, seed)
+    written = write_course(course, out / "data", force=force)
+    files.update({f"data/{Path(p).name}": Path(p) for p in written.values()})
+    return _Truth(path=course.vehicle.truth.pos, acc=course.vehicle.truth.acc)
+
+
+def _read_truth(data_dir: Path, truth: _Truth) -> _Truth:
+    """Add ``truth.json`` of ``data_dir`` (if any) and, without a simulated path, its samples."""
+    from bench.validate import load_json
+
+    path = data_dir / "truth.json"
+    if not path.exists():
+        return truth
+    manifest = load_json(path, "truth")
+    true_path = truth.path
+    if true_path is None:
+        samples = manifest.get("vehicle", {}).get("trajectory", {}).get("samples", {})
+        if "pos" in samples:
+            true_path = np.asarray(samples["pos"], dtype=float)
+    return _Truth(manifest, true_path, truth.acc)
+
+
+def _write_json(out: Path, name: str, obj: Any, files: dict[str, Path]) -> None:
+    files[name] = atomic_write_text(out / name, dumps(obj), True)
+
+
+def _figures(out: Path, ana: CourseAnalysis, truth: _Truth, formats: tuple[str, ...],
+             files: dict[str, Path]) -> None:
+    from bench import figures
+
+    fdir = out / "figures"
+    for fmt in formats:
+        files.update({f"figures/{p.name}": p for p in figures.write_calibration_figures(
+            fdir, ana.cal, ana.ensayo, truth.manifest, 0.95, fmt, True).values()})
+        files.update({f"figures/{p.name}": p for p in figures.write_vehicle_figures(
+            fdir, ana.traj, ana.region, ana.cal, ana.ensayo.n, truth.final, truth.path,
+            truth.acc, fmt, True).values()})
+
+
+def _recording(out: Path, ana: CourseAnalysis, truth: _Truth, est: dict, tj: dict,
+               files: dict[str, Path]) -> bool:
+    """Write ``demo.rrd``, read it back; True if estimates, trajectory and truth come back."""
+    from bench.record import read_recording, record_course
+
+    rrd = record_course(out / "demo.rrd", cal=ana.cal, ensayo=ana.ensayo, traj=ana.traj,
+                        region=ana.region, force=True, truth=truth.manifest,
+                        true_path=truth.path, true_acc=truth.acc, tree=tj)
+    files["demo.rrd"] = rrd
+    back = read_recording(rrd)
+    recovered = back["estimates"] == _jsonable(est) and back["trajectory"] == _jsonable(tj)
+    if truth.manifest is not None:
+        recovered = recovered and back["truth"] == truth.manifest
+    return recovered
+
+
 def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool = False,
              course_data: str | Path | None = None, level: float = DEFAULT_LEVEL,
-             coverage_runs: int = COVERAGE_RUNS, quiet: bool = False,
-             stream: IO[str] | None = None,
+             coverage_runs: int = COVERAGE_RUNS,
+             progress: Callable[[str], None] | None = None,
              formats: tuple[str, ...] = FIGURE_FORMATS) -> DemoResult:
     """Run the demo (module docstring); return what was written and computed.
 
     Parameters
     ----------
     out : output directory.  seed : seed of the generated course set.
-    force : overwrite existing outputs (checked before anything is written).
+    force : overwrite existing outputs (checked before anything is written; else
+        :class:`FileExistsError`).
     course_data : directory with real course files (ensayo.mat, acel.mat, puntos.mat,
         datos.txt; truth.json used if present) instead of generating a set.
-    level : level of the arrival region.  coverage_runs : Monte Carlo runs (0: skip).
-    quiet : no progress lines.  stream : where progress goes (default stderr).
+    level : level of the arrival region, in (0, 1).  coverage_runs : Monte Carlo runs
+        (0: skip).
+    progress : called with one line of text at the start and at the end of each step (None:
+        silent); the command line passes :class:`bench.cli.progress.Progress`.
     formats : figure formats written side by side ("png", "svg").
     """
-    from bench import figures
-    from bench.record import read_recording, record_course
-    from bench.validate import load_json, validate
+    from bench.validate import validate
 
     out = Path(out)
     generate = course_data is None
-    if not 0.0 < level < 1.0:  # options are checked before anything is written
-        raise DataError(f"--level must be in (0, 1), e.g. 0.997, got {level}")
+    if not 0.0 < level < 1.0:  # arguments are checked before anything is written
+        raise ValueError(f"level must be in (0, 1), got {level}")
     if coverage_runs < 0:
-        raise DataError(f"--coverage-runs must be >= 0, got {coverage_runs}")
+        raise ValueError(f"coverage_runs must be >= 0, got {coverage_runs}")
     if not formats or set(formats) - {"png", "svg"}:
-        raise DataError(f"figure formats must be png and/or svg, got {', '.join(formats)}")
+        raise ValueError(f"figure formats must be png and/or svg, got {', '.join(formats)}")
     _prepare(out, force, generate, formats)
-    steps = 7 if generate else 6
-    prog = Progress(steps, stream, quiet)
+    data_dir = out / "data" if generate else Path(course_data)
+    has_truth = generate or (data_dir / "truth.json").exists()
+    steps = _Steps(_step_labels(generate, has_truth, generate and coverage_runs > 0, seed,
+                                coverage_runs, formats), progress)
     files: dict[str, Path] = {}
-    true_path = true_acc = None
+    truth = _Truth()
     if generate:
-        from bench.course import make_course_set, write_course
-
-        with prog.step(f"generating a course set with the MuJoCo bench (seed {seed})"):
-            course = make_course_set(None, seed)
-            written = write_course(course, out / "data", force=force)
-            files.update({f"data/{Path(p).name}": Path(p) for p in written.values()})
-            true_path, true_acc = course.vehicle.truth.pos, course.vehicle.truth.acc
-        data_dir = out / "data"
+        with steps.step():
+            truth = _generate(out, seed, force, files)
         source = f"generated course set, seed {seed}"
     else:
-        data_dir = Path(course_data)
         source = f"course files in {data_dir}"
-    truth = load_json(data_dir / "truth.json", "truth") if (data_dir / "truth.json").exists() \
-        else None
-    if truth is not None and true_path is None:
-        samples = truth.get("vehicle", {}).get("trajectory", {}).get("samples", {})
-        if "pos" in samples:
-            true_path = np.asarray(samples["pos"], dtype=float)
-    with prog.step("calibrating, correcting, integrating and deciding"):
+    truth = _read_truth(data_dir, truth)
+    with steps.step():
         ana = analyze_course_dir(data_dir, level)
         est = ana.cal.to_dict()
         tj = ana.trajectory_json()
-        files["estimates.json"] = atomic_write_text(out / "estimates.json", dumps(est), True)
-        files["trajectory.json"] = atomic_write_text(out / "trajectory.json", dumps(tj), True)
+        _write_json(out, "estimates.json", est, files)
+        _write_json(out, "trajectory.json", tj, files)
         nmin = _nmin(ana)
     val = cov = None
-    if truth is not None:
-        with prog.step("validating the estimates against truth.json"):
-            val = validate(truth, est, VALIDATE_LEVEL)
-            files["validation.json"] = atomic_write_text(out / "validation.json",
-                                                         dumps(val.to_dict()), True)
+    if truth.manifest is not None:
+        with steps.step():
+            val = validate(truth.manifest, est, VALIDATE_LEVEL)
+            _write_json(out, "validation.json", val.to_dict(), files)
         if generate and coverage_runs > 0:
-            with prog.step(f"coverage check: {coverage_runs} fresh calibrations, same design"):
-                cov = coverage_check(truth, coverage_runs, COVERAGE_LEVEL, seed)
-    true_final = None
-    if truth is not None and "true_final_position" in truth:
-        true_final = np.asarray(truth["true_final_position"], dtype=float)
-    with prog.step(f"figures ({', '.join(formats)})"):
-        fdir = out / "figures"
-        for fmt in formats:
-            files.update({f"figures/{p.name}": p for p in figures.write_calibration_figures(
-                fdir, ana.cal, ana.ensayo, truth, 0.95, fmt, True).values()})
-            files.update({f"figures/{p.name}": p for p in figures.write_vehicle_figures(
-                fdir, ana.traj, ana.region, ana.cal, ana.ensayo.n, true_final, true_path,
-                true_acc, fmt, True).values()})
-    recovered = None
-    with prog.step("rerun recording (written, then read back)"):
-        rrd = record_course(out / "demo.rrd", cal=ana.cal, ensayo=ana.ensayo, traj=ana.traj,
-                            region=ana.region, force=True, truth=truth, true_path=true_path,
-                            true_acc=true_acc, tree=tj)
-        files["demo.rrd"] = rrd
-        back = read_recording(rrd)
-        recovered = back["estimates"] == _jsonable(est) and back["trajectory"] == _jsonable(tj)
-        if truth is not None:
-            recovered = recovered and back["truth"] == truth
-    result = DemoResult(out, files, ana, truth, val, cov, nmin, recovered, prog.times,
-                        0.0, source)
-    with prog.step("report"):
+            with steps.step():
+                cov = coverage_check(truth.manifest, coverage_runs, COVERAGE_LEVEL, seed)
+    with steps.step():
+        _figures(out, ana, truth, formats, files)
+    with steps.step():
+        recovered = _recording(out, ana, truth, est, tj, files)
+    result = DemoResult(out, files, ana, truth.manifest, val, cov, nmin, recovered,
+                        steps.times, 0.0, source)
+    with steps.step():
         files["report.md"] = atomic_write_text(out / "report.md", report_markdown(result),
                                                True)
-    result.elapsed = prog.elapsed
+    result.elapsed = steps.elapsed
     return result
 
 

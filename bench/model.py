@@ -28,8 +28,20 @@ TILT_JOINT = "tilt"
 TABLE_BODY = "table"
 SERVO = "servo"
 ENCODER = "encoder"
-ACC_SITES = {"x": "acc_x", "y": "acc_y"}
-ACC_SENSORS = {"x": "accel_x", "y": "accel_y"}
+TABLE_ACC_SITES = {"x": "acc_x", "y": "acc_y"}
+TABLE_ACC_SENSORS = {"x": "accel_x", "y": "accel_y"}
+ACC_SITES = TABLE_ACC_SITES
+"""The tilt table's accelerometer sites (short name kept for existing importers)."""
+ACC_SENSORS = TABLE_ACC_SENSORS
+"""The tilt table's accelerometer sensors (short name kept for existing importers)."""
+
+# Planar vehicle element names (models/vehicle.xml). Its accelerometer *sites* are named
+# acc_x_site / acc_y_site and its *sensors* acc_x / acc_y: not the tilt table's names.
+VEHICLE_BODY = "vehicle"
+VEHICLE_SLIDE_JOINTS = {"x": "slide_x", "y": "slide_y"}
+VEHICLE_DRIVES = {"x": "drive_x", "y": "drive_y"}
+VEHICLE_ACC_SITES = {"x": "acc_x_site", "y": "acc_y_site"}
+VEHICLE_ACC_SENSORS = {"x": "acc_x", "y": "acc_y"}
 
 
 def load_spec(path: Path = TILT_TABLE_XML) -> mujoco.MjSpec:
@@ -79,13 +91,13 @@ def edit_tilt_table(spec: mujoco.MjSpec, edits: TableEdits) -> mujoco.MjSpec:
     spec.option.gravity = [0.0, 0.0, -float(edits.g)]
     hinge_axis = np.array([0.0, 1.0, 0.0])
     for k, axis in enumerate(("x", "y")):
-        site = spec.site(ACC_SITES[axis])
+        site = spec.site(TABLE_ACC_SITES[axis])
         rot = _axis_angle_quat(hinge_axis, edits.misalignment[k] + edits.tilt_offset)
         site.quat = _quat_mul(rot, np.asarray(site.quat, float))
         px, pz = edits.lever_arm[k]
         site.pos = [float(px), 0.0, float(pz)]
         if edits.cutoff[k] > 0:
-            spec.sensor(ACC_SENSORS[axis]).cutoff = float(edits.cutoff[k])
+            spec.sensor(TABLE_ACC_SENSORS[axis]).cutoff = float(edits.cutoff[k])
     return spec
 
 

@@ -27,7 +27,15 @@ import mujoco
 import mujoco.rollout
 import numpy as np
 
-from bench.model import ACC_SENSORS, ENCODER, TableEdits, full_state, sensor_slice, tilt_table
+from bench.model import (
+    ENCODER,
+    TABLE_ACC_SENSORS,
+    TILT_JOINT,
+    TableEdits,
+    full_state,
+    sensor_slice,
+    tilt_table,
+)
 from bench.sensors import SensorErrorModel
 from calib.io import Ensayo
 
@@ -155,9 +163,14 @@ class CalibrationRun:
 
 def _accel_columns(model: mujoco.MjModel) -> tuple[int, int, int]:
     """sensordata columns of the x and y sensitive axes (site +x) and of the encoder."""
-    sx = sensor_slice(model, ACC_SENSORS["x"]).start
-    sy = sensor_slice(model, ACC_SENSORS["y"]).start
+    sx = sensor_slice(model, TABLE_ACC_SENSORS["x"]).start
+    sy = sensor_slice(model, TABLE_ACC_SENSORS["y"]).start
     return sx, sy, sensor_slice(model, ENCODER).start
+
+
+def _tilt_qposadr(model: mujoco.MjModel) -> int:
+    """Index of the tilt hinge's angle in ``qpos`` (looked up by name)."""
+    return int(model.joint(TILT_JOINT).qposadr[0])
 
 
 def static_readings(theta: np.ndarray, table: TableEdits | None = None
@@ -172,7 +185,8 @@ def static_readings(theta: np.ndarray, table: TableEdits | None = None
     data = mujoco.MjData(model)
     poses, inverse = np.unique(theta, return_inverse=True)
     base = full_state(model, data)
-    qpos_at = 1  # mjSTATE_FULLPHYSICS layout: [time, qpos (nq), qvel (nv), act, ...]
+    # mjSTATE_FULLPHYSICS layout: [time, qpos (nq), qvel (nv), act, ...]
+    qpos_at = 1 + _tilt_qposadr(model)
     state0 = np.tile(base, (poses.size, 1))
     state0[:, qpos_at] = poses
     control = poses.reshape(-1, 1, 1)  # servo target = pose: no torque, no motion
@@ -208,7 +222,7 @@ def sweep_readings(sweep: SweepProfile, table: TableEdits | None = None
     nstep = (n_samples - 1) * stride + 1
     t_step = np.arange(nstep) * dt
     cmd = sweep.command(t_step)
-    data.qpos[0] = cmd[0]
+    data.qpos[_tilt_qposadr(model)] = cmd[0]
     state0 = full_state(model, data)
     _, sensordata = mujoco.rollout.rollout(model, data, state0[None, :],
                                            cmd.reshape(1, nstep, 1), nstep=nstep)

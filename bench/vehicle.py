@@ -19,7 +19,6 @@ Signs: positive acceleration along +x / +y increases x / y. Units SI.
 
 from __future__ import annotations
 
-import argparse
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,18 +26,21 @@ import mujoco
 import mujoco.rollout
 import numpy as np
 
-from bench.model import VEHICLE_XML, full_state, load_spec, sensor_slice
+from bench.model import (
+    VEHICLE_ACC_SENSORS,
+    VEHICLE_BODY,
+    VEHICLE_DRIVES,
+    VEHICLE_SLIDE_JOINTS,
+    VEHICLE_XML,
+    full_state,
+    load_spec,
+    sensor_slice,
+)
 from bench.sensors import SensorErrorModel
 from calib.conventions import AXES, G
-from calib.io import Acel, DataError, check_positive, parse_pair, refuse_overwrite
+from calib.io import Acel
 from calib.trajectory import COURSE_P0, COURSE_V0, integrate_twice
 
-# Element names of models/vehicle.xml (defined once; looked up by name).
-VEHICLE_BODY = "vehicle"
-SLIDE_JOINTS = {"x": "slide_x", "y": "slide_y"}
-DRIVES = {"x": "drive_x", "y": "drive_y"}
-ACC_SITES = {"x": "acc_x_site", "y": "acc_y_site"}
-ACC_SENSORS = {"x": "acc_x", "y": "acc_y"}
 SENSITIVE_COMPONENT = 0
 """Component of each accelerometer (site frame) along its sensitive axis: local +x."""
 
@@ -194,8 +196,8 @@ def simulate_vehicle(config: VehicleConfig | None = None) -> VehicleTruth:
     model, _ = vehicle_model(config.rate, config.g)
     data = mujoco.MjData(model)
     m = config.n_samples
-    qadr = {a: int(model.joint(SLIDE_JOINTS[a]).qposadr[0]) for a in AXES}
-    vadr = {a: int(model.joint(SLIDE_JOINTS[a]).dofadr[0]) for a in AXES}
+    qadr = {a: int(model.joint(VEHICLE_SLIDE_JOINTS[a]).qposadr[0]) for a in AXES}
+    vadr = {a: int(model.joint(VEHICLE_SLIDE_JOINTS[a]).dofadr[0]) for a in AXES}
     for k, a in enumerate(AXES):
         data.qpos[qadr[a]] = config.p0[k]
         data.qvel[vadr[a]] = config.v0[k]
@@ -204,13 +206,13 @@ def simulate_vehicle(config: VehicleConfig | None = None) -> VehicleTruth:
     cmd = config.command()
     control = np.zeros((1, m, model.nu))
     for k, a in enumerate(AXES):
-        control[0, :, model.actuator(DRIVES[a]).id] = mass * cmd[:, k]
+        control[0, :, model.actuator(VEHICLE_DRIVES[a]).id] = mass * cmd[:, k]
     state, sensordata = mujoco.rollout.rollout(model, data, state0[None, :], control, nstep=m)
     # mjSTATE_FULLPHYSICS layout: [time, qpos (nq), qvel (nv), ...]
     qpos = np.vstack([state0[1:1 + model.nq], state[0, :m - 1, 1:1 + model.nq]])
     qvel = np.vstack([state0[1 + model.nq:1 + model.nq + model.nv],
                       state[0, :m - 1, 1 + model.nq:1 + model.nq + model.nv]])
-    cols = [sensor_slice(model, ACC_SENSORS[a]).start + SENSITIVE_COMPONENT for a in AXES]
+    cols = [sensor_slice(model, VEHICLE_ACC_SENSORS[a]).start + SENSITIVE_COMPONENT for a in AXES]
     return VehicleTruth(
         t=config.t, pos=qpos[:, [qadr[a] for a in AXES]], vel=qvel[:, [vadr[a] for a in AXES]],
         acc=sensordata[0][:, cols], acc_cmd=cmd, mass=mass)
@@ -289,81 +291,8 @@ def generate_vehicle(out: str | Path, seed: int = 0, force: bool = False,
     return run
 
 
-# ---------------------------------------------------------------- command line helpers
-def parse_profile(text: str) -> tuple[Segment, ...]:
-    """``"20:0.5,0;20:0,-0.2;20:-0.5,0"`` → segments (duration s : ax, ay m/s²);
-    ``"course"`` → :data:`COURSE_PROFILE`."""
-    if text.strip().lower() == "course":
-        return COURSE_PROFILE
-    segs = []
-    for part in filter(None, (p.strip() for p in text.split(";"))):
-        try:
-            dur, acc = part.split(":")
-            segs.append(Segment(float(dur), tuple(parse_pair(acc, "--profile"))))
-        except ValueError:
-            raise DataError(f"--profile: segment {part!r} must be 'duration:ax,ay' "
-                            "(s : m/s²), segments separated by ';'") from None
-    if not segs:
-        raise DataError("--profile: no segments given")
-    return tuple(segs)
-
-
-def add_vehicle_options(p: argparse.ArgumentParser, profile_default: str | None = "course"
-                        ) -> None:
-    p.add_argument("--duration", type=float, default=60.0, help="run length, s")
-    p.add_argument("--rate", type=float, default=100.0, help="sample rate, Hz")
-    p.add_argument("--p0", default="0,0", help="initial position x,y in m")
-    p.add_argument("--v0", default="1,3", help="initial velocity x,y in m/s")
-    p.add_argument("--profile", default=profile_default,
-                   help="acceleration segments 'dur:ax,ay;dur:ax,ay;…' (s : m/s²) or 'course'"
-                        + ("" if profile_default else "; omitted: drawn from the seed"))
-
-
-def add_cli_options(p: argparse.ArgumentParser) -> None:
-    """Options of ``tiltbench generate vehicle``."""
-    from bench.cli_generate import add_common, add_sensor_options
-
-    add_common(p)
-    add_sensor_options(p)
-    add_vehicle_options(p)
-    p.add_argument("--rrd", help="also record the run next to its truth to this rerun file")
-
-
-def vehicle_config_from_args(args: argparse.Namespace, sensor: SensorErrorModel,
-                             profile: tuple[Segment, ...]) -> VehicleConfig:
-    check_positive(args.g, "--g")
-    cfg = VehicleConfig(duration=args.duration, rate=args.rate,
-                        p0=tuple(parse_pair(args.p0, "--p0")),
-                        v0=tuple(parse_pair(args.v0, "--v0")), profile=profile,
-                        sensor=sensor, g=args.g)
-    cfg.command()  # validate the grid now, with a clear message
-    return cfg
-
-
-def cli_generate_vehicle(args: argparse.Namespace) -> int:
-    """Handler of ``tiltbench generate vehicle``; prints a summary on stdout."""
-    from bench.cli_generate import print_summary
-
-    refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
-    sensor = SensorErrorModel.from_pairs(parse_pair(args.bias, "--bias"),
-                                         parse_pair(args.scale, "--scale"),
-                                         parse_pair(args.noise_var, "--noise-var"))
-    cfg = vehicle_config_from_args(args, sensor, parse_profile(args.profile))
-    run = make_vehicle_run(cfg, args.seed)
-    paths = write_vehicle(run, args.out, force=args.force)
-    if args.rrd:
-        from bench.record import record_vehicle_truth
-
-        paths["rrd"] = str(record_vehicle_truth(run, args.rrd, force=args.force))
-    print_summary(args, f"generate vehicle: {run.t.shape[0]} samples, seed {args.seed}",
-                  {"n": int(run.t.shape[0]), "files": paths,
-                   "final_position": run.truth.final_position.tolist()})
-    return 0
-
-
 __all__ = [
-    "ACC_SENSORS", "ACC_SITES", "COURSE_PROFILE", "COURSE_SENSOR", "DRIVES", "SLIDE_JOINTS",
-    "VEHICLE_BODY", "Segment", "VehicleConfig", "VehicleRun", "VehicleTruth",
-    "apply_sensor_errors", "generate_vehicle", "make_vehicle_run", "parse_profile",
-    "simulate_vehicle", "vehicle_mass", "vehicle_model", "write_vehicle",
+    "COURSE_PROFILE", "COURSE_SENSOR", "Segment", "VehicleConfig", "VehicleRun", "VehicleTruth",
+    "apply_sensor_errors", "generate_vehicle", "make_vehicle_run", "simulate_vehicle",
+    "vehicle_mass", "vehicle_model", "write_vehicle",
 ]

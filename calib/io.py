@@ -260,58 +260,17 @@ def read_datos(path: str | os.PathLike) -> Datos:
     return Datos(**found)
 
 
-def parse_pair(text: str, what: str) -> np.ndarray:
-    """Parse 'a,b' (command line) into a (2,) array."""
-    try:
-        vals = [float(v) for v in text.replace(" ", "").split(",")]
-    except ValueError:
-        raise DataError(f"{what}: expected two numbers 'x,y', got {text!r}") from None
-    if len(vals) != 2 or not np.all(np.isfinite(vals)):
-        raise DataError(f"{what}: expected two finite numbers 'x,y', got {text!r}")
-    return np.array(vals)
-
-
-def parse_variances(text: str, what: str = "--noise-var") -> np.ndarray:
-    """Parse 'σx²,σy²' (command line) into a (2,) array of positive variances, (m/s²)²."""
-    nv = parse_pair(text, what)
-    if np.any(nv <= 0):
-        raise DataError(f"{what}: variances must be positive, got {text}")
-    return nv
-
-
-def check_positive(value: float, what: str) -> float:
-    """``value`` if it is a positive finite number, else :class:`DataError` naming ``what``."""
-    if not (np.isfinite(value) and value > 0):
-        raise DataError(f"{what} must be a positive finite number, got {value}")
-    return float(value)
-
-
-def refuse_overwrite(paths, force: bool = False) -> None:
-    """Check output files before any work, so that a refused run writes nothing.
-
-    ``paths``: output file paths (None entries are skipped). A directory is never a valid
-    output file; an existing file needs ``force``.
-    """
-    for p in paths:
-        if p is None:
-            continue
-        p = Path(p)
-        if p.is_dir():
-            raise DataError(f"{p}: is a directory; expected an output file name")
-        if p.exists() and not force:
-            raise FileExistsError(f"{p}: exists; pass --force to overwrite")
-
-
 def atomic_write_bytes(path: str | os.PathLike, data: bytes, force: bool = False) -> Path:
     """Write ``data`` to ``path`` through a temporary file and a rename.
 
-    Refuses to replace an existing file unless ``force``; a crash never leaves half a file.
+    Refuses to replace an existing file unless ``force`` (:class:`FileExistsError`); a crash
+    never leaves half a file.
     """
     path = Path(path)
     if path.is_dir():
         raise DataError(f"{path}: is a directory; expected an output file name")
     if path.exists() and not force:
-        raise FileExistsError(f"{path}: exists; pass --force to overwrite")
+        raise FileExistsError(f"{path}: exists")
     path.parent.mkdir(parents=True, exist_ok=True)
     try:
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")

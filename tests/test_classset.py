@@ -88,15 +88,15 @@ def test_a_folder_is_reproduced_by_generate_course(klass, tmp_path):
 
 def test_cli_generate_class_and_overwrite(tmp_path, capsys):
     out = tmp_path / "c"
-    assert main(["generate", "class", "--count", "2", "--seed", "5", "--out", str(out),
+    assert main(["generate", "class", "--students", "2", "--seed", "5", "--out", str(out),
                  "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["count"] == 2 and set(summary["folders"]) == {"student_001", "student_002"}
     assert "answers" not in json.dumps(summary) and '"answer"' not in json.dumps(summary)
     csv_before = (out / KEY_CSV).read_bytes()
-    assert main(["generate", "class", "--count", "2", "--seed", "5", "--out", str(out)]) == 2
+    assert main(["generate", "class", "--students", "2", "--seed", "5", "--out", str(out)]) == 2
     assert "--force" in capsys.readouterr().err
-    assert main(["generate", "class", "--count", "2", "--seed", "5", "--out", str(out),
+    assert main(["generate", "class", "--students", "2", "--seed", "5", "--out", str(out),
                  "--force"]) == 0
     assert (out / KEY_CSV).read_bytes() == csv_before  # same seed, same bytes
 

@@ -4,6 +4,7 @@ nothing, option values may be negative pairs. Small synthetic files; no MuJoCo r
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -227,3 +228,92 @@ def test_help_states_each_default_once(capsys, command):
     if "--seed" in text:
         assert "--seed SEED random seed" in text or "--seed SEED seed" in text
         assert "(default: 0)" in text
+
+
+def test_version_and_bare_command(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0
+    assert capsys.readouterr().out == "tiltbench 0.1.0\n"
+    assert main([]) == 0
+    cap = capsys.readouterr()
+    assert cap.out.startswith("usage: tiltbench") and "generate" in cap.out and cap.err == ""
+
+
+def test_help_imports_nothing_heavy():
+    """Start-up time: building the parser of every command and printing the help import no
+    numpy, scipy, mujoco, matplotlib or rerun (benchmarks/cli_startup.py times it). (A
+    command's own help may: it shows defaults such as calib.conventions.G.)"""
+    import subprocess
+    import sys
+
+    code = ("import sys, contextlib, io\n"
+            "from bench.cli import main\n"
+            "for argv in (['--help'], []):\n"
+            "    with contextlib.redirect_stdout(io.StringIO()), "
+            "contextlib.suppress(SystemExit):\n"
+            "        main(argv)\n"
+            "heavy = ('numpy', 'scipy', 'mujoco', 'matplotlib', 'rerun')\n"
+            "print(sorted(m for m in heavy if m in sys.modules))\n")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=60, check=True)
+    assert res.stdout.strip() == "[]", res.stdout + res.stderr
+
+
+def test_existing_output_is_worded_by_the_command_line(capsys, tmp_path, ensayo):
+    old = tmp_path / "old.rrd"
+    old.write_bytes(b"old")
+    msg = _error(capsys, "calibrate", ensayo, "--rrd", old)
+    assert msg.endswith(f"{old}: exists; pass --force to overwrite")
+
+
+def test_record_entities_json_is_one_object(capsys, tmp_path, ensayo):
+    rrd = tmp_path / "fit.rrd"
+    assert main(["calibrate", str(ensayo), "--noise-var", "0.25,0.64", "--rrd", str(rrd)]) == 0
+    out = capsys.readouterr().out
+    assert f"wrote: {rrd}" in out  # the readable output names every file written
+    rc, out, _ = _run(capsys, "record", "entities", rrd, "--json")
+    assert rc == 0
+    obj = json.loads(out)
+    assert obj["file"] == str(rrd) and obj["entities"]
+    assert all(set(e) == {"path", "pattern"} for e in obj["entities"])
+    rc, text, _ = _run(capsys, "record", "entities", rrd)
+    assert len(text.strip().splitlines()) == len(obj["entities"])
+
+
+def test_progress_lines_carriage_return_only_on_a_terminal():
+    import io
+
+    from bench.cli.progress import Progress
+
+    class Tty(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    log = io.StringIO()
+    p = Progress("generate class", log)
+    p("starting")
+    for k in range(1, 4):
+        p.count(k, 3, "course sets")
+    lines = log.getvalue().splitlines()
+    assert "\r" not in log.getvalue() and len(lines) == 4
+    assert all(re.match(r"^\[generate class +\d+\.\d s\] ", ln) for ln in lines)
+    assert [ln.split("] ")[1] for ln in lines[1:]] == [f"course sets {k}/3" for k in (1, 2, 3)]
+    term = Tty()
+    p = Progress("generate class", term)
+    for k in range(1, 4):
+        p.count(k, 3, "course sets")
+    p("done")
+    text = term.getvalue()
+    assert text.count("\r") == 3 and text.count("\n") == 2 and "course sets 3/3" in text
+    quiet = io.StringIO()
+    Progress("x", quiet, quiet=True)("nothing")
+    assert quiet.getvalue() == ""
+
+
+def test_class_count_flag_is_students(capsys, tmp_path):
+    msg = _error(capsys, "generate", "class", "--students", "0", "--out", tmp_path / "c")
+    assert "--students" in msg
+    with pytest.raises(SystemExit):
+        main(["generate", "class", "--count", "2", "--out", str(tmp_path / "c")])
+    assert not (tmp_path / "c").exists()

@@ -79,7 +79,7 @@ def test_demo_library_truth_beside_estimates(tmp_path):
     """run_demo on a small budget: decision, validation and recovered recording reported."""
     from bench.demo import run_demo
 
-    res = run_demo(tmp_path / "d", seed=3, coverage_runs=20, quiet=True)
+    res = run_demo(tmp_path / "d", seed=3, coverage_runs=20)
     text = res.summary()
     assert res.recovered is True
     assert res.truth is not None and res.validation is not None
@@ -103,3 +103,17 @@ def test_demo_on_course_data(tmp_path, course_dir):
     assert printed["scale_x"] == pytest.approx(-0.0301, abs=0.5e-4)
     assert printed["bias_x"] == pytest.approx(0.0767, abs=0.5e-4)
     assert read_recording(tmp_path / "cd" / "demo.rrd")["truth"] is None
+
+
+def test_demo_json_is_one_object_and_steps_count_right(tmp_path, course_dir, capsys):
+    out = tmp_path / "cd"
+    assert main(["demo", "--course-data", str(course_dir), "--out", str(out), "--json",
+                 "--figures", "png"]) == 0
+    cap = capsys.readouterr()
+    obj = json.loads(cap.out)  # one JSON object, nothing else on stdout
+    assert obj["passed"] is True and obj["recovered"] is True and obj["answer"] is None
+    assert obj["estimates"] == json.loads((out / "estimates.json").read_text())
+    assert all(Path(p).exists() for p in obj["files"].values())
+    # no truth.json, no generation: calibrate, figures, recording, report
+    done = re.findall(r"\[(\d+)/(\d+)\] [^\n]*: done \(", cap.err)
+    assert done == [(str(k), "4") for k in range(1, 5)]

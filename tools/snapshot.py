@@ -123,7 +123,7 @@ def _snapshot(course: Path) -> dict[str, str]:
                            "--duration", "8", "--effect", "lever_arm:x:pos_x=0.2"],
             f"vehicle-{s}": ["generate", "vehicle", "--rrd", f"vehicle-{s}.rrd"],
             f"course-{s}": ["generate", "course", "--rrd", f"course-{s}.rrd"],
-            f"class-{s}": ["generate", "class", "--count", "2"],
+            f"class-{s}": ["generate", "class", "--students", "2"],
         }
         for name, argv in gens.items():
             out[f"stdout {name}"] = _json_digest(

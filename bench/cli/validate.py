@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import argparse
 
-from calib.io import DataError, dumps
+from bench.cli.options import OptionError, add_json
+from bench.cli.output import print_json
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
+    # domain imports here, not at module level: start-up time of `tiltbench --help`
     from bench.validate import load_json, validate
 
     truth = load_json(args.truth, "truth file")
@@ -15,8 +17,8 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         from bench.classset import student_truth
 
         if not args.student:
-            raise DataError(f"{args.truth}: a class answer key; name the student with "
-                            "--student (e.g. student_001)")
+            raise OptionError(f"{args.truth}: a class answer key; name the student with "
+                              "--student (e.g. student_001)")
         truth = student_truth(truth, args.student)
     est = load_json(args.estimates, "estimates file")
     theta, src = None, None
@@ -27,7 +29,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     result = validate(truth, est, args.level, args.std, theta, src,
                       truth_name=str(args.truth), est_name=str(args.estimates))
     if args.json:
-        print(dumps(result.to_dict()), end="")
+        print_json(result.to_dict())
     else:
         print(f"{args.estimates} against {args.truth} at level {args.level:g}")
         print(result.summary())
@@ -52,5 +54,5 @@ def register(sub) -> None:
                    help="standard deviations: reported in est.json, or recomputed from the "
                    "design with the true noise variances (auto: reported if present)")
     p.add_argument("--ensayo", help="ensayo.mat the estimates came from (θ for --std design)")
-    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    add_json(p)
     p.set_defaults(handler=_cmd_validate)

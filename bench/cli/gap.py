@@ -3,7 +3,7 @@
 ::
 
     tiltbench gap ENSAYO.mat [--noise-var 0.25,0.64 | --datos datos.txt] [--rate HZ]
-                  [--g 9.8] [--json] [--report DIR] [--rrd FILE] [--force]
+                  [--g G] [--json] [--report DIR] [--rrd FILE] [--force]
 
 ``--json`` prints exactly one JSON object on stdout (see :meth:`bench.gap.GapReport.to_dict`);
 progress goes to stderr. Without ``--json`` a readable report is printed.
@@ -13,9 +13,19 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
-from bench.cli import RawDescriptionHelpFormatter
-from calib.io import DataError, check_positive, dumps, read_ensayo
+from bench.cli.options import (
+    OptionError,
+    RawDescriptionHelpFormatter,
+    add_force,
+    add_gravity,
+    add_json,
+    add_noise_inputs,
+    check_positive,
+    noise_var_from_args,
+)
+from bench.cli.output import print_files, print_json
 
 EPILOG = """\
 effects and their timing needs (docs/effects.md):
@@ -23,17 +33,20 @@ effects and their timing needs (docs/effects.md):
   per second with timing, per sample without: bias_drift, bias_random_walk
   not identifiable on one table: gravity_mismatch (absorbed by the scale factors)
 """
+REPORT_FILES = ("gap.json", "gap.md", "gap.png", "gap.svg", "model_after.xml")
+"""What ``--report DIR`` holds (:func:`bench.gap.run_gap`)."""
 
 
 def _cmd_gap(args: argparse.Namespace) -> int:
-    from bench.cli_calibrate import noise_var_from_args
+    # domain imports here, not at module level: start-up time of `tiltbench --help`
     from bench.gap import run_gap
+    from calib.io import read_ensayo
 
     ensayo = read_ensayo(args.ensayo)
     nv = noise_var_from_args(args)
     if nv is None:
-        raise DataError(f"{args.ensayo}: the gap is measured against the stated noise; give "
-                        "--noise-var σx²,σy² or --datos datos.txt")
+        raise OptionError(f"{args.ensayo}: the gap is measured against the stated noise; give "
+                          "--noise-var σx²,σy² or --datos datos.txt")
     if args.rate is not None and ensayo.t is not None:
         print(f"warning: {args.ensayo} has sample times 't'; --rate {args.rate} is ignored",
               file=sys.stderr)
@@ -41,10 +54,12 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     report = run_gap(ensayo, nv, g=args.g, rate=None if ensayo.t is not None else args.rate,
                      report_dir=args.report, rrd=args.rrd, force=args.force, progress=True)
     if args.json:
-        print(dumps(report.to_dict()), end="")
-    else:
-        print(args.ensayo)
-        print(report.summary())
+        print_json(report.to_dict())
+        return 0
+    print(args.ensayo)
+    print(report.summary())
+    written = [Path(args.report) / f for f in REPORT_FILES] if args.report else []
+    print_files([p for p in written if p.exists()] + [args.rrd])
     return 0
 
 
@@ -54,18 +69,13 @@ def register(sub) -> None:
                        formatter_class=RawDescriptionHelpFormatter)
     p.add_argument("ensayo", help="ensayo.mat with tita (N×1, rad), datos (N×2, m/s²), "
                    "optional t (N×1, s)")
-    p.add_argument("--noise-var", help="stated noise variances x,y in (m/s²)², e.g. 0.25,0.64")
-    p.add_argument("--datos", help="course datos.txt (noise variances are read from it)")
+    add_noise_inputs(p, stated=True)
     p.add_argument("--rate", type=float, help="sample rate in Hz of a file without t "
                    "(samples in time order)")
-    p.add_argument("--g", type=float, default=9.8, help="gravity, m/s²")
-    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    p.add_argument("--report", help="write gap.json, gap.md, gap.png, gap.svg and "
-                   "model_after.xml into this directory")
+    add_gravity(p)
+    add_json(p)
+    p.add_argument("--report", help="write " + ", ".join(REPORT_FILES[:-1]) + " and "
+                   f"{REPORT_FILES[-1]} into this directory")
     p.add_argument("--rrd", help="write a rerun recording of the residuals before/after")
-    p.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    add_force(p)
     p.set_defaults(handler=_cmd_gap)
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit("use the tiltbench command")

@@ -1,10 +1,12 @@
-"""``tiltbench record read FILE.rrd [--json]`` and ``tiltbench record entities FILE.rrd``."""
+"""``tiltbench record read FILE.rrd [--json]`` and ``tiltbench record entities FILE.rrd
+[--all] [--json]``."""
 
 from __future__ import annotations
 
 import argparse
 
-from calib.io import dumps
+from bench.cli.options import add_json
+from bench.cli.output import print_json
 
 
 def _flat(obj, prefix: str = "") -> list[tuple[str, object]]:
@@ -16,11 +18,11 @@ def _flat(obj, prefix: str = "") -> list[tuple[str, object]]:
 
 
 def _cmd_read(args: argparse.Namespace) -> int:
-    from bench.record import read_recording
+    from bench.record import read_recording  # imports rerun: start-up time
 
     data = read_recording(args.file)
     if args.json:
-        print(dumps(data), end="")
+        print_json(data)
         return 0
     for root, tree in data.items():
         if tree is None:
@@ -33,12 +35,19 @@ def _cmd_read(args: argparse.Namespace) -> int:
 
 
 def _cmd_entities(args: argparse.Namespace) -> int:
-    from bench.record import documented, recording_entities
+    from bench.record import documented, recording_entities  # imports rerun: start-up time
 
+    rows = []
     for e in recording_entities(args.file):
         d = documented(e)
         if args.all or not (d and d.pattern.endswith("/**")):
-            print(f"{e}\t{d.pattern if d else '(undocumented)'}")
+            rows.append((str(e), d.pattern if d else None))
+    if args.json:
+        print_json({"file": str(args.file),
+                    "entities": [{"path": e, "pattern": pat} for e, pat in rows]})
+        return 0
+    for e, pat in rows:
+        print(f"{e}\t{pat or '(undocumented)'}")
     return 0
 
 
@@ -53,5 +62,5 @@ def register(sub) -> None:
     e = kinds.add_parser("entities", help="entity paths with their documented pattern")
     e.add_argument("file", help="recording (.rrd)")
     e.add_argument("--all", action="store_true", help="also list the JSON tree nodes")
+    add_json(e)
     e.set_defaults(handler=_cmd_entities)
-

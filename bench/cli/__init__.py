@@ -1,0 +1,93 @@
+"""The ``tiltbench`` command line: parse, call the library, print. The only place with argparse.
+
+One module per command (:data:`COMMANDS`); each has ``register(subparsers)``, which adds its
+parser and sets ``handler``: a function of the parsed args that returns the exit code.
+Bad input (:class:`calib.io.DataError` and other ``ValueError``, ``OSError`` such as a
+directory given for a file) is one line on stderr and exit code 2; an existing output without
+``--force`` (``FileExistsError`` from the library) says "pass --force to overwrite".
+
+Start-up time: this package imports no domain module at import time (no numpy, scipy, mujoco,
+matplotlib or rerun); each handler imports what it needs when it runs, and option defaults
+that are domain constants are read late (:class:`bench.cli.options.Deferred`).
+``benchmarks/cli_startup.py`` measures it.
+"""
+
+from __future__ import annotations
+
+import os
+
+# numpy and scipy each bundle an OpenBLAS; on small matrices their thread pools fight and a
+# calibration runs ~10x slower (measured: 49 ms vs 5.5 ms at N = 20001). Our problems are small:
+# one BLAS thread per process. Must run before numpy is imported; the user can override it.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import sys  # noqa: E402
+import warnings  # noqa: E402
+
+from bench import __version__  # noqa: E402
+from bench.cli import (  # noqa: E402
+    calibrate,
+    demo,
+    gap,
+    generate,
+    nmin,
+    record,
+    trajectory,
+    validate,
+)
+from bench.cli.options import Parser, resolve_deferred  # noqa: E402
+
+COMMANDS = (generate, calibrate, trajectory, nmin, record, validate, gap, demo)
+"""Command modules, in the order of the help."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = Parser(
+        prog="tiltbench",
+        description="Simulated-hardware accelerometer test bench (MuJoCo tilt table + LS).",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for command in COMMANDS:
+        command.register(sub)
+    return parser
+
+
+def _os_error_message(exc: OSError) -> str:
+    """One line naming the path: a directory where a file is expected, permissions, an
+    existing output (the library raises ``FileExistsError``; the remedy is a flag)."""
+    if exc.filename is None or not exc.strerror:
+        text = str(exc)
+        if isinstance(exc, FileExistsError) and "--force" not in text:
+            text += "; pass --force to overwrite"
+        return text
+    hint = {IsADirectoryError: "; expected a file",
+            NotADirectoryError: "; a part of the path is a file, not a directory",
+            FileExistsError: " and is not a directory"}.get(type(exc), "")
+    return f"{exc.filename}: {exc.strerror}{hint}"
+
+
+def _warning_to_stderr(message, category, filename, lineno, file=None, line=None):
+    print(f"warning: {message}", file=sys.stderr)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:  # `tiltbench` alone: the help, not an error
+        parser.print_help()
+        return 0
+    resolve_deferred(args)
+    warnings.showwarning = _warning_to_stderr
+    try:
+        return int(args.handler(args) or 0)
+    except BrokenPipeError:  # output piped into `head`: not an error
+        sys.stderr.close()
+        return 0
+    except OSError as exc:  # FileExistsError, FileNotFoundError, IsADirectoryError, …
+        print(f"tiltbench {args.command}: error: {_os_error_message(exc)}", file=sys.stderr)
+        return 2
+    except ValueError as exc:  # calib.io.DataError, bench.cli.options.OptionError, …
+        print(f"tiltbench {args.command}: error: {exc}", file=sys.stderr)
+        return 2

@@ -1,0 +1,63 @@
+"""``tiltbench calibrate``: parse, call :func:`calib.calibration.calibrate`, print."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from bench.cli.options import (
+    add_force,
+    add_gravity,
+    add_json,
+    add_noise_inputs,
+    check_level,
+    check_positive,
+    noise_var_from_args,
+)
+from bench.cli.output import print_files, print_json, refuse_overwrite, warnings_to_stderr
+
+
+def _cmd_calibrate(args: argparse.Namespace) -> int:
+    # domain imports here, not at module level: start-up time of `tiltbench --help`
+    from calib.calibration import calibrate
+    from calib.io import read_ensayo
+
+    check_level(args.level)
+    check_positive(args.g, "--g")
+    refuse_overwrite([args.plot, args.rrd], args.force)
+    ensayo = read_ensayo(args.ensayo)
+    nv = noise_var_from_args(args)
+    cal = warnings_to_stderr(lambda: calibrate(ensayo, nv, args.method, args.g))
+    if args.plot:
+        from bench.figures import save_calibration_plot
+
+        save_calibration_plot(args.plot, cal, ensayo, force=args.force, level=args.level)
+    if args.rrd:
+        from bench.record import record_calibration
+
+        record_calibration(cal, ensayo, args.rrd, force=args.force)
+    if args.json:
+        print_json(cal.to_dict())
+        return 0
+    if nv is None:
+        print("note: noise variances not given; estimated from the residuals "
+              "(intervals use Student t)", file=sys.stderr)
+    print(f"{args.ensayo}")
+    print(cal.summary(args.level))
+    print_files([args.plot, args.rrd])
+    return 0
+
+
+def register(sub) -> None:
+    p = sub.add_parser("calibrate", help="estimate bias and scale from a calibration run")
+    p.add_argument("ensayo", help="ensayo.mat with tita (N×1, rad) and datos (N×2, m/s²)")
+    add_noise_inputs(p)
+    p.add_argument("--method", choices=["ols", "wls"], default="ols",
+                   help="ols: per axis (course method); wls: joint 4-parameter WLS")
+    add_gravity(p)
+    p.add_argument("--level", type=float, default=0.95, help="confidence level of intervals")
+    add_json(p)
+    p.add_argument("--rrd", help="write a rerun recording of the fit to this file")
+    p.add_argument("--plot", help="write the fit figure (.png or .svg)")
+    add_force(p, "an existing --rrd / --plot file")
+    p.set_defaults(handler=_cmd_calibrate)

@@ -1,0 +1,84 @@
+"""``tiltbench demo [--out DIR] [--seed S] [--force] [--course-data DIR] [--json]``."""
+
+from __future__ import annotations
+
+import argparse
+
+from bench.cli.options import Deferred, OptionError, add_force, add_json, check_level
+from bench.cli.output import print_json
+from bench.cli.progress import Progress
+
+
+# The demo's defaults live in bench.demo, which imports scipy: read when needed (start-up time).
+def _seed() -> int:
+    from bench.demo import DEFAULT_SEED
+
+    return DEFAULT_SEED
+
+
+def _level() -> float:
+    from bench.demo import DEFAULT_LEVEL
+
+    return DEFAULT_LEVEL
+
+
+def _coverage_runs() -> int:
+    from bench.demo import COVERAGE_RUNS
+
+    return COVERAGE_RUNS
+
+
+def _result_json(res, ok: bool) -> dict:
+    """The ``--json`` object: what was written and the numbers of the summary."""
+    r = res.analysis.region
+    return {"out": str(res.out), "source": res.source, "passed": ok,
+            "files": {k: str(p) for k, p in sorted(res.files.items())},
+            "estimates": res.analysis.cal.to_dict(),
+            "decision": r.decision, "answer": (res.truth or {}).get("answer"),
+            "validation": None if res.validation is None else res.validation.to_dict(),
+            "coverage": res.coverage, "recovered": res.recovered,
+            "elapsed_s": res.elapsed}
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from bench.demo import run_demo  # start-up time of `tiltbench --help`
+
+    check_level(args.level)
+    if args.coverage_runs < 0:
+        raise OptionError(f"--coverage-runs must be >= 0, got {args.coverage_runs}")
+    formats = ("png", "svg") if args.figures == "both" else (args.figures,)
+    res = run_demo(args.out, args.seed, args.force, args.course_data, args.level,
+                   args.coverage_runs, None if args.quiet else Progress("demo"),
+                   formats=formats)
+    ok = res.recovered is not False and (res.validation is None or res.validation.passed)
+    if args.json:
+        print_json(_result_json(res, ok))
+    else:
+        print(res.summary())
+    return 0 if ok else 1
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "demo", help="the whole job end to end: generate, calibrate, decide, validate, "
+        "figures, report, recording",
+        description="Generates a course set with the MuJoCo bench (or uses --course-data), "
+        "calibrates, corrects and integrates the vehicle run, decides the arrival point, "
+        "validates against the truth, writes figures, a Markdown report and a rerun "
+        "recording, and prints truth beside estimates. Exit code 1 if the validation fails "
+        "or the recording does not give the numbers back.")
+    p.add_argument("--out", default="demo-out", help="output directory")
+    p.add_argument("--seed", type=int, default=Deferred(_seed), help="seed of the course set")
+    add_force(p)
+    p.add_argument("--course-data", metavar="DIR",
+                   help="use the course files in DIR (ensayo.mat, acel.mat, puntos.mat, "
+                   "datos.txt) instead of generating a set")
+    p.add_argument("--level", type=float, default=Deferred(_level),
+                   help="confidence level of the arrival region")
+    p.add_argument("--coverage-runs", type=int, default=Deferred(_coverage_runs),
+                   help="fresh synthetic calibrations in the coverage check (0: skip)")
+    p.add_argument("--figures", choices=["png", "svg", "both"], default="both",
+                   help="figure format(s) written to OUT/figures")
+    add_json(p)
+    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p.set_defaults(handler=_cmd_demo)

@@ -1,0 +1,300 @@
+"""``tiltbench generate calibration|vehicle|course|class``: options → configuration objects of
+the library, the run, the files it wrote on stdout (``--json``: one object).
+
+The library (:mod:`bench.tilt`, :mod:`bench.vehicle`, :mod:`bench.course`,
+:mod:`bench.classset`) knows no options; the ``*_config`` functions here turn parsed options
+into its configuration objects, naming the option in every error. A recording (``--rrd``) is
+made here, after the set is written (the library does not import :mod:`bench.record`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from bench.cli.options import (
+    DEFAULT_NOISE,
+    FULL_TURN,
+    OptionError,
+    add_generate_common,
+    add_gravity,
+    add_sensor_options,
+    check_positive,
+    parse_floats,
+    parse_pair,
+    parse_variances,
+)
+from bench.cli.output import print_summary, refuse_overwrite
+from bench.cli.progress import Progress
+
+TWO_PI = 2 * math.pi
+
+
+# ---------------------------------------------------------------- option values → config
+# Domain imports inside the functions, not at module level: start-up time of `tiltbench --help`.
+def sensor_model(args: argparse.Namespace):
+    """:class:`bench.sensors.SensorErrorModel` from ``--bias``, ``--scale``, ``--noise-var``."""
+    from bench.sensors import SensorErrorModel
+
+    return SensorErrorModel.from_pairs(parse_pair(args.bias, "--bias"),
+                                       parse_pair(args.scale, "--scale"),
+                                       parse_pair(args.noise_var, "--noise-var"))
+
+
+def _check_radians(values, what: str) -> None:
+    if max(abs(v) for v in values) > TWO_PI * (1 + 1e-9):
+        raise OptionError(f"{what}: values exceed 2π; angles are in radians "
+                          "(degrees? multiply by π/180)")
+
+
+def calibration_config(args: argparse.Namespace):
+    """:class:`bench.tilt.CalibrationConfig` from the options of ``generate calibration``."""
+    from bench.model import TableEdits
+    from bench.tilt import CalibrationConfig, SweepProfile, ThetaDesign
+
+    sensor = sensor_model(args)
+    start, stop = parse_pair(args.theta_range, "--theta-range")
+    _check_radians((start, stop), "--theta-range")
+    if args.theta_list is not None:
+        values = parse_floats(args.theta_list, "--theta-list")
+        _check_radians(values, "--theta-list")
+        theta = ThetaDesign(kind="list", values=values)
+    elif args.positions is not None:
+        theta = ThetaDesign(kind="positions", start=start, stop=stop, positions=args.positions,
+                            per_position=args.per_position)
+    else:
+        theta = ThetaDesign(kind="range", start=start, stop=stop, count=args.count)
+    sweep = SweepProfile(kind=args.profile, start=start, stop=stop, duration=args.duration,
+                         rate=args.rate, cycles=args.cycles)
+    check_positive(args.g, "--g")
+    config = CalibrationConfig(mode=args.mode, theta=theta, sweep=sweep, sensor=sensor,
+                               table=TableEdits(g=args.g))
+    if args.effect:  # effect catalog (docs/effects.md), bench/effects.py
+        from bench.effects import apply_effects, parse_effect_option
+
+        config = apply_effects(config, [parse_effect_option(e) for e in args.effect])
+    return config
+
+
+def parse_profile(text: str):
+    """``"20:0.5,0;20:0,-0.2;20:-0.5,0"`` → :class:`bench.vehicle.Segment` s (duration s :
+    ax, ay m/s²); ``"course"`` → :data:`bench.vehicle.COURSE_PROFILE`."""
+    from bench.vehicle import COURSE_PROFILE, Segment
+
+    if text.strip().lower() == "course":
+        return COURSE_PROFILE
+    segs = []
+    for part in filter(None, (p.strip() for p in text.split(";"))):
+        try:
+            dur, acc = part.split(":")
+            segs.append(Segment(float(dur), tuple(parse_pair(acc, "--profile"))))
+        except ValueError:
+            raise OptionError(f"--profile: segment {part!r} must be 'duration:ax,ay' "
+                              "(s : m/s²), segments separated by ';'") from None
+    if not segs:
+        raise OptionError("--profile: no segments given")
+    return tuple(segs)
+
+
+def vehicle_config(args: argparse.Namespace, sensor, profile):
+    """:class:`bench.vehicle.VehicleConfig` from ``--duration``, ``--rate``, ``--p0``, ``--v0``,
+    ``--g`` and the given sensor model and profile."""
+    from bench.vehicle import VehicleConfig
+
+    check_positive(args.g, "--g")
+    cfg = VehicleConfig(duration=args.duration, rate=args.rate,
+                        p0=tuple(parse_pair(args.p0, "--p0")),
+                        v0=tuple(parse_pair(args.v0, "--v0")), profile=profile,
+                        sensor=sensor, g=args.g)
+    cfg.command()  # validate the grid now, with a clear message
+    return cfg
+
+
+def course_config(args: argparse.Namespace):
+    """:class:`bench.course.CourseConfig` from the options of ``generate course``."""
+    from bench.course import CourseConfig
+    from bench.sensors import SensorErrorModel
+    from bench.tilt import ThetaDesign
+    from bench.vehicle import COURSE_PROFILE
+
+    nv = parse_variances(args.noise_var)
+    if (args.bias is None) != (args.scale is None):
+        raise OptionError("give both --bias and --scale, or neither (drawn from the seed)")
+    sensor = None
+    if args.bias is not None:
+        sensor = SensorErrorModel.from_pairs(parse_pair(args.bias, "--bias"),
+                                             parse_pair(args.scale, "--scale"), nv)
+    profile = parse_profile(args.profile) if args.profile else COURSE_PROFILE
+    vcfg = vehicle_config(args, sensor or SensorErrorModel(), profile)
+    if args.count < 3:
+        raise OptionError(f"--count must be >= 3, got {args.count}")
+    if args.min_separation <= 0:
+        raise OptionError(f"--min-separation must be positive, got {args.min_separation}")
+    return CourseConfig(vehicle=vcfg, random_profile=args.profile is None, sensor=sensor,
+                        noise_var=tuple(nv), theta=ThetaDesign(count=args.count),
+                        min_separation=args.min_separation, g=args.g)
+
+
+# ---------------------------------------------------------------- handlers
+def _cmd_calibration(args: argparse.Namespace) -> int:
+    from bench.tilt import generate_calibration, write_calibration
+
+    refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
+    run = generate_calibration(calibration_config(args), args.seed)
+    paths = write_calibration(run, args.out, force=args.force)
+    if args.rrd:
+        from bench.record import record_calibration_truth
+
+        paths["rrd"] = str(record_calibration_truth(run, args.rrd, force=args.force))
+    print_summary(args, f"generate calibration: {run.tita.shape[0]} samples ({run.config.mode}), "
+                  f"seed {args.seed}",
+                  {"n": int(run.tita.shape[0]), "mode": run.config.mode, "files": paths})
+    return 0
+
+
+def _cmd_vehicle(args: argparse.Namespace) -> int:
+    from bench.vehicle import make_vehicle_run, write_vehicle
+
+    refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
+    cfg = vehicle_config(args, sensor_model(args), parse_profile(args.profile))
+    run = make_vehicle_run(cfg, args.seed)
+    paths = write_vehicle(run, args.out, force=args.force)
+    if args.rrd:
+        from bench.record import record_vehicle_truth
+
+        paths["rrd"] = str(record_vehicle_truth(run, args.rrd, force=args.force))
+    print_summary(args, f"generate vehicle: {run.t.shape[0]} samples, seed {args.seed}",
+                  {"n": int(run.t.shape[0]), "files": paths,
+                   "final_position": run.truth.final_position.tolist()})
+    return 0
+
+
+def _cmd_course(args: argparse.Namespace) -> int:
+    from bench.course import make_course_set, write_course
+
+    refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
+    course = make_course_set(course_config(args), args.seed)
+    paths = write_course(course, args.out, force=args.force)
+    if args.rrd:
+        from bench.record import record_course_truth
+
+        paths["rrd"] = str(record_course_truth(course, args.rrd, force=args.force))
+    print_summary(args, f"generate course: a course set, seed {args.seed} (the answer is in "
+                  "truth.json only)",
+                  {"files": paths, "n_calibration": int(course.calibration.tita.shape[0]),
+                   "n_vehicle": int(course.vehicle.t.shape[0])})
+    return 0
+
+
+def _cmd_class(args: argparse.Namespace) -> int:
+    from bench.classset import generate_class
+    from bench.course import CourseConfig
+
+    nv = parse_variances(args.noise_var)
+    if args.students < 1:
+        raise OptionError(f"--students must be >= 1, got {args.students}")
+    if args.seed < 0:
+        raise OptionError(f"--seed must be >= 0, got {args.seed}")
+    if not args.prefix or "/" in args.prefix or "\\" in args.prefix:
+        raise OptionError(f"--prefix must be a plain name, got {args.prefix!r}")
+    progress = Progress("generate class")
+    res = generate_class(args.out, args.students, args.seed, args.force,
+                         CourseConfig(noise_var=(float(nv[0]), float(nv[1]))), args.prefix,
+                         lambda done, total: progress.count(done, total, "course sets"))
+    files = {f"{name}/{p.name}": str(p) for name, folder in res.folders.items()
+             for p in sorted(folder.iterdir())}
+    summary = {"count": len(res.folders),
+               "folders": {k: str(v) for k, v in res.folders.items()},
+               "answer_key": {"csv": str(res.key_csv), "json": str(res.key_json)},
+               "note": "keep answer_key.* private; hand out the student folders"}
+    title = f"generate class: {len(res.folders)} course sets, seed {args.seed}"
+    if args.json:  # the JSON object is unchanged; the readable output lists every file
+        print_summary(args, title, summary)
+    else:
+        print_summary(args, title, {**summary, "files": files})
+    return 0
+
+
+# ---------------------------------------------------------------- options
+def _add_vehicle_options(p: argparse.ArgumentParser, profile_default: str | None) -> None:
+    p.add_argument("--duration", type=float, default=60.0, help="run length, s")
+    p.add_argument("--rate", type=float, default=100.0, help="sample rate, Hz")
+    p.add_argument("--p0", default="0,0", help="initial position x,y in m")
+    p.add_argument("--v0", default="1,3", help="initial velocity x,y in m/s")
+    p.add_argument("--profile", default=profile_default,
+                   help="acceleration segments 'dur:ax,ay;dur:ax,ay;…' (s : m/s²) or 'course'"
+                        + ("" if profile_default else "; omitted: drawn from the seed"))
+
+
+def _register_calibration(kinds) -> None:
+    p = kinds.add_parser("calibration", help="a tilt-table calibration run (ensayo.mat)")
+    add_generate_common(p)
+    add_sensor_options(p)
+    p.add_argument("--mode", choices=["static", "sweep"], default="static",
+                   help="static: held poses; sweep: servo-driven rotation, θ from the encoder")
+    p.add_argument("--theta-range", default=FULL_TURN,
+                   help="θ range start,stop in rad (static range/positions; sweep)")
+    p.add_argument("--count", type=int, default=20001, help="static: samples over the range")
+    p.add_argument("--theta-list", help="static: explicit θ values in rad, comma separated")
+    p.add_argument("--positions", type=int, help="static: number of discrete held positions")
+    p.add_argument("--per-position", type=int, default=100,
+                   help="static: samples held at each position")
+    p.add_argument("--profile", choices=["constant", "accel", "updown", "sine"],
+                   default="constant", help="sweep: commanded angle profile")
+    p.add_argument("--duration", type=float, default=20.0, help="sweep: duration, s")
+    p.add_argument("--rate", type=float, default=100.0, help="sweep: sample rate, Hz")
+    p.add_argument("--cycles", type=float, default=1.0, help="sweep: up-down/sine cycles")
+    p.add_argument("--effect", action="append", metavar="NAME:AXIS:KEY=VALUE[,KEY=VALUE]",
+                   help="add a catalog effect (repeatable), e.g. misalignment:x:delta=0.02, "
+                        "tilt_offset:both:delta=0.01, lever_arm:x:pos_x=0.2 (docs/effects.md)")
+    p.add_argument("--rrd", help="also record the truth to this rerun file")
+    p.set_defaults(handler=_cmd_calibration)
+
+
+def _register_vehicle(kinds) -> None:
+    p = kinds.add_parser("vehicle", help="a planar vehicle run (acel.mat)")
+    add_generate_common(p)
+    add_sensor_options(p)
+    _add_vehicle_options(p, profile_default="course")
+    p.add_argument("--rrd", help="also record the run next to its truth to this rerun file")
+    p.set_defaults(handler=_cmd_vehicle)
+
+
+def _register_course(kinds) -> None:
+    p = kinds.add_parser("course", help="a full course set",
+                         epilog="Without --profile the acceleration profile is drawn from the "
+                         "seed (--profile course gives the course's).")
+    add_generate_common(p)
+    _add_vehicle_options(p, profile_default=None)
+    p.add_argument("--noise-var", default=DEFAULT_NOISE, help="noise variances x,y (m/s²)²")
+    p.add_argument("--bias", help="true bias x,y in m/s²; omitted: drawn from the seed")
+    p.add_argument("--scale", help="true scale-factor error x,y; omitted: drawn from the seed")
+    p.add_argument("--count", type=int, default=20001, help="calibration samples over [0, 2π]")
+    p.add_argument("--min-separation", type=float, default=100.0,
+                   help="smallest distance between candidate points, m")
+    add_gravity(p)
+    p.add_argument("--rrd", help="also record the set next to its truth to this rerun file")
+    p.set_defaults(handler=_cmd_course)
+
+
+def _register_class(kinds) -> None:
+    p = kinds.add_parser("class", help="K unique course sets + answer key",
+                         description="K unique course sets (one folder each, no truth inside) "
+                         "and the private answer key DIR/answer_key.csv and "
+                         "DIR/answer_key.json.")
+    add_generate_common(p)
+    p.add_argument("--students", type=int, required=True, metavar="K",
+                   help="number of students K")
+    p.add_argument("--prefix", default="student", help="folder prefix (student_001, …)")
+    p.add_argument("--noise-var", default=DEFAULT_NOISE,
+                   help="noise variances x,y (m/s²)² of every set")
+    p.set_defaults(handler=_cmd_class)
+
+
+def register(sub) -> None:
+    gen = sub.add_parser("generate", help="generate datasets with the simulated bench")
+    kinds = gen.add_subparsers(dest="kind", required=True, metavar="KIND")
+    _register_calibration(kinds)
+    _register_vehicle(kinds)
+    _register_course(kinds)
+    _register_class(kinds)

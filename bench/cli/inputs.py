@@ -1,0 +1,63 @@
+"""Inputs of ``trajectory`` and ``nmin``: the course files and the initial state.
+
+Without ``--datos`` the noise variances are estimated from the calibration residuals and P0,
+V0 are the course's (0, 0), (1, 3); a note says so on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from bench.cli.options import Deferred, add_gravity, add_json, check_positive, parse_pair
+
+
+def _integrators() -> tuple[str, ...]:
+    from calib.trajectory import INTEGRATORS  # imports scipy: read when needed (start-up time)
+
+    return INTEGRATORS
+
+
+def add_course_inputs(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--ensayo", required=True, help="calibration run ensayo.mat (tita, datos)")
+    p.add_argument("--acel", required=True, help="vehicle run acel.mat (t, Aerr)")
+    p.add_argument("--puntos", required=True, help="candidate points puntos.mat (A, B, …)")
+    p.add_argument("--datos", help="course datos.txt (P0, V0, noise variances)")
+    p.add_argument("--p0", help="initial position x,y in m (overrides datos.txt)")
+    p.add_argument("--v0", help="initial velocity x,y in m/s (overrides datos.txt)")
+    p.add_argument("--level", type=float, default=0.997,
+                   help="confidence level of the region (χ², 2 dof)")
+    p.add_argument("--method", choices=["ols", "wls"], default="ols",
+                   help="calibration: per-axis OLS (course) or joint WLS")
+    # an explicit metavar: argparse would list the choices (and import scipy) when building
+    p.add_argument("--integrator", choices=Deferred(_integrators), default="trapezoid",
+                   metavar="RULE", help="double integration rule: %(choices)s")
+    add_gravity(p)
+    add_json(p)
+
+
+def read_course_inputs(args: argparse.Namespace):
+    """Read the files; return ensayo, acel, candidates, p0, v0, noise_var (None = estimate)."""
+    import numpy as np
+
+    from calib.io import read_acel, read_datos, read_ensayo, read_puntos
+    from calib.trajectory import COURSE_P0, COURSE_V0
+
+    check_positive(args.g, "--g")
+    ensayo = read_ensayo(args.ensayo)
+    acel = read_acel(args.acel)
+    candidates = read_puntos(args.puntos)
+    p0, v0, nv = np.array(COURSE_P0), np.array(COURSE_V0), None
+    if args.datos:
+        d = read_datos(args.datos)
+        p0, v0, nv = d.p0, d.v0, d.noise_var
+    if args.p0:
+        p0 = parse_pair(args.p0, "--p0")
+    if args.v0:
+        v0 = parse_pair(args.v0, "--v0")
+    if not args.datos:
+        p0_src, v0_src = ("given" if opt else "course value" for opt in (args.p0, args.v0))
+        print("note: no --datos: noise variances estimated from the calibration residuals; "
+              f"P0 = {p0.tolist()} m ({p0_src}), V0 = {v0.tolist()} m/s ({v0_src})",
+              file=sys.stderr)
+    return ensayo, acel, candidates, p0, v0, nv

@@ -1,0 +1,51 @@
+"""``tiltbench nmin``: how many calibration samples are needed to decide the arrival point
+(:mod:`calib.nmin`). ``--json`` prints exactly one JSON object on stdout; progress goes to
+stderr."""
+
+from __future__ import annotations
+
+import argparse
+
+from bench.cli.inputs import add_course_inputs, read_course_inputs
+from bench.cli.options import Deferred, OptionError, check_level, parse_ints
+from bench.cli.output import print_json
+from bench.cli.progress import Progress
+
+
+def _course_steps() -> str:
+    from calib.nmin import COURSE_STEPS  # imports scipy: read when needed (start-up time)
+
+    return ",".join(map(str, COURSE_STEPS))
+
+
+def _cmd_nmin(args: argparse.Namespace) -> int:
+    from calib.nmin import analyze_nmin  # start-up time of `tiltbench --help`
+
+    level = check_level(args.level)
+    ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
+    steps = parse_ints(args.steps, "--steps")
+    mc_n = parse_ints(args.mc_n, "--mc-n")
+    if any(s < 1 for s in steps) or any(n < 3 for n in mc_n):
+        raise OptionError("--steps must be >= 1 and --mc-n values >= 3")
+    if args.runs < 0:
+        raise OptionError(f"--runs must be >= 0, got {args.runs}")
+    res = analyze_nmin(ensayo, acel, candidates, p0, v0, nv, level, args.method,
+                       args.integrator, args.g, steps, mc_n, args.runs, args.seed,
+                       progress=Progress("nmin"))
+    if args.json:
+        print_json(res.to_dict())
+    else:
+        print(res.summary())
+    return 0
+
+
+def register(sub) -> None:
+    q = sub.add_parser("nmin", help="calibration samples needed to decide the arrival point")
+    add_course_inputs(q)
+    q.add_argument("--steps", default=Deferred(_course_steps),
+                   help="subsampling steps of the course experiment (every k-th sample)")
+    q.add_argument("--mc-n", default="20001,1539,1429",
+                   help="calibration sizes N for fresh synthetic runs (the design N is added)")
+    q.add_argument("--runs", type=int, default=100, help="synthetic runs per N (0: none)")
+    q.add_argument("--seed", type=int, default=0, help="seed of the synthetic runs")
+    q.set_defaults(handler=_cmd_nmin)

@@ -1,0 +1,205 @@
+"""Options shared by several commands, the parsing of option values, and the help formatter.
+
+Each option has one meaning across commands (``--count``: calibration samples; ``--students``:
+students of a class; ``--g``: gravity in m/s²; ``--force``: overwrite existing outputs;
+``--json``: one JSON object on stdout and nothing else there).
+
+Start-up time: nothing here imports numpy, scipy or mujoco at module level. Defaults that are
+domain constants (``calib.conventions.G``, ``calib.nmin.COURSE_STEPS``, …) are
+:class:`Deferred`: read when the command runs or when its help is printed, so that
+``tiltbench --help`` does not import the domain (about a second with scipy and mujoco).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+from collections.abc import Callable, Iterator
+from typing import Any
+
+
+class OptionError(ValueError):
+    """An option value that cannot be used; the message names the option and the fix.
+
+    (A ``ValueError``, like :class:`calib.io.DataError`, so ``main`` reports both the same way;
+    not ``DataError`` itself because importing ``calib.io`` imports numpy: start-up time.)
+    """
+
+DEFAULT_BIAS = "0.08,-0.02"
+DEFAULT_SCALE = "-0.03,0.01"
+DEFAULT_NOISE = "0.25,0.64"
+FULL_TURN = f"0,{2 * math.pi!r}"
+"""Default θ range of a calibration run, rad: one full turn."""
+
+
+class Deferred:
+    """A domain constant used as an option default or choice list, read only when needed.
+
+    ``read`` returns the value; it imports the domain module itself. :func:`resolve_deferred`
+    replaces deferred defaults by their values after parsing; help text shows ``str(value)``;
+    as ``choices`` it behaves as the sequence ``read()`` returns.
+    """
+
+    def __init__(self, read: Callable[[], Any]) -> None:
+        self.read = read
+
+    def __str__(self) -> str:
+        value = self.read()
+        return ",".join(map(str, value)) if isinstance(value, tuple) else str(value)
+
+    def __iter__(self) -> Iterator[Any]:
+        return iter(self.read())
+
+    def __contains__(self, item: object) -> bool:
+        return item in self.read()
+
+
+def resolve_deferred(args: argparse.Namespace) -> argparse.Namespace:
+    """Replace every :class:`Deferred` default left in ``args`` by its value (in place)."""
+    for key, value in vars(args).items():
+        if isinstance(value, Deferred):
+            setattr(args, key, value.read())
+    return args
+
+
+def _gravity() -> float:
+    from calib.conventions import G  # imports numpy: read when needed (start-up time)
+
+    return G
+
+
+GRAVITY = Deferred(_gravity)
+"""Default of ``--g``: :data:`calib.conventions.G`, m/s²."""
+
+
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Shows an option's default when it has one worth showing (not None, not a flag's False)
+    and its help text does not already state it."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if any(action.default is v for v in (None, False, argparse.SUPPRESS)) or "default" in text:
+            return text
+        return super()._get_help_string(action)
+
+
+class RawDescriptionHelpFormatter(argparse.RawDescriptionHelpFormatter, HelpFormatter):
+    """:class:`HelpFormatter` that keeps the description's and epilog's line breaks."""
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse that takes negative number pairs as option values: ``--bias -0.02,0.08``.
+
+    Plain argparse (< 3.13) only treats ``-5`` or ``-0.5`` as a value, so ``--p0 -5,3`` was an
+    "expected one argument" error. Sub-parsers inherit the class (and the help formatter).
+    """
+
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-\.?\d[\d.eE+\-,\s]*$")
+
+
+# ---------------------------------------------------------------- option groups
+def add_json(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+
+
+def add_force(p: argparse.ArgumentParser, what: str = "existing outputs") -> None:
+    p.add_argument("--force", action="store_true", help=f"overwrite {what}")
+
+
+def add_gravity(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--g", type=float, default=GRAVITY, help="gravity, m/s²")
+
+
+def add_noise_inputs(p: argparse.ArgumentParser, stated: bool = False) -> None:
+    """``--noise-var`` / ``--datos`` of the commands that read measured data."""
+    p.add_argument("--noise-var", help=f"{'stated ' if stated else ''}noise variances x,y in "
+                   "(m/s²)², e.g. 0.25,0.64")
+    p.add_argument("--datos", help="course datos.txt (noise variances are read from it)")
+
+
+def add_generate_common(p: argparse.ArgumentParser) -> None:
+    """``--seed``, ``--out``, ``--force``, ``--json`` of every ``generate`` kind."""
+    p.add_argument("--seed", type=int, default=0, help="random seed")
+    p.add_argument("--out", required=True, help="output directory")
+    add_force(p, "existing files")
+    add_json(p)
+
+
+def add_sensor_options(p: argparse.ArgumentParser) -> None:
+    """True sensor errors of a generated run (``--bias``, ``--scale``, ``--noise-var``, ``--g``)."""
+    p.add_argument("--bias", default=DEFAULT_BIAS, help="true bias x,y in m/s²")
+    p.add_argument("--scale", default=DEFAULT_SCALE, help="true scale-factor error x,y")
+    p.add_argument("--noise-var", default=DEFAULT_NOISE, help="noise variances x,y (m/s²)²")
+    add_gravity(p)
+
+
+# ---------------------------------------------------------------- option values
+def parse_pair(text: str, what: str):
+    """Parse ``'a,b'`` into a (2,) float array; :class:`OptionError` names the option ``what``."""
+    import numpy as np  # start-up time: only when a pair is parsed
+
+    try:
+        vals = [float(v) for v in text.replace(" ", "").split(",")]
+    except ValueError:
+        raise OptionError(f"{what}: expected two numbers 'x,y', got {text!r}") from None
+    if len(vals) != 2 or not all(math.isfinite(v) for v in vals):
+        raise OptionError(f"{what}: expected two finite numbers 'x,y', got {text!r}")
+    return np.array(vals)
+
+
+def parse_variances(text: str, what: str = "--noise-var"):
+    """Parse ``'σx²,σy²'`` into a (2,) array of positive variances, (m/s²)²."""
+    nv = parse_pair(text, what)
+    if (nv <= 0).any():
+        raise OptionError(f"{what}: variances must be positive, got {text}")
+    return nv
+
+
+def parse_floats(text: str, what: str) -> tuple[float, ...]:
+    """Parse ``'a,b,…'`` into finite floats."""
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise OptionError(f"{what}: expected comma-separated numbers, got {text!r}") from None
+    if not all(math.isfinite(v) for v in values):
+        raise OptionError(f"{what}: values must be finite, got {text!r}")
+    return values
+
+
+def parse_ints(text: str, what: str) -> list[int]:
+    """Parse ``'a,b,…'`` into integers (empty text: no values)."""
+    try:
+        return [int(s) for s in text.split(",")] if text else []
+    except ValueError:
+        raise OptionError(f"{what}: expected comma-separated integers, got {text!r}") from None
+
+
+def check_positive(value: float, what: str) -> float:
+    """``value`` if it is a positive finite number, else :class:`OptionError` naming ``what``."""
+    if not (math.isfinite(value) and value > 0):
+        raise OptionError(f"{what} must be a positive finite number, got {value}")
+    return float(value)
+
+
+def check_level(level: float) -> float:
+    """A confidence level in (0, 1) given as ``--level``."""
+    if not 0.0 < level < 1.0:
+        raise OptionError(f"--level must be in (0, 1), e.g. 0.95, got {level}")
+    return level
+
+
+def noise_var_from_args(args: argparse.Namespace):
+    """σ² (m/s²)² from ``--noise-var`` or ``--datos``; None means 'estimate from the residuals'."""
+    if args.noise_var is not None and args.datos:
+        raise OptionError("give either --noise-var or --datos, not both")
+    if args.noise_var is not None:
+        return parse_variances(args.noise_var)
+    if args.datos:
+        from calib.io import read_datos
+
+        return read_datos(args.datos).noise_var
+    return None

@@ -1,0 +1,55 @@
+"""``tiltbench trajectory``: calibrate on the ensayo, correct and integrate the vehicle run,
+decide the arrival point with its confidence region (:mod:`calib.region`).
+
+``--json`` prints exactly one JSON object on stdout (the tree of
+``bench.record.trajectory_tree``).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from bench.cli.inputs import add_course_inputs, read_course_inputs
+from bench.cli.options import add_force, check_level
+from bench.cli.output import print_files, print_json, refuse_overwrite, warnings_to_stderr
+
+
+def _cmd_trajectory(args: argparse.Namespace) -> int:
+    # domain imports here, not at module level: start-up time of `tiltbench --help`
+    from bench.record import trajectory_tree
+    from calib.calibration import calibrate
+    from calib.region import arrival_region
+    from calib.trajectory import compute_trajectory
+
+    level = check_level(args.level)
+    refuse_overwrite([args.plot, args.rrd], args.force)
+    ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
+    cal = warnings_to_stderr(lambda: calibrate(ensayo, nv, args.method, args.g))
+    traj = compute_trajectory(acel, cal, p0, v0, args.integrator)
+    region = arrival_region(traj, cal, candidates, nv, level)
+    if args.plot:
+        from bench.figures_trajectory import save_trajectory_plot
+
+        save_trajectory_plot(args.plot, traj, region, force=args.force)
+    out = trajectory_tree(traj, region, cal, args.method,
+                          "given" if nv is not None else "estimated")
+    if args.rrd:
+        from bench.record import record_trajectory
+
+        record_trajectory(traj, region, cal, args.rrd, force=args.force, tree=out)
+    if args.json:
+        print_json(out)
+        return 0
+    print(traj.summary())
+    print(region.summary())
+    print_files([args.plot, args.rrd])
+    return 0
+
+
+def register(sub) -> None:
+    p = sub.add_parser("trajectory", help="correct, integrate and decide the arrival point")
+    add_course_inputs(p)
+    p.add_argument("--plot", help="write a figure (.png or .svg)")
+    p.add_argument("--rrd", help="write a rerun recording of the run to this file")
+    add_force(p, "an existing --plot / --rrd file")
+    p.set_defaults(handler=_cmd_trajectory)
