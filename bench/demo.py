@@ -45,6 +45,7 @@ from calib.io import (
 )
 from calib.region import ArrivalRegion, arrival_region
 from calib.trajectory import Trajectory, compute_trajectory
+from calib.trajectory_report import trajectory_tree
 
 DEFAULT_SEED = 0
 """Seed of the embedded demo (the generators' default seed)."""
@@ -109,8 +110,6 @@ class CourseAnalysis:
     warnings: list[str] = field(default_factory=list)
 
     def trajectory_json(self) -> dict:
-        from bench.record import trajectory_tree
-
         return trajectory_tree(self.traj, self.region, self.cal, self.method,
                                "given" if self.noise_var is not None else "estimated")
 

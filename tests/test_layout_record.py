@@ -52,14 +52,11 @@ def test_bench_loads_neither_package():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
-def test_old_names_still_import():
-    from bench.figures import FORMATS, save_figure, trajectory_figure
-    from bench.figures_trajectory import save_trajectory_plot
-    from bench.record import binned_mean, position_cov_along, trajectory_tree
-    from calib.binning import binned_mean as b
-    from calib.propagation import position_cov_along as p
-    from calib.trajectory_report import trajectory_tree as t
+def test_equations_moved_to_calib_have_one_home():
+    import bench.record
+    from bench.figures import FORMATS, save_figure, save_trajectory_plot, trajectory_figure
 
-    assert (binned_mean, position_cov_along, trajectory_tree) == (b, p, t)
+    for name in ("binned_mean", "position_cov_along", "trajectory_tree"):
+        assert not hasattr(bench.record, name), f"bench.record still carries {name}"
     assert FORMATS and callable(save_figure) and callable(trajectory_figure)
     assert callable(save_trajectory_plot)

@@ -2,7 +2,7 @@
 decide the arrival point with its confidence region (:mod:`calib.region`).
 
 ``--json`` prints exactly one JSON object on stdout (the tree of
-``bench.record.trajectory_tree``).
+``calib.trajectory_report.trajectory_tree``).
 """
 
 from __future__ import annotations
@@ -16,10 +16,10 @@ from bench.cli.output import print_files, print_json, refuse_overwrite, warnings
 
 def _cmd_trajectory(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
-    from bench.record import trajectory_tree
     from calib.calibration import calibrate
     from calib.region import arrival_region
     from calib.trajectory import compute_trajectory
+    from calib.trajectory_report import trajectory_tree
 
     level = check_level(args.level)
     refuse_overwrite([args.plot, args.rrd], args.force)
@@ -28,7 +28,7 @@ def _cmd_trajectory(args: argparse.Namespace) -> int:
     traj = compute_trajectory(acel, cal, p0, v0, args.integrator)
     region = arrival_region(traj, cal, candidates, nv, level)
     if args.plot:
-        from bench.figures_trajectory import save_trajectory_plot
+        from bench.figures import save_trajectory_plot
 
         save_trajectory_plot(args.plot, traj, region, force=args.force)
     out = trajectory_tree(traj, region, cal, args.method,

@@ -16,8 +16,7 @@ from it):
 
 The equations live in calib: binned means (:func:`calib.binning.binned_mean`), the
 covariance along the run (:func:`calib.propagation.position_cov_along`) and the
-``trajectory --json`` object (:func:`calib.trajectory_report.trajectory_tree`); they are
-re-exported here for the callers that still import them from ``bench.record``.
+``trajectory --json`` object (:func:`calib.trajectory_report.trajectory_tree`).
 
 Every recording is written with its own :class:`rerun.RecordingStream` (never the global one),
 so one process can write several; the file is written to a temporary name beside the target
@@ -97,18 +96,15 @@ from bench.record.vehicle import (
     record_trajectory,
     record_vehicle_truth,
 )
-from calib.binning import binned_mean
-from calib.propagation import position_cov_along
-from calib.trajectory_report import trajectory_tree
 
 __all__ = [
     "APP_ID", "COLORS", "CURVE_POINTS", "ENTITY_DOCS", "FLIP_Y", "LINE_WIDTH", "MEAN_BINS",
     "PLOT_BOX", "POINT_SIZE", "SAMPLE_TIMELINE", "SNAPSHOTS", "THETA_TIMELINE",
-    "TIME_TIMELINE", "TREE_ROOTS", "EntityDoc", "StaticPlot", "binned_mean",
+    "TIME_TIMELINE", "TREE_ROOTS", "EntityDoc", "StaticPlot",
     "decision_markdown", "documented", "entity_table_markdown", "full_time_axis",
     "log_series", "log_tree", "open_recording", "parameters_markdown", "plane_bounds",
-    "position_cov_along", "read_blueprint", "read_recording", "read_trees",
+    "read_blueprint", "read_recording", "read_trees",
     "record_calibration", "record_calibration_truth", "record_course", "record_course_truth",
     "record_series", "record_trajectory", "record_vehicle_truth", "recording_entities",
-    "time_panel", "trajectory_tree", "truth_manifest", "update_docs",
+    "time_panel", "truth_manifest", "update_docs",
 ]
