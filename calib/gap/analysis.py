@@ -3,17 +3,16 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 from calib.calibration import Calibration, calibrate
 from calib.conventions import AXES, G
 from calib.diagnostics import GapMeasure, Lattice, detect_lattice, gap_measure
-from calib.effects import Extensions, ModelState, RunData
+from calib.effects import Extensions, ModelState, RunData, effect
+from calib.effects.catalog import REFINED
 from calib.gap.confusions import _confusions
-from calib.gap.estimates import _estimate, _Reporter
-from calib.gap.random_walk import _q_uncertainty
+from calib.gap.estimates import _Reporter
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
-from calib.gap.selection import _drop, _try, candidate_list, initial_state, select
+from calib.gap.selection import _try, candidate_list, initial_state, select
 from calib.io import Ensayo
 
 
@@ -56,11 +55,10 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     sel = select(ext, initial_state(run, lattice), candidates, family_alpha)
     state = sel.state
 
-    rep = _Reporter(ext, state)
-    q_unc = {k: _q_uncertainty(ext, state, k) for k in range(2) if state.axes[k].q > 0}
-    effects = _named_effects(ext, rep, state, lattice, q_unc)
+    rep = _Reporter(ext, state, lattice)
+    effects = _named_effects(ext, rep, state, lattice)
     before, after, resid_before, resid_after, fitted = _gaps(ext, rep, state, nominal)
-    final = _final_model(ext, rep, state, q_unc, gains)
+    final = _final_model(ext, rep, state, gains)
     criterion = {"rule": "forward likelihood-ratio selection, Bonferroni per-step threshold",
                  "family_alpha": float(family_alpha), "alpha_step": float(sel.alpha_step),
                  "n_tests": int(sel.n_tests)}
@@ -74,26 +72,20 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         noise_var=(float(stated[0]), float(stated[1])))
 
 
-def _named_effects(ext: Extensions, rep: _Reporter, state: ModelState, lattice: list[Lattice],
-                   q_unc: dict) -> list[EffectEstimate]:
+def _named_effects(ext: Extensions, rep: _Reporter, state: ModelState, lattice: list[Lattice]
+                   ) -> list[EffectEstimate]:
     """Each effect of the final model: estimate ± std, drop-one statistic, interval."""
-    run, stated = ext.run, ext.run.sigma2
     effects = []
     for name, axis in state.effects():
-        params, std = _estimate(rep, name, axis, lattice, q_unc)
-        if name == "quantization":
+        e = effect(name)
+        params, std = e.estimate(rep, axis)
+        if e.lr_tested:
+            t = _try(ext, state.without(name, axis, ext.run.sigma2), name, axis)
+            stat, p = (t.lr, t.p_value) if t is not None else (float("nan"), float("nan"))
+        else:  # the lattice test of step 0: number of levels, its p-value
             lat = lattice[AXES.index(axis)]
             stat, p = float(lat.levels), float(np.exp(lat.logp))
-        else:
-            t = _try(ext, _drop(state, name, axis, stated), name, axis)
-            stat, p = (t.lr, t.p_value) if t is not None else (float("nan"), float("nan"))
-        interval = {}
-        if name == "noise_level":  # (dof·σ̂²/χ²_{0.975}, dof·σ̂²/χ²_{0.025})
-            dof = run.n - ext.n_params(state, AXES.index(axis))
-            lo, hi = dof * params["sigma2"] / stats.chi2.ppf([0.975, 0.025], dof)
-            interval = {"sigma2": (float(lo), float(hi))}
-        if name == "bias_random_walk":  # REML profile-likelihood interval (_q_uncertainty)
-            interval = {next(iter(params)): q_unc[AXES.index(axis)][1]}
+        interval = e.interval(rep, axis, params)
         effects.append(EffectEstimate(name, axis, params, std, float(stat), float(p), interval))
     return effects
 
@@ -119,23 +111,15 @@ def _gaps(ext: Extensions, rep: _Reporter, state: ModelState, nominal: Calibrati
     return before, after, resid_before, resid_after, fitted
 
 
-def _final_model(ext: Extensions, rep: _Reporter, state: ModelState, q_unc: dict,
-                 gains: np.ndarray) -> ExtendedModel:
+def _final_model(ext: Extensions, rep: _Reporter, state: ModelState, gains: np.ndarray
+                 ) -> ExtendedModel:
     """The extended model: linear parameters with covariance, nonlinear ones ± std."""
-    run = ext.run
     nonlinear = {}
     for k, a in enumerate(AXES):
-        st = state.axes[k]
-        if st.tau > 0:
-            nonlinear[f"{a}.tau"] = (st.tau, rep.gn_std[f"{a}.d_tau"])
-        if np.isfinite(st.limit):
-            nonlinear[f"{a}.limit"] = (st.limit, rep.gn_std[f"{a}.d_limit"])
-        if st.q > 0:
-            nonlinear[f"{a}.q"] = (st.q, q_unc[k][0])
-        if st.noise_free:
-            dof = run.n - ext.n_params(state, k)
-            nonlinear[f"{a}.sigma2"] = (st.sigma2, st.sigma2 * float(np.sqrt(2.0 / dof)))
+        for e in REFINED:
+            if e.present(state.axes[k]):
+                nonlinear[f"{a}.{e.field}"] = e.nonlinear(rep, k)
     return ExtendedModel(tuple(rep.names), rep.params, rep.cov, nonlinear,
                          (state.axes[0].sigma2_eff, state.axes[1].sigma2_eff),
                          (state.axes[0].sigma2, state.axes[1].sigma2), state,
-                         (float(gains[0]), float(gains[1])), run.time_unit)
+                         (float(gains[0]), float(gains[1])), ext.run.time_unit)

@@ -14,32 +14,19 @@ from __future__ import annotations
 import numpy as np
 
 from calib.conventions import AXES
-from calib.effects import Extensions, ModelState
+from calib.effects import CATALOG, Extensions, ModelState, effect
 from calib.gap.selection import _drop, _try
 
 AMBIGUITY_LR = 2.0 * float(np.log(10.0))
 """Two explanations whose ``-2 log L`` differ by less than this (likelihood ratio < 10) are
 reported as not told apart."""
 
-REASONS = {
-    "gravity_mismatch": (
-        "absorbed by the scale factors: a different local g is a common scale change of both "
-        "axes; only an independent gravity reference (or a known scale) separates them"),
-    "tilt_offset": (
-        "identical on one table: a table-angle offset equals the same misalignment of both "
-        "sensors; mounting the sensor block rotated by 90° (or an independent inclinometer) "
-        "separates them"),
-    "lowpass_lag": (
-        "at a constant sweep rate a lag τ looks like an angle offset -τ·ω; a sweep with a "
-        "varying rate or a reversal (up-then-down) separates them"),
-    "bias_drift": (
-        "a linear trend is one realisation of a random walk; a longer run, or repeated runs, "
-        "separate them"),
-}
+REASONS: dict[str, str] = {e.name: e.confusion for e in CATALOG if e.confusion}
+"""Effect → why it may not be told apart from another (``Effect.confusion``)."""
 
 
 def _n_effect_params(name: str) -> int:
-    return 2 if name == "lever_arm" else 1
+    return effect(name).n_free
 
 
 def _confusions(ext: Extensions, state: ModelState, stated: np.ndarray,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from calib.conventions import AXES
-from calib.effects import Extensions, RunData
+from calib.effects import Extensions, RunData, effect
 from calib.gap.estimates import _Reporter
 from calib.gap.results import GapAnalysis
 
@@ -33,8 +33,7 @@ def predict(analysis: GapAnalysis, tita: np.ndarray, t: np.ndarray | None = None
                         rate)
     for k, a in enumerate(AXES):
         st = final.state.axes[k]
-        needs = st.tau > 0 or "lever_arm" in st.linear or (
-            "bias_drift" in st.linear and final.time_unit == "s")
+        needs = any(effect(n).needs_times_to_predict(final.time_unit) for n in st.effects())
         if needs and not run.timed:
             raise ValueError(f"axis {a}: the extended model needs sample times (t or rate) "
                              "to predict (low-pass, lever arm or drift per second)")

@@ -29,13 +29,21 @@ structured effects, on the residuals of the extended model.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from calib.conventions import AXES
 from calib.diagnostics import Lattice
-from calib.effects import NEEDS_TIMING, AxisState, Extensions, ModelState, RunData, Trial
+from calib.effects import (
+    NEEDS_TIMING,
+    AxisState,
+    Extensions,
+    ModelState,
+    RunData,
+    Trial,
+    effect,
+)
 from calib.ls import NotIdentifiableError
 
 PER_AXIS_CANDIDATES: tuple[str, ...] = (
@@ -69,14 +77,7 @@ class Selection:
 # --------------------------------------------------------------------- model moves
 
 def _remaining(state: ModelState, candidates: list[tuple[str, str]]) -> list[tuple[str, str]]:
-    out = []
-    for name, axis in candidates:
-        if name == "tilt_offset":
-            if not state.tilt:
-                out.append((name, axis))
-        elif not state.axes[AXES.index(axis)].has(name):
-            out.append((name, axis))
-    return out
+    return [(name, axis) for name, axis in candidates if not state.has(name, axis)]
 
 
 def _try(ext: Extensions, state: ModelState, name: str, axis: str) -> Trial | None:
@@ -87,10 +88,7 @@ def _try(ext: Extensions, state: ModelState, name: str, axis: str) -> Trial | No
 
 
 def _drop(state: ModelState, name: str, axis: str, stated: np.ndarray) -> ModelState:
-    if name == "tilt_offset":
-        return replace(state, tilt=False)
-    k = AXES.index(axis)
-    return state.with_axis(k, state.axes[k].remove(name, float(stated[k])))
+    return state.without(name, axis, stated)
 
 
 # --------------------------------------------------------------------------- steps
@@ -146,7 +144,7 @@ def _backward(ext: Extensions, state: ModelState, stated: np.ndarray, log_alpha:
               steps: list[dict]) -> ModelState:
     """One backward pass: drop what the later additions made unnecessary."""
     for name, axis in state.effects():
-        if name == "quantization":
+        if not effect(name).lr_tested:
             continue
         t = _try(ext, _drop(state, name, axis, stated), name, axis)
         if t is not None and t.logp >= log_alpha:
