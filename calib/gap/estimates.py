@@ -14,7 +14,7 @@ from scipy import linalg as sla
 
 from calib.conventions import AXES
 from calib.diagnostics import Lattice
-from calib.effects import CATALOG, Extensions, ModelState, effect
+from calib.effects import CATALOG, Extensions, ModelState
 from calib.filters import walk_filter
 from calib.gap.quantization import quantized_moments
 from calib.gap.random_walk import _q_uncertainty
@@ -143,8 +143,3 @@ class _Reporter:
     def cov_of(self, *names: str) -> np.ndarray:
         idx = [self.names.index(n) for n in names]
         return self.cov[np.ix_(idx, idx)]
-
-
-def _estimate(rep: _Reporter, name: str, axis: str) -> tuple[dict, dict]:
-    """Catalog parameters (and std) of one named effect from the final fit."""
-    return effect(name).estimate(rep, axis)
