@@ -67,6 +67,9 @@ class Effect:
     that is not in any model and cannot be tested)."""
 
     name: ClassVar[str]
+    """Catalog name (a key of ``calib.conventions.EFFECTS``)."""
+    coefficients: ClassVar[tuple[str, ...]] = ()
+    """Names of the design-matrix coefficients (linear effects only)."""
     n_free: ClassVar[int] = 1
     """Free parameters the effect adds to an axis' model (the AIC count of the swap tests)."""
     lr_tested: ClassVar[bool] = True
@@ -87,6 +90,7 @@ class Effect:
 
     @property
     def units(self) -> dict[str, str]:
+        """Parameter key → unit, from the catalog row."""
         return dict(zip(self.info.keys, self.info.units, strict=True))
 
     # --- the model state ----------------------------------------------------------------
@@ -111,9 +115,6 @@ class Effect:
         return state.with_axis(k, self.remove(state.axes[k], float(stated_sigma2[k])))
 
     # --- likelihood and test --------------------------------------------------------------
-
-    coefficients: ClassVar[tuple[str, ...]] = ()
-    """Names of the design-matrix coefficients (linear effects only)."""
 
     def columns(self, ext: Extensions, k: int, st: AxisState) -> list[np.ndarray]:
         """Design columns (N,) of axis k, one per coefficient (linear effects only)."""
@@ -157,6 +158,7 @@ class Effect:
         return None
 
     def needs_times_to_predict(self, time_unit: str) -> bool:
+        """Whether :func:`calib.gap.predict` needs sample times for this effect."""
         return False
 
 

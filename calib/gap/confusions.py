@@ -25,10 +25,6 @@ REASONS: dict[str, str] = {e.name: e.confusion for e in CATALOG if e.confusion}
 """Effect → why it may not be told apart from another (``Effect.confusion``)."""
 
 
-def _n_effect_params(name: str) -> int:
-    return effect(name).n_free
-
-
 def _confusions(ext: Extensions, state: ModelState, stated: np.ndarray,
                 candidates: list[tuple[str, str]], untestable: dict) -> list[dict]:
     """``not_identifiable`` entries (see the module docstring).
@@ -75,7 +71,7 @@ def _confusions(ext: Extensions, state: ModelState, stated: np.ndarray,
         alternatives = [(n, a) for n, a in candidates if (n, a) not in named and n != name
                         and n != "noise_level" and (a == axis or "both" in (a, axis))]
         for alt, alt_axis in alternatives:
-            penalty = 2.0 * (_n_effect_params(alt) - _n_effect_params(name))
+            penalty = 2.0 * (effect(alt).n_free - effect(name).n_free)
             delta = alt_nll(base, [(alt, alt_axis)]) + penalty - nll_final
             if delta < AMBIGUITY_LR:
                 report((name, alt), axis, delta)
