@@ -400,9 +400,30 @@ def gap_measure(
     sigma = float(np.sqrt(sigma2))
     dof = max(n - int(n_params), 1)
     chi2 = float(r @ r / sigma2)
-    sig: list[tuple[str, float]] = [("chi2", chi2_signed_z(chi2, dof))]
-    rc = r - r.mean()
 
+    sig: list[tuple[str, float]] = [("chi2", chi2_signed_z(chi2, dof))]
+    sig += _column_signatures(r, tita, sigma, t, other_ref, time_index)
+    _, _, lb_logp = ljung_box_logp(r)
+    sig.append(("whiteness", z_from_logp(lb_logp)))
+    if readings is not None:
+        sig.append(("lattice", _lattice_z(readings, model_lsb)))
+    if own_ref is not None:
+        z = _flat_top_z(r, np.asarray(own_ref, dtype=float), sigma)
+        if z is not None:
+            sig.append(("flat_top", z))
+
+    worst, z_max, logp_max = _largest(sig)
+    return GapMeasure(chi2_dof=chi2 / dof, max_signature_z=z_max, dof=dof,
+                      max_signature_p=float(np.exp(logp_max)), worst=worst,
+                      signatures=tuple((k, float(v)) for k, v in sig))
+
+
+def _signature_columns(tita: np.ndarray, t: np.ndarray | None, other_ref: np.ndarray | None,
+                       time_index: bool) -> dict[str, np.ndarray]:
+    """The structured signatures that are columns: harmonics of θ (1st, 2nd), the other
+    axis' reference, a trend (in t, or in the sample index), and with times ω·cos θ, ω·sin θ,
+    ω², α."""
+    n = tita.size
     cols = {"h1_cos": np.cos(tita), "h1_sin": np.sin(tita),
             "h2_cos": np.cos(2 * tita), "h2_sin": np.sin(2 * tita)}
     if other_ref is not None:
@@ -415,37 +436,51 @@ def gap_measure(
         omega, alpha = angular_rates(tita, t)
         cols.update({"rate_cos": omega * np.cos(tita), "rate_sin": omega * np.sin(tita),
                      "rate_sq": omega**2, "accel": alpha})
-    for name, col in cols.items():
+    return cols
+
+
+def _column_signatures(r: np.ndarray, tita: np.ndarray, sigma: float, t: np.ndarray | None,
+                       other_ref: np.ndarray | None, time_index: bool
+                       ) -> list[tuple[str, float]]:
+    """(name, z) of the marginal regression of the centred residuals on each column."""
+    rc = r - r.mean()
+    out = []
+    for name, col in _signature_columns(tita, t, other_ref, time_index).items():
         z = _marginal_z(rc, col, sigma)
         if z is not None:
-            sig.append((name, z))
+            out.append((name, z))
+    return out
 
-    _, _, lb_logp = ljung_box_logp(r)
-    sig.append(("whiteness", z_from_logp(lb_logp)))
 
-    if readings is not None:
-        lat = detect_lattice(readings)
-        explained = (lat.found and model_lsb is not None and model_lsb > 0
-                     and abs(lat.lsb / model_lsb - np.round(lat.lsb / model_lsb)) < 1e-6
-                     and np.round(lat.lsb / model_lsb) >= 1)
-        sig.append(("lattice", 0.0 if explained else lat.z))
+def _lattice_z(readings: np.ndarray, model_lsb: float | None) -> float:
+    """z of a lattice in the raw readings; 0 when the model's lsb explains it (the lattice
+    step is an integer multiple of ``model_lsb``)."""
+    lat = detect_lattice(readings)
+    explained = (lat.found and model_lsb is not None and model_lsb > 0
+                 and abs(lat.lsb / model_lsb - np.round(lat.lsb / model_lsb)) < 1e-6
+                 and np.round(lat.lsb / model_lsb) >= 1)
+    return 0.0 if explained else lat.z
 
-    if own_ref is not None:
-        a = np.asarray(own_ref, dtype=float)
-        levels = hinge_levels(a)
-        if levels.size:
-            design = np.column_stack([np.ones(n), a]) / sigma
-            _, logp = flat_top_score(r / sigma, design, hinge_columns(a, levels) / sigma)
-            sig.append(("flat_top", z_from_logp(logp)))
 
+def _flat_top_z(r: np.ndarray, a: np.ndarray, sigma: float) -> float | None:
+    """z of the flat-top (clipping) score test against ``[1, A_r]``, or None when |A_r| has
+    no range to clip."""
+    levels = hinge_levels(a)
+    if not levels.size:
+        return None
+    n = r.size
+    design = np.column_stack([np.ones(n), a]) / sigma
+    _, logp = flat_top_score(r / sigma, design, hinge_columns(a, levels) / sigma)
+    return z_from_logp(logp)
+
+
+def _largest(sig: list[tuple[str, float]]) -> tuple[str, float, float]:
+    """(name, |z|, log p) of the largest |z|; log p Bonferroni-corrected over the m
+    signatures, ``min(0, log m + log p(|z|))``."""
     zs = np.array([abs(z) for _, z in sig])
     i = int(np.argmax(zs))
-    m = len(sig)
-    logp_max = min(0.0, np.log(m) + logp_from_z(zs[i]))
-    return GapMeasure(chi2_dof=chi2 / dof, max_signature_z=float(zs[i]), dof=dof,
-                      max_signature_p=float(np.exp(logp_max)), worst=sig[i][0],
-                      signatures=tuple((k, float(v)) for k, v in sig))
-
+    logp_max = min(0.0, np.log(len(sig)) + logp_from_z(zs[i]))
+    return sig[i][0], float(zs[i]), logp_max
 
 __all__ = [
     "GapMeasure", "Lattice", "gap_measure", "detect_lattice", "hinge_levels", "hinge_columns",

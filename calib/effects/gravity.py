@@ -1,0 +1,23 @@
+"""Gravity mismatch: never in a model (absorbed by the scale factors), always reported."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from calib.effects.base import Effect, register
+
+if TYPE_CHECKING:
+    from calib.effects.state import ModelState
+
+
+@register
+class GravityMismatch(Effect):
+    """A different local g is a common scale change of both axes: no extension of its own."""
+
+    name = "gravity_mismatch"
+    confusion = (
+        "absorbed by the scale factors: a different local g is a common scale change of both "
+        "axes; only an independent gravity reference (or a known scale) separates them")
+
+    def in_model(self, state: ModelState, axis: str) -> bool:
+        return False

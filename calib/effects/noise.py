@@ -1,0 +1,154 @@
+"""Noise effects: ``bias_random_walk`` (q), ``noise_level`` (σ²), ``quantization`` (lsb).
+
+* bias_random_walk: enters the whitening, ``Σ_Δ = σ² T + q² diag(Δt)``; q by restricted ML
+  (REML, :meth:`Extensions.nll`); q ≥ 0 on the boundary, ``LR ~ ½χ²₀ + ½χ²₁`` (χ̄²; for a
+  variance component the true point mass at 0 is larger than ½, so this p-value is
+  conservative).
+* noise_level: σ² free (profile); ``RSS/σ²_stated ~ χ²(dof)`` exactly, two-sided.
+* quantization: found from the lattice of the readings (step 0 of the selection, not a
+  likelihood-ratio test); adds lsb²/12 to σ² (Sheppard).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy import stats
+
+from calib.conventions import AXES
+from calib.diagnostics import chi2_two_sided_logp
+from calib.effects.base import Effect, Trial, minimise, register
+from calib.effects.response import BoundaryEffect, ProfiledEffect
+
+if TYPE_CHECKING:
+    from calib.effects.engine import Extensions
+    from calib.effects.state import AxisState, ModelState
+
+
+@register
+class BiasRandomWalk(BoundaryEffect):
+    """Bias random walk ``b_k = b_{k-1} + q·√Δt·w_k`` (per √s with timing, else per √sample)."""
+
+    name = "bias_random_walk"
+    field = "q"
+    off = 0.0
+    reml = True
+    refine_rank = 2
+    refine_window = 1.0
+
+    def profile(self, ext: Extensions, state: ModelState, k: int,
+                window: float | None = None) -> tuple[float, float]:
+        """REML of the random-walk intensity q of axis k (others fixed): (q, REML -2 log L).
+
+        Searched on ``log(q²·Δt/σ²)``, the walk-to-noise variance ratio per step."""
+        st = state.axes[k]
+        s2 = st.sigma2_eff
+        dtm = float(np.median(ext.run.dt_walk))
+        n = ext.run.n
+
+        def f(lk: float) -> float:
+            q = float(np.sqrt(np.exp(lk) * s2 / dtm))
+            return ext.safe_nll(state.with_axis(k, replace(st, q=q)), reml=True)
+
+        if window is None:
+            grid = np.linspace(np.log(0.01 / n**2), 0.0, 18)
+        else:
+            c = np.log(st.q**2 * dtm / s2)
+            grid = np.linspace(c - window, c + window, 7)
+        lk, val = minimise(f, grid)
+        return float(np.sqrt(np.exp(lk) * s2 / dtm)), val
+
+    def std(self, fit, k: int) -> float:
+        """From the REML profile interval (:func:`calib.gap.random_walk._q_uncertainty`)."""
+        return fit.q_uncertainty(k)[0]
+
+    def _key(self, fit) -> str:
+        return self.info.keys[0] if fit.run.time_unit == "s" else self.info.keys[1]
+
+    def estimate(self, fit, axis: str) -> tuple[dict, dict]:
+        k = AXES.index(axis)
+        key = self._key(fit)
+        return {key: fit.state.axes[k].q}, {key: self.std(fit, k)}
+
+    def interval(self, fit, axis: str, params: dict) -> dict:
+        """The REML profile-likelihood interval of q (asymmetric)."""
+        return {self._key(fit): fit.q_uncertainty(AXES.index(axis))[1]}
+
+
+@register
+class NoiseLevel(ProfiledEffect):
+    """True white-noise variance σ² differs from the stated one: σ² estimated."""
+
+    name = "noise_level"
+    field = "sigma2"
+    refine_rank = 3
+
+    def present(self, st: AxisState) -> bool:
+        return st.noise_free
+
+    def add(self, st: AxisState, value: float | None = None) -> AxisState:
+        return replace(st, sigma2=float(value), noise_free=True)
+
+    def remove(self, st: AxisState, stated_sigma2: float) -> AxisState:
+        return replace(st, sigma2=stated_sigma2, noise_free=False)
+
+    def test(self, ext: Extensions, state: ModelState, axis: str) -> Trial:
+        k = AXES.index(axis)
+        nll0 = ext.nll(state)
+        fit = ext.fit(state)
+        dof = ext.run.n - 1 - (ext.n_params(state, k) - 1)
+        logp = chi2_two_sided_logp(fit.rss[k], dof)
+        s2, nll1 = self.profile(ext, state, k)
+        new = state.with_axis(k, self.add(state.axes[k], s2))
+        return Trial(self.name, axis, new, max(nll0 - nll1, 0.0), logp, nll1, f"chi2({dof})")
+
+    def profile(self, ext: Extensions, state: ModelState, k: int,
+                window: float | None = None) -> tuple[float, float]:
+        """ML of the white-noise variance σ² of axis k (others fixed): (σ², nll)."""
+        st = state.axes[k]
+        fit = ext.fit(state)
+        m = ext.run.n - 1
+        guess = max(fit.rss[k] * st.sigma2_eff / m - st.lsb**2 / 12.0, 1e-12 * st.sigma2_eff)
+        if st.q == 0:  # RSS ∝ 1/σ²_eff exactly: closed form
+            return guess, ext.safe_nll(state.with_axis(k, replace(st, sigma2=guess)))
+
+        def f(ls: float) -> float:
+            return ext.safe_nll(state.with_axis(k, replace(st, sigma2=float(np.exp(ls)))))
+
+        ls, val = minimise(f, np.log(guess) + np.linspace(-0.7, 0.7, 7))
+        return float(np.exp(ls)), val
+
+    @staticmethod
+    def _dof(fit, k: int) -> int:
+        return fit.run.n - fit.ext.n_params(fit.state, k)
+
+    def std(self, fit, k: int) -> float:
+        """``σ̂²·sqrt(2/dof)`` (χ²(dof) variance)."""
+        return fit.state.axes[k].sigma2 * float(np.sqrt(2.0 / self._dof(fit, k)))
+
+    def interval(self, fit, axis: str, params: dict) -> dict:
+        """``(dof·σ̂²/χ²_{0.975}, dof·σ̂²/χ²_{0.025})``."""
+        dof = self._dof(fit, AXES.index(axis))
+        lo, hi = dof * params["sigma2"] / stats.chi2.ppf([0.975, 0.025], dof)
+        return {"sigma2": (float(lo), float(hi))}
+
+
+@register
+class Quantization(Effect):
+    """Output rounded to multiples of lsb: adds lsb²/12 to the noise variance."""
+
+    name = "quantization"
+    n_free = 0
+    lr_tested = False
+
+    def present(self, st: AxisState) -> bool:
+        return st.lsb > 0
+
+    def remove(self, st: AxisState, stated_sigma2: float) -> AxisState:
+        return replace(st, lsb=0.0)
+
+    def estimate(self, fit, axis: str) -> tuple[dict, dict]:
+        lat = fit.lattice[AXES.index(axis)]
+        return {"lsb": lat.lsb}, {"lsb": lat.lsb_std}

@@ -1,0 +1,193 @@
+"""Response effects with one nonlinear parameter: ``lowpass_lag`` (τ) and ``saturation`` (L).
+
+Both change the reference of the axis, ``r = LPF_τ(clip(A_r, ±L))`` (read from the axis state
+by :meth:`Extensions.reference`), and are estimated by a 1-D profile likelihood.
+
+* lowpass_lag (τ ≥ 0, needs sample times): τ on the boundary under "no such effect", so
+  ``LR ~ ½χ²₀ + ½χ²₁`` (χ̄²).
+* saturation: L exists only under the alternative: Davies' bound on the sup of the one-sided
+  score process over the grid of limits (:func:`calib.diagnostics.flat_top_score`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING, ClassVar
+
+import numpy as np
+from scipy import stats
+
+from calib.conventions import AXES
+from calib.diagnostics import LN2, flat_top_score, hinge_columns, hinge_levels
+from calib.effects.base import Effect, Trial, UntestableError, minimise, register
+
+if TYPE_CHECKING:
+    from calib.effects.engine import Extensions
+    from calib.effects.state import AxisState, ModelState
+
+
+class ProfiledEffect(Effect):
+    """A per-axis effect with one nonlinear parameter, the axis-state field ``field``,
+    estimated by :meth:`profile` and refined in a local window ``refine_window``."""
+
+    field: ClassVar[str]
+    off: ClassVar[float]
+    """The field's value when the effect is absent."""
+    refine_window: ClassVar[float | None] = None
+
+    def present(self, st: AxisState) -> bool:
+        return getattr(st, self.field) != self.off
+
+    def add(self, st: AxisState, value: float | None = None) -> AxisState:
+        return replace(st, **{self.field: float(value)})
+
+    def remove(self, st: AxisState, stated_sigma2: float) -> AxisState:
+        return replace(st, **{self.field: self.off})
+
+    def profile(self, ext: Extensions, state: ModelState, k: int,
+                window: float | None = None) -> tuple[float, float]:
+        """ML (or REML) of the parameter of axis k, others fixed: (value, -2 log L)."""
+        raise NotImplementedError
+
+    def refine(self, ext: Extensions, state: ModelState, k: int) -> ModelState:
+        val, _ = self.profile(ext, state, k, window=self.refine_window)
+        return state.with_axis(k, replace(state.axes[k], **{self.field: val}))
+
+    def nonlinear(self, fit, k: int) -> tuple[float, float]:
+        return getattr(fit.state.axes[k], self.field), self.std(fit, k)
+
+    def std(self, fit, k: int) -> float:
+        """Gauss-Newton std from the final fit's column ``d_<field>`` (:meth:`gn_column`)."""
+        return fit.gn_std[f"{AXES[k]}.d_{self.field}"]
+
+    def estimate(self, fit, axis: str) -> tuple[dict, dict]:
+        k = AXES.index(axis)
+        key = self.info.keys[0]
+        return {key: getattr(fit.state.axes[k], self.field)}, {key: self.std(fit, k)}
+
+
+class BoundaryEffect(ProfiledEffect):
+    """Parameter ≥ 0 with "none" on the boundary: the χ̄² = ½χ²₀ + ½χ²₁ test."""
+
+    reml: ClassVar[bool] = False
+
+    def test(self, ext: Extensions, state: ModelState, axis: str) -> Trial:
+        k = AXES.index(axis)
+        nll0 = ext.nll(state)
+        self.check_testable(ext)
+        val, nll1 = self.profile(ext, state, k)
+        lr = (ext.nll(state, reml=True) if self.reml else nll0) - nll1
+        if not np.isfinite(nll1) or lr <= 0:
+            return Trial(self.name, axis, state, 0.0, 0.0, nll0, "chibar2(0:1)")
+        new = state.with_axis(k, self.add(state.axes[k], val))
+        return Trial(self.name, axis, new, lr, float(-LN2 + stats.chi2.logsf(lr, 1)),
+                     ext.nll(new), "chibar2(0:1)")
+
+    def check_testable(self, ext: Extensions) -> None:
+        return None
+
+
+@register
+class LowpassLag(BoundaryEffect):
+    """First-order low-pass τ·dy/dt + y = u on the signal (the white noise stays white)."""
+
+    name = "lowpass_lag"
+    field = "tau"
+    off = 0.0
+    refine_rank = 0
+    refine_window = 0.5
+    confusion = (
+        "at a constant sweep rate a lag τ looks like an angle offset -τ·ω; a sweep with a "
+        "varying rate or a reversal (up-then-down) separates them")
+
+    def check_testable(self, ext: Extensions) -> None:
+        if not ext.run.timed:
+            raise UntestableError("lowpass_lag needs sample times")
+
+    def profile(self, ext: Extensions, state: ModelState, k: int,
+                window: float | None = None) -> tuple[float, float]:
+        """ML of the low-pass time constant τ (s) of axis k (others fixed): (τ, nll)."""
+        st = state.axes[k]
+        h = float(np.median(np.diff(ext.run.t)))
+        dur = float(ext.run.t[-1] - ext.run.t[0])
+
+        def f(lt: float) -> float:
+            return ext.safe_nll(state.with_axis(k, replace(st, tau=float(np.exp(lt)))))
+
+        if window is None:
+            grid = np.linspace(np.log(0.01 * h), np.log(max(0.25 * dur, 2 * h)), 24)
+        else:
+            c = np.log(st.tau)
+            grid = np.linspace(c - window, c + window, 7)
+        lt, val = minimise(f, grid)
+        return float(np.exp(lt)), val
+
+    def gn_column(self, ext: Extensions, k: int, st: AxisState, gain: float
+                  ) -> tuple[str, np.ndarray] | None:
+        """``d r / d τ`` by a central difference (relative step 1e-3), times the gain."""
+        eps = 1e-3
+        d = (ext.reference(k, st.tau * (1 + eps), st.limit)
+             - ext.reference(k, st.tau * (1 - eps), st.limit)) / (2 * eps * st.tau)
+        return "d_tau", gain * d
+
+    def needs_times_to_predict(self, time_unit: str) -> bool:
+        return True
+
+
+@register
+class Saturation(ProfiledEffect):
+    """True specific force clipped to ±L."""
+
+    name = "saturation"
+    field = "limit"
+    off = float("inf")
+    refine_rank = 1
+    refine_window = 0.05
+
+    def test(self, ext: Extensions, state: ModelState, axis: str) -> Trial:
+        k = AXES.index(axis)
+        nll0 = ext.nll(state)
+        logp = self.score(ext, state, k)
+        lim, nll1 = self.profile(ext, state, k)
+        lr = max(nll0 - nll1, 0.0)
+        new = state.with_axis(k, self.add(state.axes[k], lim)) if np.isfinite(lim) else state
+        return Trial(self.name, axis, new, lr, logp, min(nll1, nll0), "davies")
+
+    def score(self, ext: Extensions, state: ModelState, k: int) -> float:
+        """log p of the flat-top score test (clip at ±L, L unknown) on axis k."""
+        st = state.axes[k]
+        levels = hinge_levels(ext.run.a_ref[:, k])
+        if levels.size == 0:
+            raise UntestableError("no range of |A_r| to clip")
+        fit = ext.fit(state)
+        yw, hw, _ = fit.blocks[k]
+        design = hw
+        if state.tilt:
+            design = np.column_stack([hw, ext.whiten(st, ext.tilt_column(k, st))])
+        a = ext.run.a_ref[:, k]
+        hinges = ext.filter(hinge_columns(a, levels), st.tau)
+        _, logp = flat_top_score(fit.resid[k], design, ext.whiten(st, hinges))
+        return logp
+
+    def profile(self, ext: Extensions, state: ModelState, k: int,
+                window: float | None = None) -> tuple[float, float]:
+        """ML of the saturation limit L (m/s²) of axis k (others fixed): (L, nll)."""
+        st = state.axes[k]
+
+        def f(lim: float) -> float:
+            return ext.safe_nll(state.with_axis(k, replace(st, limit=float(lim))))
+
+        if window is None:
+            grid = np.sort(hinge_levels(ext.run.a_ref[:, k]))
+        else:
+            grid = st.limit * np.linspace(1 - window, 1 + window, 7)
+        if grid.size == 0:
+            return float("inf"), ext.nll(state)
+        lim, val = minimise(f, grid)
+        return lim, val
+
+    def gn_column(self, ext: Extensions, k: int, st: AxisState, gain: float
+                  ) -> tuple[str, np.ndarray] | None:
+        """``d r / d L = LPF_τ(sgn(A_r)·[|A_r| > L])``, times the gain."""
+        a = ext.run.a_ref[:, k]
+        return "d_limit", gain * ext.filter(np.sign(a) * (np.abs(a) > st.limit), st.tau)

@@ -1,0 +1,125 @@
+""":func:`analyze_gap`: select the effects, estimate them, measure the gap before and after."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from calib.calibration import Calibration, calibrate
+from calib.conventions import AXES, G
+from calib.diagnostics import GapMeasure, Lattice, detect_lattice, gap_measure
+from calib.effects import Extensions, ModelState, RunData, effect
+from calib.effects.catalog import REFINED
+from calib.gap.confusions import _confusions
+from calib.gap.estimates import _Reporter
+from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
+from calib.gap.selection import _try, candidate_list, initial_state, select
+from calib.io import Ensayo
+
+
+def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = None,
+                family_alpha: float = 0.005) -> GapAnalysis:
+    """Find where the nominal model and a measured calibration run disagree, name the effect.
+
+    Parameters
+    ----------
+    ensayo : the run: ``tita`` (N,) rad, ``datos`` (N, 2) m/s², optional ``t`` (N,) s;
+        samples in time order.
+    noise_var : (2,) stated noise variances [σx², σy²], (m/s²)².
+    g : gravity, m/s² (course convention ``A_rx = -g sin θ``, ``A_ry = -g cos θ``).
+    rate : sample rate, Hz, when ``t`` is missing (``t = k / rate``); without either the
+        effects that need timing are skipped (``needs_timing``) and drift / random walk are
+        per sample.
+    family_alpha : false-alarm probability of the whole selection on a run without any
+        effect; the per-step threshold is ``family_alpha / m`` (Bonferroni over the m tests).
+
+    Returns
+    -------
+    GapAnalysis
+
+    Notes
+    -----
+    Criterion (:mod:`calib.gap.selection`), reference distributions
+    (:meth:`calib.effects.Extensions.test`) and confusions (:mod:`calib.gap.confusions`).
+    ``calib`` never sees the bench: this works on the measured arrays only.
+    """
+    if not 0 < family_alpha < 1:
+        raise ValueError(f"family_alpha must be in (0, 1), got {family_alpha}")
+    run = RunData.build(ensayo.tita, ensayo.datos, noise_var, g, ensayo.t, rate)
+    stated = run.sigma2
+    nominal = calibrate(ensayo, stated, "ols", g)
+    gains = 1.0 + nominal.scale
+    ext = Extensions(run, gains)
+
+    lattice = [detect_lattice(run.datos[:, k]) for k in range(2)]
+    candidates, needs_timing = candidate_list(run)
+    sel = select(ext, initial_state(run, lattice), candidates, family_alpha)
+    state = sel.state
+
+    rep = _Reporter(ext, state, lattice)
+    effects = _named_effects(ext, rep, state, lattice)
+    before, after, resid_before, resid_after, fitted = _gaps(ext, rep, state, nominal)
+    final = _final_model(ext, rep, state, gains)
+    criterion = {"rule": "forward likelihood-ratio selection, Bonferroni per-step threshold",
+                 "family_alpha": float(family_alpha), "alpha_step": float(sel.alpha_step),
+                 "n_tests": int(sel.n_tests)}
+    return GapAnalysis(
+        effects=tuple(effects),
+        not_identifiable=tuple(_confusions(ext, state, stated, sel.candidates,
+                                           sel.untestable)),
+        gap_before=before, gap_after_fit=after, nominal=nominal, final=final,
+        residuals_before=resid_before, residuals_after=resid_after, fitted=fitted,
+        needs_timing=tuple(needs_timing), criterion=criterion, steps=sel.steps, g=float(g),
+        noise_var=(float(stated[0]), float(stated[1])))
+
+
+def _named_effects(ext: Extensions, rep: _Reporter, state: ModelState, lattice: list[Lattice]
+                   ) -> list[EffectEstimate]:
+    """Each effect of the final model: estimate ± std, drop-one statistic, interval."""
+    effects = []
+    for name, axis in state.effects():
+        e = effect(name)
+        params, std = e.estimate(rep, axis)
+        if e.lr_tested:
+            t = _try(ext, state.without(name, axis, ext.run.sigma2), name, axis)
+            stat, p = (t.lr, t.p_value) if t is not None else (float("nan"), float("nan"))
+        else:  # the lattice test of step 0: number of levels, its p-value
+            lat = lattice[AXES.index(axis)]
+            stat, p = float(lat.levels), float(np.exp(lat.logp))
+        interval = e.interval(rep, axis, params)
+        effects.append(EffectEstimate(name, axis, params, std, float(stat), float(p), interval))
+    return effects
+
+
+def _gaps(ext: Extensions, rep: _Reporter, state: ModelState, nominal: Calibration
+          ) -> tuple[dict[str, GapMeasure], dict[str, GapMeasure], np.ndarray, np.ndarray,
+                     np.ndarray]:
+    """Gap of the nominal and of the extended model per axis, their residuals, the fit."""
+    run = ext.run
+    resid_before = np.column_stack([nominal.fits[a].residuals for a in AXES])
+    resid_after = np.column_stack([rep.residual_after(k) for k in range(2)])
+    fitted = np.column_stack([rep.mean(k) for k in range(2)])
+    before, after = {}, {}
+    for k, a in enumerate(AXES):
+        common = dict(t=run.t, other_ref=run.a_ref[:, 1 - k], own_ref=run.a_ref[:, k],
+                      readings=run.datos[:, k])
+        before[a] = gap_measure(resid_before[:, k], run.tita, float(run.sigma2[k]), n_params=2,
+                                **common)
+        st = state.axes[k]
+        after[a] = gap_measure(resid_after[:, k], run.tita, st.sigma2_eff,
+                               model_lsb=st.lsb if st.lsb > 0 else None,
+                               n_params=ext.n_params(state, k), **common)
+    return before, after, resid_before, resid_after, fitted
+
+
+def _final_model(ext: Extensions, rep: _Reporter, state: ModelState, gains: np.ndarray
+                 ) -> ExtendedModel:
+    """The extended model: linear parameters with covariance, nonlinear ones ± std."""
+    nonlinear = {}
+    for k, a in enumerate(AXES):
+        for e in REFINED:
+            if e.present(state.axes[k]):
+                nonlinear[f"{a}.{e.field}"] = e.nonlinear(rep, k)
+    return ExtendedModel(tuple(rep.names), rep.params, rep.cov, nonlinear,
+                         (state.axes[0].sigma2_eff, state.axes[1].sigma2_eff),
+                         (state.axes[0].sigma2, state.axes[1].sigma2), state,
+                         (float(gains[0]), float(gains[1])), ext.run.time_unit)

@@ -1,0 +1,86 @@
+"""Confusions: named effects that another candidate explains as well (``not_identifiable``).
+
+Known confusions: ``gravity_mismatch`` always (absorbed by the scale factors);
+``tilt_offset`` vs equal ``misalignment`` of both sensors whenever either is named (identical
+on one table; the 1-parameter tilt offset is preferred by the selection when the two δ
+agree); ``lowpass_lag`` vs a tilt offset / misalignment and ``bias_drift`` vs
+``bias_random_walk`` when the alternative explains the data within a likelihood ratio of 10
+(``|Δ(-2 log L)| < 2 ln 10``, AIC-penalised when the parameter counts differ); candidates that
+this θ design cannot test (collinear columns).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from calib.conventions import AXES
+from calib.effects import CATALOG, Extensions, ModelState, effect
+from calib.gap.selection import _drop, _try
+
+AMBIGUITY_LR = 2.0 * float(np.log(10.0))
+"""Two explanations whose ``-2 log L`` differ by less than this (likelihood ratio < 10) are
+reported as not told apart."""
+
+REASONS: dict[str, str] = {e.name: e.confusion for e in CATALOG if e.confusion}
+"""Effect → why it may not be told apart from another (``Effect.confusion``)."""
+
+
+def _confusions(ext: Extensions, state: ModelState, stated: np.ndarray,
+                candidates: list[tuple[str, str]], untestable: dict) -> list[dict]:
+    """``not_identifiable`` entries (see the module docstring).
+
+    Swap test: for each named effect, every other candidate is fitted *in its place*; when
+    one explains the data within ``AMBIGUITY_LR`` of the final model (``-2 log L`` + 2 per
+    extra parameter, AIC) the pair is reported: this experiment cannot tell them apart.
+    """
+    out: list[dict] = [{"names": ["gravity_mismatch"], "reason": REASONS["gravity_mismatch"]}]
+    mis_axes = [a for k, a in enumerate(AXES) if state.axes[k].has("misalignment")]
+    seen: set = set()
+    if state.tilt or len(mis_axes) == 2:
+        out.append({"names": ["tilt_offset", "misalignment"], "reason": REASONS["tilt_offset"]})
+        seen.add(("misalignment", "tilt_offset"))  # already said, for every θ design
+    nll_final = ext.nll(state)
+    named = state.effects()
+
+    def alt_nll(base: ModelState, adds: list[tuple[str, str]]) -> float:
+        s = base
+        for n, a in adds:
+            t = _try(ext, s, n, a)
+            if t is None:
+                return np.inf
+            s = t.state
+        return ext.nll(s)
+
+    def report(pair: tuple[str, str], axis: str, delta: float) -> None:
+        key = tuple(sorted(pair))
+        if key in seen:
+            return
+        seen.add(key)
+        known = next((REASONS[n] for n in ("bias_drift", "lowpass_lag") if n in pair), None)
+        why = known or ("their signatures coincide in this θ design; a wider or denser set of "
+                        "angles (a full turn) separates them")
+        where = "both axes" if axis == "both" else f"axis {axis}"
+        out.append({"names": sorted(pair),
+                    "reason": f"{where}: {why} (fitting {pair[1]} in place of {pair[0]} "
+                              f"changes -2 log L by {delta:.2f}, less than 2 ln 10)"})
+
+    for name, axis in named:
+        if name in ("quantization", "noise_level"):
+            continue
+        base = _drop(state, name, axis, stated)
+        alternatives = [(n, a) for n, a in candidates if (n, a) not in named and n != name
+                        and n != "noise_level" and (a == axis or "both" in (a, axis))]
+        for alt, alt_axis in alternatives:
+            penalty = 2.0 * (effect(alt).n_free - effect(name).n_free)
+            delta = alt_nll(base, [(alt, alt_axis)]) + penalty - nll_final
+            if delta < AMBIGUITY_LR:
+                report((name, alt), axis, delta)
+        if name == "tilt_offset" and ext.run.timed and not any(
+                n == "lowpass_lag" for n, _ in named):
+            delta = alt_nll(base, [("lowpass_lag", a) for a in AXES]) + 2.0 - nll_final
+            if delta < AMBIGUITY_LR:
+                report(("tilt_offset", "lowpass_lag"), axis, delta)
+    for (name, axis), why in untestable.items():
+        out.append({"names": [name], "reason": f"axis {axis}: not testable in this experiment "
+                                               f"({why})"})
+    return out

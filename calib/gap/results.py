@@ -1,0 +1,213 @@
+"""Result types of the discrepancy workflow: a named effect, the extended model, the analysis."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from calib.calibration import Calibration
+from calib.conventions import AXES, G
+from calib.effects import ModelState
+
+
+@dataclass(frozen=True)
+class EffectEstimate:
+    """A named effect with its evidence.
+
+    name : catalog name.  axis : "x", "y" or "both".
+    params : catalog keys → estimates (catalog units, ``docs/effects.md``).
+    std : same keys → standard deviations.
+    statistic : likelihood-ratio statistic ``-2 log Λ`` of dropping the effect from the final
+        model (quantization: the number of distinct reading levels on the lattice).
+    p_value : its p-value under the reference distribution of :meth:`Extensions.test`.
+    """
+
+    name: str
+    axis: str
+    params: dict
+    std: dict
+    statistic: float
+    p_value: float
+    interval: dict = field(default_factory=dict, compare=False)
+    """Optional 95 % intervals (key → (low, high)): noise_level, the χ²(dof) interval of σ²;
+    bias_random_walk, the REML profile-likelihood interval of q (asymmetric; its std is
+    (high - low)/(2·1.96), see :func:`_q_uncertainty`)."""
+
+    def to_dict(self) -> dict:
+        """``{"name", "axis", "params", "std", "statistic", "p_value"}`` (documented JSON),
+        plus ``"interval": {key: [low, high]}`` only for an effect that has one (additive)."""
+        out = {"name": self.name, "axis": self.axis,
+               "params": {k: float(v) for k, v in self.params.items()},
+               "std": {k: float(v) for k, v in self.std.items()},
+               "statistic": float(self.statistic), "p_value": float(self.p_value)}
+        if self.interval:
+            out["interval"] = {k: [float(lo), float(hi)] for k, (lo, hi) in self.interval.items()}
+        return out
+
+    def __str__(self) -> str:
+        vals = ", ".join(f"{k} = {v:.6g} ± {self.std.get(k, float('nan')):.3g}"
+                         for k, v in self.params.items())
+        ci = "".join(f"; 95% interval of {k}: [{lo:.6g}, {hi:.6g}]"
+                     for k, (lo, hi) in self.interval.items())
+        return (f"{self.name} ({self.axis}): {vals}{ci}; statistic = {self.statistic:.4g}, "
+                f"p = {self.p_value:.3g}")
+
+
+@dataclass(frozen=True)
+class ExtendedModel:
+    """The model fitted by :func:`analyze_gap`: nominal parameters plus the named extensions.
+
+    names : parameter names, ``"x.bias"``, ``"x.scale"``, ``"x.c_k2"``, …, ``"sin_tilt"``
+        (linear parameters: bias m/s², scale dimensionless, column coefficients in the units of
+        :data:`calib.effects.LINEAR_COLUMNS` times (1 + scale)).
+    params, cov : estimates and their joint covariance (Gauss-Newton: it includes the
+        uncertainty of the limit L and the time constant τ).
+    nonlinear : ``"x.tau"``, ``"x.limit"``, ``"x.q"``, ``"x.sigma2"`` → (value, std).
+    sigma2 : (2,) variance of the white error of each axis in the model (σ² + lsb²/12).
+    noise_var : (2,) white-noise variance σ² of each axis before any rounding (the estimate
+        when ``noise_level`` is named, else the stated one), (m/s²)².
+    state : the model structure (:class:`calib.effects.ModelState`).
+    gains : (2,) multipliers of the tilt column (1 + nominal scale).
+    time_unit : "s" or "sample" (drift and random walk units).
+    """
+
+    names: tuple[str, ...]
+    params: np.ndarray
+    cov: np.ndarray
+    nonlinear: dict
+    sigma2: tuple[float, float]
+    noise_var: tuple[float, float]
+    state: ModelState
+    gains: tuple[float, float]
+    time_unit: str
+
+    def __post_init__(self) -> None:
+        for name in ("params", "cov"):
+            arr = np.array(getattr(self, name), dtype=float)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
+    @property
+    def std(self) -> np.ndarray:
+        return np.sqrt(np.maximum(np.diag(self.cov), 0.0))
+
+    def value(self, name: str, default: float = 0.0) -> float:
+        return float(self.params[self.names.index(name)]) if name in self.names else default
+
+    def axis_params(self, axis: str) -> dict:
+        """Parameters of one axis (and the shared tilt) → {"value", "std"}."""
+        out = {}
+        for i, n in enumerate(self.names):
+            if n.startswith(f"{axis}.") or n == "sin_tilt":
+                out[n.split(".", 1)[-1]] = {"value": float(self.params[i]),
+                                            "std": float(self.std[i])}
+        for n, (v, s) in self.nonlinear.items():
+            if n.startswith(f"{axis}."):
+                out[n.split(".", 1)[1]] = {"value": float(v), "std": float(s)}
+        return out
+
+    def to_dict(self) -> dict:
+        return {"names": list(self.names), "params": self.params.tolist(),
+                "std": self.std.tolist(), "cov": self.cov.tolist(),
+                "nonlinear": {k: {"value": float(v), "std": float(s)}
+                              for k, (v, s) in self.nonlinear.items()},
+                "sigma2": list(self.sigma2), "noise_var": list(self.noise_var),
+                "time_unit": self.time_unit}
+
+
+@dataclass(frozen=True)
+class GapAnalysis:
+    """What :func:`analyze_gap` found.
+
+    Attributes
+    ----------
+    effects : the named effects, catalog order.
+    not_identifiable : ``{"names": [...], "reason": str}`` for each confusion.
+    gap_before : per axis, the gap of the nominal model (bias + scale, stated σ²).
+    gap_after_fit : per axis, the gap of the extended model fitted here (data vs the model).
+    nominal : the nominal calibration (per-axis OLS, stated σ²; :class:`Calibration`).
+    final : the extended model with its covariance (:class:`ExtendedModel`).
+    residuals_before : (N, 2) data - nominal model, m/s².
+    residuals_after : (N, 2) whitened residuals of the extended model scaled to m/s² (white
+        with variance ``final.sigma2`` under the model: data - model, or the normalised
+        Kalman innovations × σ with a random walk).
+    fitted : (N, 2) mean reading of the extended model (no random walk), m/s².
+    needs_timing : effects skipped because the run has no timing.
+    criterion : family α, per-step α, number of tests and the rule, for the record.
+    steps : the selection trace (every candidate's LR and p at each step).
+    """
+
+    effects: tuple[EffectEstimate, ...]
+    not_identifiable: tuple[dict, ...]
+    gap_before: dict
+    gap_after_fit: dict
+    nominal: Calibration
+    final: ExtendedModel
+    residuals_before: np.ndarray
+    residuals_after: np.ndarray
+    fitted: np.ndarray
+    needs_timing: tuple[str, ...]
+    criterion: dict
+    steps: tuple[dict, ...] = field(default=())
+    g: float = G
+    noise_var: tuple[float, float] = (1.0, 1.0)
+
+    def __post_init__(self) -> None:
+        for name in ("residuals_before", "residuals_after", "fitted"):
+            arr = np.array(getattr(self, name), dtype=float)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
+    @property
+    def named(self) -> list[tuple[str, str]]:
+        """(name, axis) of every named effect."""
+        return [(e.name, e.axis) for e in self.effects]
+
+    def effect(self, name: str, axis: str | None = None) -> EffectEstimate:
+        for e in self.effects:
+            if e.name == name and (axis is None or e.axis == axis):
+                return e
+        raise KeyError(f"effect {name} ({axis}) not named")
+
+    def to_dict(self) -> dict:
+        """The documented JSON object (``gap_after`` here is the fitted one; the bench
+        replaces it by the re-simulated gap), plus ``needs_timing`` and ``criterion``."""
+        return {
+            "effects": [e.to_dict() for e in self.effects],
+            "not_identifiable": [{"names": list(d["names"]), "reason": d["reason"]}
+                                 for d in self.not_identifiable],
+            "gap_before": {a: self.gap_before[a].to_dict() for a in AXES},
+            "gap_after": {a: self.gap_after_fit[a].to_dict() for a in AXES},
+            "needs_timing": list(self.needs_timing),
+            "criterion": dict(self.criterion),
+        }
+
+    def summary(self) -> str:
+        out = [f"Gap analysis: N = {self.residuals_before.shape[0]}, g = {self.g} m/s², "
+               f"stated σ² = {self.noise_var[0]:.4g}, {self.noise_var[1]:.4g} (m/s²)²"]
+        c = self.criterion
+        out.append(f"criterion: forward LR selection, family α = {c['family_alpha']:g}, "
+                   f"{c['n_tests']} tests, per-step α = {c['alpha_step']:.3g} (Bonferroni)")
+        out.append("gap before (nominal: bias + scale):")
+        for a in AXES:
+            m = self.gap_before[a]
+            out.append(f"  {a}: χ²/dof = {m.chi2_dof:.4f}, max signature z = "
+                       f"{m.max_signature_z:.2f} ({m.worst}, p = {m.max_signature_p:.3g})")
+        if self.effects:
+            out.append("named effects:")
+            out += [f"  {e}" for e in self.effects]
+        else:
+            out.append("named effects: none — the nominal model explains the data within the "
+                       "stated noise")
+        for d in self.not_identifiable:
+            out.append(f"  not identifiable: {' / '.join(d['names'])}: {d['reason']}")
+        if self.needs_timing:
+            out.append(f"  skipped (need t or --rate): {', '.join(self.needs_timing)}")
+        out.append("gap after (extended model fitted here):")
+        for a in AXES:
+            m = self.gap_after_fit[a]
+            out.append(f"  {a}: χ²/dof = {m.chi2_dof:.4f}, max signature z = "
+                       f"{m.max_signature_z:.2f} ({m.worst}, p = {m.max_signature_p:.3g})")
+        return "\n".join(out)
+
