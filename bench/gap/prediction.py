@@ -65,9 +65,10 @@ def fit_bias_scale(y: np.ndarray, x: np.ndarray) -> tuple[float, float, np.ndarr
 
     The course's per-axis model ``y - x = bias + scale·x`` solved by :func:`calib.ls.fit_linear`
     (Householder QR of the centred design, the estimation side's solver), with the simulated
-    response ``x`` in place of the reference ``A_r``.
+    response ``x`` in place of the reference ``A_r``. Only the estimate and the residual are
+    used, so the noise variance is given as 1 (noiseless data would make an estimated one 0).
     """
-    fit = fit_linear(np.column_stack([np.ones_like(x), x]), y - x, PARAM_NAMES)
+    fit = fit_linear(np.column_stack([np.ones_like(x), x]), y - x, PARAM_NAMES, sigma2=1.0)
     bias, scale = (float(v) for v in fit.params)
     return bias, scale, np.array(fit.residuals)
 
