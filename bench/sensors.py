@@ -7,9 +7,11 @@ K1 = 1 + scale)::
     A_m = (1 + scale) · a + bias + Σ terms(a, context) + v,     v ~ N(0, σ²) white
 
 The base terms (bias, scale, white noise) are fields of :class:`AxisErrors`. Further error
-terms (IEEE K2, cross-axis, drift, quantization, ...) are :class:`ErrorTerm` objects added one by
-one to ``AxisErrors.terms``; each knows its vocabulary name, its stage in the signal chain and
-how to apply itself, so new effects need no change here. Signal chain per axis:
+terms (IEEE K2, cross-axis, drift, quantization, ...) are :class:`bench.terms.ErrorTerm` objects
+added one by one to ``AxisErrors.terms``; each knows its vocabulary name, its stage in the
+signal chain and how to apply itself, so new effects need no change here. The forward model
+``(1 + scale)·a + bias`` is :func:`calib.correct.apply_errors` (one home for both sides).
+Signal chain per axis:
 
     stage "response" (deterministic, on the true input) → scale & bias → white noise
     → stage "output" (on the noisy reading: low-pass, quantization, ...)
@@ -22,49 +24,18 @@ the white noise drawn between the response and output stages.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
-from typing import ClassVar, Literal, Protocol
 
 import numpy as np
 
+from bench.terms import (  # noqa: F401  (ErrorTerm, Stage, register_term: public here too)
+    TERM_REGISTRY,
+    ErrorTerm,
+    SensorContext,
+    Stage,
+    register_term,
+)
 from calib.conventions import AXES
-
-Stage = Literal["response", "output"]
-
-
-@dataclass(frozen=True)
-class SensorContext:
-    """What an error term may look at.
-
-    a_true : (N, 2) true specific force on both sensitive axes, m/s² (MuJoCo).
-    t : (N,) sample times, s, or None when the run has no timing.
-    axis : index of the axis being modelled (0 = x, 1 = y).
-    """
-
-    a_true: np.ndarray
-    t: np.ndarray | None
-    axis: int
-
-
-class ErrorTerm(Protocol):
-    """One additional error term of the accelerometer model."""
-
-    name: ClassVar[str]  # effect vocabulary name (DESIGN.md), e.g. "nonlinearity_k2"
-    stage: ClassVar[Stage]
-
-    def apply(self, a: np.ndarray, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:
-        """Return the signal after this term; ``a`` is the (N,) signal at this stage."""
-        ...
-
-    def to_dict(self) -> dict: ...
-
-
-TERM_REGISTRY: dict[str, type] = {}
-"""Effect name → term class; filled by :func:`register_term`, used to rebuild from JSON."""
-
-
-def register_term(cls: type) -> type:
-    TERM_REGISTRY[cls.name] = cls
-    return cls
+from calib.correct import apply_errors
 
 
 @dataclass(frozen=True)
@@ -99,8 +70,6 @@ class AxisErrors:
 
     @classmethod
     def from_dict(cls, d: dict) -> AxisErrors:
-        if any(t["name"] not in TERM_REGISTRY for t in d.get("terms", ())):
-            import bench.effects  # noqa: F401  (registers the catalog terms)
         terms = tuple(TERM_REGISTRY[t["name"]](**{k: v for k, v in t.items() if k != "name"})
                       for t in d.get("terms", ()))
         return cls(float(d["bias"]), float(d["scale"]), float(d["noise_var"]), terms)
@@ -139,7 +108,7 @@ class SensorErrorModel:
             for term in err.terms:
                 if term.stage == "response":
                     a = term.apply(a, ctx, rng)
-            a = (1.0 + err.scale) * a + err.bias
+            a = apply_errors(a, err.bias, err.scale)
             if err.noise_var > 0:
                 a = a + np.sqrt(err.noise_var) * rng.standard_normal(a.shape[0])
             for term in err.terms:

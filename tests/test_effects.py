@@ -29,12 +29,12 @@ from bench.effects import (
     Quantization,
     apply_effects,
     effects_from_truth,
-    lowpass,
     parse_effect_option,
 )
 from bench.sensors import AxisErrors, SensorContext, SensorErrorModel
 from bench.tilt import CalibrationConfig, SweepProfile, ThetaDesign, generate_calibration
 from calib.conventions import reference_accel
+from calib.filters import lowpass
 from calib.io import DataError
 
 G = 9.8

@@ -52,7 +52,8 @@ def _cmd_gap(args: argparse.Namespace) -> int:
               file=sys.stderr)
     check_positive(args.g, "--g")
     report = run_gap(ensayo, nv, g=args.g, rate=None if ensayo.t is not None else args.rate,
-                     report_dir=args.report, rrd=args.rrd, force=args.force, progress=True)
+                     report_dir=args.report, rrd=args.rrd, force=args.force,
+                     progress=lambda msg: print(f"[gap] {msg}", file=sys.stderr, flush=True))
     if args.json:
         print_json(report.to_dict())
         return 0

@@ -1,0 +1,93 @@
+"""The rerun recording of the discrepancy workflow: residuals before / after, ±σ bands,
+binned means, the effects text and the ``gap --json`` tree, with its blueprint.
+
+``rerun`` is imported inside the functions that log, so importing :mod:`bench.gap` does not
+load it.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from bench.gap.report import GapReport
+from bench.gap.writers import gap_markdown
+from bench.record import (
+    COLORS,
+    THETA_TIMELINE,
+    binned_mean,
+    full_time_axis,
+    log_series,
+    log_tree,
+    open_recording,
+    time_panel,
+)
+from calib.conventions import AXES
+
+PathLike = str | os.PathLike
+
+
+def recording_blueprint() -> Any:
+    """Layout of the gap recording: per axis the residual before (top) and after (bottom)
+    adding the named effects, each with its ±σ band and binned mean over the whole θ range,
+    and the effects text. ``gap_report/**`` (the JSON tree) is left out of every view."""
+    import rerun.blueprint as rrb
+
+    def view(ax: str, which: str) -> Any:
+        return rrb.TimeSeriesView(
+            origin=f"gap/{ax}", name=f"{ax}: residual {which}, ±σ, binned mean vs θ (µrad), m/s²",
+            contents=[f"+ gap/{ax}/residual_{which}", f"+ gap/{ax}/band_{which}/**",
+                      f"+ gap/{ax}/mean_{which}"], axis_x=full_time_axis())
+
+    grid = rrb.Horizontal(*(rrb.Vertical(view(ax, "before"), view(ax, "after"))
+                            for ax in AXES))
+    return rrb.Blueprint(
+        rrb.Horizontal(grid, rrb.TextDocumentView(origin="gap/effects", name="effects"),
+                       column_shares=[3, 1]),
+        time_panel(THETA_TIMELINE), collapse_panels=True)
+
+
+def recording_markdown(report: GapReport) -> str:
+    """``gap.md`` without its image line (a path relative to the report, broken in a viewer)."""
+    lines = [ln for ln in gap_markdown(report).split("\n") if not ln.startswith("![")]
+    return re.sub(r"\n{3,}", "\n\n", "\n".join(lines))
+
+
+def write_recording(report: GapReport, path: PathLike, force: bool = False) -> Path:
+    """Rerun recording: ``gap/{x,y}/residual_before``, ``…/residual_after`` (timelines
+    ``sample`` and ``theta_urad``), ``gap/{x,y}/band_{before,after}/{plus,minus}`` (±σ),
+    ``gap/{x,y}/mean_{before,after}`` (binned means), ``gap/effects`` (Markdown text) and the
+    ``gap --json`` object as a tree under ``gap_report``, with a blueprint (2 × 2 grid)."""
+    import rerun as rr
+
+    theta = report.replay.tita
+    n = theta.size
+    index = {"sample": np.arange(n, dtype=np.int64),
+             "theta_urad": np.round(theta * 1e6).astype(np.int64)}
+    # ±σ bands span the θ range (the first and last samples of an up-then-down sweep share θ)
+    ends = {tl: v[[int(np.argmin(theta)), int(np.argmax(theta))]] for tl, v in index.items()}
+    with open_recording(path, force=force, blueprint=recording_blueprint(),
+                        name="tiltbench gap") as rec:
+        for k, ax in enumerate(AXES):
+            for which, res, s2 in (("before", report.residual_before, report.noise_var[k]),
+                                   ("after", report.residual_after,
+                                    report.after[ax].sigma2)):
+                log_series(rec, f"gap/{ax}/residual_{which}", res[:, k], index,
+                           style="points", color=COLORS[which], name=f"residual {which}",
+                           size=1.0 if n < 10_000 else 0.5)
+                for part, sign in (("plus", 1.0), ("minus", -1.0)):
+                    log_series(rec, f"gap/{ax}/band_{which}/{part}",
+                               np.full(2, sign * np.sqrt(s2)), ends, color=COLORS["band"],
+                               name=f"{sign:+.0f}σ {which}")
+                th, mean, at = binned_mean(theta, res[:, k], bins=min(100, max(1, n // 80)))
+                log_series(rec, f"gap/{ax}/mean_{which}", mean,
+                           {"sample": at, "theta_urad": np.round(th * 1e6).astype(np.int64)},
+                           color=COLORS["mean"], name=f"binned mean {which}")
+        rec.log("gap/effects", rr.TextDocument(recording_markdown(report),
+                                               media_type=rr.MediaType.MARKDOWN), static=True)
+        log_tree(rec, "gap_report", report.to_dict())
+    return Path(path)

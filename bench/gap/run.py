@@ -1,0 +1,251 @@
+"""The discrepancy workflow's run: :func:`run_gap`, in the steps of ``docs/gap.md``.
+
+1. the estimation side's analysis (:func:`calib.gap.analyze_gap`);
+2. the nominal re-simulation and its gap (:func:`_nominal_gap`);
+3. the extension: the named effects in the bench model, physical ones refined by
+   ``mujoco.sysid`` (:func:`_extension`);
+4. the extended re-simulation and its gap (:func:`_extended_gap`);
+5. the outputs (:func:`_write_outputs`).
+
+The library never prints: progress messages go to the ``progress`` callable when one is given.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from bench.effects import EffectSpec, apply_to_model
+from bench.gap.prediction import AxisPrediction, axis_term, fit_bias_scale, predict_axis
+from bench.gap.recording import write_recording
+from bench.gap.replay import Replay, make_replay, simulate, timing
+from bench.gap.report import GapReport
+from bench.gap.sysid import SYSID_EFFECTS, sysid_refine, sysid_usable
+from bench.gap.writers import check_outputs, write_report
+from bench.model import TableEdits
+from bench.sensors import AxisErrors, SensorErrorModel
+from calib.conventions import AXES, G
+from calib.diagnostics import gap_measure
+from calib.gap import GapAnalysis, analyze_gap
+from calib.io import Ensayo
+
+PathLike = str | os.PathLike
+Progress = Callable[[str], None] | None
+
+
+def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = G,
+            rate: float | None = None, report_dir: PathLike | None = None,
+            rrd: PathLike | None = None, force: bool = False, *,
+            family_alpha: float = 0.005, progress: Progress = None) -> GapReport:
+    """Run the discrepancy workflow on a measured calibration run.
+
+    Parameters
+    ----------
+    ensayo : :class:`calib.io.Ensayo` (θ rad, readings m/s², optional t s; time order).
+    noise_var : (2,) stated noise variances [σx², σy²], (m/s²)².
+    g : gravity, m/s² (default :data:`calib.conventions.G`).
+    rate : sample rate, Hz, of a run without ``t`` (samples in time order).
+    report_dir : write ``gap.json``, ``gap.md``, ``gap.png``, ``gap.svg`` and
+        ``model_after.xml`` there (refuses to overwrite unless ``force``).
+    rrd : write a rerun recording there.
+    family_alpha : family-wise level of the detection and of "consistent with noise".
+    progress : called with one line per step and its duration (e.g. a function printing to
+        stderr); None: silent.
+
+    Returns
+    -------
+    GapReport
+    """
+    noise_var = _check_inputs(noise_var, report_dir, rrd, force)
+    t = timing(ensayo.t, ensayo.n, rate)
+    timing_src = "t" if ensayo.t is not None else ("rate" if rate is not None else "none")
+    datos = np.asarray(ensayo.datos, dtype=float)
+    tita = np.asarray(ensayo.tita, dtype=float)
+
+    with _step(progress, f"analysing {ensayo.n} samples (calib.gap)…", "analysis done"):
+        analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate, family_alpha=family_alpha)
+
+    with _step(progress, None, "nominal re-simulation") as note:
+        replay = make_replay(tita, t)
+        base = TableEdits(g=g)
+        nominal = _nominal_gap(replay, base, datos, noise_var)
+        note(f" ({replay.mode})")
+
+    effects, table_after, sensor_after, sysid_out = _extension(
+        analysis, replay, datos, noise_var, base, progress)
+
+    with _step(progress, None, "extended re-simulation"):
+        after = _extended_gap(replay, effects, table_after, sensor_after, nominal, datos,
+                              noise_var)
+
+    report = GapReport(analysis=analysis, effects=tuple(effects), sysid=sysid_out,
+                       replay=replay, tracking_error=nominal.tracking, noise_var=noise_var,
+                       g=float(g), timing=timing_src, nominal=nominal.params,
+                       after=after.predictions, table_after=table_after,
+                       sensor_after=after.sensor, gap_before=nominal.gap,
+                       gap_after=after.gap, residual_before=nominal.residual,
+                       residual_after=after.residual, family_alpha=float(family_alpha))
+    files = _write_outputs(report, report_dir, rrd, force, progress)
+    return replace(report, files=files)
+
+
+# ----------------------------------------------------------------------------- steps
+
+@contextmanager
+def _step(progress: Progress, start: str | None, done: str
+          ) -> Iterator[Callable[[str], None]]:
+    """Report ``start``, then ``done`` with the step's duration (and any noted detail)."""
+    detail: list[str] = []
+    if progress is not None and start is not None:
+        progress(start)
+    clock = time.perf_counter()
+    yield detail.append
+    if progress is not None:
+        progress(f"{done}{''.join(detail)} in {time.perf_counter() - clock:.1f} s")
+
+
+def _check_inputs(noise_var: Sequence[float] | np.ndarray, report_dir: PathLike | None,
+                  rrd: PathLike | None, force: bool) -> np.ndarray:
+    """The stated noise as a (2,) array; refuses existing outputs unless ``force``."""
+    noise_var = np.asarray(noise_var, dtype=float).reshape(-1)
+    if noise_var.shape != (2,) or np.any(~np.isfinite(noise_var)) or np.any(noise_var <= 0):
+        raise ValueError(f"noise_var must be two positive variances (x, y), got {noise_var}")
+    if report_dir is not None and not force:
+        check_outputs(report_dir, rrd)
+    elif rrd is not None and not force and Path(rrd).exists():
+        raise FileExistsError(f"{rrd}: exists; pass --force to overwrite")
+    return noise_var
+
+
+@dataclass(frozen=True)
+class _Nominal:
+    """The nominal re-simulation: true specific force (N, 2) and encoder (N,), the encoder
+    tracking error (rad), per axis (bias, scale), residual (N, 2) and gap measure."""
+
+    a: np.ndarray
+    enc: np.ndarray
+    tracking: float
+    params: dict[str, tuple[float, float]]
+    residual: np.ndarray
+    gap: dict
+
+
+def _nominal_gap(replay: Replay, base: TableEdits, datos: np.ndarray, noise_var: np.ndarray
+                 ) -> _Nominal:
+    """Simulate the nominal bench, fit bias and scale per axis, measure the gap."""
+    tita, t = replay.tita, replay.t
+    a_nom, enc = simulate(replay, base)
+    tracking = float(np.max(np.abs(enc - tita))) if replay.mode == "sweep" else 0.0
+    params, residual, gap = {}, np.empty_like(datos), {}
+    for k, ax in enumerate(AXES):
+        bias, scale, r = fit_bias_scale(datos[:, k], a_nom[:, k])
+        params[ax] = (bias, scale)
+        residual[:, k] = r
+        gap[ax] = gap_measure(r, tita, float(noise_var[k]), t,
+                              other_ref=a_nom[:, 1 - k], own_ref=a_nom[:, k],
+                              readings=datos[:, k], n_params=2)
+    return _Nominal(a_nom, enc, tracking, params, residual, gap)
+
+
+def _effect_spec(est: Any) -> EffectSpec:
+    """Catalog :class:`EffectSpec` of a ``calib.gap`` effect estimate (name, axis, params)."""
+    return EffectSpec(str(est.name), str(est.axis), {k: float(v) for k, v in
+                                                     dict(est.params).items()})
+
+
+def _axis_count(effects: Sequence[EffectSpec], k: int) -> int:
+    """Number of effect parameters fitted on axis ``k`` (for the χ² degrees of freedom)."""
+    return sum(len(e.params) for e in effects if AXES[k] in e.axes
+               and e.name != "gravity_mismatch")
+
+
+def _bench_model(effects: Sequence[EffectSpec], base: TableEdits
+                 ) -> tuple[TableEdits, SensorErrorModel]:
+    """The nominal table and a noiseless sensor with ``effects`` added (``gravity_mismatch``
+    is not identifiable on one table and is left out)."""
+    sensor0 = SensorErrorModel.from_pairs((0.0, 0.0), (0.0, 0.0), (0.0, 0.0))
+    return apply_to_model([e for e in effects if e.name != "gravity_mismatch"], base, sensor0)
+
+
+def _extension(analysis: GapAnalysis, replay: Replay, datos: np.ndarray,
+               noise_var: np.ndarray, base: TableEdits, progress: Progress
+               ) -> tuple[list[EffectSpec], TableEdits, SensorErrorModel, dict[int, dict]]:
+    """The named effects in the bench model; physical ones refined by ``mujoco.sysid``.
+
+    A refinement replaces the ``calib`` estimate when it lowered the cost and has finite
+    intervals (:func:`bench.gap.sysid.sysid_usable`); when sysid fails, the reason is kept in
+    its entry and the estimate stays.
+    """
+    effects = [_effect_spec(e) for e in analysis.effects]
+    table_after, sensor_after = _bench_model(effects, base)
+    if not any(e.name in SYSID_EFFECTS for e in effects):
+        return effects, table_after, sensor_after, {}
+    with _step(progress, "refining physical effects by re-simulation (mujoco.sysid)…",
+               "sysid done"):
+        sigma2 = np.array([sensor_after.axis(a).noise_var or noise_var[k]
+                           for k, a in enumerate(AXES)])
+        try:
+            sysid_out = sysid_refine(effects, replay, datos, sigma2, table_after, sensor_after)
+        except Exception as exc:  # the LS estimate stays usable; say why sysid did not run
+            sysid_out = {i: {"error": f"{type(exc).__name__}: {exc}"}
+                         for i, e in enumerate(effects) if e.name in SYSID_EFFECTS}
+        used = list(effects)
+        for i, s in sysid_out.items():
+            if "params" in s and sysid_usable(s):
+                used[i] = EffectSpec(effects[i].name, effects[i].axis, s["params"])
+        table_after, sensor_after = _bench_model(used, base)
+    return used, table_after, sensor_after, sysid_out
+
+
+@dataclass(frozen=True)
+class _Extended:
+    """The extended re-simulation: per axis prediction and gap, residual (N, 2), and the
+    extended sensor model with its fitted bias and scale."""
+
+    predictions: dict[str, AxisPrediction]
+    residual: np.ndarray
+    gap: dict
+    sensor: SensorErrorModel
+
+
+def _extended_gap(replay: Replay, effects: Sequence[EffectSpec], table_after: TableEdits,
+                  sensor_after: SensorErrorModel, nominal: _Nominal, datos: np.ndarray,
+                  noise_var: np.ndarray) -> _Extended:
+    """Simulate the extended bench, predict each axis and measure the gap after."""
+    tita, t, a_nom = replay.tita, replay.t, nominal.a
+    a_ext, _ = simulate(replay, table_after) if effects else (a_nom, nominal.enc)
+    preds, residual, gap, axes = {}, np.empty_like(datos), {}, {}
+    for k, ax in enumerate(AXES):
+        sigma2_k = sensor_after.axis(ax).noise_var or float(noise_var[k])
+        pred = predict_axis(datos[:, k], a_ext, t, sensor_after, k, sigma2_k)
+        preds[ax] = pred
+        residual[:, k] = pred.residual
+        quant = axis_term(sensor_after, k, "quantization")
+        gap[ax] = gap_measure(pred.residual, tita, pred.sigma2, t,
+                              other_ref=a_nom[:, 1 - k], own_ref=a_nom[:, k],
+                              readings=datos[:, k],
+                              model_lsb=None if quant is None else quant.lsb,
+                              n_params=2 + _axis_count(effects, k))
+        axes[ax] = AxisErrors(pred.bias, pred.scale, sigma2_k, sensor_after.axis(ax).terms)
+    return _Extended(preds, residual, gap, SensorErrorModel(axes["x"], axes["y"]))
+
+
+def _write_outputs(report: GapReport, report_dir: PathLike | None, rrd: PathLike | None,
+                   force: bool, progress: Progress) -> dict[str, str]:
+    """Write the report directory and the recording asked for; name → path."""
+    files: dict[str, str] = {}
+    if report_dir is None and rrd is None:
+        return files
+    with _step(progress, "writing the report…", "report written"):
+        if report_dir is not None:
+            files.update(write_report(report, report_dir, force=force))
+        if rrd is not None:
+            files["rrd"] = str(write_recording(report, rrd, force=force))
+    return files
