@@ -57,7 +57,6 @@ from calib.calibration import Calibration, calibrate
 from calib.conventions import G, reference_accel
 from calib.io import Acel, Ensayo, validate_ensayo
 from calib.ls import PoorlyIdentifiedWarning
-from calib.results import ResultMixin
 from calib.region import (
     ArrivalRegion,
     arrival_region,
@@ -65,6 +64,7 @@ from calib.region import (
     course_decision,
     noise_cov_matrix,
 )
+from calib.results import ResultMixin
 from calib.trajectory import Integrator, compute_trajectory, correct_and_integrate
 
 N_MAX = 10**12
