@@ -326,6 +326,24 @@ def validate(truth: Mapping, estimates: Mapping, level: float = 0.99,
     theta : (N,) rad, the run's θ for a design covariance (default: rebuilt from truth).
     theta_source : label of where θ came from (for the report).
     truth_name, est_name : file names used in error messages.
+
+    Returns
+    -------
+    Validation : per parameter (order ``[bias_x, scale_x, bias_y, scale_y]``; bias m/s²,
+    scale dimensionless) estimate, truth, std, z; the joint χ²₄ verdict ``passed``.
+
+    Examples
+    --------
+    >>> from bench import validate
+    >>> truth = {"sensor": {"x": {"bias": 0.1, "scale": 0.0},
+    ...                     "y": {"bias": 0.0, "scale": 0.01}}}
+    >>> est = {"axes": {"x": {"bias": 0.11, "bias_std": 0.01, "scale": 0.0,
+    ...                       "scale_std": 0.001},
+    ...                 "y": {"bias": 0.0, "bias_std": 0.01, "scale": 0.01,
+    ...                       "scale_std": 0.001}}}
+    >>> v = validate(truth, est, level=0.99)
+    >>> bool(v.passed), [round(float(z), 3) for z in v.z]
+    (True, [1.0, 0.0, 0.0, 0.0])
     """
     if not 0.0 < level < 1.0:
         raise DataError(f"--level must be in (0, 1), got {level}")

@@ -154,6 +154,22 @@ def calibrate(
         None to estimate them from the residuals.
     method : "ols" — per axis, ``A_m - A_r = bias + scale·A_r`` (course method);
         "wls" — joint four-parameter WLS weighted by the noise covariance.
+    g : gravity, m/s² (reference ``A_rx = -g sin θ``, ``A_ry = -g cos θ``).
+
+    Returns
+    -------
+    Calibration : ``bias`` (2,) m/s², ``scale`` (2,), ``params`` (4,) and ``cov`` (4, 4)
+    ordered ``[bias_x, scale_x, bias_y, scale_y]``; per-axis fits in ``fits``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib import Ensayo, calibrate
+    >>> th = np.linspace(0.0, 2 * np.pi, 100, endpoint=False)
+    >>> datos = np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)]) * 0.97 + 0.08
+    >>> cal = calibrate(Ensayo(th, datos), noise_var=[0.25, 0.64])
+    >>> np.round(cal.bias, 9).tolist(), np.round(cal.scale, 9).tolist()
+    ([0.08, 0.08], [-0.03, -0.03])
     """
     if method not in ("ols", "wls"):
         raise ValueError(f"method must be 'ols' or 'wls', got {method!r}")

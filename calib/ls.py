@@ -352,14 +352,30 @@ def fit_axis(
 
     Parameters
     ----------
-    tita : (N,) rad.  a_m : (N,) measured acceleration of ``axis``, m/s².
-    axis : 'x' (A_r = -g sin θ) or 'y' (A_r = -g cos θ).
-    sigma2 : known noise variance (m/s²)² — the course method; ``None`` estimates it.
+    tita : (N,) table angles, rad (any finite value; ≥ 2 distinct ``A_r`` needed).
+    a_m : (N,) measured acceleration of ``axis``, m/s².
+    axis : 'x' (``A_r = -g sin θ``) or 'y' (``A_r = -g cos θ``).
+    sigma2 : known noise variance, (m/s²)² — the course method (normal quantiles); ``None``
+        estimates it as RSS/(N - 2) (Student t quantiles).
     g : gravity, m/s².
 
     Returns
     -------
-    FitResult with ``param_names = ("bias", "scale")``; ``cov`` in that order.
+    FitResult with ``param_names = ("bias", "scale")`` (bias m/s², scale dimensionless);
+    ``cov`` (2, 2) in that order; ``residuals`` (N,) m/s².
+
+    Raises
+    ------
+    NotIdentifiableError : every θ gives the same ``A_r`` (bias and scale confounded).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib import fit_axis
+    >>> th = np.linspace(0.0, 2 * np.pi, 100, endpoint=False)
+    >>> f = fit_axis(th, 1.02 * -9.8 * np.sin(th) + 0.1, "x", sigma2=0.25)
+    >>> np.round(f.params, 9).tolist()        # [bias m/s², scale]
+    [0.1, 0.02]
     """
     tita = np.asarray(tita, dtype=float)
     a_r = reference_accel(tita, g)[:, AXES.index(axis)]
@@ -402,6 +418,29 @@ def fit_joint(
 
     ``noise_var=None``: two-stage feasible WLS, per-axis σ² estimated from per-axis OLS
     residuals (``sigma2_source = "estimated"``).
+
+    Parameters
+    ----------
+    tita : (N,) table angles, rad.
+    datos : (N, 2) measured ``[A_mx, A_my]``, m/s².
+    noise_var : (2,) variances ``[σx², σy²]`` or a (2, 2) covariance, (m/s²)²; None
+        estimates them.
+    g : gravity, m/s².
+
+    Returns
+    -------
+    FitResult with ``param_names = ("bias_x", "scale_x", "bias_y", "scale_y")``, ``cov``
+    (4, 4), ``residuals`` (N, 2) m/s², ``sigma2`` (2,); ``extra["noise_cov"]`` the 2×2 C.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib import fit_joint
+    >>> th = np.linspace(0.0, 2 * np.pi, 100, endpoint=False)
+    >>> datos = np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)]) + [0.1, -0.2]
+    >>> f = fit_joint(th, datos, [0.25, 0.64])
+    >>> (np.round(f.params, 9) + 0.0).tolist()  # [bias_x, scale_x, bias_y, scale_y]
+    [0.1, 0.0, -0.2, 0.0]
     """
     tita = np.asarray(tita, dtype=float)
     datos = np.asarray(datos, dtype=float)

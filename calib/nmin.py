@@ -551,6 +551,35 @@ def analyze_nmin(
     the data as the true profile, the calibration estimate as the true sensor errors, and the
     candidates translated so the decided one (or the nearest) is the true arrival point.
     ``progress`` (optional) is called with a short message before each long step.
+
+    Parameters
+    ----------
+    ensayo : the calibration run (``tita`` (N,) rad, ``datos`` (N, 2) m/s²).
+    acel : the vehicle run (``t`` (M,) s, ``aerr`` (M, 2) m/s²).
+    candidates : name → (2,) candidate arrival point, m.
+    p0 : (2,) initial position, m.  v0 : (2,) initial velocity, m/s.
+    noise_var : (2,) noise variances, (m/s²)², or None (estimated).
+    level : confidence level L.  method : "ols" or "wls".  integrator : "trapezoid" or
+        "simpson".  g : gravity, m/s².
+    steps : subsampling steps of the course experiment (every k-th sample; () skips it).
+    mc_n : calibration sizes N for fresh synthetic runs.  runs : runs per N (0: none).
+    seed : seed of the synthetic runs.
+
+    Returns
+    -------
+    NminResult : design and a-posteriori N, subsampling rows, synthetic-run rows.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib import Acel, Ensayo, analyze_nmin
+    >>> th = np.linspace(0.0, 2 * np.pi, 2000, endpoint=False)
+    >>> e = Ensayo(th, np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)]))
+    >>> a = Acel(np.arange(1001) * 0.01, np.zeros((1001, 2)))
+    >>> r = analyze_nmin(e, a, {"A": [10.0, 30.0], "B": [60.0, 30.0]}, noise_var=[0.25, 0.64],
+    ...                  steps=())
+    >>> r.decision, r.design["n"] is not None
+    ('A', True)
     """
     say = progress or (lambda _msg: None)
     cal = calibrate(ensayo, noise_var, method, g)  # type: ignore[arg-type]

@@ -464,6 +464,24 @@ def arrival_region(
     level : confidence level L of the region, e.g. 0.997.
     include_noise : False drops the vehicle-noise term (the course's omission), for
         comparison only.
+
+    Returns
+    -------
+    ArrivalRegion : ``estimate`` (2,) m, ``cov`` (2, 2) m², the level-L ``ellipse``, the
+    Mahalanobis distance of each candidate and the ``decision`` (a name or None).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib import Acel, Ensayo, arrival_region, calibrate, compute_trajectory
+    >>> th = np.linspace(0.0, 2 * np.pi, 2000, endpoint=False)
+    >>> cal = calibrate(Ensayo(th, np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)])),
+    ...                 noise_var=[0.25, 0.64])
+    >>> t = np.arange(1001) * 0.01
+    >>> tr = compute_trajectory(Acel(t, np.zeros((1001, 2))), cal)   # V0 = (1, 3) m/s
+    >>> r = arrival_region(tr, cal, {"A": [10.0, 30.0], "B": [60.0, 30.0]}, level=0.997)
+    >>> r.decision
+    'A'
     """
     if noise_var is None:
         noise_var = [calibration.fits[a].sigma2.item() for a in ("x", "y")]

@@ -380,6 +380,23 @@ def compute_trajectory(
     p0 : (2,) initial position, m (course: (0, 0)).  v0 : (2,) initial velocity, m/s
         (course: (1, 3)).
     integrator : "trapezoid" or "simpson".
+
+    Returns
+    -------
+    Trajectory : raw and corrected positions (M, 2) m, velocities (M, 2) m/s, accelerations
+    (M, 2) m/s²; ``final_corrected`` (2,) m.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib import Acel, Ensayo, calibrate, compute_trajectory
+    >>> th = np.linspace(0.0, 2 * np.pi, 100, endpoint=False)
+    >>> datos = np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)]) + 0.1
+    >>> cal = calibrate(Ensayo(th, datos), noise_var=[0.25, 0.64])
+    >>> t = np.arange(1001) * 0.01                      # 10 s at 100 Hz, standing still
+    >>> tr = compute_trajectory(Acel(t, np.full((1001, 2), 0.1)), cal, v0=(0.0, 0.0))
+    >>> np.round(tr.final_corrected, 9).tolist(), np.round(tr.final_raw, 6).tolist()
+    ([0.0, 0.0], [5.0, 5.0])
     """
     return correct_and_integrate(acel.t, acel.aerr, calibration.bias, calibration.scale,
                                  p0, v0, integrator)
