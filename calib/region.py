@@ -247,7 +247,8 @@ class Ellipse(ResultMixin):
 
     @classmethod
     def from_dict(cls, d: dict, cov=None) -> Ellipse:
-        """Rebuild from :meth:`to_state`, or from :meth:`to_dict` and ``cov`` (2, 2) m².
+        """Rebuild from :meth:`to_state` (exact), or from :meth:`to_dict` and ``cov`` (2, 2) m²
+        (without ``cov`` it is rebuilt from the semi-axes and the angle, to rounding).
 
         Examples
         --------
@@ -256,7 +257,11 @@ class Ellipse(ResultMixin):
         >>> Ellipse.from_dict(e.to_state()) == e
         True
         """
-        c = d["cov"] if cov is None else cov
+        c = d.get("cov") if cov is None else cov
+        if c is None:  # the printed ellipse: rebuild Σ = R diag(a², b²) Rᵀ / χ²₂(L)
+            rot = np.array([[np.cos(d["angle_rad"]), -np.sin(d["angle_rad"])],
+                            [np.sin(d["angle_rad"]), np.cos(d["angle_rad"])]])
+            c = rot @ np.diag(np.square(d["semi_axes"])) @ rot.T / chi2_2dof(d["level"])
         return cls(d["center"], c, float(d["level"]), d["semi_axes"], float(d["angle_rad"]))
 
     def summary(self) -> str:
