@@ -26,10 +26,10 @@ def versions() -> dict[str, str]:
     import mujoco
     import scipy
 
-    import bench
+    from bench.version import __version__
 
     out = {
-        "tiltbench": bench.__version__,
+        "tiltbench": __version__,
         "mujoco": mujoco.__version__,
         "numpy": np.__version__,
         "scipy": scipy.__version__,

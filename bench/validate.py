@@ -45,6 +45,7 @@ from scipy import stats
 
 from calib.conventions import AXES, JOINT_PARAM_NAMES, G, reference_accel
 from calib.io import DataError
+from calib.results import ResultMixin
 
 StdSource = Literal["auto", "reported", "design"]
 
@@ -203,15 +204,25 @@ def parse_estimates(est: Mapping, where: str = "est.json") -> dict[str, Any]:
             "cov": cov if have_cov else None, "g": _num(g, f"{where}: g")}
 
 
-@dataclass(frozen=True)
-class Validation:
+@dataclass(frozen=True, eq=False)
+class Validation(ResultMixin):
     """Result of :func:`validate`.
 
     names : parameter names.  estimate, truth, std, z : (4,).  cov : (4, 4) used.
     level : L.  quantile : ``Φ⁻¹((1 + L)/2)``.  chi2 : d².  chi2_limit : ``χ²₄(L)``.
     passed_each : (4,) bool.  passed : the verdict (joint test).  std_source : "reported"
     or "design".  theta_source : where θ came from for a design covariance.
+    Units: order ``[bias_x, scale_x, bias_y, scale_y]``, bias in m/s², scale dimensionless.
+
+    Serialisation: :meth:`to_dict` (printed by ``validate --json``) has the standard
+    deviations but not the correlations; :meth:`to_state` adds ``names`` and ``cov`` and
+    ``Validation.from_dict(v.to_state()) == v``. From :meth:`to_dict` alone the covariance is
+    rebuilt diagonal (``std²``); the printed object is the same.
     """
+
+    _TITLE = "Validation against the truth"
+    _UNITS = ("bias, its std and error m/s²; scale and its std dimensionless; z-scores, d² and "
+              "limits dimensionless; level a fraction")
 
     names: tuple[str, ...]
     estimate: np.ndarray
@@ -239,6 +250,52 @@ class Validation:
                                "z": float(self.z[i]), "passed": bool(self.passed_each[i])}
                            for i, n in enumerate(self.names)},
         }
+
+    def to_state(self) -> dict:
+        """:meth:`to_dict` plus ``names`` and the (4, 4) ``cov`` used — an exact rebuild."""
+        return {**self.to_dict(), "names": list(self.names),
+                "cov": np.asarray(self.cov).tolist()}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Validation:
+        """Rebuild from :meth:`to_state` (exact) or :meth:`to_dict` (diagonal ``cov``).
+
+        Parameters
+        ----------
+        d : ``passed``, ``level``, ``chi2``, ``chi2_limit``, ``z_limit``, ``std_source``,
+            ``theta_source`` and ``parameters`` → name → ``estimate``, ``truth``, ``std``
+            (bias m/s², scale dimensionless), ``z``, ``passed``; optionally ``names`` and
+            ``cov`` (4, 4).
+
+        Examples
+        --------
+        >>> from bench.validate import Validation, validate
+        >>> truth = {"sensor": {"x": {"bias": 0.1, "scale": 0.0},
+        ...                     "y": {"bias": 0.0, "scale": 0.01}}}
+        >>> est = {"axes": {"x": {"bias": 0.11, "bias_std": 0.01, "scale": 0.0,
+        ...                       "scale_std": 0.001},
+        ...                 "y": {"bias": 0.0, "bias_std": 0.01, "scale": 0.01,
+        ...                       "scale_std": 0.001}}}
+        >>> v = validate(truth, est)
+        >>> Validation.from_dict(v.to_state()) == v
+        True
+        """
+        par = d["parameters"]
+        if "names" in d:
+            names = tuple(d["names"])
+        elif set(par) == set(JOINT_PARAM_NAMES):  # JSON may have sorted the keys
+            names = tuple(JOINT_PARAM_NAMES)
+        else:
+            names = tuple(par)
+
+        def col(key: str, dtype: type = float) -> np.ndarray:
+            return np.array([par[n][key] for n in names], dtype=dtype)
+
+        std = col("std")
+        cov = np.array(d["cov"], dtype=float) if "cov" in d else np.diag(std**2)
+        return cls(names, col("estimate"), col("truth"), std, cov, col("z"), float(d["level"]),
+                   float(d["z_limit"]), float(d["chi2"]), float(d["chi2_limit"]),
+                   col("passed", bool), bool(d["passed"]), d["std_source"], d["theta_source"])
 
     def summary(self) -> str:
         pct = f"{100 * self.level:g}%"
@@ -269,6 +326,24 @@ def validate(truth: Mapping, estimates: Mapping, level: float = 0.99,
     theta : (N,) rad, the run's θ for a design covariance (default: rebuilt from truth).
     theta_source : label of where θ came from (for the report).
     truth_name, est_name : file names used in error messages.
+
+    Returns
+    -------
+    Validation : per parameter (order ``[bias_x, scale_x, bias_y, scale_y]``; bias m/s²,
+    scale dimensionless) estimate, truth, std, z; the joint χ²₄ verdict ``passed``.
+
+    Examples
+    --------
+    >>> from bench import validate
+    >>> truth = {"sensor": {"x": {"bias": 0.1, "scale": 0.0},
+    ...                     "y": {"bias": 0.0, "scale": 0.01}}}
+    >>> est = {"axes": {"x": {"bias": 0.11, "bias_std": 0.01, "scale": 0.0,
+    ...                       "scale_std": 0.001},
+    ...                 "y": {"bias": 0.0, "bias_std": 0.01, "scale": 0.01,
+    ...                       "scale_std": 0.001}}}
+    >>> v = validate(truth, est, level=0.99)
+    >>> bool(v.passed), [round(float(z), 3) for z in v.z]
+    (True, [1.0, 0.0, 0.0, 0.0])
     """
     if not 0.0 < level < 1.0:
         raise DataError(f"--level must be in (0, 1), got {level}")

@@ -9,13 +9,14 @@ import numpy as np
 
 from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G
 from calib.io import Ensayo
-from calib.ls import FitResult, NotIdentifiableError, fit_axis, fit_joint
+from calib.ls import FitResult, NotIdentifiableError, chi2_from_dof, fit_axis, fit_joint
+from calib.results import ResultMixin
 
 Method = Literal["ols", "wls"]
 
 
-@dataclass(frozen=True)
-class Calibration:
+@dataclass(frozen=True, eq=False)
+class Calibration(ResultMixin):
     """Bias and scale of both accelerometers with their joint covariance.
 
     Attributes
@@ -27,7 +28,18 @@ class Calibration:
     n : number of samples.
 
     ``params`` and ``cov`` are ordered ``[bias_x, scale_x, bias_y, scale_y]``.
+
+    Serialisation: :meth:`to_dict` is the ``calibrate --json`` object (frozen by the snapshot
+    test); it has no residuals, condition numbers or joint cross-covariances, so
+    :meth:`to_state` adds them (keys ``fits`` and ``joint``) and
+    ``Calibration.from_dict(c.to_state()) == c``. ``from_dict(c.to_dict())`` rebuilds the
+    same printed object (what a ``cal.json`` holds) with empty residuals.
     """
+
+    _TITLE = "Calibration"
+    _UNITS = ("bias m/s² (positive: the reading is shifted up); scale dimensionless "
+              "(positive: the sensor reads too much); std and confidence limits in the units of "
+              "their parameter; σ² (m/s²)²; g m/s²; N samples")
 
     method: Method
     g: float
@@ -72,6 +84,55 @@ class Calibration:
             }
         return {"method": self.method, "g": self.g, "axes": axes}
 
+    def to_state(self) -> dict:
+        """:meth:`to_dict` plus the full per-axis fits and the joint fit (exact rebuild)."""
+        return {**self.to_dict(), "fits": {a: self.fits[a].to_dict() for a in AXES},
+                "joint": None if self.joint is None else self.joint.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Calibration:
+        """Rebuild from :meth:`to_state` (exact) or from :meth:`to_dict` / a ``cal.json``.
+
+        Parameters
+        ----------
+        d : mapping with ``method``, ``g`` (m/s²) and ``axes`` → ``x``/``y`` →
+            ``bias`` (m/s²), ``scale``, ``cov`` (2×2, order [bias, scale]), ``sigma2``
+            ((m/s²)²), ``sigma2_source``, ``chi2_dof``, ``n``; optionally ``fits`` / ``joint``
+            (from :meth:`to_state`).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from calib import Calibration, Ensayo, calibrate
+        >>> th = np.linspace(0, 2 * np.pi, 100)
+        >>> e = Ensayo(th, np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)]) + 0.05)
+        >>> cal = calibrate(e, noise_var=[0.25, 0.64])
+        >>> Calibration.from_dict(cal.to_state()) == cal
+        True
+        >>> Calibration.from_dict(cal.to_dict()).to_dict() == cal.to_dict()
+        True
+        """
+        method, g = d["method"], float(d["g"])
+        if d.get("fits") is not None:
+            fits = {a: FitResult.from_dict(d["fits"][a]) for a in AXES}
+            joint = None if d.get("joint") is None else FitResult.from_dict(d["joint"])
+            n = int(d["axes"][AXES[0]]["n"])
+            return cls(method, g, fits, n, joint)
+        fits = {}
+        n = 0
+        for a in AXES:
+            ax = d["axes"][a]
+            n = int(ax["n"])
+            fits[a] = FitResult(
+                PARAM_NAMES, [ax["bias"], ax["scale"]], ax["cov"], np.zeros(0), ax["sigma2"],
+                ax["sigma2_source"], n - 2, 2, float("nan"), chi2_from_dof(ax["chi2_dof"], n - 2))
+        return cls(method, g, fits, n)
+
+    @property
+    def std(self) -> np.ndarray:
+        """(4,) standard deviations ``[bias_x, scale_x, bias_y, scale_y]`` (m/s², 1, m/s², 1)."""
+        return np.sqrt(np.diag(self.cov))
+
     def summary(self, level: float = 0.95) -> str:
         title = {"ols": "per-axis OLS (course method)", "wls": "joint WLS (4 parameters)"}
         out = [f"Calibration: {title[self.method]}, g = {self.g} m/s², N = {self.n}"]
@@ -93,6 +154,22 @@ def calibrate(
         None to estimate them from the residuals.
     method : "ols" — per axis, ``A_m - A_r = bias + scale·A_r`` (course method);
         "wls" — joint four-parameter WLS weighted by the noise covariance.
+    g : gravity, m/s² (reference ``A_rx = -g sin θ``, ``A_ry = -g cos θ``).
+
+    Returns
+    -------
+    Calibration : ``bias`` (2,) m/s², ``scale`` (2,), ``params`` (4,) and ``cov`` (4, 4)
+    ordered ``[bias_x, scale_x, bias_y, scale_y]``; per-axis fits in ``fits``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib import Ensayo, calibrate
+    >>> th = np.linspace(0.0, 2 * np.pi, 100, endpoint=False)
+    >>> datos = np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)]) * 0.97 + 0.08
+    >>> cal = calibrate(Ensayo(th, datos), noise_var=[0.25, 0.64])
+    >>> np.round(cal.bias, 9).tolist(), np.round(cal.scale, 9).tolist()
+    ([0.08, 0.08], [-0.03, -0.03])
     """
     if method not in ("ols", "wls"):
         raise ValueError(f"method must be 'ols' or 'wls', got {method!r}")

@@ -180,7 +180,29 @@ def validate_ensayo(
 
 
 def read_ensayo(path: str | os.PathLike) -> Ensayo:
-    """Read a course ``ensayo.mat``: ``tita`` (N×1, rad), ``datos`` (N×2, m/s²), optional ``t``."""
+    """Read a course ``ensayo.mat``: ``tita`` (N×1, rad), ``datos`` (N×2, m/s²), optional ``t``.
+
+    Parameters
+    ----------
+    path : the MATLAB v5 file with ``tita`` (N×1 or 1×N) rad, ``datos`` (N×2) m/s²
+        ``[A_mx, A_my]`` and optionally ``t`` (N) s, strictly increasing.
+
+    Returns
+    -------
+    Ensayo : ``tita`` (N,) rad, ``datos`` (N, 2) m/s², ``t`` (N,) s or None.
+
+    Raises
+    ------
+    DataError : missing variable, bad shape, NaN/Inf or non-monotonic ``t`` (the message
+        names the file, the variable and the fix).
+
+    Examples
+    --------
+    >>> from calib import read_ensayo
+    >>> e = read_ensayo("ensayo.mat")  # doctest: +SKIP
+    >>> e.n, e.datos.shape  # doctest: +SKIP
+    (20001, (20001, 2))
+    """
     path = Path(path)
     mat = _loadmat(path)
     t = _get(mat, path, "t") if "t" in mat else None
@@ -188,7 +210,24 @@ def read_ensayo(path: str | os.PathLike) -> Ensayo:
 
 
 def read_acel(path: str | os.PathLike) -> Acel:
-    """Read a course ``acel.mat``: ``t`` (M×1, s, uniform), ``Aerr`` (M×2, m/s²)."""
+    """Read a course ``acel.mat``: ``t`` (M×1, s, uniform), ``Aerr`` (M×2, m/s²).
+
+    Parameters
+    ----------
+    path : the MATLAB v5 file with ``t`` (M) s, uniformly sampled and increasing, and
+        ``Aerr`` (M×2) uncorrected vehicle accelerations ``[x, y]``, m/s².
+
+    Returns
+    -------
+    Acel : ``t`` (M,) s, ``aerr`` (M, 2) m/s².
+
+    Examples
+    --------
+    >>> from calib import read_acel
+    >>> a = read_acel("acel.mat")  # doctest: +SKIP
+    >>> a.t.shape, a.aerr.shape  # doctest: +SKIP
+    ((6000,), (6000, 2))
+    """
     path = Path(path)
     mat = _loadmat(path)
     where = str(path)
@@ -206,7 +245,22 @@ def read_acel(path: str | os.PathLike) -> Acel:
 
 
 def read_puntos(path: str | os.PathLike) -> dict[str, np.ndarray]:
-    """Read a course ``puntos.mat``: candidate points (1×2 each, m), named by letter."""
+    """Read a course ``puntos.mat``: candidate points (1×2 each, m), named by letter.
+
+    Parameters
+    ----------
+    path : the MATLAB v5 file; every variable is one candidate ``[x, y]`` (1×2), m.
+
+    Returns
+    -------
+    dict : name → (2,) position, m, sorted by name (at least two).
+
+    Examples
+    --------
+    >>> from calib import read_puntos
+    >>> sorted(read_puntos("puntos.mat"))  # doctest: +SKIP
+    ['A', 'B', 'C', 'D']
+    """
     path = Path(path)
     mat = _loadmat(path)
     out = {}
@@ -230,6 +284,21 @@ def read_datos(path: str | os.PathLike) -> Datos:
     Lines: ``Posición inicial = [x y]``, ``Velocidad inicial = [vx vy]``,
     ``varianza del ruido de los acelerómetros = [σx² σy²]``. Matching is by keyword
     (``posici``, ``velocidad``, ``varianza``), so accents and spacing do not matter.
+
+    Parameters
+    ----------
+    path : the text file.
+
+    Returns
+    -------
+    Datos : ``p0`` (2,) m, ``v0`` (2,) m/s, ``noise_var`` (2,) (m/s²)².
+
+    Examples
+    --------
+    >>> from calib import read_datos
+    >>> d = read_datos("datos.txt")  # doctest: +SKIP
+    >>> d.v0.tolist(), d.noise_var.tolist()  # doctest: +SKIP
+    ([1.0, 3.0], [0.25, 0.64])
     """
     path = Path(path)
     if not path.exists():

@@ -28,6 +28,7 @@ from scipy import stats
 from scipy.linalg import lapack
 
 from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G, reference_accel
+from calib.results import ResultMixin
 
 Sigma2Source = Literal["given", "estimated"]
 
@@ -53,8 +54,26 @@ def _readonly(a) -> np.ndarray:
     return arr
 
 
-@dataclass(frozen=True)
-class FitResult:
+def chi2_from_dof(chi2_dof: float, dof: int) -> float:
+    """The χ² whose ``χ²/dof`` is exactly ``chi2_dof`` (rebuilding from a printed χ²/dof).
+
+    ``chi2_dof · dof`` divided by ``dof`` may miss ``chi2_dof`` by one unit in the last place;
+    the neighbours of the product are tried so that the rebuilt ``chi2_dof`` prints the same.
+    """
+    c = float(chi2_dof) * dof
+    if dof <= 0 or not np.isfinite(c):
+        return c
+    lo = hi = c
+    for _ in range(4):
+        for v in (lo, hi):
+            if v / dof == chi2_dof:
+                return float(v)
+        lo, hi = float(np.nextafter(lo, -np.inf)), float(np.nextafter(hi, np.inf))
+    return c
+
+
+@dataclass(frozen=True, eq=False)
+class FitResult(ResultMixin):
     """Result of a linear least-squares fit (statsmodels-like, frozen, holds no data).
 
     Attributes
@@ -81,6 +100,11 @@ class FitResult:
     cond: float
     chi2: float
     extra: dict = field(default_factory=dict, compare=False)
+
+    _TITLE = "Least-squares fit"
+    _UNITS = ("bias m/s²; scale dimensionless (other parameters: the units of their effect in "
+              "calib.conventions.EFFECTS); std and confidence limits in the units of their "
+              "parameter; σ² (m/s²)²; χ²/dof dimensionless")
 
     def __post_init__(self) -> None:
         for name in ("params", "cov", "residuals", "sigma2"):
@@ -135,7 +159,41 @@ class FitResult:
             "chi2_dof": self.chi2_dof,
             "dof": self.dof,
             "cond": self.cond,
+            "rank": self.rank,
+            "chi2": self.chi2,
+            "residuals": self.residuals.tolist(),
+            "extra": self.extra,
         }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> FitResult:
+        """Rebuild from :meth:`to_dict` (exact: ``FitResult.from_dict(f.to_dict()) == f``).
+
+        Parameters
+        ----------
+        d : the mapping of :meth:`to_dict`, possibly through JSON. Without ``residuals``,
+            ``rank`` and ``chi2`` (a marginal block printed by a command) the residuals are
+            empty, the rank is full and χ² comes from ``chi2_dof · dof``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from calib.ls import FitResult, fit_axis
+        >>> th = np.linspace(0, 2 * np.pi, 50)
+        >>> f = fit_axis(th, -9.8 * np.sin(th) + 0.1, "x", sigma2=0.25)
+        >>> FitResult.from_dict(f.to_dict()) == f
+        True
+        """
+        params = np.asarray(d["params"], dtype=float)
+        dof = int(d["dof"])
+        return cls(
+            param_names=tuple(d["param_names"]), params=params, cov=d["cov"],
+            residuals=d.get("residuals", np.zeros(0)), sigma2=d["sigma2"],
+            sigma2_source=d["sigma2_source"], dof=dof, rank=int(d.get("rank", params.size)),
+            cond=float(d["cond"]),
+            chi2=float(d["chi2"]) if "chi2" in d else chi2_from_dof(d["chi2_dof"], dof),
+            extra=dict(d.get("extra", {})),
+        )
 
 
 def _r_factor(A: np.ndarray) -> np.ndarray:
@@ -294,14 +352,30 @@ def fit_axis(
 
     Parameters
     ----------
-    tita : (N,) rad.  a_m : (N,) measured acceleration of ``axis``, m/s².
-    axis : 'x' (A_r = -g sin θ) or 'y' (A_r = -g cos θ).
-    sigma2 : known noise variance (m/s²)² — the course method; ``None`` estimates it.
+    tita : (N,) table angles, rad (any finite value; ≥ 2 distinct ``A_r`` needed).
+    a_m : (N,) measured acceleration of ``axis``, m/s².
+    axis : 'x' (``A_r = -g sin θ``) or 'y' (``A_r = -g cos θ``).
+    sigma2 : known noise variance, (m/s²)² — the course method (normal quantiles); ``None``
+        estimates it as RSS/(N - 2) (Student t quantiles).
     g : gravity, m/s².
 
     Returns
     -------
-    FitResult with ``param_names = ("bias", "scale")``; ``cov`` in that order.
+    FitResult with ``param_names = ("bias", "scale")`` (bias m/s², scale dimensionless);
+    ``cov`` (2, 2) in that order; ``residuals`` (N,) m/s².
+
+    Raises
+    ------
+    NotIdentifiableError : every θ gives the same ``A_r`` (bias and scale confounded).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib import fit_axis
+    >>> th = np.linspace(0.0, 2 * np.pi, 100, endpoint=False)
+    >>> f = fit_axis(th, 1.02 * -9.8 * np.sin(th) + 0.1, "x", sigma2=0.25)
+    >>> np.round(f.params, 9).tolist()        # [bias m/s², scale]
+    [0.1, 0.02]
     """
     tita = np.asarray(tita, dtype=float)
     a_r = reference_accel(tita, g)[:, AXES.index(axis)]
@@ -344,6 +418,29 @@ def fit_joint(
 
     ``noise_var=None``: two-stage feasible WLS, per-axis σ² estimated from per-axis OLS
     residuals (``sigma2_source = "estimated"``).
+
+    Parameters
+    ----------
+    tita : (N,) table angles, rad.
+    datos : (N, 2) measured ``[A_mx, A_my]``, m/s².
+    noise_var : (2,) variances ``[σx², σy²]`` or a (2, 2) covariance, (m/s²)²; None
+        estimates them.
+    g : gravity, m/s².
+
+    Returns
+    -------
+    FitResult with ``param_names = ("bias_x", "scale_x", "bias_y", "scale_y")``, ``cov``
+    (4, 4), ``residuals`` (N, 2) m/s², ``sigma2`` (2,); ``extra["noise_cov"]`` the 2×2 C.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib import fit_joint
+    >>> th = np.linspace(0.0, 2 * np.pi, 100, endpoint=False)
+    >>> datos = np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)]) + [0.1, -0.2]
+    >>> f = fit_joint(th, datos, [0.25, 0.64])
+    >>> (np.round(f.params, 9) + 0.0).tolist()  # [bias_x, scale_x, bias_y, scale_y]
+    [0.1, 0.0, -0.2, 0.0]
     """
     tita = np.asarray(tita, dtype=float)
     datos = np.asarray(datos, dtype=float)

@@ -64,6 +64,7 @@ from calib.region import (
     course_decision,
     noise_cov_matrix,
 )
+from calib.results import ResultMixin
 from calib.trajectory import Integrator, compute_trajectory, correct_and_integrate
 
 N_MAX = 10**12
@@ -84,12 +85,29 @@ def uniform_design_cov(n: int | float, noise_var, g: float = G) -> np.ndarray:
     return np.diag([sx2, 2 * sx2 / g**2, sy2, 2 * sy2 / g**2]) / float(n)
 
 
-@dataclass(frozen=True)
-class PositionCovModel:
+@dataclass(frozen=True, eq=False)
+class PositionCovModel(ResultMixin):
     """``Σ_P(N) = A/N + B`` for the arrival point, m² (module docstring)."""
 
     A: np.ndarray
     B: np.ndarray
+
+    _TITLE = "Arrival covariance model Σ_P(N) = A/N + B"
+    _UNITS = "A m² (per sample: Σ_P at N = 1 without B); B m²; N samples"
+
+    def to_dict(self) -> dict:
+        return {"A": np.asarray(self.A).tolist(), "B": np.asarray(self.B).tolist()}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> PositionCovModel:
+        """Rebuild from :meth:`to_dict`: ``A``, ``B`` (2, 2) m²."""
+        return cls(A=np.array(d["A"], dtype=float), B=np.array(d["B"], dtype=float))
+
+    def summary(self) -> str:
+        a, b = np.asarray(self.A), np.asarray(self.B)
+        return (f"Σ_P(N) = A/N + B; std at N = 1: ({np.sqrt(a[0, 0] + b[0, 0]):.4g}, "
+                f"{np.sqrt(a[1, 1] + b[1, 1]):.4g}) m; N → ∞: ({np.sqrt(b[0, 0]):.4g}, "
+                f"{np.sqrt(b[1, 1]):.4g}) m")
 
     def cov(self, n: float) -> np.ndarray:
         return self.A / float(n) + self.B
@@ -212,9 +230,17 @@ def course_box_nrange(estimate, candidates: dict[str, np.ndarray], box_at_n1: np
             "crossings": cross}
 
 
-@dataclass(frozen=True)
-class SubsampleRow:
-    """One subsampled calibration of the course reports' experiment."""
+@dataclass(frozen=True, eq=False)
+class SubsampleRow(ResultMixin):
+    """One subsampled calibration of the course reports' experiment.
+
+    step : every ``step``-th sample kept.  n : samples.  estimate, std : (2,) m.
+    semi_axes : (2,) m.  course_box : (2,) m.  mahalanobis : name → d.  decisions: letter or
+    None; ``inside`` / ``course_inside``: candidate names.
+    """
+
+    _TITLE = "Subsampled calibration"
+    _UNITS = "estimate, std, semi-axes and course box m; Mahalanobis distance dimensionless"
 
     step: int
     n: int
@@ -239,6 +265,23 @@ class SubsampleRow:
                 "course_box": np.asarray(self.course_box).tolist(),
                 "course_decision": self.course_decision,
                 "course_inside": list(self.course_inside)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> SubsampleRow:
+        """Rebuild from :meth:`to_dict` (exact)."""
+        return cls(int(d["step"]), int(d["n"]), np.array(d["estimate"], dtype=float),
+                   np.array(d["std"], dtype=float), np.array(d["semi_axes"], dtype=float),
+                   dict(d["mahalanobis"]), d["decision"], tuple(d["inside"]),
+                   d["calibration_only_decision"], np.array(d["course_box"], dtype=float),
+                   d["course_decision"], tuple(d["course_inside"]))
+
+    def summary(self) -> str:
+        return (f"step {self.step}, N = {self.n}: estimate ({self.estimate[0]:.1f}, "
+                f"{self.estimate[1]:.1f}) m, std ({self.std[0]:.1f}, {self.std[1]:.1f}) m, "
+                f"decision {self.decision or 'undecided'} (inside: "
+                f"{', '.join(self.inside) or 'none'}); course box ±({self.course_box[0]:.1f}, "
+                f"{self.course_box[1]:.1f}) m, course decision "
+                f"{self.course_decision or 'undecided'}")
 
 
 def subsample_analysis(
@@ -269,9 +312,12 @@ def subsample_analysis(
     return rows
 
 
-@dataclass(frozen=True)
-class McRow:
+@dataclass(frozen=True, eq=False)
+class McRow(ResultMixin):
     """Decisions over ``runs`` fresh synthetic (calibration + vehicle) runs at one N."""
+
+    _TITLE = "Synthetic runs"
+    _UNITS = "counts of runs; level and rates are fractions (dimensionless); N samples"
 
     n: int
     runs: int
@@ -286,6 +332,17 @@ class McRow:
                 "undecided": self.undecided, "truth_inside": self.truth_inside,
                 "level": self.level, "right_rate": self.right / self.runs,
                 "coverage": self.truth_inside / self.runs}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> McRow:
+        """Rebuild from :meth:`to_dict` (exact; the rates are derived)."""
+        return cls(int(d["n"]), int(d["runs"]), int(d["right"]), int(d["wrong"]),
+                   int(d["undecided"]), int(d["truth_inside"]), float(d["level"]))
+
+    def summary(self) -> str:
+        return (f"N = {self.n}: {self.runs} runs at level {self.level:g}: {self.right} right, "
+                f"{self.wrong} wrong, {self.undecided} undecided; truth inside its region in "
+                f"{self.truth_inside}")
 
 
 def synthetic_calibration(n: int, bias, scale, noise_var, rng: np.random.Generator,
@@ -339,9 +396,21 @@ def simulate_decisions(
     return McRow(int(n), int(runs), right, wrong, undecided, inside, float(level))
 
 
-@dataclass(frozen=True)
-class NminResult:
-    """Result of the N analysis (see the module docstring for the definitions)."""
+@dataclass(frozen=True, eq=False)
+class NminResult(ResultMixin):
+    """Result of the N analysis (see the module docstring for the definitions).
+
+    level : L.  n_data : N of the data.  estimate : (2,) arrival point, m.  decision :
+    letter or None.  design*, posterior* : dicts of :func:`design_nmin` /
+    :func:`posterior_nrange` / :func:`course_box_nrange` (N in samples, separations
+    dimensionless Mahalanobis units).  subsample : :class:`SubsampleRow` s.  monte_carlo :
+    :class:`McRow` s.  notes : caveats.  area_comparison : areas m² and ratios.
+    ``NminResult.from_dict(r.to_dict()) == r`` (exact).
+    """
+
+    _TITLE = "N analysis"
+    _UNITS = ("N in samples; positions and box sizes m; areas m²; separations in Mahalanobis "
+              "units (dimensionless); level a fraction")
 
     level: float
     n_data: int
@@ -369,6 +438,32 @@ class NminResult:
             "monte_carlo": [r.to_dict() for r in self.monte_carlo],
             "notes": list(self.notes), "area_comparison": self.area_comparison,
         }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> NminResult:
+        """Rebuild from :meth:`to_dict` (exact, also through JSON).
+
+        Examples
+        --------
+        >>> from calib.nmin import NminResult
+        >>> r = NminResult.from_dict({
+        ...     "level": 0.95, "n_data": 10, "estimate": [0.0, 0.0], "decision": None,
+        ...     "design": {}, "design_calibration_only": {}, "posterior": {},
+        ...     "posterior_calibration_only": {}, "posterior_course_box": {}})
+        >>> NminResult.from_dict(r.to_dict()) == r
+        True
+        """
+        return cls(
+            level=float(d["level"]), n_data=int(d["n_data"]),
+            estimate=np.array(d["estimate"], dtype=float), decision=d["decision"],
+            design=dict(d["design"]), design_calibration_only=dict(d["design_calibration_only"]),
+            posterior=dict(d["posterior"]),
+            posterior_calibration_only=dict(d["posterior_calibration_only"]),
+            posterior_course_box=dict(d["posterior_course_box"]),
+            subsample=tuple(SubsampleRow.from_dict(r) for r in d.get("subsample", ())),
+            monte_carlo=tuple(McRow.from_dict(r) for r in d.get("monte_carlo", ())),
+            notes=tuple(d.get("notes", ())), area_comparison=dict(d.get("area_comparison", {})),
+        )
 
     def summary(self) -> str:
         L = f"{100 * self.level:g}%"
@@ -456,6 +551,35 @@ def analyze_nmin(
     the data as the true profile, the calibration estimate as the true sensor errors, and the
     candidates translated so the decided one (or the nearest) is the true arrival point.
     ``progress`` (optional) is called with a short message before each long step.
+
+    Parameters
+    ----------
+    ensayo : the calibration run (``tita`` (N,) rad, ``datos`` (N, 2) m/s²).
+    acel : the vehicle run (``t`` (M,) s, ``aerr`` (M, 2) m/s²).
+    candidates : name → (2,) candidate arrival point, m.
+    p0 : (2,) initial position, m.  v0 : (2,) initial velocity, m/s.
+    noise_var : (2,) noise variances, (m/s²)², or None (estimated).
+    level : confidence level L.  method : "ols" or "wls".  integrator : "trapezoid" or
+        "simpson".  g : gravity, m/s².
+    steps : subsampling steps of the course experiment (every k-th sample; () skips it).
+    mc_n : calibration sizes N for fresh synthetic runs.  runs : runs per N (0: none).
+    seed : seed of the synthetic runs.
+
+    Returns
+    -------
+    NminResult : design and a-posteriori N, subsampling rows, synthetic-run rows.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib import Acel, Ensayo, analyze_nmin
+    >>> th = np.linspace(0.0, 2 * np.pi, 2000, endpoint=False)
+    >>> e = Ensayo(th, np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)]))
+    >>> a = Acel(np.arange(1001) * 0.01, np.zeros((1001, 2)))
+    >>> r = analyze_nmin(e, a, {"A": [10.0, 30.0], "B": [60.0, 30.0]}, noise_var=[0.25, 0.64],
+    ...                  steps=())
+    >>> r.decision, r.design["n"] is not None
+    ('A', True)
     """
     say = progress or (lambda _msg: None)
     cal = calibrate(ensayo, noise_var, method, g)  # type: ignore[arg-type]

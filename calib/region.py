@@ -62,6 +62,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import stats
 
+from calib.results import ResultMixin
 from calib.trajectory import Trajectory
 
 if TYPE_CHECKING:
@@ -178,13 +179,19 @@ def decide(d2: dict[str, float], level: float) -> tuple[str | None, tuple[str, .
                           f"{100 * level:g}% region")
 
 
-@dataclass(frozen=True)
-class Ellipse:
+@dataclass(frozen=True, eq=False)
+class Ellipse(ResultMixin):
     """Confidence ellipse ``{p : (p - center)ᵀ cov⁻¹ (p - center) ≤ χ²₂(level)}``.
 
     semi_axes : (2,) m, major first.  angle_rad : direction of the major axis, measured from
     +x towards +y, in (-π/2, π/2].  area : π·a·b, m².
+
+    :meth:`to_dict` (printed inside the ``trajectory --json`` object) has no ``cov``;
+    :meth:`to_state` adds it.
     """
+
+    _TITLE = "Confidence ellipse"
+    _UNITS = "center and semi-axes m; cov m²; area m²; angle rad (summary: degrees from +x)"
 
     center: np.ndarray
     cov: np.ndarray
@@ -234,9 +241,38 @@ class Ellipse:
                 "angle_rad": self.angle_rad, "area": self.area,
                 "center": self.center.tolist()}
 
+    def to_state(self) -> dict:
+        """:meth:`to_dict` plus ``cov`` (2, 2) m² (exact rebuild by :meth:`from_dict`)."""
+        return {**self.to_dict(), "cov": self.cov.tolist()}
 
-@dataclass(frozen=True)
-class ArrivalRegion:
+    @classmethod
+    def from_dict(cls, d: dict, cov=None) -> Ellipse:
+        """Rebuild from :meth:`to_state` (exact), or from :meth:`to_dict` and ``cov`` (2, 2) m²
+        (without ``cov`` it is rebuilt from the semi-axes and the angle, to rounding).
+
+        Examples
+        --------
+        >>> from calib.region import Ellipse
+        >>> e = Ellipse.from_cov([0.0, 0.0], [[4.0, 1.0], [1.0, 2.0]], 0.95)
+        >>> Ellipse.from_dict(e.to_state()) == e
+        True
+        """
+        c = d.get("cov") if cov is None else cov
+        if c is None:  # the printed ellipse: rebuild Σ = R diag(a², b²) Rᵀ / χ²₂(L)
+            rot = np.array([[np.cos(d["angle_rad"]), -np.sin(d["angle_rad"])],
+                            [np.sin(d["angle_rad"]), np.cos(d["angle_rad"])]])
+            c = rot @ np.diag(np.square(d["semi_axes"])) @ rot.T / chi2_2dof(d["level"])
+        return cls(d["center"], c, float(d["level"]), d["semi_axes"], float(d["angle_rad"]))
+
+    def summary(self) -> str:
+        return (f"{100 * self.level:g}% ellipse around ({self.center[0]:.2f}, "
+                f"{self.center[1]:.2f}) m: semi-axes {self.semi_axes[0]:.2f} m × "
+                f"{self.semi_axes[1]:.2f} m, major axis at {np.degrees(self.angle_rad):.1f}° "
+                f"from +x, area {self.area:.0f} m²")
+
+
+@dataclass(frozen=True, eq=False)
+class ArrivalRegion(ResultMixin):
     """Arrival point, its covariance, the confidence region and the decision.
 
     Attributes
@@ -250,7 +286,16 @@ class ArrivalRegion:
     inside : names with ``d² ≤ χ²₂(L)``.  decision : letter or None.  reason : why.
     course_box_bound : (2,) the course's 3σ box, m.  a_max : (2,) used for it, m/s².
     duration : T, s.  include_noise : whether ``cov`` has the noise part.
+
+    Serialisation: :meth:`to_dict` (printed by ``trajectory --json``) lacks ``duration``;
+    :meth:`to_state` adds it and ``ArrivalRegion.from_dict(r.to_state()) == r``.
+    ``from_dict(r.to_dict())`` gives the same printed object with ``duration = nan``.
     """
+
+    _TITLE = "Arrival region"
+    _UNITS = ("positions, std, semi-axes and box bounds m; covariances m²; area m²; "
+              "noise variance (m/s²)²; Mahalanobis distance and relative likelihood "
+              "dimensionless; angles in degrees from +x")
 
     estimate: np.ndarray
     cov: np.ndarray
@@ -329,6 +374,52 @@ class ArrivalRegion:
             "area_comparison": self.area_comparison(),
         }
 
+    def to_state(self) -> dict:
+        """:meth:`to_dict` plus ``level`` and ``duration`` (s) — an exact rebuild."""
+        return {**self.to_dict(), "level": self.level, "duration": self.duration}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> ArrivalRegion:
+        """Rebuild from :meth:`to_state` (exact) or :meth:`to_dict` (``duration`` = nan).
+
+        Parameters
+        ----------
+        d : the mapping of :meth:`to_state`: ``final_corrected`` (2,) m, ``cov``,
+            ``cov_calibration``, ``cov_noise`` (2, 2) m², ``jacobian`` (2, 4),
+            ``noise_var`` (2, 2) (m/s²)², ``ellipse``, ``candidates`` (name → ``pos`` (2,) m,
+            ``mahalanobis``, ``likelihood``), ``inside``, ``decision``, ``reason``,
+            ``course_box_bound`` (2,) m, ``course_box_a_max`` (2,) m/s², ``include_noise``,
+            ``level``, ``duration`` s.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from calib import ArrivalRegion, Ensayo, arrival_region, calibrate
+        >>> from calib.trajectory import correct_and_integrate
+        >>> th = np.linspace(0, 2 * np.pi, 100)
+        >>> cal = calibrate(Ensayo(th, np.column_stack([-9.8 * np.sin(th),
+        ...                                             -9.8 * np.cos(th)])), [0.25, 0.64])
+        >>> tr = correct_and_integrate(np.linspace(0, 10, 101), np.zeros((101, 2)), 0, 0)
+        >>> r = arrival_region(tr, cal, {"A": [10.0, 30.0], "B": [0.0, 0.0]})
+        >>> ArrivalRegion.from_dict(r.to_state()) == r
+        True
+        """
+        cov = np.asarray(d["cov"], dtype=float)
+        cands = d["candidates"]
+        return cls(
+            estimate=d["final_corrected"], cov=cov, cov_calibration=d["cov_calibration"],
+            cov_noise=d["cov_noise"], jacobian=d["jacobian"], noise_var=d["noise_var"],
+            level=float(d.get("level", d["ellipse"]["level"])),
+            ellipse=Ellipse.from_dict(d["ellipse"], cov=d["ellipse"].get("cov", cov)),
+            candidates={k: np.asarray(v["pos"], dtype=float) for k, v in cands.items()},
+            mahalanobis={k: float(v["mahalanobis"]) for k, v in cands.items()},
+            likelihood={k: float(v["likelihood"]) for k, v in cands.items()},
+            inside=tuple(d["inside"]), decision=d["decision"], reason=d["reason"],
+            course_box_bound=d["course_box_bound"], a_max=d["course_box_a_max"],
+            duration=float(d.get("duration", float("nan"))),
+            include_noise=bool(d["include_noise"]),
+        )
+
     def summary(self) -> str:
         e = self.ellipse
         lines = [
@@ -378,6 +469,24 @@ def arrival_region(
     level : confidence level L of the region, e.g. 0.997.
     include_noise : False drops the vehicle-noise term (the course's omission), for
         comparison only.
+
+    Returns
+    -------
+    ArrivalRegion : ``estimate`` (2,) m, ``cov`` (2, 2) m², the level-L ``ellipse``, the
+    Mahalanobis distance of each candidate and the ``decision`` (a name or None).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib import Acel, Ensayo, arrival_region, calibrate, compute_trajectory
+    >>> th = np.linspace(0.0, 2 * np.pi, 2000, endpoint=False)
+    >>> cal = calibrate(Ensayo(th, np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)])),
+    ...                 noise_var=[0.25, 0.64])
+    >>> t = np.arange(1001) * 0.01
+    >>> tr = compute_trajectory(Acel(t, np.zeros((1001, 2))), cal)   # V0 = (1, 3) m/s
+    >>> r = arrival_region(tr, cal, {"A": [10.0, 30.0], "B": [60.0, 30.0]}, level=0.997)
+    >>> r.decision
+    'A'
     """
     if noise_var is None:
         noise_var = [calibration.fits[a].sigma2.item() for a in ("x", "y")]

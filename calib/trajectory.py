@@ -33,6 +33,7 @@ from scipy.integrate import cumulative_simpson, cumulative_trapezoid
 
 from calib.correct import correct
 from calib.io import Acel
+from calib.results import ResultMixin
 
 if TYPE_CHECKING:  # only for annotations: calib.calibration is a sibling module
     from calib.calibration import Calibration
@@ -197,8 +198,8 @@ def double_integral_weights(t: np.ndarray, integrator: Integrator = "trapezoid")
     return _weights_cached(t.tobytes(), t.shape[0], integrator)
 
 
-@dataclass(frozen=True)
-class Trajectory:
+@dataclass(frozen=True, eq=False)
+class Trajectory(ResultMixin):
     """Raw and corrected trajectories of a vehicle run.
 
     Attributes
@@ -210,7 +211,14 @@ class Trajectory:
     p0 : (2,) m.  v0 : (2,) m/s.
     bias : (2,) m/s² and scale : (2,) used for the correction.
     integrator : "trapezoid" or "simpson".
+
+    Serialisation: :meth:`to_dict` (printed by ``trajectory --json``) holds the final values
+    only; :meth:`to_state` adds every array and ``Trajectory.from_dict(tr.to_state()) == tr``.
     """
+
+    _TITLE = "Trajectory"
+    _UNITS = ("t s; positions and P0 m; velocities and V0 m/s; accelerations and bias m/s²; "
+              "scale dimensionless")
 
     t: np.ndarray
     acc_raw: np.ndarray
@@ -275,6 +283,47 @@ class Trajectory:
                      pos_corrected=self.pos_corrected.tolist())
         return d
 
+    _ARRAYS = ("t", "acc_raw", "acc_corrected", "pos_raw", "vel_raw", "pos_corrected",
+               "vel_corrected")
+
+    def to_state(self) -> dict:
+        """:meth:`to_dict` plus every sample array (exact rebuild by :meth:`from_dict`)."""
+        d = self.to_dict()
+        d.update({name: getattr(self, name).tolist() for name in self._ARRAYS})
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Trajectory:
+        """Rebuild from :meth:`to_state` (exact).
+
+        Parameters
+        ----------
+        d : mapping with ``p0`` (2,) m, ``v0`` (2,) m/s, ``bias`` (2,) m/s², ``scale`` (2,),
+            ``integrator`` and the sample arrays ``t`` (M,) s, ``acc_raw``, ``acc_corrected``
+            (M, 2) m/s², ``pos_raw``, ``pos_corrected`` (M, 2) m, ``vel_raw``,
+            ``vel_corrected`` (M, 2) m/s. With only ``t`` and ``acc_raw`` the rest is
+            recomputed (:func:`correct_and_integrate`). :meth:`to_dict` alone holds no samples
+            and raises ``ValueError``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from calib import Trajectory
+        >>> from calib.trajectory import correct_and_integrate
+        >>> t = np.linspace(0, 10, 101)
+        >>> tr = correct_and_integrate(t, np.ones((101, 2)), [0.1, 0.0], [0.01, 0.0])
+        >>> Trajectory.from_dict(tr.to_state()) == tr
+        True
+        """
+        if all(k in d for k in cls._ARRAYS):
+            return cls(*(d[k] for k in cls._ARRAYS), d["p0"], d["v0"], d["bias"], d["scale"],
+                       d["integrator"])
+        if "t" in d and "acc_raw" in d:
+            return correct_and_integrate(d["t"], d["acc_raw"], d["bias"], d["scale"], d["p0"],
+                                         d["v0"], d["integrator"])
+        raise ValueError("this trajectory mapping has no samples (the printed summary of "
+                         "to_dict()); rebuild from Trajectory.to_state()")
+
     def summary(self) -> str:
         fr, fc, vc = self.final_raw, self.final_corrected, self.final_velocity_corrected
         return "\n".join([
@@ -331,6 +380,23 @@ def compute_trajectory(
     p0 : (2,) initial position, m (course: (0, 0)).  v0 : (2,) initial velocity, m/s
         (course: (1, 3)).
     integrator : "trapezoid" or "simpson".
+
+    Returns
+    -------
+    Trajectory : raw and corrected positions (M, 2) m, velocities (M, 2) m/s, accelerations
+    (M, 2) m/s²; ``final_corrected`` (2,) m.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib import Acel, Ensayo, calibrate, compute_trajectory
+    >>> th = np.linspace(0.0, 2 * np.pi, 100, endpoint=False)
+    >>> datos = np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)]) + 0.1
+    >>> cal = calibrate(Ensayo(th, datos), noise_var=[0.25, 0.64])
+    >>> t = np.arange(1001) * 0.01                      # 10 s at 100 Hz, standing still
+    >>> tr = compute_trajectory(Acel(t, np.full((1001, 2), 0.1)), cal, v0=(0.0, 0.0))
+    >>> np.round(tr.final_corrected, 9).tolist(), np.round(tr.final_raw, 6).tolist()
+    ([0.0, 0.0], [5.0, 5.0])
     """
     return correct_and_integrate(acel.t, acel.aerr, calibration.bias, calibration.scale,
                                  p0, v0, integrator)

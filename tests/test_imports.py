@@ -1,0 +1,321 @@
+"""The import rules of DESIGN.md, checked on the source (``ast``, no import is executed).
+
+(a) ``calib`` never imports ``bench``, ``mujoco``, ``argparse``, ``matplotlib`` or ``rerun``
+    (an estimator must not be able to peek at the simulation or the truth);
+(b) no module outside ``bench/cli/`` imports ``bench.cli`` (or a ``bench.cli_*`` module) or
+    ``argparse``;
+(c) no ``importlib`` / ``__import__`` in ``bench`` or ``calib`` (dynamic imports would hide
+    edges from these checks);
+(d) no import circles between modules.
+
+Every import counts, also inside functions (a deferred import is still a dependency); only
+``if TYPE_CHECKING:`` blocks are skipped (annotations, never executed). Edges of the module
+graph: ``import a.b`` → ``a.b``; ``from p import n`` → ``p.n`` when that is a module, else
+``p`` (its ``__init__``); relative imports are resolved first. Each checker is also run on a
+small synthetic tree below, so a check that can never fail would show.
+"""
+
+from __future__ import annotations
+
+import ast
+import textwrap
+from dataclasses import dataclass, field
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+PACKAGES = ("bench", "calib")
+CALIB_FORBIDDEN = ("bench", "mujoco", "argparse", "matplotlib", "rerun")
+
+
+@dataclass
+class Module:
+    name: str
+    path: Path
+    is_package: bool
+    imports: list[tuple[str, tuple[str, ...], int]] = field(default_factory=list)
+    """(imported module, names taken from it by ``from … import``, line)."""
+    dynamic: list[tuple[str, int]] = field(default_factory=list)
+    """Uses of ``importlib`` / ``__import__`` (what, line)."""
+
+
+def _is_type_checking(test: ast.expr) -> bool:
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+
+
+def _walk(node: ast.AST):
+    """All nodes below ``node`` except the bodies of ``if TYPE_CHECKING:`` (its ``else`` runs)."""
+    for child in ast.iter_child_nodes(node):
+        if isinstance(child, ast.If) and _is_type_checking(child.test):
+            for sub in child.orelse:
+                yield sub
+                yield from _walk(sub)
+            continue
+        yield child
+        yield from _walk(child)
+
+
+def _resolve(mod: Module, node: ast.ImportFrom) -> str:
+    if not node.level:
+        return node.module or ""
+    base = mod.name.split(".")
+    if not mod.is_package:
+        base = base[:-1]
+    base = base[: len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def scan(root: Path, packages: tuple[str, ...] = PACKAGES) -> dict[str, Module]:
+    """Parse every ``.py`` of ``packages`` under ``root``: module name → :class:`Module`."""
+    mods: dict[str, Module] = {}
+    for pkg in packages:
+        for path in sorted((root / pkg).rglob("*.py")):
+            parts = list(path.relative_to(root).with_suffix("").parts)
+            is_pkg = parts[-1] == "__init__"
+            if is_pkg:
+                parts = parts[:-1]
+            mods[".".join(parts)] = Module(".".join(parts), path, is_pkg)
+    for mod in mods.values():
+        tree = ast.parse(mod.path.read_text(encoding="utf-8"), str(mod.path))
+        for node in _walk(tree):
+            if isinstance(node, ast.Import):
+                for alias in node.names:
+                    mod.imports.append((alias.name, (), node.lineno))
+                    if alias.name.split(".")[0] == "importlib":
+                        mod.dynamic.append((f"import {alias.name}", node.lineno))
+            elif isinstance(node, ast.ImportFrom):
+                target = _resolve(mod, node)
+                mod.imports.append((target, tuple(a.name for a in node.names), node.lineno))
+                if target.split(".")[0] == "importlib":
+                    mod.dynamic.append((f"from {target} import …", node.lineno))
+            elif isinstance(node, ast.Name) and node.id in ("__import__", "importlib"):
+                mod.dynamic.append((node.id, node.lineno))
+            elif isinstance(node, ast.Attribute) and node.attr == "__import__":
+                mod.dynamic.append(("__import__", node.lineno))
+    return mods
+
+
+def _where(mod: Module, root: Path, line: int) -> str:
+    return f"{mod.path.relative_to(root)}:{line}"
+
+
+def _flagged(mod: Module, root: Path, bad_name) -> list[str]:
+    """One line per import statement taking a name for which ``bad_name`` holds
+    (``from p import n`` is checked as ``p`` and as ``p.n``: n may be a module)."""
+    out = []
+    for target, names, line in mod.imports:
+        for name in [target, *(f"{target}.{n}" for n in names if n != "*")]:
+            if bad_name(name):
+                out.append(f"{_where(mod, root, line)} imports {name}")
+                break
+    return out
+
+
+def _under(name: str, prefix: str) -> bool:
+    return name == prefix or name.startswith(prefix + ".")
+
+
+def check_calib_imports(mods: dict[str, Module], root: Path) -> list[str]:
+    """(a) ``calib`` imports none of :data:`CALIB_FORBIDDEN`."""
+    bad = []
+    for mod in mods.values():
+        if _under(mod.name, "calib"):
+            bad += _flagged(mod, root, lambda n: any(_under(n, f) for f in CALIB_FORBIDDEN))
+    return sorted(set(bad))
+
+
+def _is_cli(name: str) -> bool:
+    return _under(name, "bench.cli") or name.startswith("bench.cli_")
+
+
+def check_cli_imports(mods: dict[str, Module], root: Path) -> list[str]:
+    """(b) only ``bench/cli/`` imports ``bench.cli`` or ``argparse``."""
+    bad = []
+    for mod in mods.values():
+        if not _under(mod.name, "bench.cli"):  # the bench/cli/ package itself may
+            bad += _flagged(mod, root, lambda n: _under(n, "argparse") or _is_cli(n))
+    return sorted(set(bad))
+
+
+def check_dynamic_imports(mods: dict[str, Module], root: Path) -> list[str]:
+    """(c) no ``importlib`` / ``__import__``."""
+    return sorted({f"{_where(m, root, line)} uses {what}"
+                   for m in mods.values() for what, line in m.dynamic})
+
+
+def import_graph(mods: dict[str, Module]) -> dict[str, set[str]]:
+    """Module → modules it imports (only modules of the scanned packages)."""
+    graph: dict[str, set[str]] = {name: set() for name in mods}
+    for mod in mods.values():
+        for target, names, _ in mod.imports:
+            if names:
+                for n in names:
+                    sub = f"{target}.{n}"
+                    if sub in mods:
+                        graph[mod.name].add(sub)
+                    elif target in mods:
+                        graph[mod.name].add(target)
+            elif target in mods:
+                graph[mod.name].add(target)
+        graph[mod.name].discard(mod.name)
+    return graph
+
+
+def strongly_connected(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Tarjan's strongly connected components (iterative), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+    counter = 0
+    for start in sorted(graph):
+        if start in index:
+            continue
+        work = [(start, iter(sorted(graph[start])))]
+        index[start] = low[start] = counter
+        counter += 1
+        stack.append(start)
+        on.add(start)
+        while work:
+            v, it = work[-1]
+            advanced = False
+            for w in it:
+                if w not in index:
+                    index[w] = low[w] = counter
+                    counter += 1
+                    stack.append(w)
+                    on.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                    advanced = True
+                    break
+                if w in on:
+                    low[v] = min(low[v], index[w])
+            if advanced:
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[v])
+            if low[v] == index[v]:
+                comp = []
+                while True:
+                    w = stack.pop()
+                    on.discard(w)
+                    comp.append(w)
+                    if w == v:
+                        break
+                out.append(sorted(comp))
+    return out
+
+
+def check_cycles(mods: dict[str, Module], root: Path) -> list[str]:
+    """(d) every strongly connected component of more than one module, with its files."""
+    graph = import_graph(mods)
+    return sorted(
+        "circle: " + ", ".join(str(mods[n].path.relative_to(root)) for n in comp)
+        for comp in strongly_connected(graph) if len(comp) > 1)
+
+
+# --- the rules on the real tree -------------------------------------------------------------
+
+def _real() -> dict[str, Module]:
+    return scan(REPO)
+
+
+def test_calib_never_imports_the_simulation_or_ui():
+    bad = check_calib_imports(_real(), REPO)
+    assert not bad, "calib must not import bench/mujoco/argparse/matplotlib/rerun:\n" + \
+        "\n".join(bad)
+
+
+def test_only_the_cli_package_parses_arguments():
+    bad = check_cli_imports(_real(), REPO)
+    assert not bad, "only bench/cli/ may import bench.cli or argparse:\n" + "\n".join(bad)
+
+
+def test_no_dynamic_imports():
+    bad = check_dynamic_imports(_real(), REPO)
+    assert not bad, "importlib / __import__ hide imports from these checks:\n" + \
+        "\n".join(bad)
+
+
+def test_no_import_circles():
+    bad = check_cycles(_real(), REPO)
+    assert not bad, "import circles (strongly connected modules):\n" + "\n".join(bad)
+
+
+# --- each checker can fail: a synthetic tree ------------------------------------------------
+
+def _tree(root: Path, files: dict[str, str]) -> dict[str, Module]:
+    for rel, text in files.items():
+        p = root / rel
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_text(textwrap.dedent(text), encoding="utf-8")
+    for pkg in PACKAGES:
+        (root / pkg).mkdir(exist_ok=True)
+        (root / pkg / "__init__.py").touch()
+    return scan(root)
+
+
+def test_checker_a_finds_forbidden_imports_in_calib_even_inside_functions(tmp_path):
+    mods = _tree(tmp_path, {
+        "calib/est.py": """
+            from typing import TYPE_CHECKING
+            import numpy as np
+            if TYPE_CHECKING:
+                import matplotlib  # annotations only: allowed
+            def plot():
+                import rerun as rr
+            from bench import tilt
+            """,
+        "calib/ok.py": "from calib import est\nimport scipy\n",
+        "bench/tilt.py": "import mujoco\nimport calib.est\n",  # bench may import these
+    })
+    bad = check_calib_imports(mods, tmp_path)
+    assert any("calib/est.py:7 imports rerun" in b for b in bad), bad
+    assert any("calib/est.py:8 imports bench" in b for b in bad), bad
+    assert not any("matplotlib" in b or "ok.py" in b or "tilt.py" in b for b in bad), bad
+
+
+def test_checker_b_finds_argparse_and_cli_imports_outside_the_cli_package(tmp_path):
+    mods = _tree(tmp_path, {
+        "bench/cli/__init__.py": "import argparse\nfrom bench.cli import generate\n",
+        "bench/cli/generate.py": "import argparse\nfrom bench import vehicle\n",
+        "bench/vehicle.py": "def add_options(p):\n    from bench.cli.generate import x\n",
+        "bench/course.py": "from argparse import Namespace\n",
+        "calib/io.py": "import numpy\n",
+    })
+    bad = check_cli_imports(mods, tmp_path)
+    assert bad == ["bench/course.py:1 imports argparse",
+                   "bench/vehicle.py:2 imports bench.cli.generate"], bad
+
+
+def test_checker_c_finds_importlib_and_dunder_import(tmp_path):
+    mods = _tree(tmp_path, {
+        "bench/a.py": "import importlib\nm = importlib.import_module('calib')\n",
+        "bench/b.py": "def f():\n    return __import__('calib.io')\n",
+        "calib/c.py": "from importlib import import_module\n",
+        "calib/d.py": "import builtins\nx = builtins.__import__\n",
+        "calib/ok.py": "import numpy as np\n",
+    })
+    bad = check_dynamic_imports(mods, tmp_path)
+    files = {b.split(":")[0] for b in bad}
+    assert files == {"bench/a.py", "bench/b.py", "calib/c.py", "calib/d.py"}, bad
+
+
+def test_checker_d_finds_circles_through_deferred_and_package_imports(tmp_path):
+    mods = _tree(tmp_path, {
+        "bench/x.py": "def f():\n    from bench import y\n",      # deferred still counts
+        "bench/y.py": "from bench.x import f\n",
+        "bench/p/__init__.py": "from bench.p.q import g\n",
+        "bench/p/q.py": "from . import helper\n",                     # relative, to __init__
+        "bench/z.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                      "    from bench.w import W\n",
+        "bench/w.py": "from bench.z import TYPE_CHECKING\n",          # guarded: no circle
+        "calib/a.py": "from calib.b import x\n",
+        "calib/b.py": "x = 1\n",
+    })
+    assert check_cycles(mods, tmp_path) == [
+        "circle: bench/p/__init__.py, bench/p/q.py",
+        "circle: bench/x.py, bench/y.py",
+    ]
