@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bench.gap.report import GapReport
-from bench.record import binned_mean
+from calib.binning import binned_mean
 from calib.conventions import AXES
 
 if TYPE_CHECKING:  # pragma: no cover

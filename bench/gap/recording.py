@@ -19,13 +19,13 @@ from bench.gap.writers import gap_markdown
 from bench.record import (
     COLORS,
     THETA_TIMELINE,
-    binned_mean,
     full_time_axis,
     log_series,
     log_tree,
     open_recording,
     time_panel,
 )
+from calib.binning import binned_mean
 from calib.conventions import AXES
 
 PathLike = str | os.PathLike
