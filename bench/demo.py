@@ -32,7 +32,8 @@ from typing import Any
 import numpy as np
 
 from calib.calibration import Calibration, calibrate
-from calib.conventions import AXES
+from calib.conventions import AXES, G
+from calib.correct import apply_errors
 from calib.io import (
     Acel,
     Ensayo,
@@ -149,12 +150,12 @@ def coverage_check(truth: dict, runs: int = COVERAGE_RUNS, level: float = COVERA
     if tp is None:
         raise ValueError("truth has no sensor parameters")
     theta = design_theta(truth)
-    g = float(truth.get("course", {}).get("g", truth.get("g", 9.8)))
+    g = float(truth.get("course", {}).get("g", truth.get("g", G)))
     a_r = reference_accel(theta, g)
     scale = np.array([tp["scale_x"], tp["scale_y"]])
     bias = np.array([tp["bias_x"], tp["bias_y"]])
     nv = np.array([tp["noise_var_x"], tp["noise_var_y"]])
-    clean = (1.0 + scale) * a_r + bias
+    clean = apply_errors(a_r, bias, scale)
     passed = 0
     each = np.zeros(4)
     # spawn_key (7,): a stream family of its own, independent of the course set's streams

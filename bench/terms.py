@@ -33,7 +33,7 @@ from typing import ClassVar, Literal, Protocol
 
 import numpy as np
 
-from calib.filters import lowpass
+from calib.filters import lowpass, uniform_step
 
 Stage = Literal["response", "output"]
 
@@ -77,17 +77,6 @@ def register_term(cls: type) -> type:
 TERM_ORDER: tuple[str, ...] = ("lowpass_lag", "nonlinearity_k2", "cross_axis", "bias_drift",
                                "bias_random_walk", "quantization")
 """Order in which sensor terms are applied (stage first, then this order)."""
-
-
-def uniform_step(t: np.ndarray) -> float | None:
-    """The sampling period when ``t`` is uniform (every step within 1e-9 of the mean step, the
-    criterion of :class:`calib.effects` runs), else None: :func:`calib.filters.lowpass` then
-    runs its vectorised filter."""
-    dt = np.diff(np.asarray(t, dtype=float))
-    if dt.size == 0:
-        return None
-    h = float(dt.mean())
-    return h if np.max(np.abs(dt - h)) <= 1e-9 * h else None
 
 
 def require_finite(value: float, what: str) -> float:

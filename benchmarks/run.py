@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # as the CLI does (bench/cli.py)
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # as the CLI does (bench/cli/__init__.py)
 
 import time  # noqa: E402
 

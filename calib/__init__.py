@@ -58,6 +58,8 @@ Example
 import sys
 import types
 
+from calib.exports import install_lazy_exports
+
 _EXPORTS: dict[str, str] = {
     "read_ensayo": "calib.io:read_ensayo",
     "read_acel": "calib.io:read_acel",
@@ -106,29 +108,4 @@ def _module(name: str) -> types.ModuleType:
     return sys.modules[name]
 
 
-def __getattr__(name: str):
-    target = _EXPORTS.get(name)
-    if target is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    mod, attr = target.split(":")
-    value = getattr(_module(mod), attr)
-    globals()[name] = value  # once resolved, a plain attribute
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
-
-
-class _Package(types.ModuleType):
-    """Keeps an exported function when its same-named submodule is imported (``correct``):
-    the import system would otherwise replace the attribute with the module."""
-
-    def __setattr__(self, name: str, value) -> None:
-        if (name in _EXPORTS and isinstance(value, types.ModuleType)
-                and value.__name__ == f"{self.__name__}.{name}"):
-            return
-        super().__setattr__(name, value)
-
-
-sys.modules[__name__].__class__ = _Package
+install_lazy_exports(__name__, _EXPORTS, _module)

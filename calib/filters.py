@@ -11,6 +11,16 @@ import numpy as np
 from scipy import signal
 
 
+def uniform_step(t: np.ndarray) -> float | None:
+    """The sampling period, s, when the sample times ``t`` (N,) are uniform (every step within
+    1e-9 of the mean step), else None. :func:`lowpass` runs its vectorised filter with it."""
+    dt = np.diff(np.asarray(t, dtype=float))
+    if dt.size == 0:
+        return None
+    h = float(dt.mean())
+    return h if np.max(np.abs(dt - h)) <= 1e-9 * h else None
+
+
 def lowpass(u: np.ndarray, t: np.ndarray, tau: float, h_uniform: float | None = None
             ) -> np.ndarray:
     """First-order low-pass ``τ·dy/dt + y = u`` of sampled inputs (the bench's filter).

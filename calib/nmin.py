@@ -55,6 +55,7 @@ import numpy as np
 
 from calib.calibration import Calibration, calibrate
 from calib.conventions import G, reference_accel
+from calib.correct import apply_errors
 from calib.io import Acel, Ensayo, validate_ensayo
 from calib.ls import PoorlyIdentifiedWarning
 from calib.region import (
@@ -354,8 +355,7 @@ def synthetic_calibration(n: int, bias, scale, noise_var, rng: np.random.Generat
     tita = 2.0 * np.pi * np.arange(n) / n
     a_r = reference_accel(tita, g)
     sd = np.sqrt(np.diag(noise_cov_matrix(noise_var)))
-    datos = (1.0 + np.asarray(scale)) * a_r + np.asarray(bias) + sd * rng.standard_normal(
-        a_r.shape)
+    datos = apply_errors(a_r, bias, scale) + sd * rng.standard_normal(a_r.shape)
     return Ensayo(tita, datos, None, source=f"synthetic N={n}")
 
 
@@ -382,8 +382,7 @@ def simulate_decisions(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", PoorlyIdentifiedWarning)
             cal: Calibration = calibrate(ens, np.diag(nv), method, g)  # type: ignore[arg-type]
-        a_m = (1.0 + np.asarray(scale)) * a_true + np.asarray(bias) + sd * rng.standard_normal(
-            a_true.shape)
+        a_m = apply_errors(a_true, bias, scale) + sd * rng.standard_normal(a_true.shape)
         traj = correct_and_integrate(t, a_m, cal.bias, cal.scale, p0, v0, integrator)
         reg = arrival_region(traj, cal, candidates, nv, level)
         inside += truth in reg.inside

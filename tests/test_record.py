@@ -347,7 +347,7 @@ def test_record_trajectory_vehicle_only(course_data_rrd, tmp_path):
 
 
 def test_gap_recording_entities_are_documented(tmp_path, capsys):
-    """The discrepancy workflow's recording (bench/gap.py) uses the documented paths."""
+    """The discrepancy workflow's recording (bench/gap/recording.py) uses the documented paths."""
     run = _small_run(8, 1001)
     paths = write_calibration(run, tmp_path)
     rrd = tmp_path / "gap.rrd"

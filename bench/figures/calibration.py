@@ -14,6 +14,7 @@ from bench.figures.parameters import true_params
 from bench.figures.save import save_figure
 from calib.binning import binned_mean
 from calib.conventions import AXES, reference_accel
+from calib.correct import apply_errors
 
 if TYPE_CHECKING:
     from calib.calibration import Calibration
@@ -78,7 +79,7 @@ def _axis_panels(fig, cal: Calibration, ensayo: Ensayo, axis: str,
                 label=f"measured A_m{axis} (N = {ensayo.n})")
         if col == 0:
             xs = np.array([a_r.min(), a_r.max()])
-            ax.plot(xs, (1 + s) * xs + b, color="tab:red", lw=2, label="LS fit")
+            ax.plot(xs, apply_errors(xs, b, s), color="tab:red", lw=2, label="LS fit")
             ax.plot(xs, xs, color="0.5", lw=1, ls=":", label="ideal sensor A_m = A_r")
             if tp:
                 tb, ts = tp[f"bias_{axis}"], tp[f"scale_{axis}"]

@@ -29,6 +29,7 @@ from bench.record.stream import (
 from bench.record.summary import parameters_markdown, truth_manifest
 from calib.binning import binned_mean
 from calib.conventions import AXES, reference_accel
+from calib.correct import apply_errors
 
 if TYPE_CHECKING:
     import rerun as rr
@@ -71,11 +72,11 @@ def _model_curves(a_r: np.ndarray, fit_line: tuple[float, float] | None,
     curves: dict[str, np.ndarray] = {}
     if fit_line is not None:
         b, s = fit_line
-        curves["fit"] = (1.0 + s) * a_r + b
+        curves["fit"] = apply_errors(a_r, b, s)
     if true_line is not None:
         b, s = true_line
         base = a_r if a_true is None else a_true
-        curves["true"] = (1.0 + s) * base + b
+        curves["true"] = apply_errors(base, b, s)
     return curves
 
 

@@ -127,7 +127,7 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
               "arrival decision, distances to the candidates", ("vehicle",)),
     EntityDoc("gap/{axis}/residual_{k}", "Scalars + SeriesPoints", "sample, theta_urad",
               "discrepancy workflow: residual before / after adding the named effects, m/s² "
-              "(bench/gap.py)", ("gap",)),
+              "(bench/gap/recording.py)", ("gap",)),
     EntityDoc("gap/{axis}/band_{k}/{k}", "Scalars + SeriesLines", "sample, theta_urad",
               "±σ band of the before / after model (smallest and largest θ), m/s²", ("gap",)),
     EntityDoc("gap/{axis}/mean_{k}", "Scalars + SeriesLines", "sample, theta_urad",

@@ -8,6 +8,7 @@ import numpy as np
 
 from calib.conventions import reference_accel
 from calib.diagnostics import angular_rates
+from calib.filters import uniform_step
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,8 +71,7 @@ class RunData:
                 raise ValueError("t must be (N,) and strictly increasing")
             tcol = t - t[0]
             dt = np.diff(t)
-            if np.max(np.abs(dt - dt.mean())) <= 1e-9 * dt.mean():
-                h_uniform = float(dt.mean())
+            h_uniform = uniform_step(t)
             omega, alpha = angular_rates(tita, t)
             unit = "s"
         else:
