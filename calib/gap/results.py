@@ -30,6 +30,9 @@ class EffectEstimate:
     statistic: float
     p_value: float
     interval: dict = field(default_factory=dict, compare=False)
+    tentative: bool = False
+    """True when the final model fails adequacy (verdict "unexplained"): the effect is named,
+    but something not in the model remains, so its estimate may be biased by it."""
     """Optional 95 % intervals (key → (low, high)): noise_level, the χ²(dof) interval of σ²;
     bias_random_walk, the REML profile-likelihood interval of q (asymmetric; its std is
     (high - low)/(2·1.96), see :func:`_q_uncertainty`)."""
@@ -40,7 +43,8 @@ class EffectEstimate:
         out = {"name": self.name, "axis": self.axis,
                "params": {k: float(v) for k, v in self.params.items()},
                "std": {k: float(v) for k, v in self.std.items()},
-               "statistic": float(self.statistic), "p_value": float(self.p_value)}
+               "statistic": float(self.statistic), "p_value": float(self.p_value),
+               "tentative": bool(self.tentative)}
         if self.interval:
             out["interval"] = {k: [float(lo), float(hi)] for k, (lo, hi) in self.interval.items()}
         return out
@@ -136,6 +140,14 @@ class GapAnalysis:
     needs_timing : effects skipped because the run has no timing.
     criterion : family α, per-step α, number of tests and the rule, for the record.
     steps : the selection trace (every candidate's LR and p at each step).
+    verdict : "explained" (effects named and the final model passes adequacy),
+        "unexplained" (adequacy fails: structure remains that the named effects do not
+        explain) or "nothing_detected" (nothing named and adequacy passes, at ``alpha``).
+    unexplained : one dict per failed adequacy check: ``{"axis", "signature", "size",
+        "unit", "statistic", "p_value", "description"}`` (description in words a test
+        engineer can act on, e.g. "a 3rd harmonic of θ on x, 0.04 m/s²").
+    adequacy : ``{"family_alpha", "alpha_check", "checks": [{"name", "axis", "statistic",
+        "p_value", "passed", ...}]}``: the battery run on the final model.
     """
 
     effects: tuple[EffectEstimate, ...]
@@ -152,6 +164,9 @@ class GapAnalysis:
     steps: tuple[dict, ...] = field(default=())
     g: float = G
     noise_var: tuple[float, float] = (1.0, 1.0)
+    verdict: str = "nothing_detected"
+    unexplained: tuple[dict, ...] = ()
+    adequacy: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name in ("residuals_before", "residuals_after", "fitted"):
@@ -181,6 +196,9 @@ class GapAnalysis:
             "gap_after": {a: self.gap_after_fit[a].to_dict() for a in AXES},
             "needs_timing": list(self.needs_timing),
             "criterion": dict(self.criterion),
+            "verdict": self.verdict,
+            "unexplained": [dict(u) for u in self.unexplained],
+            "adequacy": dict(self.adequacy),
         }
 
     def summary(self) -> str:
