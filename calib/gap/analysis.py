@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from calib.calibration import Calibration, calibrate
@@ -9,7 +11,8 @@ from calib.conventions import AXES, G
 from calib.diagnostics import GapMeasure, Lattice, detect_lattice, gap_measure
 from calib.effects import Extensions, ModelState, RunData, effect
 from calib.effects.catalog import REFINED
-from calib.gap.confusions import _confusions
+from calib.gap.adequacy import ADEQUACY_ALPHA, Battery, run_battery
+from calib.gap.confusions import _confusions, prefer_less_assuming
 from calib.gap.estimates import _Reporter
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
 from calib.gap.selection import _try, candidate_list, initial_state, select
@@ -17,7 +20,8 @@ from calib.io import Ensayo
 
 
 def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = None,
-                family_alpha: float = 0.005) -> GapAnalysis:
+                family_alpha: float = 0.005, adequacy_alpha: float = ADEQUACY_ALPHA
+                ) -> GapAnalysis:
     """Find where the nominal model and a measured calibration run disagree, name the effect.
 
     Parameters
@@ -39,11 +43,16 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     Notes
     -----
     Criterion (:mod:`calib.gap.selection`), reference distributions
-    (:meth:`calib.effects.Extensions.test`) and confusions (:mod:`calib.gap.confusions`).
+    (:meth:`calib.effects.Extensions.test`), ties and confusions (:mod:`calib.gap.confusions`),
+    the adequacy battery and the verdict (:mod:`calib.gap.adequacy`): "unexplained" when a
+    check fails (the named effects are then tentative), else "explained" when something is
+    named, else "nothing_detected" (at the stated α, never a proof that nothing is missing).
+    ``gap_after`` is measured against the stated noise (σ² + lsb²/12), not an estimated one.
     ``calib`` never sees the bench: this works on the measured arrays only.
     """
-    if not 0 < family_alpha < 1:
-        raise ValueError(f"family_alpha must be in (0, 1), got {family_alpha}")
+    for label, a in (("family_alpha", family_alpha), ("adequacy_alpha", adequacy_alpha)):
+        if not 0 < a < 1:
+            raise ValueError(f"{label} must be in (0, 1), got {a}")
     run = RunData.build(ensayo.tita, ensayo.datos, noise_var, g, ensayo.t, rate)
     stated = run.sigma2
     nominal = calibrate(ensayo, stated, "ols", g)
@@ -53,23 +62,51 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     lattice = [detect_lattice(run.datos[:, k]) for k in range(2)]
     candidates, needs_timing = candidate_list(run)
     sel = select(ext, initial_state(run, lattice), candidates, family_alpha)
-    state = sel.state
+    steps = list(sel.steps)
+    state = prefer_less_assuming(ext, sel.state, stated, sel.candidates, steps)
 
     rep = _Reporter(ext, state, lattice)
     effects = _named_effects(ext, rep, state, lattice)
     before, after, resid_before, resid_after, fitted = _gaps(ext, rep, state, nominal)
     final = _final_model(ext, rep, state, gains)
-    criterion = {"rule": "forward likelihood-ratio selection, Bonferroni per-step threshold",
+    battery = run_battery(ext, state, resid_after, lattice, rep.innov, adequacy_alpha)
+    verdict = ("unexplained" if battery.failed else "explained" if effects
+               else "nothing_detected")
+    if verdict == "unexplained":
+        effects = [replace(e, tentative=True) for e in effects]
+    criterion = {"rule": "forward likelihood-ratio selection, Bonferroni per-step threshold; "
+                         "structured effects first, a random walk only when it beats every "
+                         "structured candidate by AIC with its effective dof",
                  "family_alpha": float(family_alpha), "alpha_step": float(sel.alpha_step),
-                 "n_tests": int(sel.n_tests)}
+                 "n_tests": int(sel.n_tests), "adequacy_alpha": float(adequacy_alpha)}
     return GapAnalysis(
         effects=tuple(effects),
         not_identifiable=tuple(_confusions(ext, state, stated, sel.candidates,
                                            sel.untestable)),
         gap_before=before, gap_after_fit=after, nominal=nominal, final=final,
         residuals_before=resid_before, residuals_after=resid_after, fitted=fitted,
-        needs_timing=tuple(needs_timing), criterion=criterion, steps=sel.steps, g=float(g),
-        noise_var=(float(stated[0]), float(stated[1])))
+        needs_timing=tuple(needs_timing), criterion=criterion, steps=tuple(steps), g=float(g),
+        noise_var=(float(stated[0]), float(stated[1])), verdict=verdict,
+        unexplained=tuple(c.signature() for c in battery.failed),
+        adequacy=_adequacy(battery, after, state, float(family_alpha)))
+
+
+def _adequacy(battery: Battery, after: dict[str, GapMeasure], state: ModelState,
+              family_alpha: float) -> dict:
+    """The battery as a dict, plus per axis whether the gap after is consistent with noise:
+    every check passed, and the χ² against the stated noise in its band, or a named noise
+    level (its excess variance then passed the battery: uniform in time and θ, Gaussian)."""
+    out = battery.to_dict()
+    out["consistent"] = {
+        a: bool(battery.axis_passed(a) and (
+            state.axes[k].noise_free
+            or _within(after[a].chi2_dof, after[a].chi2_band(family_alpha))))
+        for k, a in enumerate(AXES)}
+    return out
+
+
+def _within(x: float, band: tuple[float, float]) -> bool:
+    return band[0] <= x <= band[1]
 
 
 def _named_effects(ext: Extensions, rep: _Reporter, state: ModelState, lattice: list[Lattice]
@@ -105,7 +142,8 @@ def _gaps(ext: Extensions, rep: _Reporter, state: ModelState, nominal: Calibrati
         before[a] = gap_measure(resid_before[:, k], run.tita, float(run.sigma2[k]), n_params=2,
                                 **common)
         st = state.axes[k]
-        after[a] = gap_measure(resid_after[:, k], run.tita, st.sigma2_eff,
+        stated_eff = float(run.sigma2[k]) + st.lsb**2 / 12.0  # the stated noise, not σ̂²
+        after[a] = gap_measure(resid_after[:, k], run.tita, stated_eff,
                                model_lsb=st.lsb if st.lsb > 0 else None,
                                n_params=ext.n_params(state, k), **common)
     return before, after, resid_before, resid_after, fitted

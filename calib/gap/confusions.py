@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from calib.conventions import AXES
+from calib.conventions import AXES, EFFECTS
 from calib.effects import CATALOG, Extensions, ModelState, effect
-from calib.gap.selection import _drop, _try
+from calib.gap.selection import FLEXIBLE, _drop, _try
 
 AMBIGUITY_LR = 2.0 * float(np.log(10.0))
 """Two explanations whose ``-2 log L`` differ by less than this (likelihood ratio < 10) are
@@ -23,6 +23,46 @@ reported as not told apart."""
 
 REASONS: dict[str, str] = {e.name: e.confusion for e in CATALOG if e.confusion}
 """Effect → why it may not be told apart from another (``Effect.confusion``)."""
+
+
+def assumptions(name: str) -> tuple[bool, bool, int]:
+    """How much an explanation assumes, to break ties (smaller assumes less): whether it needs
+    sample times, whether it is flexible (a random walk), its number of free parameters."""
+    return (EFFECTS[name].timing == "yes", name in FLEXIBLE, effect(name).n_free)
+
+
+def prefer_less_assuming(ext: Extensions, state: ModelState, stated: np.ndarray,
+                         candidates: list[tuple[str, str]], steps: list[dict]) -> ModelState:
+    """Ties: a named effect that another candidate explains within ``AMBIGUITY_LR`` (AIC
+    penalised) is replaced by that candidate when it assumes less (:func:`assumptions`),
+    e.g. a one-axis rotation instead of a low-pass lag on a constant-rate sweep. The pair is
+    then reported by :func:`_confusions`. Each swap is recorded in ``steps``."""
+    for name, axis in list(state.effects()):
+        if name in ("quantization", "noise_level") or not state.has(name, axis):
+            continue
+        nll_final = ext.nll(state)
+        base = _drop(state, name, axis, stated)
+        named = state.effects()
+        alternatives = [(n, a) for n, a in candidates if (n, a) not in named and n != name
+                        and n != "noise_level" and n not in FLEXIBLE and a == axis
+                        and assumptions(n) < assumptions(name)]
+        best = None
+        for alt, alt_axis in sorted(alternatives, key=lambda c: assumptions(c[0])):
+            t = _try(ext, base, alt, alt_axis)
+            if t is None:
+                continue
+            penalty = 2.0 * (effect(alt).n_free - effect(name).n_free)
+            delta = ext.nll(t.state) + penalty - nll_final
+            if delta < AMBIGUITY_LR and (best is None or delta < best[0]):
+                best = (delta, alt, alt_axis, t.state)
+        if best is not None:
+            delta, alt, alt_axis, new = best
+            state = ext.refine(new)
+            steps.append({"tie": [name, axis], "named_instead": [alt, alt_axis],
+                          "delta_m2logL": float(delta),
+                          "rule": "within the ambiguity margin the explanation that assumes "
+                                  "less is named (no timing, not flexible, fewer parameters)"})
+    return state
 
 
 def _confusions(ext: Extensions, state: ModelState, stated: np.ndarray,

@@ -17,7 +17,19 @@ error rate:
    parameters are then re-fitted. Stop when no candidate passes. Under noise alone the run
    names nothing unless some first-step test passes, so ``P(false alarm) ≤ family_alpha``
    (Bonferroni; default 0.005, i.e. ≤ 0.5 % of clean runs).
-3. One backward pass: an effect whose drop-one test no longer passes ``α_step`` is removed.
+3. Flexible last: ``bias_random_walk`` can follow almost any slow residual, so it is not in
+   the pool of step 2. It is considered only when no structured candidate (nor the noise
+   level) passes, and it is added only when (a) its own test passes ``α_step`` and (b) it
+   explains the residual better than every structured candidate on that axis at its cost:
+   ``LR_walk - 2·edf > max(0, max_s LR_s - 2·k_s)`` (AIC with the walk charged its effective
+   degrees of freedom, the trace of the smoother's hat matrix,
+   :func:`calib.gap.flexibility.walk_effective_dof`; k_s the structured candidate's
+   parameters). After a walk is added, the structured candidates are tested again on top of
+   it (step 2). And the other way round: where structured effects were named on an axis,
+   the walk *in their place* is compared with them by the same criterion
+   (``nll + 2·p`` against ``nll + 2·edf``): on a single sweep a walk's path is smooth in θ
+   and several structured effects can share it out, so the cheaper explanation is kept.
+4. One backward pass: an effect whose drop-one test no longer passes ``α_step`` is removed.
 
 Noise level last. ``noise_level`` competes at every step, so a mere change of σ² is never
 taken by a noise-like structured candidate (random walk, low-pass). It cannot take the place of
@@ -44,6 +56,7 @@ from calib.effects import (
     Trial,
     effect,
 )
+from calib.gap.flexibility import walk_effective_dof
 from calib.ls import NotIdentifiableError
 
 PER_AXIS_CANDIDATES: tuple[str, ...] = (
@@ -51,7 +64,22 @@ PER_AXIS_CANDIDATES: tuple[str, ...] = (
     "bias_random_walk", "saturation", "lowpass_lag", "lever_arm")
 """Per-axis extensions tested at every step (``tilt_offset`` is tested for both axes)."""
 
+FLEXIBLE: tuple[str, ...] = ("bias_random_walk",)
+"""Flexible candidates: tested only after the structured ones, charged their effective dof."""
+
+WALK_CHARGE = "marginal"
+"""How a random walk is charged against structured explanations: "marginal" (its likelihood
+integrates the path out; the log-determinant is the Occam charge; q counts 1) or "edf" (2·edf
+on top, the AIC of a fitted smoother)."""
+
 MAX_STEPS = 10
+
+
+def walk_cost(ext: Extensions, st: AxisState) -> float:
+    """Parameters a random walk on an axis with state ``st`` is charged (:data:`WALK_CHARGE`)."""
+    if WALK_CHARGE == "edf":
+        return walk_effective_dof(st.sigma2_eff, st.q, ext.run.dt_walk)
+    return 1.0
 
 LATTICE_TESTS = 2
 """Step 0 tests one lattice per axis; they count in the Bonferroni m."""
@@ -121,22 +149,85 @@ def _first_step(ext: Extensions, state: ModelState, candidates: list[tuple[str, 
     return trials, untestable
 
 
+def _flexible_choice(ext: Extensions, trials: list[Trial], log_alpha: float
+                     ) -> tuple[Trial | None, list[dict]]:
+    """The flexible candidate to add, if any: it passes ``α_step`` and beats every structured
+    candidate on its axis by AIC with its effective dof (module docstring, step 3)."""
+    notes = []
+    flexible = sorted((t for t in trials if t.name in FLEXIBLE and t.logp < log_alpha),
+                      key=lambda t: t.logp)
+    for t in flexible:
+        k = AXES.index(t.axis)
+        st = t.state.axes[k]
+        edf = walk_effective_dof(st.sigma2_eff, st.q, ext.run.dt_walk)
+        crit = t.lr - 2.0 * walk_cost(ext, st)
+        rivals = [(s.lr - 2.0 * effect(s.name).n_free, s.name) for s in trials
+                  if s.name not in FLEXIBLE and s.name != "noise_level"
+                  and s.axis in (t.axis, "both")]
+        best_rival = max(rivals, default=(0.0, None))
+        accepted = crit > max(0.0, best_rival[0])
+        notes.append({"flexible": [t.name, t.axis], "lr": t.lr, "edf": edf,
+                      "criterion": crit, "best_structured": [best_rival[1], best_rival[0]],
+                      "accepted": accepted})
+        if accepted:
+            return t, notes
+    return None, notes
+
+
 def _forward(ext: Extensions, state: ModelState, trials: list[Trial],
              candidates: list[tuple[str, str]], log_alpha: float, steps: list[dict]
              ) -> ModelState:
-    """Add the best candidate while its p-value passes; refit the nonlinear parameters."""
+    """Add the best structured candidate while its p-value passes, else a flexible one that
+    pays for its effective dof; refit the nonlinear parameters after each addition."""
     for _ in range(MAX_STEPS):
         if not trials:
             break
-        best = min(trials, key=lambda t: t.logp)
-        steps.append({"added": [best.name, best.axis] if best.logp < log_alpha else None,
-                      "candidates": [[t.name, t.axis, t.lr, t.p_value]
-                                     for t in sorted(trials, key=lambda t: t.logp)]})
-        if best.logp >= log_alpha:
+        pool = [t for t in trials if t.name not in FLEXIBLE]
+        best = min(pool, key=lambda t: t.logp) if pool else None
+        notes: list[dict] = []
+        if best is None or best.logp >= log_alpha:
+            best, notes = _flexible_choice(ext, trials, log_alpha)
+        step = {"added": [best.name, best.axis] if best is not None else None,
+                "candidates": [[t.name, t.axis, t.lr, t.p_value]
+                               for t in sorted(trials, key=lambda t: t.logp)]}
+        if notes:
+            step["flexible"] = notes
+        steps.append(step)
+        if best is None:
             break
         state = ext.refine(best.state)
         trials = [t for t in (_try(ext, state, n, a) for n, a in _remaining(state, candidates))
                   if t is not None]
+    return state
+
+
+def _flexible_swap(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]],
+                   log_alpha: float, steps: list[dict]) -> ModelState:
+    """Per axis: the structured effects named there against a walk in their place (AIC, the
+    walk charged its effective dof); the walk is kept only when its own test passes."""
+    stated = ext.run.sigma2
+    for k, axis in enumerate(AXES):
+        st = state.axes[k]
+        named = [n for n in st.effects() if n not in ("noise_level", "quantization")]
+        if not named or st.q > 0 or ("bias_random_walk", axis) not in candidates:
+            continue
+        reduced = state
+        for n in named:
+            reduced = reduced.without(n, axis, stated)
+        t = _try(ext, reduced, "bias_random_walk", axis)
+        if t is None or t.logp >= log_alpha:
+            continue
+        walk = ext.refine(t.state)
+        sw = walk.axes[k]
+        edf = walk_effective_dof(sw.sigma2_eff, sw.q, ext.run.dt_walk)
+        c_named = ext.nll(state) + 2.0 * sum(effect(n).n_free for n in named)
+        c_walk = ext.nll(walk) + 2.0 * walk_cost(ext, sw)
+        note = {"walk_in_place_of": named, "axis": axis, "edf": edf,
+                "criterion_named": c_named, "criterion_walk": c_walk,
+                "accepted": bool(c_walk < c_named)}
+        steps.append({"flexible_swap": note})
+        if c_walk < c_named:
+            state = walk
     return state
 
 
@@ -163,5 +254,10 @@ def select(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]]
     log_alpha = float(np.log(alpha_step))
     steps: list[dict] = []
     state = _forward(ext, state, first, candidates, log_alpha, steps)
+    swapped = _flexible_swap(ext, state, candidates, log_alpha, steps)
+    if swapped is not state:  # structured candidates again, on top of the walk
+        trials = [t for t in (_try(ext, swapped, n, a)
+                              for n, a in _remaining(swapped, candidates)) if t is not None]
+        state = _forward(ext, swapped, trials, candidates, log_alpha, steps)
     state = _backward(ext, state, ext.run.sigma2, log_alpha, steps)
     return Selection(state, candidates, untestable, n_tests, alpha_step, tuple(steps))

@@ -1,0 +1,489 @@
+"""Adequacy of the selected model: a battery of checks that did not drive the selection.
+
+The selection (:mod:`calib.gap.selection`) can only choose among catalog effects, and a
+flexible one (a random walk, a free noise level) can absorb structure that is not in the
+catalog. So the final model is tested afterwards against departures of other shapes, on its
+own residuals, with tests the selection never used. Per axis:
+
+========================  ==================================================================
+check                     statistic and reference distribution under the model
+========================  ==================================================================
+``harmonics``             columns cos jθ, sin jθ, j = 3 … 6, added to the model (GLS in the
+                          model's whitened space): ``ΔRSS ~ χ²(k)``, k the columns not
+                          collinear with the model here
+``periodic``              Fisher's g = max periodogram ordinate / sum of the whitened
+                          residuals; exact ``P(g > x) = Σ_j (-1)^{j-1} C(m,j) (1 - jx)^{m-1}``
+                          (first term, a bound)
+``outliers``              largest |z| of the standardised residuals; ``P = 1 - (1 - p₁)^N``
+``heavy_tails``           kurtosis test (D'Agostino), one-sided: heavier tails than Gaussian
+``step``                  sup of the CUSUM of the standardised residuals; the sup of a
+                          Brownian bridge (Kolmogorov); not on a random-walk axis (a walk
+                          may jump)
+``trend``                 Legendre polynomials of degree 2 … 4 in time added: ``χ²(3)``
+``variance_time``,        Bartlett's test of equal variance over 8 equal-count time segments
+``variance_angle``        and over 8 bins of θ mod 2π: ``χ²(7)``
+``hysteresis``            the direction of the last motion (up +1 / down -1) added:
+                          ``χ²(1)`` (only when θ moves both ways)
+``rate``                  ω and |ω| added (timed runs with a varying rate): ``χ²(≤ 2)``
+``lattice``               readings on a lattice the model does not have
+``walk_whiteness``        (random-walk axes) Ljung-Box of the innovations, ``χ²(h)``
+``rival_shapes``          (axes with named effects) a polynomial, periodic or step path of
+                          the bias (few parameters) explains the data at least as well as the
+                          named effects, by AIC with a walk charged its effective dof
+                          (:func:`calib.gap.flexibility.walk_effective_dof`)
+========================  ==================================================================
+
+Family-wise error: every check with a p-value is run at ``α_check = family_alpha / m`` with m
+the number of such checks on the run (Bonferroni), so on a run that the model describes the
+battery fails with probability ≤ ``family_alpha`` (default 0.005; with the selection's 0.005,
+a clean run is named or called unexplained with probability ≤ 1 %).
+``rival_shapes`` is a model comparison, not a test; it runs only where effects are named.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from math import comb
+
+import numpy as np
+from scipy import linalg as sla
+from scipy import stats
+
+from calib.conventions import AXES
+from calib.diagnostics import Lattice, ljung_box_logp
+from calib.effects import Extensions, ModelState, effect
+from calib.gap.flexibility import walk_effective_dof
+from calib.gap.selection import walk_cost
+
+ADEQUACY_ALPHA = 0.005
+"""Family-wise false-alarm probability of the battery on a run the final model describes."""
+
+HARMONICS = (3, 4, 5, 6)
+"""Harmonics of θ tested (1 is the scale, 2 is K2 / cross-axis: both in the catalog)."""
+
+SEGMENTS = 8
+"""Equal-count groups of the variance checks (time segments, θ bins)."""
+
+MIN_GROUP = 30
+"""Fewest samples per group for the variance checks (fewer groups on short runs)."""
+
+COLLINEAR_TOL = 1e-6
+"""A test column whose part outside the model is below this fraction of its norm is dropped."""
+
+OUTLIER_Z = 5.0
+"""|z| counted as an outlier in the description."""
+
+
+@dataclass(frozen=True)
+class Check:
+    """One adequacy check on one axis.
+
+    name, axis : the check and the axis ("x", "y").  statistic : its value (χ², g, |z|, …).
+    logp : log p-value under the model (0 for ``rival_shapes``, a model comparison).
+    reference : the reference distribution.  failed_by : "p" (p < α_check) or "criterion".
+    size, unit : how big the departure is, in the units of the readings.
+    description : words a test engineer can act on ("a 3rd harmonic of θ on x, 0.04 m/s²").
+    failed : whether the check failed (set by :func:`run_battery`).
+    """
+
+    name: str
+    axis: str
+    statistic: float
+    logp: float
+    reference: str
+    size: float
+    unit: str
+    description: str
+    criterion_failed: bool | None = None
+    failed: bool = False
+
+    @property
+    def p_value(self) -> float | None:
+        return None if self.criterion_failed is not None else float(np.exp(self.logp))
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "axis": self.axis, "statistic": float(self.statistic),
+                "p_value": self.p_value, "reference": self.reference,
+                "passed": not self.failed, "size": float(self.size), "unit": self.unit,
+                "description": self.description}
+
+    def signature(self) -> dict:
+        """The ``unexplained`` entry of a failed check."""
+        return {"axis": self.axis, "signature": self.name, "size": float(self.size),
+                "unit": self.unit, "statistic": float(self.statistic),
+                "p_value": self.p_value, "description": self.description}
+
+
+@dataclass(frozen=True)
+class Battery:
+    """The battery's outcome: every check, the Bonferroni level, the failed ones."""
+
+    checks: tuple[Check, ...]
+    family_alpha: float
+    alpha_check: float
+
+    @property
+    def failed(self) -> tuple[Check, ...]:
+        return tuple(c for c in self.checks if c.failed)
+
+    def axis_passed(self, axis: str) -> bool:
+        return not any(c.failed for c in self.checks if c.axis == axis)
+
+    def to_dict(self) -> dict:
+        return {"family_alpha": float(self.family_alpha),
+                "alpha_check": float(self.alpha_check),
+                "rule": "Bonferroni over the checks with a p-value; rival_shapes by AIC",
+                "checks": [c.to_dict() for c in self.checks]}
+
+
+# --------------------------------------------------------------------- column tests (GLS)
+
+class _AxisSpace:
+    """The whitened system of one axis of the final model, to test added columns.
+
+    ``yw, H`` from :meth:`Extensions.axis_system` (differenced and whitened with the model's
+    noise: σ², lsb, q; unit variance under the model), ``rw`` the residual of the model's
+    columns. An added column block Z is whitened the same way and projected off H; the
+    regression of ``rw`` on it gives ``ΔRSS ~ χ²(rank)`` under the model.
+    """
+
+    def __init__(self, ext: Extensions, state: ModelState, k: int) -> None:
+        st = state.axes[k]
+        yw, hw, _, _, tw = ext.axis_system(k, st, state.tilt)
+        h = hw if tw is None else np.column_stack([hw, tw])
+        self.qh, _ = np.linalg.qr(h)
+        self.rw = yw - self.qh @ (self.qh.T @ yw)
+        self.ext, self.st = ext, st
+
+    def test(self, z: np.ndarray) -> tuple[float, int, np.ndarray] | None:
+        """(ΔRSS, rank, coefficients of the columns of z in their own units) or None."""
+        z = np.asarray(z, dtype=float).reshape(z.shape[0], -1)
+        zw = self.ext.whiten(self.st, z)
+        zp = zw - self.qh @ (self.qh.T @ zw)
+        norms = np.linalg.norm(zw, axis=0)
+        keep = np.linalg.norm(zp, axis=0) > COLLINEAR_TOL * np.maximum(norms, 1e-300)
+        if not np.any(keep):
+            return None
+        q, r, piv = sla.qr(zp[:, keep], mode="economic", pivoting=True)
+        d = np.abs(np.diag(r))
+        rank = int(np.sum(d > COLLINEAR_TOL * d[0])) if d.size else 0
+        if rank == 0:
+            return None
+        proj = q[:, :rank].T @ self.rw
+        cols = np.flatnonzero(keep)[piv[:rank]]
+        coef = np.zeros(z.shape[1])
+        coef[cols] = np.linalg.lstsq(zp[:, cols], self.rw, rcond=None)[0]
+        return float(proj @ proj), rank, coef
+
+
+def _chi2_check(space: _AxisSpace, z: np.ndarray, name: str, axis: str
+                ) -> tuple[float, int, np.ndarray, float] | None:
+    out = space.test(z)
+    if out is None:
+        return None
+    stat, dof, coef = out
+    return stat, dof, coef, float(stats.chi2.logsf(stat, dof))
+
+
+# ---------------------------------------------------------------------------- checks
+
+def _ordinal(j: int) -> str:
+    return {1: "1st", 2: "2nd", 3: "3rd"}.get(j, f"{j}th")
+
+
+def _harmonics(space: _AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
+    cols = [f(j * tita) for j in HARMONICS for f in (np.cos, np.sin)]
+    res = _chi2_check(space, np.column_stack(cols), "harmonics", axis)
+    if res is None:
+        return None
+    stat, dof, coef, logp = res
+    amps = np.hypot(coef[0::2], coef[1::2])
+    j = HARMONICS[int(np.argmax(amps))]
+    size = float(amps.max())
+    return Check("harmonics", axis, stat, logp, f"chi2({dof})", size, "m/s²",
+                 f"a {_ordinal(j)} harmonic of θ on {axis}, {size:.3g} m/s² "
+                 f"(harmonics {HARMONICS[0]}–{HARMONICS[-1]} tested)")
+
+
+def _fisher_g_logp(g: float, m: int) -> float:
+    """log P(max periodogram ordinate / sum > g) for white Gaussian noise (Fisher 1929)."""
+    p = 0.0
+    for j in range(1, int(min(m, np.floor(1.0 / g))) + 1):
+        term = (-1) ** (j - 1) * comb(m, j) * (1.0 - j * g) ** (m - 1)
+        p += term
+        if j >= 3:  # alternating, decreasing: three terms are plenty
+            break
+    return float(np.log(min(max(p, 1e-300), 1.0)))
+
+
+def _peak(space: _AxisSpace, run) -> tuple[float, float, int, float, np.ndarray] | None:
+    """Largest periodogram ordinate of the whitened residual: (g, log p, m, period, columns).
+
+    Period in the run's time unit (s, or samples); columns: cos and sin at that frequency."""
+    r = space.rw
+    n = r.size
+    if n < 16:
+        return None
+    spec = np.abs(np.fft.rfft(r - r.mean())) ** 2
+    spec = spec[1:(n - 1) // 2 + 1]  # Fourier frequencies j = 1 … floor((n-1)/2)
+    m = spec.size
+    total = float(spec.sum())
+    if m < 2 or total <= 0:
+        return None
+    j = int(np.argmax(spec)) + 1
+    g = float(spec[j - 1] / total)
+    # j cycles over the N-1 differenced samples: the same frequency in the readings
+    span = float(run.tcol[-1] - run.tcol[0]) * (n / max(n - 1, 1))
+    phase = 2.0 * np.pi * j * (run.tcol - run.tcol[0]) / span
+    return g, _fisher_g_logp(g, m), m, span / j, np.column_stack([np.cos(phase), np.sin(phase)])
+
+
+def _periodic(space: _AxisSpace, run, axis: str) -> Check | None:
+    peak = _peak(space, run)
+    if peak is None:
+        return None
+    g, logp, m, period, cols = peak
+    fit = space.test(cols)
+    size = float(np.hypot(*fit[2])) if fit is not None else float("nan")
+    unit_t = "s" if run.time_unit == "s" else "samples"
+    return Check("periodic", axis, g, logp, f"Fisher g over {m} frequencies", size, "m/s²",
+                 f"a periodic component on {axis} with period {period:.4g} {unit_t}, "
+                 f"{size:.3g} m/s²")
+
+
+def _outliers(z: np.ndarray, scale: float, axis: str) -> Check:
+    n = z.size
+    i = int(np.argmax(np.abs(z)))
+    zmax = float(abs(z[i]))
+    log_p1 = float(np.log(2.0) + stats.norm.logsf(zmax))
+    p1 = float(np.exp(log_p1))
+    logp = float(np.log(-np.expm1(n * np.log1p(-p1)))) if p1 < 1 else 0.0
+    beyond = int(np.sum(np.abs(z) > OUTLIER_Z))
+    return Check("outliers", axis, zmax, logp, f"max |z| of {n} N(0,1)", zmax * scale, "m/s²",
+                 f"{100.0 * beyond / n:.2g} % of samples on {axis} beyond {OUTLIER_Z:g}σ "
+                 f"({beyond} of {n}; the largest {zmax:.3g}σ, {zmax * scale:.3g} m/s², "
+                 f"at sample {i})")
+
+
+def _heavy_tails(z: np.ndarray, axis: str) -> Check | None:
+    if z.size < 20:
+        return None
+    res = stats.kurtosistest(z, alternative="greater")
+    excess = float(stats.kurtosis(z))
+    logp = float(stats.norm.logsf(res.statistic))
+    return Check("heavy_tails", axis, float(res.statistic), logp, "kurtosis test z (one-sided)",
+                 excess, "", f"heavier tails than Gaussian noise on {axis} "
+                 f"(excess kurtosis {excess:.3g})")
+
+
+def _step(z: np.ndarray, scale: float, run, axis: str) -> Check | None:
+    n = z.size
+    if n < 20:
+        return None
+    c = np.cumsum(z - z.mean()) / np.sqrt(n)
+    i = int(np.argmax(np.abs(c)))
+    stat = float(abs(c[i]))
+    logp = float(np.log(max(stats.kstwobign.sf(stat), 1e-300)))
+    before, after = z[:i + 1].mean(), z[i + 1:].mean() if i + 1 < n else 0.0
+    size = float((after - before) * scale)
+    where = (f"t = {run.tcol[i]:.4g} s" if run.time_unit == "s" else f"sample {i}")
+    return Check("step", axis, stat, logp, "sup |Brownian bridge| (Kolmogorov)", abs(size),
+                 "m/s²", f"a step or slow wander of the bias on {axis}: {size:+.3g} m/s² "
+                 f"after {where}")
+
+
+def _trend(space: _AxisSpace, run, axis: str) -> Check | None:
+    tc = run.tcol
+    x = 2.0 * (tc - tc[0]) / max(float(tc[-1] - tc[0]), 1e-300) - 1.0
+    cols = np.column_stack([np.polynomial.legendre.Legendre.basis(d)(x) for d in (2, 3, 4)])
+    res = _chi2_check(space, cols, "trend", axis)
+    if res is None:
+        return None
+    stat, dof, coef, logp = res
+    size = float(np.max(np.abs(cols @ coef)))
+    return Check("trend", axis, stat, logp, f"chi2({dof})", size, "m/s²",
+                 f"a slow curved trend of the bias on {axis} (polynomial in time), up to "
+                 f"{size:.3g} m/s²")
+
+
+def _groups(order: np.ndarray, n: int) -> list[np.ndarray]:
+    count = int(min(SEGMENTS, n // MIN_GROUP))
+    return [] if count < 2 else np.array_split(order, count)
+
+
+def _variance(z: np.ndarray, order: np.ndarray, name: str, what: str, axis: str,
+              scale: float) -> Check | None:
+    groups = _groups(order, z.size)
+    if not groups:
+        return None
+    stat, p = stats.bartlett(*[z[g] for g in groups])
+    sd = np.array([np.std(z[g]) for g in groups]) * scale
+    return Check(name, axis, float(stat), float(np.log(max(p, 1e-300))),
+                 f"Bartlett chi2({len(groups) - 1})", float(sd.max() - sd.min()), "m/s²",
+                 f"the noise on {axis} changes with {what}: std from {sd.min():.3g} to "
+                 f"{sd.max():.3g} m/s² over {len(groups)} groups")
+
+
+def _direction(tita: np.ndarray) -> np.ndarray | None:
+    """+1 after an upward move, -1 after a downward one (held samples keep the last)."""
+    d = np.sign(np.diff(tita, prepend=tita[0]))
+    if not (np.any(d > 0) and np.any(d < 0)):
+        return None
+    idx = np.where(d != 0, np.arange(d.size), 0)
+    np.maximum.accumulate(idx, out=idx)
+    first = d[np.flatnonzero(d)[0]]
+    out = np.where(d[idx] != 0, d[idx], first)
+    frac = min(np.mean(out > 0), np.mean(out < 0))
+    return out if frac >= 0.05 else None
+
+
+def _hysteresis(space: _AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
+    d = _direction(tita)
+    if d is None:
+        return None
+    res = _chi2_check(space, d[:, None], "hysteresis", axis)
+    if res is None:
+        return None
+    stat, dof, coef, logp = res
+    size = float(2.0 * abs(coef[0]))
+    return Check("hysteresis", axis, stat, logp, f"chi2({dof})", size, "m/s²",
+                 f"the reading on {axis} depends on the direction of motion (up minus down "
+                 f"{2.0 * coef[0]:+.3g} m/s²)")
+
+
+def _rate(space: _AxisSpace, run, axis: str) -> Check | None:
+    if run.omega is None or np.ptp(run.omega) <= 1e-9:
+        return None
+    w = np.asarray(run.omega)
+    res = _chi2_check(space, np.column_stack([w, np.abs(w)]), "rate", axis)
+    if res is None:
+        return None
+    stat, dof, coef, logp = res
+    size = float(np.max(np.abs(np.column_stack([w, np.abs(w)]) @ coef)))
+    return Check("rate", axis, stat, logp, f"chi2({dof})", size, "m/s²",
+                 f"the reading on {axis} depends on the rotation rate (up to {size:.3g} m/s² "
+                 f"over the run's rates)")
+
+
+def _lattice(lat: Lattice, model_lsb: float, axis: str) -> Check | None:
+    if not lat.found:
+        return None
+    explained = model_lsb > 0 and abs(model_lsb - lat.lsb) <= 1e-6 * lat.lsb
+    logp = 0.0 if explained else float(lat.logp)
+    return Check("lattice", axis, float(lat.levels), logp, "lattice of the readings",
+                 float(lat.lsb), "m/s²", f"the readings on {axis} sit on a lattice of "
+                 f"{lat.lsb:.4g} m/s² that the model does not have")
+
+
+def _walk_whiteness(innov: np.ndarray, axis: str) -> Check:
+    q, h, logp = ljung_box_logp(innov[1:])
+    return Check("walk_whiteness", axis, q, logp, f"Ljung-Box chi2({h})", float("nan"), "",
+                 f"the random walk on {axis} leaves correlated innovations: the bias does "
+                 f"not move like a random walk")
+
+
+def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> Check | None:
+    """The named effects of one axis against few-parameter shapes outside the catalog.
+
+    The named set of axis k (its per-axis effects but the noise level and quantization; a
+    random walk charged its effective dof, :func:`calib.gap.flexibility.walk_effective_dof`)
+    is removed, and in its place, each alone: a polynomial in time (degree 1 … 4: 4
+    parameters), one sinusoid at the periodogram peak (amplitude, phase, frequency: 3) and one
+    step of the bias at the CUSUM peak (size, place: 2). When one of them explains the data at
+    least as well by AIC (``LR_shape - 2·k ≥ LR_named - 2·p_named``), the named effects are
+    not the explanation: catalog effects (or a walk) are bending to follow something else.
+    """
+    axis = AXES[k]
+    st = state.axes[k]
+    named = [n for n in st.effects() if n not in ("noise_level", "quantization")]
+    if not named:
+        return None
+    run = ext.run
+    reduced = state
+    for n in named:
+        reduced = reduced.without(n, axis, stated)
+    lr_named = ext.nll(reduced) - ext.nll(state)
+    cost = sum(walk_cost(ext, st) if n == "bias_random_walk" else float(effect(n).n_free)
+               for n in named)
+    space = _AxisSpace(ext, reduced, k)
+    x = 2.0 * (run.tcol - run.tcol[0]) / max(float(np.ptp(run.tcol)), 1e-300) - 1.0
+    poly_cols = np.column_stack([np.polynomial.legendre.Legendre.basis(d)(x)
+                                 for d in (1, 2, 3, 4)])
+    shapes: list[tuple[float, str, float]] = []
+    poly = space.test(poly_cols)
+    if poly is not None:
+        shapes.append((poly[0] - 2.0 * poly[1], "a polynomial in time",
+                       float(np.ptp(poly_cols @ poly[2]))))
+    peak = _peak(space, run)
+    if peak is not None:
+        fit = space.test(peak[4])
+        if fit is not None:
+            unit_t = "s" if run.time_unit == "s" else "samples"
+            shapes.append((fit[0] - 2.0 * 3.0, f"a periodic component (period {peak[3]:.4g} "
+                           f"{unit_t})", float(np.hypot(*fit[2]))))
+    c = np.cumsum(space.rw - space.rw.mean())
+    i = int(np.argmax(np.abs(c))) + 1  # rw[i] is the difference of samples i and i+1
+    step = space.test((np.arange(run.n) > i).astype(float)[:, None])
+    if step is not None:
+        where = f"t = {run.tcol[i]:.4g} s" if run.time_unit == "s" else f"sample {i}"
+        shapes.append((step[0] - 2.0 * 2.0, f"a step of the bias at {where}",
+                       abs(float(step[2][0]))))
+    crit_named = lr_named - 2.0 * cost
+    crit_alt, shape, size = max(shapes, default=(-np.inf, "no simpler shape", float("nan")))
+    failed = bool(crit_alt >= crit_named)
+    return Check("rival_shapes", axis, float(crit_alt - crit_named), 0.0,
+                 f"AIC: named LR {lr_named:.1f} - 2·{cost:.1f} vs the best few-parameter "
+                 "shape", size, "m/s²", f"the residual on {axis} is explained at least as well "
+                 f"by {shape} ({size:.3g} m/s²) as by {' + '.join(named)}: not in the catalog",
+                 criterion_failed=failed)
+
+
+# --------------------------------------------------------------------------- battery
+
+def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
+                lattice: list[Lattice], innovations: dict[int, np.ndarray],
+                family_alpha: float = ADEQUACY_ALPHA) -> Battery:
+    """Run every applicable check on both axes of the final model (module docstring).
+
+    Parameters
+    ----------
+    ext, state : the run's likelihood and the final model.
+    residuals : (N, 2) the final model's residuals, m/s², white with variance σ²_eff under
+        the model (data - model, or the walk filter's normalised innovations × σ).
+    lattice : the lattice found on each axis' readings.  innovations : axis index → the
+        walk filter's normalised innovations (random-walk axes).
+    family_alpha : family-wise false-alarm probability of the battery.
+    """
+    run = ext.run
+    checks: list[Check] = []
+    for k, axis in enumerate(AXES):
+        st = state.axes[k]
+        scale = float(np.sqrt(st.sigma2_eff))
+        z = np.asarray(residuals[:, k], dtype=float) / scale
+        space = _AxisSpace(ext, state, k)
+        found = [
+            _harmonics(space, run.tita, axis),
+            _periodic(space, run, axis),
+            _outliers(z, scale, axis),
+            _heavy_tails(z, axis),
+            None if st.q > 0 else _step(z, scale, run, axis),
+            _trend(space, run, axis),
+            _variance(z, np.arange(run.n), "variance_time", "time", axis, scale),
+            _variance(z, np.argsort(np.mod(run.tita, 2.0 * np.pi), kind="stable"),
+                      "variance_angle", "θ", axis, scale),
+            _hysteresis(space, run.tita, axis),
+            _rate(space, run, axis),
+            _lattice(lattice[k], st.lsb, axis),
+        ]
+        if st.q > 0:
+            found.append(_walk_whiteness(innovations[k], axis))
+        found.append(_rivals(ext, state, k, run.sigma2))
+        checks += [c for c in found if c is not None]
+    m = sum(1 for c in checks if c.criterion_failed is None)
+    alpha_check = family_alpha / max(m, 1)
+    log_a = float(np.log(alpha_check))
+    out = []
+    for c in checks:
+        failed = c.criterion_failed if c.criterion_failed is not None else c.logp < log_a
+        out.append(Check(**{**c.__dict__, "failed": bool(failed)}))
+    return Battery(tuple(out), float(family_alpha), float(alpha_check))
