@@ -211,9 +211,16 @@ def _check_named_and_estimates(res, effects):
 
 
 def _check_after_is_noise(res):
+    """The gap after is measured against the stated noise: its χ² band holds unless a noise
+    level is named on the axis, whose excess must then pass the adequacy battery."""
+    assert res.verdict in ("explained", "nothing_detected"), res.unexplained
     for a in AXES:
+        assert res.adequacy["consistent"][a], (a, res.unexplained)
         m = res.gap_after_fit[a]
         lo, hi = m.chi2_band(ALPHA_TEST)
+        if ("noise_level", a) in res.named:
+            assert m.chi2_dof > hi or m.chi2_dof < lo, (a, m.details())
+            continue
         assert lo <= m.chi2_dof <= hi, (a, m.details())
         assert m.max_signature_z <= m.threshold_z(ALPHA_TEST), (a, m.details())
 
