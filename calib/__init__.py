@@ -5,7 +5,9 @@ estimator cannot peek at the simulation or the truth.
 
 Conventions (stated once, used everywhere)
 ------------------------------------------
-* SI units: accelerations in m/s², time in s, positions in m, angles in **radians**.
+* SI units: accelerations in m/s², time in s, positions in m, angles in **radians** — any
+  finite value (several turns, negative, past 2π); degrees are told from the readings, never
+  from a range (:mod:`calib.angles`).
 * ``g`` = 9.8 m/s² unless the user gives another value (:data:`calib.conventions.G`).
 * Columns: x first, then y. ``datos`` is (N, 2) = [A_mx, A_my].
 * Course tilt-table convention (reference accelerations, specific force along each sensitive

@@ -3,6 +3,11 @@
 Every reader rejects what would silently give a wrong answer: wrong shapes, NaN/Inf,
 non-monotonic time, angles that look like degrees. Messages name the file, the variable,
 what is wrong and the fix.
+
+Angles: any finite θ in radians is valid (several turns, negative, oscillating, overshooting
+2π); there is no range check. Degrees are told from the readings: :func:`check_angle_units`
+refuses ``tita`` when the nominal model fits θ·π/180 far better than θ (the rule is in
+:mod:`calib.angles`).
 """
 
 from __future__ import annotations
@@ -16,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-TWO_PI = 2.0 * np.pi
+from calib.angles import compare_angle_units
 
 
 class DataError(ValueError):
@@ -118,13 +123,20 @@ def check_finite(arr: np.ndarray, where: str, name: str) -> None:
         )
 
 
-def check_angles(tita: np.ndarray, where: str, name: str = "tita") -> None:
-    """Reject angles that cannot be radians (|θ| > 2π: probably degrees)."""
-    big = float(np.max(np.abs(tita))) if tita.size else 0.0
-    if big > TWO_PI * (1 + 1e-9):
+def check_angle_units(tita: np.ndarray, datos: np.ndarray, where: str,
+                      name: str = "tita") -> None:
+    """Refuse angles whose readings say they are degrees (rule: :mod:`calib.angles`).
+
+    No range check: any finite θ in radians is valid. ``tita`` (N,) and ``datos`` (N, 2) m/s²
+    must already be finite and of matching length.
+    """
+    units = compare_angle_units(tita, datos)
+    if units.looks_like_degrees:
         raise DataError(
-            f"{where}: variable '{name}' reaches |θ| = {big:.6g}, more than 2π; angles must be in "
-            f"radians (degrees? multiply by π/180)"
+            f"{where}: variable '{name}' looks like degrees, not radians: the nominal model "
+            f"(A_rx = -g sin θ, A_ry = -g cos θ) fits θ·π/180 far better than θ "
+            f"({units.summary()}); convert the angles to radians (θ·π/180) and read the file "
+            "again"
         )
 
 
@@ -157,7 +169,11 @@ def _two_columns(arr: np.ndarray, where: str, name: str) -> np.ndarray:
 def validate_ensayo(
     tita: np.ndarray, datos: np.ndarray, t: np.ndarray | None = None, where: str = "<memory>"
 ) -> Ensayo:
-    """Check shapes, finiteness, units and time order; return an :class:`Ensayo`."""
+    """Check shapes, finiteness, units and time order; return an :class:`Ensayo`.
+
+    Any finite ``tita`` in radians is accepted; it is refused as degrees only when the
+    readings say so (:func:`check_angle_units`, rule in :mod:`calib.angles`).
+    """
     tita = _column(np.asarray(tita, dtype=float), where, "tita")
     datos = _two_columns(np.asarray(datos, dtype=float), where, "datos")
     if datos.shape[0] != tita.shape[0]:
@@ -169,7 +185,7 @@ def validate_ensayo(
         raise DataError(f"{where}: only {tita.shape[0]} samples; at least 3 are needed")
     check_finite(tita, where, "tita")
     check_finite(datos, where, "datos")
-    check_angles(tita, where)
+    check_angle_units(tita, datos, where)
     if t is not None:
         t = _column(np.asarray(t, dtype=float), where, "t")
         if t.shape[0] != tita.shape[0]:
@@ -193,8 +209,10 @@ def read_ensayo(path: str | os.PathLike) -> Ensayo:
 
     Raises
     ------
-    DataError : missing variable, bad shape, NaN/Inf or non-monotonic ``t`` (the message
-        names the file, the variable and the fix).
+    DataError : missing variable, bad shape, NaN/Inf, non-monotonic ``t``, or ``tita`` that
+        the readings show to be in degrees (:mod:`calib.angles`; the message names the file,
+        the variable and the fix). Any finite ``tita`` in radians is valid: several turns,
+        negative, oscillating or overshooting 2π.
 
     Examples
     --------

@@ -109,11 +109,13 @@ def test_console_script_runs(course_dir):
 
 def test_bad_input_clear_errors(tmp_path, capsys):
     bad = tmp_path / "deg.mat"
-    tita = np.linspace(0, 360, 50)
-    scipy.io.savemat(bad, {"tita": tita[:, None], "datos": np.zeros((50, 2))})
+    tita = np.linspace(0, 360, 50)  # degrees; the readings follow the angle in degrees
+    rad = np.deg2rad(tita)
+    datos = np.column_stack([-9.8 * np.sin(rad), -9.8 * np.cos(rad)])
+    scipy.io.savemat(bad, {"tita": tita[:, None], "datos": datos})
     assert main(["calibrate", str(bad)]) == 2
     err = capsys.readouterr().err
-    assert "deg.mat" in err and "tita" in err and "radians" in err
+    assert "deg.mat" in err and "tita" in err and "degrees" in err and "radians" in err
     nan = tmp_path / "nan.mat"
     d = np.zeros((50, 2))
     d[7, 1] = np.nan

@@ -10,7 +10,6 @@ made here, after the set is written (the library does not import :mod:`bench.rec
 from __future__ import annotations
 
 import argparse
-import math
 
 from bench.cli.options import (
     DEFAULT_NOISE,
@@ -27,8 +26,6 @@ from bench.cli.options import (
 from bench.cli.output import print_summary, refuse_overwrite
 from bench.cli.progress import Progress
 
-TWO_PI = 2 * math.pi
-
 
 # ---------------------------------------------------------------- option values → config
 # Domain imports inside the functions, not at module level: start-up time of `tiltbench --help`.
@@ -41,23 +38,17 @@ def sensor_model(args: argparse.Namespace):
                                        parse_pair(args.noise_var, "--noise-var"))
 
 
-def _check_radians(values, what: str) -> None:
-    if max(abs(v) for v in values) > TWO_PI * (1 + 1e-9):
-        raise OptionError(f"{what}: values exceed 2π; angles are in radians "
-                          "(degrees? multiply by π/180)")
-
-
 def calibration_config(args: argparse.Namespace):
     """:class:`bench.tilt.CalibrationConfig` from the options of ``generate calibration``."""
     from bench.model import TableEdits
     from bench.tilt import CalibrationConfig, SweepProfile, ThetaDesign
 
     sensor = sensor_model(args)
+    # Any finite angle in radians is valid (several turns, negative, past 2π): no range
+    # check here — without readings there is nothing to tell degrees by (calib.angles).
     start, stop = parse_pair(args.theta_range, "--theta-range")
-    _check_radians((start, stop), "--theta-range")
     if args.theta_list is not None:
         values = parse_floats(args.theta_list, "--theta-list")
-        _check_radians(values, "--theta-list")
         theta = ThetaDesign(kind="list", values=values)
     elif args.positions is not None:
         theta = ThetaDesign(kind="positions", start=start, stop=stop, positions=args.positions,
@@ -233,9 +224,11 @@ def _register_calibration(kinds) -> None:
     p.add_argument("--mode", choices=["static", "sweep"], default="static",
                    help="static: held poses; sweep: servo-driven rotation, θ from the encoder")
     p.add_argument("--theta-range", default=FULL_TURN,
-                   help="θ range start,stop in rad (static range/positions; sweep)")
+                   help="θ range start,stop in rad, any finite values (static range/positions; "
+                        "sweep)")
     p.add_argument("--count", type=int, default=20001, help="static: samples over the range")
-    p.add_argument("--theta-list", help="static: explicit θ values in rad, comma separated")
+    p.add_argument("--theta-list",
+                   help="static: explicit θ values in rad (any finite), comma separated")
     p.add_argument("--positions", type=int, help="static: number of discrete held positions")
     p.add_argument("--per-position", type=int, default=100,
                    help="static: samples held at each position")
