@@ -212,10 +212,9 @@ def _check_named_and_estimates(res, effects):
 
 def _check_after_is_noise(res):
     """The gap after is measured against the stated noise: its χ² band holds unless a noise
-    level is named on the axis, whose excess must then pass the adequacy battery."""
-    assert res.verdict in ("explained", "nothing_detected"), res.unexplained
+    level is named on the axis (its excess then reads as χ²/dof ≠ 1). The verdict is scored
+    over many runs against its stated error rate (tests/test_validation_score.py), not per run."""
     for a in AXES:
-        assert res.adequacy["consistent"][a], (a, res.unexplained)
         m = res.gap_after_fit[a]
         lo, hi = m.chi2_band(ALPHA_TEST)
         if ("noise_level", a) in res.named:
@@ -393,7 +392,8 @@ def test_random_walk_interval_and_std_are_honest():
     q_hat, std, lo, hi = out.T
     est = res.effect("bias_random_walk", "x")
     np.testing.assert_allclose([est.params["q_per_sample"], est.std["q_per_sample"],
-                                *est.interval["q_per_sample"]], out[0], rtol=1e-9)
+                                *est.interval["q_per_sample"]], out[0], rtol=1e-5)
+    # (the same optimum to the profile search's tolerance, 1e-4 of its bracket in log q)
     assert np.all((lo < q_hat) & (q_hat < hi)) and np.all(lo > 0)
     r = WALK_R
     band = 4.0 * np.sqrt(0.95 * 0.05 / r)
@@ -487,9 +487,13 @@ def test_to_dict_layout_and_json():
     th, y, _ = synth("uniform", 2000, np.random.default_rng([SEED, 12]), effects)
     res = analyze_gap(Ensayo(th, y), STATED)
     d = json.loads(json.dumps(res.to_dict()))
-    assert {"effects", "not_identifiable", "gap_before", "gap_after"} <= set(d)
+    assert {"effects", "not_identifiable", "gap_before", "gap_after", "verdict",
+            "unexplained", "adequacy"} <= set(d)
+    assert d["verdict"] in ("explained", "unexplained", "nothing_detected")
+    assert all(c["name"] and c["axis"] in AXES for c in d["adequacy"]["checks"])
     (e,) = d["effects"]
-    assert set(e) == {"name", "axis", "params", "std", "statistic", "p_value"}
+    assert set(e) == {"name", "axis", "params", "std", "statistic", "p_value", "tentative"}
+    assert e["tentative"] == (d["verdict"] == "unexplained")
     assert e["name"] == "misalignment" and e["axis"] == "x" and set(e["params"]) == {"delta"}
     for key in ("gap_before", "gap_after"):
         assert set(d[key]) == {"x", "y"}
