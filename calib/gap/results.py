@@ -201,28 +201,49 @@ class GapAnalysis:
             "adequacy": dict(self.adequacy),
         }
 
+    def verdict_line(self) -> str:
+        """The verdict in one sentence (first line of every report)."""
+        c = self.criterion
+        alpha = c.get("family_alpha", 0.005) + c.get("adequacy_alpha", 0.0)
+        if self.verdict == "unexplained":
+            return (f"verdict: unexplained structure remains ({len(self.unexplained)} "
+                    f"signature(s)); the named effects are tentative")
+        if self.verdict == "explained":
+            return (f"verdict: explained: the named effects account for the gap, and no "
+                    f"adequacy check fails at α = {alpha:g}")
+        return (f"verdict: nothing detected at α = {alpha:g} (selection "
+                f"{c.get('family_alpha', 0.005):g} + adequacy {c.get('adequacy_alpha', 0.0):g})")
+
     def summary(self) -> str:
-        out = [f"Gap analysis: N = {self.residuals_before.shape[0]}, g = {self.g} m/s², "
+        out = [self.verdict_line(),
+               f"Gap analysis: N = {self.residuals_before.shape[0]}, g = {self.g} m/s², "
                f"stated σ² = {self.noise_var[0]:.4g}, {self.noise_var[1]:.4g} (m/s²)²"]
         c = self.criterion
         out.append(f"criterion: forward LR selection, family α = {c['family_alpha']:g}, "
-                   f"{c['n_tests']} tests, per-step α = {c['alpha_step']:.3g} (Bonferroni)")
+                   f"{c['n_tests']} tests, per-step α = {c['alpha_step']:.3g} (Bonferroni); "
+                   "structured effects first, a random walk only when it beats them")
         out.append("gap before (nominal: bias + scale):")
         for a in AXES:
             m = self.gap_before[a]
             out.append(f"  {a}: χ²/dof = {m.chi2_dof:.4f}, max signature z = "
                        f"{m.max_signature_z:.2f} ({m.worst}, p = {m.max_signature_p:.3g})")
         if self.effects:
-            out.append("named effects:")
-            out += [f"  {e}" for e in self.effects]
+            out.append("named effects" + (" (tentative)" if self.verdict == "unexplained"
+                                          else "") + ":")
+            out += [f"  {e}" + (" (tentative)" if e.tentative else "") for e in self.effects]
         else:
-            out.append("named effects: none — the nominal model explains the data within the "
-                       "stated noise")
+            out.append("named effects: none")
+        if self.unexplained:
+            out.append("unexplained structure remains:")
+            for u in self.unexplained:
+                p = "" if u.get("p_value") is None else f", p = {u['p_value']:.3g}"
+                out.append(f"  {u['description']} [{u['signature']}, statistic "
+                           f"{u['statistic']:.4g}{p}]")
         for d in self.not_identifiable:
             out.append(f"  not identifiable: {' / '.join(d['names'])}: {d['reason']}")
         if self.needs_timing:
             out.append(f"  skipped (need t or --rate): {', '.join(self.needs_timing)}")
-        out.append("gap after (extended model fitted here):")
+        out.append("gap after (extended model fitted here, against the stated noise):")
         for a in AXES:
             m = self.gap_after_fit[a]
             out.append(f"  {a}: χ²/dof = {m.chi2_dof:.4f}, max signature z = "
