@@ -28,8 +28,18 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from validation import designs, sizes, sweep
-from validation.effects import AXES, AxisSpec, Draws, Run, Spec, mean_reading, readings, reference
+from validation import designs, sizes
+from validation.effects import (
+    AXES,
+    AxisSpec,
+    Draws,
+    G,
+    Run,
+    Spec,
+    mean_reading,
+    readings,
+    reference,
+)
 
 NOISE_VAR: tuple[float, float] = (0.25, 0.64)
 """Stated (and, unless noise_level is the effect, true) noise variances, (m/s²)²."""
@@ -83,7 +93,7 @@ class Case:
     def to_truth(self) -> dict:
         """JSON-ready truth: id, kind, design, N, timed, g, noise_var, expected, size, params."""
         return {"id": self.id, "kind": self.kind, "design": self.design, "n": self.n,
-                "timed": self.t is not None, "g": sweep.G,
+                "timed": self.t is not None, "g": G,
                 "noise_var": [float(v) for v in self.noise_var],
                 "expected": [{"name": n, "axis": a} for n, a in self.expected],
                 "size_sigma": {k: float(v) for k, v in self.size_sigma.items()},
