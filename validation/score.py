@@ -14,6 +14,8 @@ Rules
   misalignment at a constant rate, drift vs random walk).
 * **clean** case right ⇔ nothing named and verdict ``"nothing_detected"``.
 * **out_of_catalog** case right ⇔ verdict ``"unexplained"``.
+* ``names_ok`` (reported): the named set alone is right (catalog: the rule above without the
+  verdict; clean: nothing named); none for out-of-catalog runs, whose names are tentative.
 * ``gap_ok`` (reported, not part of "right"): every axis of ``gap_after_fit`` is consistent
   with noise (``GapMeasure.consistent()``), or the verdict is ``"explained"``.
 
@@ -84,17 +86,20 @@ def judge(case: Case, analysis) -> dict:
     named = named_effects(analysis)
     ties = tuple(getattr(analysis, "not_identifiable", ()))
     if case.kind == "catalog":
-        right = matches(case.expected, named, ties) and verdict == "explained"
+        names_ok = matches(case.expected, named, ties)
+        right = names_ok and verdict == "explained"
     elif case.kind == "clean":
-        right = not named and verdict == "nothing_detected"
+        names_ok = not named
+        right = names_ok and verdict == "nothing_detected"
     else:
+        names_ok = None  # any name may be tentative: only the verdict counts
         right = verdict == "unexplained"
     gap_after = getattr(analysis, "gap_after_fit", None) or {}
     gap_ok = verdict == "explained" or bool(gap_after) and all(
         m.consistent() for m in gap_after.values())
     return {"id": case.id, "kind": case.kind, "design": case.design, "n": case.n,
             "expected": sorted(case.expected), "named": sorted(named), "verdict": verdict,
-            "right": bool(right), "gap_ok": bool(gap_ok),
+            "right": bool(right), "names_ok": names_ok, "gap_ok": bool(gap_ok),
             "size_sigma": dict(case.size_sigma)}
 
 
@@ -112,13 +117,15 @@ class Score:
     seconds: float = 0.0
 
     def summary(self, by: str = "kind") -> list[dict]:
-        """Per ``by`` ("kind" or "design"): ``{by, cases, right, rate, gap_ok}``."""
+        """Per ``by`` ("kind" or "design"): ``{by, cases, right, rate, names_ok, gap_ok}``
+        (``names_ok``: the named set alone is right, verdict aside; clean and catalog)."""
         groups: dict[str, list[dict]] = {}
         for r in self.rows:
             groups.setdefault(r[by], []).append(r)
         order = KINDS if by == "kind" else sorted(groups)
         return [{by: g, "cases": len(groups[g]), "right": sum(r["right"] for r in groups[g]),
                  "rate": sum(r["right"] for r in groups[g]) / len(groups[g]),
+                 "names_ok": sum(bool(r["names_ok"]) for r in groups[g]),
                  "gap_ok": sum(r["gap_ok"] for r in groups[g])}
                 for g in order if g in groups]
 
@@ -129,16 +136,20 @@ class Score:
         def pairs(ps):
             return ", ".join(f"{n} ({a})" for n, a in ps) or "—"
 
-        out = ["| id | kind | design | expected | named | verdict | right | gap_ok |",
-               "|---|---|---|---|---|---|---|---|"]
+        def yes(v):
+            return "—" if v is None else ("yes" if v else "no")
+
+        out = ["| id | kind | design | expected | named | verdict | right | names_ok | gap_ok |",
+               "|---|---|---|---|---|---|---|---|---|"]
         for r in self.rows:
             out.append(f"| {r['id']} | {r['kind']} | {r['design']} | {pairs(r['expected'])} | "
-                       f"{pairs(r['named'])} | {r['verdict']} | {'yes' if r['right'] else 'no'}"
-                       f" | {'yes' if r['gap_ok'] else 'no'} |")
+                       f"{pairs(r['named'])} | {r['verdict']} | {yes(r['right'])} | "
+                       f"{yes(r['names_ok'])} | {yes(r['gap_ok'])} |")
         for by in ("kind", "design"):
-            out += ["", f"| {by} | cases | right | rate | gap_ok |", "|---|---|---|---|---|"]
-            out += [f"| {s[by]} | {s['cases']} | {s['right']} | {s['rate']:.0%} | {s['gap_ok']} |"
-                    for s in self.summary(by)]
+            out += ["", f"| {by} | cases | right | rate | names_ok | gap_ok |",
+                    "|---|---|---|---|---|---|"]
+            out += [f"| {s[by]} | {s['cases']} | {s['right']} | {s['rate']:.0%} | "
+                    f"{s['names_ok']} | {s['gap_ok']} |" for s in self.summary(by)]
         total = sum(r["right"] for r in self.rows)
         out += ["", f"{total}/{len(self.rows)} right; analysis time {self.seconds:.1f} s"]
         return "\n".join(out)
