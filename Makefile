@@ -20,7 +20,7 @@ test: $(STAMP)
 	$(BIN)/python -m pytest -q
 
 lint: $(STAMP)
-	$(BIN)/ruff check bench calib tests benchmarks
+	$(BIN)/ruff check bench calib validation tests benchmarks
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py

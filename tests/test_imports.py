@@ -6,7 +6,11 @@
     ``argparse``;
 (c) no ``importlib`` / ``__import__`` in ``bench`` or ``calib`` (dynamic imports would hide
     edges from these checks);
-(d) no import circles between modules.
+(d) no import circles between modules;
+(e) the generator modules of ``validation/`` (every module but the scorer,
+    :data:`VALIDATION_SCORING`) import neither ``bench`` nor ``calib`` nor the scorer: the
+    validation set is written from the physics, so the bench's effect code cannot appear on
+    both sides of the comparison. (c) and (d) hold in ``validation/`` too.
 
 Every import counts, also inside functions (a deferred import is still a dependency); only
 ``if TYPE_CHECKING:`` blocks are skipped (annotations, never executed). Edges of the module
@@ -25,6 +29,9 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 PACKAGES = ("bench", "calib")
 CALIB_FORBIDDEN = ("bench", "mujoco", "argparse", "matplotlib", "rerun")
+VALIDATION_SCORING = ("validation.score",)
+"""The only modules of ``validation/`` that may import ``calib`` (they run the analysis)."""
+GENERATOR_FORBIDDEN = ("bench", "calib", *VALIDATION_SCORING)
 
 
 @dataclass
@@ -216,6 +223,15 @@ def check_cycles(mods: dict[str, Module], root: Path) -> list[str]:
         for comp in strongly_connected(graph) if len(comp) > 1)
 
 
+def check_validation_imports(mods: dict[str, Module], root: Path) -> list[str]:
+    """(e) the generator modules of ``validation`` import none of :data:`GENERATOR_FORBIDDEN`."""
+    bad = []
+    for mod in mods.values():
+        if _under(mod.name, "validation") and mod.name not in VALIDATION_SCORING:
+            bad += _flagged(mod, root, lambda n: any(_under(n, f) for f in GENERATOR_FORBIDDEN))
+    return sorted(set(bad))
+
+
 # --- the rules on the real tree -------------------------------------------------------------
 
 def _real() -> dict[str, Module]:
@@ -242,6 +258,16 @@ def test_no_dynamic_imports():
 def test_no_import_circles():
     bad = check_cycles(_real(), REPO)
     assert not bad, "import circles (strongly connected modules):\n" + "\n".join(bad)
+
+
+def test_validation_generators_import_neither_bench_nor_calib():
+    mods = scan(REPO, ("validation",))
+    assert "validation.cases" in mods and "validation.score" in mods  # the rule sees the files
+    bad = check_validation_imports(mods, REPO)
+    assert not bad, ("validation/ generators must not import bench, calib or the scorer:\n"
+                     + "\n".join(bad))
+    bad = check_dynamic_imports(mods, REPO) + check_cycles(mods, REPO)
+    assert not bad, "\n".join(bad)
 
 
 # --- each checker can fail: a synthetic tree ------------------------------------------------
@@ -319,3 +345,19 @@ def test_checker_d_finds_circles_through_deferred_and_package_imports(tmp_path):
         "circle: bench/p/__init__.py, bench/p/q.py",
         "circle: bench/x.py, bench/y.py",
     ]
+
+
+def test_checker_e_finds_bench_calib_and_scorer_imports_in_validation_generators(tmp_path):
+    _tree(tmp_path, {
+        "validation/__init__.py": "",
+        "validation/effects.py": "import numpy as np\ndef f():\n    from calib.io import Ensayo\n",
+        "validation/designs.py": "from bench import model\nimport mujoco\n",
+        "validation/cases.py": "from validation import effects, score\n",
+        "validation/sweep.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                               "    import calib\nimport scipy\n",
+        "validation/score.py": "from calib.gap import analyze_gap\n",  # the scorer may
+    })
+    bad = check_validation_imports(scan(tmp_path, ("validation",)), tmp_path)
+    assert bad == ["validation/cases.py:1 imports validation.score",
+                   "validation/designs.py:1 imports bench",
+                   "validation/effects.py:3 imports calib.io"], bad
