@@ -16,6 +16,7 @@ check                     statistic and reference distribution under the model
                           (first term, a bound)
 ``outliers``              largest |z| of the standardised residuals; ``P = 1 - (1 - p₁)^N``
 ``heavy_tails``           kurtosis test (D'Agostino), one-sided: heavier tails than Gaussian
+                          (both skipped where the rounding is coarser than the noise)
 ``step``                  sup of the CUSUM of the standardised residuals; the sup of a
                           Brownian bridge (Kolmogorov); not on a random-walk axis (a walk
                           may jump)
@@ -25,6 +26,8 @@ check                     statistic and reference distribution under the model
 ``hysteresis``            the direction of the last motion (up +1 / down -1) added:
                           ``χ²(1)`` (only when θ moves both ways)
 ``rate``                  ω and |ω| added (timed runs with a varying rate): ``χ²(≤ 2)``
+``timing``                a delay that changes during the run: ``dA_r/dt`` times Legendre
+                          P1, P2 of time added (timed runs): ``χ²(≤ 2)``
 ``lattice``               readings on a lattice the model does not have
 ``walk_whiteness``        (random-walk axes) Ljung-Box of the innovations, ``χ²(h)``
 ``rival_shapes``          (axes with named effects) a polynomial, periodic or step path of
@@ -215,10 +218,14 @@ def _fisher_g_logp(g: float, m: int) -> float:
     return float(np.log(min(max(p, 1e-300), 1.0)))
 
 
-def _peak(space: _AxisSpace, run) -> tuple[float, float, int, float, np.ndarray] | None:
+def _peak(space: _AxisSpace, run, min_cycles: float = 0.5
+          ) -> tuple[float, float, int, float, np.ndarray] | None:
     """Largest periodogram ordinate of the whitened residual: (g, log p, m, period, columns).
 
-    Period in the run's time unit (s, or samples); columns: cos and sin at that frequency."""
+    Period in the run's time unit (s, or samples), refined between the neighbouring Fourier
+    frequencies (a period that is not a whole fraction of the run leaks into two bins);
+    columns: cos and sin at that frequency. Frequencies below ``min_cycles`` per run are not
+    considered."""
     r = space.rw
     n = r.size
     if n < 16:
@@ -227,14 +234,25 @@ def _peak(space: _AxisSpace, run) -> tuple[float, float, int, float, np.ndarray]
     spec = spec[1:(n - 1) // 2 + 1]  # Fourier frequencies j = 1 … floor((n-1)/2)
     m = spec.size
     total = float(spec.sum())
-    if m < 2 or total <= 0:
+    j0 = int(np.ceil(min_cycles))
+    if m < j0 + 1 or total <= 0:
         return None
-    j = int(np.argmax(spec)) + 1
+    j = int(np.argmax(spec[j0 - 1:])) + j0
     g = float(spec[j - 1] / total)
     # j cycles over the N-1 differenced samples: the same frequency in the readings
     span = float(run.tcol[-1] - run.tcol[0]) * (n / max(n - 1, 1))
-    phase = 2.0 * np.pi * j * (run.tcol - run.tcol[0]) / span
-    return g, _fisher_g_logp(g, m), m, span / j, np.column_stack([np.cos(phase), np.sin(phase)])
+    tc = run.tcol - run.tcol[0]
+
+    def columns(f: float) -> np.ndarray:
+        phase = 2.0 * np.pi * f * tc / span
+        return np.column_stack([np.cos(phase), np.sin(phase)])
+
+    best_f, best = float(j), -1.0
+    for f in np.linspace(max(j - 1.0, min_cycles), j + 1.0, 21):
+        fit = space.test(columns(f))
+        if fit is not None and fit[0] > best:
+            best_f, best = float(f), fit[0]
+    return g, _fisher_g_logp(g, m), m, span / best_f, columns(best_f)
 
 
 def _periodic(space: _AxisSpace, run, axis: str) -> Check | None:
@@ -364,6 +382,31 @@ def _rate(space: _AxisSpace, run, axis: str) -> Check | None:
                  f"over the run's rates)")
 
 
+def _timing(space: _AxisSpace, ext: Extensions, st, k: int, axis: str) -> Check | None:
+    """A delay between θ and the readings that changes during the run (clock drift, a
+    varying lag): the lag's column ``LPF_τ(A_r)`` slope ``dA_r/dt`` times Legendre P1, P2 of
+    time, added to the model (timed runs only): ``χ²(≤ 2)``."""
+    run = ext.run
+    if run.t is None:
+        return None
+    a = ext.reference(k, st.tau, st.limit)
+    rate = np.gradient(a, run.t)  # dA/dt, m/s³: a delay δ changes the reading by -δ·dA/dt
+    if np.ptp(rate) <= 1e-9:
+        return None
+    x = 2.0 * run.tcol / max(float(run.tcol[-1]), 1e-300) - 1.0
+    cols = np.column_stack([rate * x, rate * (1.5 * x * x - 0.5)])
+    res = _chi2_check(space, cols, "timing", axis)
+    if res is None:
+        return None
+    stat, dof, coef, logp = res
+    delay = np.abs(cols @ coef) / np.maximum(np.abs(rate), 1e-12)
+    size = float(np.max(np.abs(cols @ coef)))
+    return Check("timing", axis, stat, logp, f"chi2({dof})", size, "m/s²",
+                 f"the delay between θ and the readings on {axis} changes during the run "
+                 f"(clock drift or a varying lag; up to {size:.3g} m/s², about "
+                 f"{float(np.median(delay)):.3g} s)")
+
+
 def _lattice(lat: Lattice, model_lsb: float, axis: str) -> Check | None:
     if not lat.found:
         return None
@@ -422,10 +465,14 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
                                                     + stats.chi2.logsf(lr_d, d)))
         shapes.append((logp, what, size, lr_d, d))
 
-    poly = space.test(poly_cols)
+    # A walk's path is itself smooth: most of its energy lies in the first few polynomial
+    # (Karhunen-Loève) modes, so a polynomial rival would beat a true walk; with a walk named
+    # only shapes a walk is not (≥ 1.5 cycles of a sinusoid, a single jump) compete.
+    walk = "bias_random_walk" in named
+    poly = None if walk else space.test(poly_cols)
     if poly is not None:
         add(poly, poly[1], 1, "a polynomial in time", float(np.ptp(poly_cols @ poly[2])))
-    peak = _peak(space, run)
+    peak = _peak(space, run, min_cycles=1.5 if walk else 0.5)
     if peak is not None:
         fit = space.test(peak[4])
         unit_t = "s" if run.time_unit == "s" else "samples"
@@ -469,12 +516,14 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
         st = state.axes[k]
         scale = float(np.sqrt(st.sigma2_eff))
         z = np.asarray(residuals[:, k], dtype=float) / scale
+        # rounding coarser than the noise makes the residual's distribution discrete and
+        # peaked (mostly 0, sometimes ± lsb): the Gaussian tail checks do not apply
+        coarse = st.lsb > np.sqrt(st.sigma2)
         space = _AxisSpace(ext, state, k)
         found = [
             _harmonics(space, run.tita, axis),
             _periodic(space, run, axis),
-            _outliers(z, scale, axis),
-            _heavy_tails(z, axis),
+            *((None, None) if coarse else (_outliers(z, scale, axis), _heavy_tails(z, axis))),
             None if st.q > 0 else _step(z, scale, run, axis),
             _trend(space, run, axis),
             _variance(z, np.arange(run.n), "variance_time", "time", axis, scale),
@@ -482,6 +531,7 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
                       "variance_angle", "θ", axis, scale),
             _hysteresis(space, run.tita, axis),
             _rate(space, run, axis),
+            _timing(space, ext, st, k, axis),
             _lattice(lattice[k], st.lsb, axis),
         ]
         if st.q > 0:
