@@ -94,9 +94,12 @@ def judge(case: Case, analysis) -> dict:
     else:
         names_ok = None  # any name may be tentative: only the verdict counts
         right = verdict == "unexplained"
-    gap_after = getattr(analysis, "gap_after_fit", None) or {}
-    gap_ok = verdict == "explained" or bool(gap_after) and all(
-        m.consistent() for m in gap_after.values())
+    consistent = (getattr(analysis, "adequacy", None) or {}).get("consistent")
+    if consistent is not None:  # the analysis' own judgement: against the stated noise
+        gap_ok = all(consistent.values())
+    else:
+        gap_after = getattr(analysis, "gap_after_fit", None) or {}
+        gap_ok = bool(gap_after) and all(m.consistent() for m in gap_after.values())
     return {"id": case.id, "kind": case.kind, "design": case.design, "n": case.n,
             "expected": sorted(case.expected), "named": sorted(named), "verdict": verdict,
             "right": bool(right), "names_ok": names_ok, "gap_ok": bool(gap_ok),
