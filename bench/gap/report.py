@@ -127,6 +127,8 @@ class GapReport:
         if self.verdict == "explained":
             return [f"verdict: explained — the named effects account for the structure found "
                     f"({battery} at family {alpha})"]
+        if self.effects and not checks:  # an analysis that ran no battery has no verdict
+            return [f"verdict: not available ({battery}); {len(self.effects)} effect(s) named"]
         return [f"verdict: nothing detected at {alpha} ({battery})"]
 
     # ------------------------------------------------------------------ gap after
@@ -203,7 +205,8 @@ class GapReport:
             both = self.gap_before[ax].consistent(self.family_alpha) and not problems
             return f"no effect named on {ax}: the model is unchanged there" + (
                 " (its gap is consistent with noise before and after)" if both
-                else "; the gap is not consistent with noise: see the verdict")
+                else "; not consistent with noise: " + "; ".join(
+                    problems or ["see the gap before"]))
         if self.replay.mode == "sweep" and self.tracking_error > TRACKING_LIMIT:
             return (f"the replay could not follow θ: tracking error {self.tracking_error:.2g} "
                     f"rad (limit {TRACKING_LIMIT:g} rad)")
