@@ -305,7 +305,9 @@ def replay_sensordata(models: Sequence[mujoco.MjModel], replay: Replay, threads:
                                + [np.zeros(0, dtype=int)])
     if static_at.size:
         poses, inverse = np.unique(replay.tita[static_at], return_inverse=True)
-        state0 = np.tile(np.stack([initial_state(m0, p) for p in poses]), (nm, 1))
+        state0 = np.tile(initial_state(m0, 0.0), (nm * poses.size, 1))
+        # mjSTATE_FULLPHYSICS layout: [time, qpos (nq), qvel (nv), act, ...]
+        state0[:, 1 + int(m0.joint(TILT_JOINT).qposadr[0])] = np.tile(poses, nm)
         batch = [m for m in models for _ in poses]
         st, sd = mujoco.rollout.rollout(batch, datas, state0,
                                         np.tile(poses, nm).reshape(-1, 1, 1), nstep=1)

@@ -175,8 +175,8 @@ class GapReport:
         return {a: not self.after_problems(a) for a in AXES}
 
     def shrink(self) -> dict[str, dict]:
-        """Per axis: did the gap shrink (χ²/dof after < before, both against the stated σ²)
-        and, if not, why (``reason``)."""
+        """Per axis: did the gap shrink (effects named on the axis and χ²/dof after < before,
+        both against the stated σ²) and, if not, why (``reason``)."""
         return {ax: self._shrink_axis(ax) for ax in AXES}
 
     def _shrink_axis(self, ax: str) -> dict:
@@ -185,7 +185,7 @@ class GapReport:
         names = sorted({e.name for e in self.effects
                         if ax in e.axes and e.name != "gravity_mismatch"})
         change = self.readings_change.get(ax, {"max_abs": 0.0, "norm_over_sigma": 0.0})
-        out = {"shrunk": bool(after < before), "chi2_dof_before": before,
+        out = {"shrunk": bool(names) and after < before, "chi2_dof_before": before,
                "chi2_dof_after": after, "max_signature_z_before": float(b.max_signature_z),
                "max_signature_z_after": float(a.max_signature_z), "effects": names,
                "readings_change": {k: float(v) for k, v in change.items()}}

@@ -107,7 +107,7 @@ def gap_markdown(report: GapReport) -> str:
         da, sh = d["gap_after"][ax], d["shrink"][ax]
         lines.append(f"- {ax}: {'shrank' if sh['shrunk'] else 'did not shrink'} — "
                      f"{sh['reason']}")
-        if "reason" in da and not sh["shrunk"]:
+        if "reason" in da and da["reason"] not in sh["reason"]:
             lines.append(f"  (after not consistent: {da['reason']})")
     lines += ["", "![residuals before and after](gap.png)", "",
               "The edited model is `model_after.xml` (MjSpec edit of models/tilt_table.xml); "
