@@ -53,8 +53,8 @@ from bench.tilt import (
     write_calibration,
 )
 from calib.conventions import AXES
+from tests.test_gap_bench import NOISE, _dataset
 
-NOISE = (0.25, 0.64)
 ENCODER_STEP = 2.0 * np.pi / 2**20
 """rad: one count of a 20-bit encoder (a real table's encoder repeats θ while it stands)."""
 REPO = Path(__file__).resolve().parents[1]
@@ -183,17 +183,6 @@ def test_stop_and_go_lever_arm_is_named_and_the_gap_shrinks(lever_stop_and_go, c
 
 # ------------------------------------------------------------- noise yardstick
 
-def _dataset(effects: list[str], design: str, seed: int):
-    rng = np.random.default_rng(1000 + seed)
-    sensor = SensorErrorModel.from_pairs(rng.uniform(-0.2, 0.2, 2), rng.uniform(-0.05, 0.05, 2),
-                                         NOISE)
-    sweep = SweepProfile(kind="accel", duration=20.0)
-    cfg = CalibrationConfig(mode="sweep" if design == "accel" else "static",
-                            theta=ThetaDesign(count=2001), sweep=sweep, sensor=sensor)
-    return generate_calibration(apply_effects(cfg, [parse_effect_option(e) for e in effects]),
-                                seed)
-
-
 def test_random_walk_gap_after_is_on_the_walk_filter_innovations():
     """With ``bias_random_walk`` named the gap after is measured on the filter's innovations
     × σ (χ²/dof inside its band), not on the raw residuals (which carry the walk: χ²/dof
@@ -250,12 +239,7 @@ def _adequacy(passed: bool) -> dict:
 @pytest.fixture(scope="module")
 def misaligned_report():
     """A clean misalignment run: the lever arm is not there, one effect is named."""
-    rng = np.random.default_rng(31)
-    sensor = SensorErrorModel.from_pairs(rng.uniform(-0.2, 0.2, 2), rng.uniform(-0.05, 0.05, 2),
-                                         NOISE)
-    cfg = apply_effects(CalibrationConfig(theta=ThetaDesign(count=2001), sensor=sensor),
-                        [parse_effect_option("misalignment:x:delta=0.03")])
-    return run_gap(generate_calibration(cfg, 31).ensayo(), NOISE, 9.8)
+    return run_gap(_dataset(["misalignment:x:delta=0.03"], "full", 31).ensayo(), NOISE, 9.8)
 
 
 def _with_verdict(report, verdict: str):
