@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from bench.gap.report import GapReport
+from bench.gap.report import GapReport, shrink_word
 from calib.binning import binned_mean
 from calib.conventions import AXES
 
@@ -40,8 +40,7 @@ def verdict_box_text(report: GapReport) -> str:
     whether the gap shrank and why not."""
     d = report.to_dict()
     lines = report.verdict_lines()
-    lines += [f"{ax}: gap {'shrank' if sh['shrunk'] else 'did not shrink'} — {sh['reason']}"
-              for ax, sh in d["shrink"].items()]
+    lines += [f"{ax}: gap {shrink_word(sh)} — {sh['reason']}" for ax, sh in d["shrink"].items()]
     return "\n".join(_wrap(line, 150) for line in lines)
 
 

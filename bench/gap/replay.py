@@ -174,7 +174,7 @@ def find_jumps(tita: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 def profile(t: np.ndarray, tita: np.ndarray, ts: np.ndarray
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """θ, ω, α at times ``ts`` (within ``[t[0], t[-1]]``) from samples without jumps.
+    """θ, ω, α at times ``ts`` (sorted, within ``[t[0], t[-1]]``) from samples without jumps.
 
     Shape-preserving where the table stops: held stretches (consecutive equal θ) are exactly
     flat (ω = α = 0); each moving stretch between holds is a cubic spline with zero slope at
@@ -198,7 +198,7 @@ def profile(t: np.ndarray, tita: np.ndarray, ts: np.ndarray
         bc0 = (1, 0.0) if a > 0 else "not-a-knot"
         bc1 = (1, 0.0) if b + 1 < t.size - 1 else "not-a-knot"
         spline = CubicSpline(t[a:b + 2], tita[a:b + 2], bc_type=(bc0, bc1))
-        sel = (idx >= a) & (idx <= b)
+        sel = slice(np.searchsorted(idx, a, "left"), np.searchsorted(idx, b, "right"))
         theta[sel], omega[sel], alpha[sel] = (spline(ts[sel], d) for d in range(3))
     return theta, omega, alpha
 

@@ -354,11 +354,15 @@ class GapReport:
         out.append("shrink (gap after vs before, χ²/dof against the stated σ²):")
         for ax in AXES:
             sh = d["shrink"][ax]
-            out.append(f"  {ax}: {'shrank' if sh['shrunk'] else 'did not shrink'} — "
-                       f"{sh['reason']}")
+            out.append(f"  {ax}: {shrink_word(sh)} — {sh['reason']}")
         for name, path in self.files.items():
             out.append(f"{name}: {path}")
         return "\n".join(out)
+
+
+def shrink_word(sh: dict) -> str:
+    """"shrank", "unchanged" (nothing named on the axis) or "did not shrink"."""
+    return "shrank" if sh["shrunk"] else ("did not shrink" if sh["effects"] else "unchanged")
 
 
 def effect_name(e: dict) -> str:

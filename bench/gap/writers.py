@@ -9,7 +9,7 @@ from pathlib import Path
 
 from bench.dataset import write_json
 from bench.gap.figure import save_gap_figure
-from bench.gap.report import GapReport
+from bench.gap.report import GapReport, shrink_word
 from bench.model import edit_tilt_table, load_spec
 from calib.conventions import AXES
 from calib.io import atomic_write_text
@@ -105,8 +105,7 @@ def gap_markdown(report: GapReport) -> str:
     lines += ["", "Per axis:", ""]
     for ax in AXES:
         da, sh = d["gap_after"][ax], d["shrink"][ax]
-        lines.append(f"- {ax}: {'shrank' if sh['shrunk'] else 'did not shrink'} — "
-                     f"{sh['reason']}")
+        lines.append(f"- {ax}: {shrink_word(sh)} — {sh['reason']}")
         if "reason" in da and da["reason"] not in sh["reason"]:
             lines.append(f"  (after not consistent: {da['reason']})")
     lines += ["", "![residuals before and after](gap.png)", "",
