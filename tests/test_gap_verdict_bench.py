@@ -297,7 +297,7 @@ def test_text_and_markdown_put_the_verdict_first(misaligned_report):
         assert f"size {u['size']:.3g} {u['unit']}" in line
         assert f"statistic {u['statistic']:.4g}" in line and f"p = {u['p_value']:.3g}" in line
     assert "misalignment (x) (tentative)" in text
-    assert "shrink" in text and "did not shrink" in text
+    assert "  x: shrank — χ²/dof" in text and "  y: unchanged — no effect named on y" in text
     md = gap_markdown(report)
     assert md.index("## Verdict") < md.index("## Effects named")
     assert "UNEXPLAINED" in md and "*(tentative)*" in md
