@@ -181,6 +181,33 @@ def test_stop_and_go_lever_arm_is_named_and_the_gap_shrinks(lever_stop_and_go, c
     assert not d["shrink"]["x"]["shrunk"] and "no effect named on x" in d["shrink"]["x"]["reason"]
 
 
+def test_a_gap_that_does_not_shrink_says_why(lever_stop_and_go):
+    """Each reason of ``shrink`` (``docs/gap.md``), forced on the lever-arm stop-and-go
+    report by making χ²/dof after no smaller than before on y."""
+    from calib.io import read_ensayo
+
+    report = run_gap(read_ensayo(lever_stop_and_go), NOISE, 9.8)
+    assert report.shrink()["y"]["shrunk"]
+    stuck = replace(report, chi2_after_stated={**report.chi2_after_stated,
+                                               "y": report.gap_before["y"].chi2_dof + 0.01})
+
+    def reason(r):
+        sh = r.shrink()["y"]
+        assert not sh["shrunk"]
+        return sh["reason"]
+
+    assert reason(replace(stuck, tracking_error=5e-3)).startswith(
+        "the replay could not follow θ: tracking error 0.005 rad")
+    assert reason(replace(stuck, replay=make_replay(report.replay.tita, None))).startswith(
+        "the replay is static (no sample times: static poses): lever_arm changes nothing")
+    small = {"y": {"max_abs": 0.01, "norm_over_sigma": 0.4}}
+    assert "change the simulated readings by less than the noise" in reason(
+        replace(stuck, readings_change=small))
+    assert reason(_with_verdict(stuck, "unexplained")) == \
+        "unexplained structure remains (see verdict)"
+    assert "does not fit these data" in reason(stuck)
+
+
 # ------------------------------------------------------------- noise yardstick
 
 def test_random_walk_gap_after_is_on_the_walk_filter_innovations():
