@@ -6,7 +6,8 @@
                   [--g G] [--json] [--report DIR] [--rrd FILE] [--force]
 
 ``--json`` prints exactly one JSON object on stdout (see :meth:`bench.gap.GapReport.to_dict`);
-progress goes to stderr. Without ``--json`` a readable report is printed.
+progress goes to stderr. Without ``--json`` a readable report is printed, the verdict first
+("explained", "unexplained" with the signatures that remain, or "nothing detected at α").
 """
 
 from __future__ import annotations
@@ -28,6 +29,12 @@ from bench.cli.options import (
 from bench.cli.output import print_files, print_json
 
 EPILOG = """\
+the report starts with the verdict: explained | UNEXPLAINED (each signature that remains:
+axis, description, size, statistic, p) | nothing detected at α; then per axis whether the
+gap shrank and, if not, why (docs/gap.md). A timed run whose θ moves is replayed dynamically
+(stops included); static poses only without timing, when θ never moves or only jumps
+between held positions.
+
 effects and their timing needs (docs/effects.md):
   needs timing (t in the file or --rate): lowpass_lag, lever_arm
   per second with timing, per sample without: bias_drift, bias_random_walk

@@ -48,13 +48,18 @@ from bench.gap.prediction import (
 )
 from bench.gap.recording import write_recording
 from bench.gap.replay import (
-    HELD_FRACTION,
     MAX_REPLAY_STEPS,
-    MAX_SWEEP_STEP,
+    MAX_TABLE_ACCEL,
+    MAX_TABLE_RATE,
+    TRACKING_LIMIT,
+    Piece,
     Replay,
     ReplayMode,
+    find_jumps,
     initial_state,
     make_replay,
+    profile,
+    replay_sensordata,
     sample_rows,
     simulate,
     timing,
@@ -65,9 +70,11 @@ from bench.gap.sysid import FD_STEP, SYSID_EFFECTS, sysid_refine
 from bench.gap.writers import REPORT_FILES, gap_markdown, write_model_after, write_report
 
 __all__ = [
-    "FD_STEP", "HELD_FRACTION", "MAX_REPLAY_STEPS", "MAX_SWEEP_STEP", "REPORT_FILES",
-    "SYSID_EFFECTS", "AxisPrediction", "GapReport", "Replay", "ReplayMode", "additive_output",
-    "fit_bias_scale", "gap_figure", "gap_markdown", "initial_state", "make_replay",
-    "predict_axis", "response", "run_gap", "sample_rows", "simulate", "sysid_refine", "timing",
+    "FD_STEP", "MAX_REPLAY_STEPS", "MAX_TABLE_ACCEL", "MAX_TABLE_RATE", "REPORT_FILES",
+    "SYSID_EFFECTS", "TRACKING_LIMIT", "AxisPrediction", "GapReport", "Piece", "Replay",
+    "ReplayMode", "additive_output", "find_jumps", "fit_bias_scale", "gap_figure",
+    "gap_markdown", "initial_state", "make_replay", "predict_axis", "profile",
+    "replay_sensordata", "response", "run_gap", "sample_rows", "simulate", "sysid_refine",
+    "timing",
     "walk_innovations", "write_model_after", "write_recording", "write_report",
 ]

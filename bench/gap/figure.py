@@ -1,4 +1,5 @@
-"""The gap figure: residuals against θ before and after adding the named effects."""
+"""The gap figure: residuals against θ before and after adding the named effects, with the
+verdict, the unexplained signatures and why each axis' gap shrank or did not."""
 
 from __future__ import annotations
 
@@ -8,27 +9,55 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from bench.gap.report import GapReport
+from bench.gap.report import GapReport, shrink_word
 from calib.binning import binned_mean
 from calib.conventions import AXES
 
 if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
+
+
+VERDICT_COLORS = {"explained": (0.85, 0.95, 0.85), "unexplained": (1.0, 0.87, 0.85),
+                  "nothing_detected": (0.92, 0.92, 0.92)}
+"""Background of the verdict box (green-ish, red-ish, grey)."""
+UNEXPLAINED_EDGE = (0.8, 0.1, 0.1)
+"""Frame and text colour of a panel with unexplained structure."""
 
 
 def effects_label(report: GapReport) -> str:
     """One line naming the effects added and their parameters (figure title)."""
     if not report.effects:
         return "no effect named"
-    return "; ".join(f"{e.name} ({e.axis}): " + ", ".join(f"{k}={v:.4g}"
-                                                         for k, v in e.params.items())
-                     for e in report.effects)
+    flags = report.tentative()
+    return "; ".join(f"{e.name} ({e.axis}{', tentative' if i < len(flags) and flags[i] else ''})"
+                     ": " + ", ".join(f"{k}={v:.4g}" for k, v in e.params.items())
+                     for i, e in enumerate(report.effects))
+
+
+def verdict_box_text(report: GapReport) -> str:
+    """The figure's bottom box: the verdict (and each unexplained signature), then per axis
+    whether the gap shrank and why not."""
+    d = report.to_dict()
+    lines = report.verdict_lines()
+    lines += [f"{ax}: gap {shrink_word(sh)} — {sh['reason']}" for ax, sh in d["shrink"].items()]
+    return "\n".join(_wrap(line, 150) for line in lines)
+
+
+def _wrap(line: str, width: int) -> str:
+    import textwrap
+
+    indent = " " * (len(line) - len(line.lstrip()) + 4)
+    return textwrap.fill(line, width, subsequent_indent=indent)
 
 
 def gap_figure(report: GapReport) -> Figure:
-    """Residuals against θ before and after, per axis, with the ±σ band and binned means.
+    """Residuals against θ before and after, per axis, with the ±σ band and binned means;
+    the verdict in the title and in a box below, panels with unexplained structure framed
+    in red and labelled.
 
-    Returns a :class:`matplotlib.figure.Figure` (2 × 2: rows x, y; columns before, after).
+    Returns a :class:`matplotlib.figure.Figure` (rows x, y; columns before, after; a text
+    row with the verdict, the unexplained signatures and the shrink per axis).
     """
     import matplotlib
 
@@ -36,7 +65,13 @@ def gap_figure(report: GapReport) -> Figure:
     import matplotlib.pyplot as plt
 
     theta = report.replay.tita
-    fig, axs = plt.subplots(2, 2, figsize=(11, 7), sharex=True, constrained_layout=True)
+    fig = plt.figure(figsize=(11, 8.5), constrained_layout=True)
+    grid = fig.add_gridspec(3, 2, height_ratios=[1.0, 1.0, 0.42])
+    axs = np.empty((2, 2), dtype=object)
+    for k in range(2):
+        for j in range(2):
+            axs[k, j] = fig.add_subplot(grid[k, j], sharex=axs[0, 0] if k or j else None)
+    unexplained = report.unexplained if report.verdict == "unexplained" else []
     for k, ax_name in enumerate(AXES):
         for j, (which, res, gaps) in enumerate((
                 ("before", report.residual_before, report.gap_before),
@@ -53,18 +88,42 @@ def gap_figure(report: GapReport) -> Figure:
             for sign in (-1.0, 1.0):
                 ax.axhline(sign * sigma, color=(0.85, 0.55, 0.1), lw=1.0, ls="--", zorder=3)
             ax.axhline(0.0, color="k", lw=0.6)
-            ok = "consistent" if gm.consistent(report.family_alpha) else "GAP"
-            ax.set_title(f"{ax_name}, {which}: χ²/dof = {gm.chi2_dof:.3f}, max z = "
-                         f"{gm.max_signature_z:.1f} ({gm.worst}) — {ok}", fontsize=9)
+            ok = (report.consistent("before" if which == "before" else "after")[ax_name])
+            chi2 = gm.chi2_dof if which == "before" else report.chi2_after(ax_name)
+            ax.set_title(f"{ax_name}, {which}: χ²/dof = {chi2:.3f}, max z = "
+                         f"{gm.max_signature_z:.1f} ({gm.worst}) — "
+                         f"{'consistent' if ok else 'GAP'}", fontsize=9)
             ax.set_ylabel(f"residual {ax_name}, m/s²")
             if k == 1:
                 ax.set_xlabel("θ (encoder), rad")
             if k == 0 and j == 0:
                 ax.legend(loc="upper right", fontsize=7, markerscale=4)
-    title = effects_label(report)
-    fig.suptitle(f"gap before / after adding: {title}", fontsize=10)
+        mine = [u for u in unexplained if u.get("axis") in (ax_name, "both")]
+        if mine:
+            _mark_unexplained(axs[k, 1], mine)
+    box = fig.add_subplot(grid[2, :])
+    box.axis("off")
+    box.text(0.0, 1.0, verdict_box_text(report), transform=box.transAxes, va="top",
+             ha="left", fontsize=8, family="monospace",
+             bbox={"boxstyle": "round", "facecolor": VERDICT_COLORS.get(
+                 report.verdict, VERDICT_COLORS["nothing_detected"]), "edgecolor": "0.5"})
+    fig.suptitle(f"{report.verdict_lines()[0]}\ngap before / after adding: "
+                 f"{effects_label(report)}", fontsize=10,
+                 color=UNEXPLAINED_EDGE if report.verdict == "unexplained" else "k")
     return fig
 
+
+def _mark_unexplained(ax: Axes, signatures: list[dict]) -> None:
+    """Frame a panel in red and list the unexplained signatures in its top-left corner."""
+    for spine in ax.spines.values():
+        spine.set_edgecolor(UNEXPLAINED_EDGE)
+        spine.set_linewidth(2.0)
+    text = "unexplained:\n" + "\n".join(
+        f"{u.get('description', u.get('signature', '?'))}" for u in signatures)
+    ax.text(0.01, 0.98, text, transform=ax.transAxes, va="top", ha="left", fontsize=7.5,
+            color=UNEXPLAINED_EDGE, zorder=5,
+            bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.85,
+                  "edgecolor": UNEXPLAINED_EDGE})
 
 
 def save_gap_figure(report: GapReport, path: str | os.PathLike) -> Path:

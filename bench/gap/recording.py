@@ -1,5 +1,6 @@
 """The rerun recording of the discrepancy workflow: residuals before / after, ±σ bands,
-binned means, the effects text and the ``gap --json`` tree, with its blueprint.
+binned means, the verdict and effects text and the ``gap --json`` tree (``verdict``,
+``unexplained``, ``adequacy``, ``shrink`` included), with its blueprint.
 
 ``rerun`` is imported inside the functions that log, so importing :mod:`bench.gap` does not
 load it.
@@ -31,22 +32,33 @@ from calib.conventions import AXES
 PathLike = str | os.PathLike
 
 
-def recording_blueprint() -> Any:
+def recording_blueprint(report: GapReport | None = None) -> Any:
     """Layout of the gap recording: per axis the residual before (top) and after (bottom)
     adding the named effects, each with its ±σ band and binned mean over the whole θ range,
-    and the effects text. ``gap_report/**`` (the JSON tree) is left out of every view."""
+    and the text view (verdict first, then the effects). An axis with unexplained structure
+    says so in the name of its "after" view. ``gap_report/**`` (the JSON tree) is left out of
+    every view."""
     import rerun.blueprint as rrb
 
+    flagged = {} if report is None or report.verdict != "unexplained" else {
+        ax: [str(u.get("description", u.get("signature", "?"))) for u in report.unexplained
+             if u.get("axis") in (ax, "both")] for ax in AXES}
+
     def view(ax: str, which: str) -> Any:
+        name = f"{ax}: residual {which}, ±σ, binned mean vs θ (µrad), m/s²"
+        if which == "after" and flagged.get(ax):
+            name = f"{ax}: residual after — UNEXPLAINED: {'; '.join(flagged[ax])}"
         return rrb.TimeSeriesView(
-            origin=f"gap/{ax}", name=f"{ax}: residual {which}, ±σ, binned mean vs θ (µrad), m/s²",
+            origin=f"gap/{ax}", name=name,
             contents=[f"+ gap/{ax}/residual_{which}", f"+ gap/{ax}/band_{which}/**",
                       f"+ gap/{ax}/mean_{which}"], axis_x=full_time_axis())
 
     grid = rrb.Horizontal(*(rrb.Vertical(view(ax, "before"), view(ax, "after"))
                             for ax in AXES))
+    verdict = "" if report is None else f" — verdict: {report.verdict}"
     return rrb.Blueprint(
-        rrb.Horizontal(grid, rrb.TextDocumentView(origin="gap/effects", name="effects"),
+        rrb.Horizontal(grid, rrb.TextDocumentView(origin="gap/effects",
+                                                  name=f"verdict and effects{verdict}"),
                        column_shares=[3, 1]),
         time_panel(THETA_TIMELINE), collapse_panels=True)
 
@@ -60,8 +72,11 @@ def recording_markdown(report: GapReport) -> str:
 def write_recording(report: GapReport, path: PathLike, force: bool = False) -> Path:
     """Rerun recording: ``gap/{x,y}/residual_before``, ``…/residual_after`` (timelines
     ``sample`` and ``theta_urad``), ``gap/{x,y}/band_{before,after}/{plus,minus}`` (±σ),
-    ``gap/{x,y}/mean_{before,after}`` (binned means), ``gap/effects`` (Markdown text) and the
-    ``gap --json`` object as a tree under ``gap_report``, with a blueprint (2 × 2 grid)."""
+    ``gap/{x,y}/mean_{before,after}`` (binned means), ``gap/effects`` (Markdown: the verdict
+    with each unexplained signature, then the effects, gap and shrink) and the ``gap --json``
+    object as a tree under ``gap_report`` (read back with ``tiltbench record read``), with a
+    blueprint (2 × 2 grid; an axis with unexplained structure names it in its "after"
+    view)."""
     import rerun as rr
 
     theta = report.replay.tita
@@ -70,7 +85,7 @@ def write_recording(report: GapReport, path: PathLike, force: bool = False) -> P
              "theta_urad": np.round(theta * 1e6).astype(np.int64)}
     # ±σ bands span the θ range (the first and last samples of an up-then-down sweep share θ)
     ends = {tl: v[[int(np.argmin(theta)), int(np.argmax(theta))]] for tl, v in index.items()}
-    with open_recording(path, force=force, blueprint=recording_blueprint(),
+    with open_recording(path, force=force, blueprint=recording_blueprint(report),
                         name="tiltbench gap") as rec:
         for k, ax in enumerate(AXES):
             for which, res, s2 in (("before", report.residual_before, report.noise_var[k]),

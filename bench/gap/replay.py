@@ -1,20 +1,33 @@
 """Re-run a measured experiment on the bench: static poses or a servo replay of θ(t).
 
-* **static** (no timing, or held positions): every distinct θ is a static pose
+The rule (``docs/gap.md``):
+
+* **static** — no timing (no ``t``, no ``--rate``), or θ never moves, or θ only changes by
+  *jumps* (below) between held positions: every distinct θ is a static pose
   (:func:`bench.tilt.static_readings`), exactly what a static bench run produces.
-* **sweep** (sample times ``t`` from the file or ``--rate``, θ moving continuously): the
-  measured encoder angle is replayed through the table's position servo. A cubic spline of
-  θ(t) gives ω and α; inverse dynamics (``mj_inverse``) gives the joint torque that produces
-  that motion and the servo command that delivers it (``u = (τ - b0 - b1·θ - b2·ω) / gain``,
-  the actuator's affine law), so the simulated table follows the measured encoder instead of
-  lagging behind it (commanding the servo with the measured angle itself would add the servo
-  lag, ≈ 0.014 rad at 20 s/rev, a spurious tilt offset). The physics runs at the model
-  timestep; the sensors are read at the measured sample times. The largest encoder
-  difference between replay and data is reported (``replay.tracking_error``).
+* **sweep** — timing and θ moving anywhere, stops included: the measured encoder angle is
+  replayed through the table's position servo. A shape-preserving interpolant of θ(t)
+  (:func:`profile`: a cubic spline per moving stretch, held stretches exactly flat, zero
+  slope where a stretch meets a hold) gives ω and α; inverse dynamics (``mj_inverse``)
+  gives the joint torque that produces that motion and the servo command that delivers it
+  (``u = (τ - b0 - b1·θ - b2·ω) / gain``, the actuator's affine law), so the simulated table
+  follows the measured encoder instead of lagging behind it (commanding the servo with the
+  measured angle itself would add the servo lag, ≈ 0.014 rad at 20 s/rev, a spurious tilt
+  offset) and holds still during the stops. The physics runs at the model timestep; the
+  sensors are read at the measured sample times. The largest encoder difference between
+  replay and data is reported (``replay.tracking_error``).
+
+**Jumps.** A step between two consecutive samples that no tilt table can make — a mean rate
+above :data:`MAX_TABLE_RATE` or a finite-difference acceleration at either end above
+:data:`MAX_TABLE_ACCEL` — is a move that was not sampled (e.g. held positions logged with
+``--rate``). It is replayed as an instantaneous move: the replay is split there into pieces
+(:class:`Piece`); each piece starts from the measured θ with the interpolant's rate (at rest
+when it starts on a hold), and a piece whose θ is constant is a static pose.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -23,21 +36,63 @@ import mujoco.rollout
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from bench.model import ACC_SENSORS, ENCODER, TableEdits, full_state, sensor_slice, tilt_table
+from bench.model import (
+    ACC_SENSORS,
+    ENCODER,
+    TILT_JOINT,
+    TableEdits,
+    full_state,
+    sensor_slice,
+    tilt_table,
+)
 from bench.tilt import static_readings
 from calib.conventions import AXES
 
 ReplayMode = Literal["static", "sweep"]
 
-MAX_SWEEP_STEP = 0.5
-"""rad: a larger jump between consecutive samples means held positions, not a sweep."""
+MAX_TABLE_RATE = 50.0
+"""rad/s (≈ 8 rev/s): a larger mean rate between two samples is a jump, not a sampled move.
+The bench's own fastest generated sweeps reach ≈ 11 rad/s (``sine``, 5 s, 3 cycles)."""
 
-HELD_FRACTION = 0.01
-"""A run whose consecutive samples repeat θ more often than this is treated as static."""
+MAX_TABLE_ACCEL = 1000.0
+"""rad/s²: a larger finite-difference acceleration at either end of a step is a jump. The
+tilt table (I = 0.09 kg·m², servo kp = 200 N·m/rad) would need 90 N·m, a servo error of
+0.45 rad; the bench's fastest generated sweeps reach ≈ 40 rad/s². A move between two held
+samples 10 ms apart needs ≥ 4·Δθ/Δt² (bang-bang): 0.39 rad (16 positions) is 1.6e4 rad/s²."""
+
+TRACKING_LIMIT = 1e-3
+"""rad: a replay whose encoder differs from the measured one by more did not follow θ (the
+report says so); the servo replay follows to ~1e-4 rad."""
 
 MAX_REPLAY_STEPS = 2_000_000
 """Longest servo replay (physics steps, ≈ 2000 s at 1 kHz); longer runs use static poses,
 which give the same readings for sites on the hinge axis (only a lever arm differs)."""
+
+
+@dataclass(frozen=True)
+class Piece:
+    """Samples ``[first, stop)`` replayed continuously (a run without jumps is one piece).
+
+    control : (S,) servo command at the physics steps ``t[first] + j·dt``, rad; None for a
+        piece whose θ is constant (a static pose).
+    qvel0 : initial joint velocity, rad/s (the interpolant's rate at ``t[first]``).
+    rows, weights : sample ``first + i`` is ``(1 - w_i)·step[rows_i] + w_i·step[rows_i + 1]``.
+    """
+
+    first: int
+    stop: int
+    control: np.ndarray | None = None
+    qvel0: float = 0.0
+    rows: np.ndarray | None = None
+    weights: np.ndarray | None = None
+
+    @property
+    def static(self) -> bool:
+        return self.control is None
+
+    @property
+    def nstep(self) -> int:
+        return 0 if self.control is None else int(self.control.shape[0])
 
 
 @dataclass(frozen=True)
@@ -49,19 +104,18 @@ class Replay:
     mode : "static" (distinct poses) or "sweep" (servo replay of θ(t)).
     tita : (N,) measured encoder angle, rad.  t : (N,) sample times, s, or None.
     reason : why this mode was chosen (for the report).
-    control : sweep: (S,) servo command at the physics steps ``t[0] + j·dt``, rad.
-    qvel0 : sweep: initial joint velocity, rad/s (spline derivative at t[0]).
-    rows, weights : sweep: sample k is ``(1 - w_k)·step[rows_k] + w_k·step[rows_k + 1]``.
+    pieces : sweep: the stretches between jumps (:class:`Piece`), in sample order.
+    holds : number of held stretches (≥ 2 consecutive equal θ) kept still.
+    jumps : sample indices k whose step to k + 1 is a jump (instantaneous move).
     """
 
     mode: ReplayMode
     tita: np.ndarray
     t: np.ndarray | None
     reason: str
-    control: np.ndarray | None = None
-    qvel0: float = 0.0
-    rows: np.ndarray | None = None
-    weights: np.ndarray | None = None
+    pieces: tuple[Piece, ...] = ()
+    holds: int = 0
+    jumps: tuple[int, ...] = ()
 
     @property
     def n(self) -> int:
@@ -69,7 +123,7 @@ class Replay:
 
     @property
     def nstep(self) -> int:
-        return 0 if self.control is None else int(self.control.shape[0])
+        return sum(p.nstep for p in self.pieces)
 
 
 def timing(ensayo_t: np.ndarray | None, n: int, rate: float | None) -> np.ndarray | None:
@@ -89,48 +143,125 @@ def _servo_command(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
     data = mujoco.MjData(model)
     gain = float(model.actuator_gainprm[0, 0])
     b0, b1, b2 = (float(v) for v in model.actuator_biasprm[0, :3])
+    q = int(model.joint(TILT_JOINT).qposadr[0])
+    v = int(model.joint(TILT_JOINT).dofadr[0])
     tau = np.empty_like(theta)
     for j in range(theta.size):  # mj_inverse ≈ 3 µs per step
-        data.qpos[0], data.qvel[0], data.qacc[0] = theta[j], omega[j], alpha[j]
+        data.qpos[q], data.qvel[v], data.qacc[v] = theta[j], omega[j], alpha[j]
         mujoco.mj_inverse(model, data)
-        tau[j] = data.qfrc_inverse[0]
+        tau[j] = data.qfrc_inverse[v]
     return (tau - b0 - b1 * theta - b2 * omega) / gain
+
+
+def find_jumps(tita: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Indices k whose step θ_k → θ_{k+1} no table can make (a move that was not sampled).
+
+    A jump has a mean rate ``|Δθ_k| / Δt_k`` above :data:`MAX_TABLE_RATE`, or a
+    finite-difference acceleration ``|ω_{k+1/2} - ω_{k∓1/2}| / Δt`` at either end above
+    :data:`MAX_TABLE_ACCEL` (ω_{k+1/2} = Δθ_k/Δt_k; Δt the mean of the two intervals).
+    """
+    dth, dt = np.diff(tita), np.diff(t)
+    if dth.size == 0:
+        return np.zeros(0, dtype=int)
+    w = dth / dt
+    fast = np.abs(w) > MAX_TABLE_RATE
+    if dth.size > 1:
+        acc = np.abs(np.diff(w)) / (0.5 * (dt[1:] + dt[:-1]))  # at sample j = i + 1
+        for i in np.flatnonzero(acc > MAX_TABLE_ACCEL):  # steps i and i + 1 meet there:
+            fast[i + int(abs(w[i + 1]) > abs(w[i]))] = True  # the faster one is the jump
+    return np.flatnonzero(fast & (dth != 0.0))
+
+
+def profile(t: np.ndarray, tita: np.ndarray, ts: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """θ, ω, α at times ``ts`` (sorted, within ``[t[0], t[-1]]``) from samples without jumps.
+
+    Shape-preserving where the table stops: held stretches (consecutive equal θ) are exactly
+    flat (ω = α = 0); each moving stretch between holds is a cubic spline with zero slope at
+    an end that meets a hold (the table is at rest there) and not-a-knot at the ends of the
+    run. A run without holds is one not-a-knot cubic spline. (A single cubic spline through
+    a stop overshoots: it rings on both sides of the hold.)
+    """
+    theta, omega, alpha = (np.full(ts.shape, tita[0]), np.zeros(ts.shape), np.zeros(ts.shape))
+    if tita.size < 2:
+        return theta, omega, alpha
+    flat = np.diff(tita) == 0.0
+    idx = np.clip(np.searchsorted(t, ts, side="right") - 1, 0, t.size - 2)
+    theta[:] = tita[idx]  # held intervals: the hold's value (exactly flat)
+    moving = np.flatnonzero(~flat)
+    if moving.size == 0:
+        return theta, omega, alpha
+    breaks = np.flatnonzero(np.diff(moving) > 1)
+    for a, b in zip(np.r_[moving[0], moving[breaks + 1]], np.r_[moving[breaks], moving[-1]],
+                    strict=True):
+        # samples a … b + 1 move; a hold before a / after b + 1 pins the slope to 0
+        bc0 = (1, 0.0) if a > 0 else "not-a-knot"
+        bc1 = (1, 0.0) if b + 1 < t.size - 1 else "not-a-knot"
+        spline = CubicSpline(t[a:b + 2], tita[a:b + 2], bc_type=(bc0, bc1))
+        sel = slice(np.searchsorted(idx, a, "left"), np.searchsorted(idx, b, "right"))
+        theta[sel], omega[sel], alpha[sel] = (spline(ts[sel], d) for d in range(3))
+    return theta, omega, alpha
+
+
+def _piece(model: mujoco.MjModel, tita: np.ndarray, t: np.ndarray, first: int, stop: int
+           ) -> Piece:
+    """Servo replay of samples ``[first, stop)`` (a static pose if θ is constant there)."""
+    th, tt = tita[first:stop], t[first:stop]
+    if np.all(th == th[0]):
+        return Piece(first, stop)
+    dt = float(model.opt.timestep)
+    pos = (tt - tt[0]) / dt
+    rows = np.floor(pos + 1e-7).astype(int)
+    weights = np.clip(pos - rows, 0.0, 1.0)
+    weights[weights < 1e-7] = 0.0
+    nstep = int(rows[-1]) + 2
+    ts = np.minimum(tt[0] + dt * np.arange(nstep), tt[-1])
+    theta, omega, alpha = profile(tt, th, ts)
+    return Piece(first, stop, _servo_command(model, theta, omega, alpha), float(omega[0]),
+                 rows, weights)
 
 
 def make_replay(tita: np.ndarray, t: np.ndarray | None) -> Replay:
     """Decide how to re-run the measured experiment and prepare the servo replay.
 
-    Static when there is no timing, when θ is held (more than :data:`HELD_FRACTION` of the
-    consecutive samples repeat θ) or jumps (> :data:`MAX_SWEEP_STEP` rad between samples);
-    otherwise a servo replay of θ(t) (see the module docstring).
+    Static when there is no timing, when θ never moves, or when θ only changes by jumps
+    between held positions (:func:`find_jumps`); otherwise a servo replay of θ(t), holds
+    included (module docstring).
     """
     tita = np.asarray(tita, dtype=float)
     if t is None:
         return Replay("static", tita, None, "no sample times: static poses")
     t = np.asarray(t, dtype=float)
-    step = np.abs(np.diff(tita))
-    if step.size == 0 or np.mean(step < 1e-12) > HELD_FRACTION:
-        return Replay("static", tita, t, "θ held at discrete positions: static poses")
-    if step.max() > MAX_SWEEP_STEP:
-        return Replay("static", tita, t, f"θ jumps by up to {step.max():.3g} rad between "
-                      "samples: static poses")
+    if np.all(tita == tita[0]):
+        return Replay("static", tita, t, "θ never moves: static poses")
+    jumps = find_jumps(tita, t)
+    bounds = np.r_[0, jumps + 1, tita.size]
+    spans = [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+    flat = np.diff(tita) == 0.0
+    holds = int(np.sum(flat[1:] & ~flat[:-1]) + (flat[0] if flat.size else 0))
+    jump_text = ""
+    if jumps.size:
+        dth, dtt = np.abs(np.diff(tita))[jumps], np.diff(t)[jumps]
+        jump_text = (f"{jumps.size} jump(s) between samples (up to {dth.max():.3g} rad in "
+                     f"{dtt[np.argmax(dth)]:.3g} s; limits {MAX_TABLE_RATE:g} rad/s, "
+                     f"{MAX_TABLE_ACCEL:g} rad/s²: moves that were not sampled)")
+    if all(np.all(tita[a:b] == tita[a]) for a, b in spans):
+        return Replay("static", tita, t, f"θ held at {np.unique(tita).size} positions, "
+                      f"{jump_text}: static poses", holds=holds,
+                      jumps=tuple(int(j) for j in jumps))
     model, _ = tilt_table()
     dt = float(model.opt.timestep)
     if (t[-1] - t[0]) / dt > MAX_REPLAY_STEPS:
         return Replay("static", tita, t, f"run of {t[-1] - t[0]:.4g} s exceeds the servo "
-                      f"replay limit ({MAX_REPLAY_STEPS} steps): static poses")
-    pos = (t - t[0]) / dt
-    rows = np.floor(pos + 1e-7).astype(int)
-    weights = np.clip(pos - rows, 0.0, 1.0)
-    weights[weights < 1e-7] = 0.0
-    nstep = int(rows[-1]) + 2
-    step_t = t[0] + dt * np.arange(nstep)
-    spline = CubicSpline(t, tita)
-    ts = np.minimum(step_t, t[-1])
-    control = _servo_command(model, spline(ts), spline(ts, 1), spline(ts, 2))
-    return Replay("sweep", tita, t, "sample times and continuous θ: servo replay of the "
-                  "measured encoder angle", control=control, qvel0=float(spline(t[0], 1)),
-                  rows=rows, weights=weights)
+                      f"replay limit ({MAX_REPLAY_STEPS} steps): static poses", holds=holds,
+                      jumps=tuple(int(j) for j in jumps))
+    pieces = tuple(_piece(model, tita, t, a, b) for a, b in spans)
+    reason = "sample times and θ moving: servo replay of the measured encoder angle"
+    if holds:
+        reason += f"; {holds} hold(s) kept still"
+    if jumps.size:
+        reason += f"; {jump_text} replayed as instantaneous moves"
+    return Replay("sweep", tita, t, reason, pieces, holds, tuple(int(j) for j in jumps))
 
 
 def accel_columns(model: mujoco.MjModel) -> list[int]:
@@ -138,20 +269,60 @@ def accel_columns(model: mujoco.MjModel) -> list[int]:
     return [sensor_slice(model, ACC_SENSORS[a]).start for a in AXES]
 
 
-def initial_state(model: mujoco.MjModel, replay: Replay) -> np.ndarray:
-    """Full-physics state at the first sample of a sweep replay (θ0, ω0)."""
+def initial_state(model: mujoco.MjModel, theta: float, omega: float = 0.0) -> np.ndarray:
+    """Full-physics state at rest (or turning at ``omega``, rad/s) at ``theta``, rad."""
     data = mujoco.MjData(model)
-    data.qpos[0] = replay.tita[0]
-    data.qvel[0] = replay.qvel0
+    data.qpos[int(model.joint(TILT_JOINT).qposadr[0])] = theta
+    data.qvel[int(model.joint(TILT_JOINT).dofadr[0])] = omega
     return full_state(model, data)
 
 
-def sample_rows(replay: Replay, per_step: np.ndarray) -> np.ndarray:
-    """Per-step values (S, ...) at the measured sample times (linear between steps)."""
-    lo = per_step[replay.rows]
-    hi = per_step[np.minimum(replay.rows + 1, per_step.shape[0] - 1)]
-    w = replay.weights.reshape((-1,) + (1,) * (per_step.ndim - 1))
+def sample_rows(piece: Piece, per_step: np.ndarray) -> np.ndarray:
+    """Per-step values (S, ...) of a piece at its measured sample times (linear between
+    steps)."""
+    lo = per_step[piece.rows]
+    hi = per_step[np.minimum(piece.rows + 1, per_step.shape[0] - 1)]
+    w = piece.weights.reshape((-1,) + (1,) * (per_step.ndim - 1))
     return np.where(w == 0.0, lo, (1.0 - w) * lo + w * hi)
+
+
+def replay_sensordata(models: Sequence[mujoco.MjModel], replay: Replay, threads: int = 2
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """Sensordata (M, N, nsensordata) and state (M, N, nstate) of each of the M ``models``
+    (same size signature, e.g. candidates of one model) at the measured samples.
+
+    Static poses (a static replay, or the constant pieces of a sweep) are one batched
+    ``nstep = 1`` rollout at rest with the servo target on the pose (no torque: the
+    ``mj_forward`` reading); each moving piece is one rollout per model of its servo command
+    from (θ_first, ω0). The models of a rollout are split over ``threads`` threads.
+    """
+    m0, n, nm = models[0], replay.n, len(models)
+    datas = [mujoco.MjData(m0) for _ in range(max(1, min(threads, nm)))]
+    nstate = mujoco.mj_stateSize(m0, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    sd_out, st_out = np.empty((nm, n, m0.nsensordata)), np.empty((nm, n, nstate))
+    pieces = replay.pieces or (Piece(0, n),)
+    static_at = np.concatenate([np.arange(p.first, p.stop) for p in pieces if p.static]
+                               + [np.zeros(0, dtype=int)])
+    if static_at.size:
+        poses, inverse = np.unique(replay.tita[static_at], return_inverse=True)
+        state0 = np.tile(initial_state(m0, 0.0), (nm * poses.size, 1))
+        # mjSTATE_FULLPHYSICS layout: [time, qpos (nq), qvel (nv), act, ...]
+        state0[:, 1 + int(m0.joint(TILT_JOINT).qposadr[0])] = np.tile(poses, nm)
+        batch = [m for m in models for _ in poses]
+        st, sd = mujoco.rollout.rollout(batch, datas, state0,
+                                        np.tile(poses, nm).reshape(-1, 1, 1), nstep=1)
+        sd_out[:, static_at] = sd[:, 0].reshape(nm, poses.size, -1)[:, inverse]
+        st_out[:, static_at] = st[:, 0].reshape(nm, poses.size, -1)[:, inverse]
+    for p in pieces:
+        if p.static:
+            continue
+        state0 = initial_state(m0, replay.tita[p.first], p.qvel0)
+        st, sd = mujoco.rollout.rollout(list(models), datas, state0[None, :],
+                                        p.control.reshape(1, -1, 1), nstep=p.nstep)
+        for i in range(nm):
+            sd_out[i, p.first:p.stop] = sample_rows(p, sd[i])
+            st_out[i, p.first:p.stop] = sample_rows(p, st[i])
+    return sd_out, st_out
 
 
 def simulate(replay: Replay, table: TableEdits | None = None
@@ -160,11 +331,5 @@ def simulate(replay: Replay, table: TableEdits | None = None
     if replay.mode == "static":
         return static_readings(replay.tita, table)
     model, _ = tilt_table(table)
-    data = mujoco.MjData(model)
-    state0 = initial_state(model, replay)
-    _, sd = mujoco.rollout.rollout(model, data, state0[None, :],
-                                   replay.control.reshape(1, -1, 1), nstep=replay.nstep)
-    rows = sample_rows(replay, sd[0])
-    enc = sensor_slice(model, ENCODER).start
-    return rows[:, accel_columns(model)], rows[:, enc]
-
+    sd = replay_sensordata([model], replay)[0][0]
+    return sd[:, accel_columns(model)], sd[:, sensor_slice(model, ENCODER).start]

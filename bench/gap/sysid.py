@@ -24,8 +24,8 @@ import numpy as np
 
 from bench.effects import EffectSpec
 from bench.gap.prediction import additive_output, fit_bias_scale, response
-from bench.gap.replay import Replay, accel_columns, initial_state, sample_rows
-from bench.model import TableEdits, edit_tilt_table, full_state, load_spec
+from bench.gap.replay import Replay, accel_columns, initial_state, replay_sensordata
+from bench.model import TableEdits, edit_tilt_table, load_spec
 from bench.sensors import SensorErrorModel
 from calib.conventions import AXES
 
@@ -83,32 +83,33 @@ def _effect_params(e: EffectSpec, v: np.ndarray) -> dict[str, float]:
 
 
 
-def _static_rollout(*, models: Sequence[mujoco.MjModel], datas: Sequence[mujoco.MjData],
-                    control_signal: Sequence[Any], initial_states: Sequence[np.ndarray],
-                    param_dicts: Any = None, rollout_signal_mapping: Any = None,
-                    rollout_state_mapping: Any = None, ctrl_mapping: Any = None) -> list:
-    """``mujoco.sysid`` custom rollout for static poses: one batched ``nstep = 1`` rollout.
+def _replay_rollout(replay: Replay) -> Callable:
+    """``mujoco.sysid`` custom rollout of the replayed experiment, read at the samples.
 
-    The "control" of a static run is its list of distinct poses (θ, rad); each pose starts at
-    rest with the servo target on it (no torque), so the sensors are the ``mj_forward``
-    reading at that pose — what :func:`bench.tilt.static_readings` does.
+    For every candidate model the sensors at the measured samples come from
+    :func:`bench.gap.replay.replay_sensordata` — the same static poses / servo replay pieces
+    as :func:`bench.gap.replay.simulate` — so the "control" sysid carries is only the
+    measured θ per sample.
     """
-    sysid = _sysid()
-    out = []
-    for model, ctrl, s0 in zip(models, control_signal, initial_states, strict=True):
-        poses = np.asarray(ctrl.data[:, 0], dtype=float)
-        state0 = np.tile(np.asarray(s0, dtype=float), (poses.size, 1))
-        state0[:, 1] = poses  # mjSTATE_FULLPHYSICS: [time, qpos, ...]
-        state, sd = mujoco.rollout.rollout(model, list(datas), state0, poses.reshape(-1, 1, 1),
-                                           nstep=1)
-        state = state[:, 0, :].copy()
-        state[:, 0] = ctrl.times  # poses are not in time: index them by pose number
-        out.append(sysid.SystemTrajectory(
-            model=model, control=ctrl,
-            sensordata=sysid.TimeSeries(ctrl.times, sd[:, 0, :], rollout_signal_mapping),
-            initial_state=np.asarray(s0, dtype=float),
-            state=sysid.TimeSeries(ctrl.times, state, rollout_state_mapping)))
-    return out
+
+    def rollout(*, models: Sequence[mujoco.MjModel], datas: Sequence[mujoco.MjData],
+                control_signal: Sequence[Any], initial_states: Sequence[np.ndarray],
+                param_dicts: Any = None, rollout_signal_mapping: Any = None,
+                rollout_state_mapping: Any = None, ctrl_mapping: Any = None) -> list:
+        sysid = _sysid()
+        sd, state = replay_sensordata(models, replay)
+        out = []
+        for i, (model, ctrl, s0) in enumerate(zip(models, control_signal, initial_states,
+                                                  strict=True)):
+            state[i, :, 0] = ctrl.times  # mjSTATE_FULLPHYSICS: [time, qpos, ...]
+            out.append(sysid.SystemTrajectory(
+                model=model, control=ctrl,
+                sensordata=sysid.TimeSeries(ctrl.times, sd[i], rollout_signal_mapping),
+                initial_state=np.asarray(s0, dtype=float),
+                state=sysid.TimeSeries(ctrl.times, state[i], rollout_state_mapping)))
+        return out
+
+    return rollout
 
 
 def sysid_refine(effects: Sequence[EffectSpec], replay: Replay, datos: np.ndarray,
@@ -134,8 +135,9 @@ def sysid_refine(effects: Sequence[EffectSpec], replay: Replay, datos: np.ndarra
     One ``mujoco.sysid`` problem: a ``Parameter`` per physical effect (δ of a misalignment or
     tilt offset, rad; (pos_x, pos_z) of a lever arm, m); the model is rebuilt for each
     candidate by editing a copy of the spec with :func:`bench.model.edit_tilt_table` (the
-    ``build_model`` hook); rollouts are ``sysid_rollout`` (sweep: the servo replay) or a
-    batched static-pose rollout (``custom_rollout``); the residual (``modify_residual``) is
+    ``build_model`` hook); the rollout (``custom_rollout``) is the replay itself, static
+    poses and servo-replay pieces read at the samples (:func:`_replay_rollout`); the
+    residual (``modify_residual``) is
     ``(data - bias - (1 + scale)·resp(a_sim) - drift) / σ`` on the affected axes, with bias
     and scale solved linearly for every candidate (variable projection), so the optimizer
     (``sysid.optimize``, Gauss-Newton with finite-difference Jacobians) sees only the
@@ -163,7 +165,7 @@ def sysid_refine(effects: Sequence[EffectSpec], replay: Replay, datos: np.ndarra
     residual_fn = sysid.build_residual_fn(models_sequences=[seq], build_model=build_model,
                                           modify_residual=projection.modify_residual,
                                           custom_rollout=exp.custom_rollout,
-                                          resample_true=False, n_threads=2)
+                                          resample_true=False, n_threads=1)
     fit = _optimize(params, residual_fn, max_iters, xtol)
     return _results(targets, fit, projection)
 
@@ -186,9 +188,8 @@ class _Experiment:
 
     cols : sensordata columns of the x, y accelerometers.  mapping : sensor mapping.
     measured_full : (N, nsensordata) data in sensordata layout (accelerometer columns set).
-    state0 : initial full-physics state.  control, measured : ``sysid.TimeSeries``.
-    custom_rollout : batched static-pose rollout, or None (sweep: sysid's own rollout).
-    at_samples : per-step (or per-pose) predictions → (N, ...) at the measured samples.
+    state0 : initial full-physics state.  control, measured : ``sysid.TimeSeries`` (control:
+    the measured θ per sample).  custom_rollout : :func:`_replay_rollout` of the replay.
     """
 
     cols: list[int]
@@ -197,8 +198,7 @@ class _Experiment:
     state0: np.ndarray
     control: Any
     measured: Any
-    custom_rollout: Callable | None
-    at_samples: Callable[[np.ndarray], np.ndarray]
+    custom_rollout: Callable
 
 
 def _experiment(replay: Replay, datos: np.ndarray, table: TableEdits) -> _Experiment:
@@ -212,20 +212,11 @@ def _experiment(replay: Replay, datos: np.ndarray, table: TableEdits) -> _Experi
     measured_full = np.zeros((replay.n, model0.nsensordata))
     measured_full[:, cols] = datos
     mapping = sysid.TimeSeries.compute_all_sensor_mapping(model0)
-    if replay.mode == "static":
-        poses, inverse = np.unique(replay.tita, return_inverse=True)
-        return _Experiment(
-            cols, mapping, measured_full, full_state(model0, mujoco.MjData(model0)),
-            sysid.TimeSeries(np.arange(poses.size, dtype=float), poses.reshape(-1, 1)),
-            sysid.TimeSeries(np.arange(replay.n, dtype=float), measured_full, mapping),
-            _static_rollout, lambda pred: pred[inverse])
-    dt = float(model0.opt.timestep)
-    u = np.append(replay.control, replay.control[-1])  # sysid drops the last control
+    index = np.arange(replay.n, dtype=float)  # samples by number (a static run has no t)
     return _Experiment(
-        cols, mapping, measured_full, initial_state(model0, replay),
-        sysid.TimeSeries(replay.t[0] + dt * np.arange(u.size), u.reshape(-1, 1)),
-        sysid.TimeSeries(np.asarray(replay.t, dtype=float), measured_full, mapping),
-        None, lambda pred: sample_rows(replay, pred))
+        cols, mapping, measured_full, initial_state(model0, float(replay.tita[0])),
+        sysid.TimeSeries(index, replay.tita.reshape(-1, 1)),
+        sysid.TimeSeries(index, measured_full, mapping), _replay_rollout(replay))
 
 
 @dataclass
@@ -254,7 +245,7 @@ class _Projection:
     def modify_residual(self, p: Any, pred_ts: Any, meas_ts: Any, model: mujoco.MjModel,
                         return_pred_all: bool = False, **_: Any) -> tuple:
         exp = self.exp
-        a_sim = exp.at_samples(np.asarray(pred_ts.data))[:, exp.cols]
+        a_sim = np.asarray(pred_ts.data)[:, exp.cols]
         res = []
         pred_full = np.zeros_like(exp.measured_full)
         for k in self.axes_k:

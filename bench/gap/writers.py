@@ -9,7 +9,7 @@ from pathlib import Path
 
 from bench.dataset import write_json
 from bench.gap.figure import save_gap_figure
-from bench.gap.report import GapReport
+from bench.gap.report import GapReport, shrink_word
 from bench.model import edit_tilt_table, load_spec
 from calib.conventions import AXES
 from calib.io import atomic_write_text
@@ -29,10 +29,37 @@ def check_outputs(report_dir: PathLike, rrd: PathLike | None) -> None:
         raise FileExistsError(f"{', '.join(clash)}: exist(s); pass --force to overwrite")
 
 
+def verdict_markdown(report: GapReport) -> list[str]:
+    """The verdict section of ``gap.md`` (also the head of the recording's text view)."""
+    head, *rest = report.verdict_lines()
+    lines = ["## Verdict", "", f"**{head.removeprefix('verdict: ')}**"]
+    if rest:
+        lines += ["", "| axis | what remains | signature | size | statistic | p |",
+                  "|---|---|---|---|---|---|"]
+        for u in report.unexplained:
+            size = u.get("size")
+            lines.append(f"| {u.get('axis', '?')} | {u.get('description', '')} | "
+                         f"`{u.get('signature', '')}` | "
+                         + ("" if size is None else f"{float(size):.3g} {u.get('unit', '')}")
+                         + f" | {_num(u.get('statistic'), '.4g')} | "
+                         f"{_num(u.get('p_value'), '.3g')} |")
+    if report.tentative() and any(report.tentative()):
+        lines += ["", "Effects marked *(tentative)* are named, but the final model fails "
+                  "adequacy: something not in the model remains and may bias their "
+                  "estimates."]
+    return lines
+
+
+def _num(v: object, fmt: str) -> str:
+    return "" if v is None else format(float(v), fmt)
+
+
 def gap_markdown(report: GapReport) -> str:
-    """The Markdown report (``gap.md``)."""
+    """The Markdown report (``gap.md``): the verdict first, then the replay, the named
+    effects, the gap before / after and why it shrank or did not."""
     d = report.to_dict()
-    lines = ["# Discrepancy workflow (gap)", "",
+    lines = ["# Discrepancy workflow (gap)", "", *verdict_markdown(report), "",
+             "## Run", "",
              f"- samples: {report.replay.n}; g = {report.g} m/s²; stated σ² = "
              f"{report.noise_var[0]:g}, {report.noise_var[1]:g} (m/s²)²",
              f"- timing: {report.timing}; replay: **{report.replay.mode}** — "
@@ -42,8 +69,8 @@ def gap_markdown(report: GapReport) -> str:
                      f"{report.tracking_error:.2g} rad")
     lines += ["", "## Effects named", ""]
     if not d["effects"]:
-        lines.append("None: the nominal model (bias, scale) explains the data within the "
-                     "noise.")
+        lines.append("None." if report.verdict == "unexplained" else
+                     f"None: nothing detected at α = {report.verdict_alpha:g}.")
     else:
         lines += ["| effect | axis | estimate ± std (calib LS) | mujoco.sysid ± std | "
                   "statistic | p | timing |", "|---|---|---|---|---|---|---|"]
@@ -54,7 +81,8 @@ def gap_markdown(report: GapReport) -> str:
             sy = ("; ".join(f"{k} = {v:.6g} ± {s['std'][k]:.2g}"
                             for k, v in s["params"].items()) if "params" in s
                   else s.get("error", "—"))
-            lines.append(f"| `{e['name']}` | {e['axis']} | {est} | {sy} | "
+            name = f"`{e['name']}`" + (" *(tentative)*" if e["tentative"] else "")
+            lines.append(f"| {name} | {e['axis']} | {est} | {sy} | "
                          f"{e['statistic']:.4g} | {e['p_value']:.3g} | {e['timing']} |")
     if d["not_identifiable"]:
         lines += ["", "## Not identifiable", ""]
@@ -64,14 +92,22 @@ def gap_markdown(report: GapReport) -> str:
                   "Not testable without sample times (`t` in the file or `--rate`): "
                   + ", ".join(f"`{n}`" for n in d["needs_timing"])
                   + ". `bias_drift` and `bias_random_walk` are reported per sample."]
-    lines += ["", f"## Gap (family α = {report.family_alpha})", "",
-              "| axis | χ²/dof before | max z before | χ²/dof after | max z after | "
-              "after consistent with noise |", "|---|---|---|---|---|---|"]
+    lines += ["", f"## Gap (family α = {report.family_alpha}; χ²/dof against the stated σ²)",
+              "", "| axis | χ²/dof before | max z before | χ²/dof after | max z after | "
+              "after consistent with noise | shrank |", "|---|---|---|---|---|---|---|"]
     for ax in AXES:
         b, a = report.gap_before[ax], report.gap_after[ax]
+        da, sh = d["gap_after"][ax], d["shrink"][ax]
         lines.append(f"| {ax} | {b.chi2_dof:.4f} | {b.max_signature_z:.2f} ({b.worst}) | "
-                     f"{a.chi2_dof:.4f} | {a.max_signature_z:.2f} ({a.worst}) | "
-                     f"{'yes' if a.consistent(report.family_alpha) else 'no'} |")
+                     f"{da['chi2_dof']:.4f} | {a.max_signature_z:.2f} ({a.worst}) | "
+                     f"{'yes' if da['consistent'] else 'no'} | "
+                     f"{'yes' if sh['shrunk'] else 'no'} |")
+    lines += ["", "Per axis:", ""]
+    for ax in AXES:
+        da, sh = d["gap_after"][ax], d["shrink"][ax]
+        lines.append(f"- {ax}: {shrink_word(sh)} — {sh['reason']}")
+        if "reason" in da and da["reason"] not in sh["reason"]:
+            lines.append(f"  (after not consistent: {da['reason']})")
     lines += ["", "![residuals before and after](gap.png)", "",
               "The edited model is `model_after.xml` (MjSpec edit of models/tilt_table.xml); "
               "sensor terms and fitted bias/scale are in `gap.json` (`model_after`)."]
