@@ -104,8 +104,11 @@ class GapReport:
 
     @property
     def verdict_alpha(self) -> float:
-        """Family α the verdict is stated at (the adequacy battery's, else the workflow's)."""
-        return float(self.adequacy.get("family_alpha", self.family_alpha))
+        """α the verdict is stated at: the false-alarm bound of a clean run, the selection's
+        family α plus the adequacy battery's (``calib.gap.analyze_gap``)."""
+        c = dict(getattr(self.analysis, "criterion", None) or {})
+        return (float(c.get("family_alpha", self.family_alpha))
+                + float(self.adequacy.get("family_alpha", 0.0)))
 
     def tentative(self) -> list[bool]:
         """Per named effect (order of ``effects``): named, but the final model fails adequacy."""
