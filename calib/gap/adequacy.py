@@ -477,7 +477,7 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
         fit = space.test(peak[4])
         unit_t = "s" if run.time_unit == "s" else "samples"
         if fit is not None:
-            add(fit, 2, peak[2], f"a periodic component (period {peak[3]:.4g} {unit_t})",
+            add(fit, 2, peak[2], f"a periodic component with period {peak[3]:.4g} {unit_t}",
                 float(np.hypot(*fit[2])))
     c = np.cumsum(space.rw - space.rw.mean())
     i = int(np.argmax(np.abs(c))) + 1  # rw[i] is the difference of samples i and i+1
@@ -490,8 +490,8 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
     logp, shape, size, lr_d, d = min(shapes)
     return Check("rival_shapes", axis, float(lr_d), logp,
                  f"LR of the shape over the named set, chi2({d:g}) × search", size, "m/s²",
-                 f"the residual on {axis} is explained better by {shape} ({size:.3g} m/s²) "
-                 f"than by {' + '.join(named)}: not in the catalog")
+                 f"the residual on {axis} is explained better by {shape} (size {size:.3g} "
+                 f"m/s²) than by {' + '.join(named)}: a shape the catalog does not have")
 
 
 # --------------------------------------------------------------------------- battery
