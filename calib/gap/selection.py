@@ -21,14 +21,24 @@ error rate:
    the pool of step 2. It is considered only when no structured candidate (nor the noise
    level) passes, and it is added only when (a) its own test passes ``α_step`` and (b) it
    explains the residual better than every structured candidate on that axis at its cost:
-   ``LR_walk - 2·edf > max(0, max_s LR_s - 2·k_s)`` (AIC with the walk charged its effective
-   degrees of freedom, the trace of the smoother's hat matrix,
-   :func:`calib.gap.flexibility.walk_effective_dof`; k_s the structured candidate's
+   ``LR_walk - 2·c_walk > max(0, max_s LR_s - 2·k_s)`` (AIC; k_s the structured candidate's
    parameters). After a walk is added, the structured candidates are tested again on top of
    it (step 2). And the other way round: where structured effects were named on an axis,
    the walk *in their place* is compared with them by the same criterion
-   (``nll + 2·p`` against ``nll + 2·edf``): on a single sweep a walk's path is smooth in θ
+   (``nll + 2·p`` against ``nll + 2·c_walk``): on a single sweep a walk's path is smooth in θ
    and several structured effects can share it out, so the cheaper explanation is kept.
+
+   The walk's charge ``c_walk`` (:func:`walk_cost`). Its likelihood is the *marginal* one
+   (the path integrated out): its log-determinant term already charges for the path's
+   flexibility (the Occam factor), and q counts one parameter. Its effective degrees of
+   freedom — the trace of the smoother's hat matrix
+   (:func:`calib.gap.flexibility.walk_effective_dof`) — are what the fitted path uses; they
+   are reported next to every decision (``steps``). Charging 2·edf *on top of* the marginal
+   likelihood counts the flexibility twice: measured on sweeps with a true walk of 8–20σ
+   (N = 6001), 3 of 3 walks then lost to sets of two or three structured effects that
+   left harmonics behind (``WALK_CHARGE = "edf"`` reproduces it). Structured-first ordering,
+   the swap comparison and the adequacy battery's rival shapes
+   (:mod:`calib.gap.adequacy`) keep the walk from explaining structured or unknown effects.
 4. One backward pass: an effect whose drop-one test no longer passes ``α_step`` is removed.
 
 Noise level last. ``noise_level`` competes at every step, so a mere change of σ² is never
