@@ -225,7 +225,11 @@ def flat_top_score(resid_w: np.ndarray, design_w: np.ndarray | None,
     ----------
     resid_w : (n,) whitened residual of the current model (unit variance under H0).
     design_w : (n, p) whitened design of the current model (or None): hinge columns are
-        projected out of it (the residual is orthogonal to it).
+        projected out of the space it spans (the residual is orthogonal to it). The design may
+        be rank-deficient (a tilt offset and the misalignment of the same axis have
+        proportional columns on that axis): the basis of that space is taken from the SVD of
+        the equilibrated design with lstsq's rank cut-off (``eps·max(n, p)·s_max``), never from
+        a QR whose extra column would be a rounding-error direction.
     hinges_w : (n, G) whitened hinge columns ``clip(A_r, ±L) - A_r`` for the grid of L.
 
     Notes
@@ -236,7 +240,11 @@ def flat_top_score(resid_w: np.ndarray, design_w: np.ndarray | None,
     """
     h = np.asarray(hinges_w, dtype=float)
     if design_w is not None and design_w.size:
-        q, _ = np.linalg.qr(design_w)
+        d = np.asarray(design_w, dtype=float)
+        d = d.reshape(d.shape[0], -1)
+        norms = np.linalg.norm(d, axis=0)
+        u, sv, _ = np.linalg.svd(d[:, norms > 0] / norms[norms > 0], full_matrices=False)
+        q = u[:, sv > sv[0] * max(d.shape) * np.finfo(float).eps] if sv.size else u[:, :0]
         h = h - q @ (q.T @ h)
     norms = np.linalg.norm(h, axis=0)
     raw = np.linalg.norm(hinges_w, axis=0)

@@ -51,10 +51,11 @@ at O(N) per evaluation without a Python loop. q is estimated by restricted ML (R
 :meth:`Extensions.nll`). Nested models are compared by the likelihood ratio
 ``LR = Δ(-2 log L)``.
 
-The low-pass is the bench's own (:func:`calib.filters.lowpass`, one home for both sides): exact for an input linear
-between samples, ``y_k = u_k - τc_k + e^{-h/τ}(y_{k-1} - u_{k-1} + τc_k)``, ``c_k = (u_k -
-u_{k-1})/h``, starting at rest (``y_0 = u_0``); it acts on the signal (response stage) and the
-white noise of the reading stays white.
+The low-pass is the bench's own (:func:`calib.filters.lowpass`, one home for both sides):
+exact for an input linear between samples,
+``y_k = u_k - τc_k + e^{-h/τ}(y_{k-1} - u_{k-1} + τc_k)``, ``c_k = (u_k - u_{k-1})/h``,
+starting at rest (``y_0 = u_0``); it acts on the signal (response stage) and the white noise
+of the reading stays white.
 
 Layout (one job per module; an effect is one small object, registered once)
 ---------------------------------------------------------------------------

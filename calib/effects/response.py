@@ -159,14 +159,11 @@ class Saturation(ProfiledEffect):
         levels = hinge_levels(ext.run.a_ref[:, k])
         if levels.size == 0:
             raise UntestableError("no range of |A_r| to clip")
-        fit = ext.fit(state)
-        yw, hw, _ = fit.blocks[k]
-        design = hw
-        if state.tilt:
-            design = np.column_stack([hw, ext.whiten(st, ext.tilt_column(k, st))])
+        ext.fit(state)  # raises when the model is not identifiable
+        resid, design = ext.whitened_residual(k, state)
         a = ext.run.a_ref[:, k]
         hinges = ext.filter(hinge_columns(a, levels), st.tau)
-        _, logp = flat_top_score(fit.resid[k], design, ext.whiten(st, hinges))
+        _, logp = flat_top_score(resid, design, ext.white(st, hinges, key=("hinges", k, st.tau)))
         return logp
 
     def profile(self, ext: Extensions, state: ModelState, k: int,
