@@ -34,6 +34,15 @@ Whitening, two exact forms:
 * q > 0: ``Σ_Δ = L D Lᵀ`` (LAPACK ``dpttrf``, tridiagonal, O(N)) and ``W = D^{-1/2} L⁻¹``, one
   unit-bidiagonal forward substitution (``dtbtrs``) for all new columns at once; whitened
   columns are cached per (σ², q) and ``W Δ(A_m - r) = WΔA_m - WΔr``.
+* q > 0 with a uniform step Δt (every untimed run, and timed runs whose steps agree to 1e-9,
+  as for :func:`calib.filters.lowpass`), when the same columns are asked for a second
+  (σ², q) — the profiles and the interval of q and σ²: ``Δ = U S Vᵀ`` with V the orthonormal
+  DCT-II basis and ``S² = λ_j = 2 - 2 cos(πj/N)`` (j = 1 … N-1; the constant, j = 0, is what
+  differencing removes), so ``ΔᵀΣ_Δ⁻¹Δ = V diag(λ_j / (σ²λ_j + q²Δt)) Vᵀ`` and
+  ``ũ_j·sqrt(λ_j / (σ²λ_j + q²Δt))`` (ũ = DCT-II of u, j ≥ 1) is an isometric image of the
+  whitened column. The transforms do not depend on (σ², q), so each new (σ², q) costs one
+  scaling and one QR, no O(N) recursion. With a uniform step ``log det Σ_Δ =
+  Σ_j log(σ²λ_j + q²Δt)`` for every q > 0 (the two forms give one likelihood).
 
 Every cache is bounded (least recently used), so memory stays O(N).
 """
@@ -45,6 +54,7 @@ from collections.abc import Callable, Hashable
 from functools import cached_property
 
 import numpy as np
+from scipy import fft
 from scipy import linalg as sla
 from scipy.linalg import lapack
 
@@ -158,6 +168,15 @@ class Extensions:
         self._col_cache = _LRU(16)       # (k, linear, τ, L) -> (names, columns)
         self._white_cache = _LRU(48)     # (column key, σ², q) -> whitened column (N-1,)
         self._factor_cache = _LRU(8)     # (σ², q) -> LDLᵀ factor of Σ_Δ
+        self._spec_cache = _LRU(48)      # column key -> DCT-II (j ≥ 1) of the column (N-1,)
+        self._weight_cache = _LRU(8)     # (σ², q) -> spectral weights, log det Σ_Δ
+        self._seen = _LRU(512)           # axis column set -> the (σ², q) asked for it
+        self._memo = _LRU(8)             # derived arrays of the effects (:meth:`memo`)
+        dt = run.dt_walk
+        uniform = dt.size > 0 and float(np.ptp(dt)) <= 1e-9 * float(np.mean(dt))
+        self._dt_uniform = float(np.mean(dt)) if uniform else None
+        if uniform:  # λ_j = 2 - 2 cos(πj/N) = 4 sin²(πj/2N), j = 1 … N-1
+            self._lam = 4.0 * np.sin(0.5 * np.pi * np.arange(1, run.n) / run.n) ** 2
 
     # --- columns -------------------------------------------------------------------------
 
@@ -220,6 +239,11 @@ class Extensions:
         (shared,) = SHARED
         return shared.shared_column(self, k, st)
 
+    def memo(self, key: Hashable, make: Callable[[], object]):
+        """``make()`` once per key (a few recent keys kept): arrays an effect derives from
+        the run, e.g. the saturation's grid of limits and hinge columns."""
+        return self._memo.get_or(key, make)
+
     # --- whitening -----------------------------------------------------------------------
 
     def _factor(self, sigma2: float, q: float) -> tuple[np.ndarray, np.ndarray, float]:
@@ -239,11 +263,37 @@ class Extensions:
 
         return self._factor_cache.get_or((sigma2, q), make)
 
+    def _weights(self, sigma2: float, q: float) -> tuple[np.ndarray, float]:
+        """Uniform step: ``sqrt(λ_j / (σ²λ_j + q²Δt))`` (j = 1 … N-1) and ``log det Σ_Δ``."""
+        def make() -> tuple[np.ndarray, float]:
+            ev = sigma2 * self._lam + q * q * self._dt_uniform
+            return np.sqrt(self._lam / ev), float(np.sum(np.log(ev)))
+
+        return self._weight_cache.get_or((sigma2, q), make)
+
     def _logdet(self, st: AxisState) -> float:
         """``log det Σ_Δ`` of one axis."""
         if st.q == 0:  # det(σ² T) = σ^{2(N-1)} N
             return float((self.run.n - 1) * np.log(st.sigma2_eff) + np.log(self.run.n))
+        if self._dt_uniform is not None:
+            return self._weights(st.sigma2_eff, st.q)[1]
         return self._factor(st.sigma2_eff, st.q)[2]
+
+    def _spectra(self, items: list[tuple[Hashable, np.ndarray]]) -> list[np.ndarray]:
+        """Orthonormal DCT-II of named columns without the constant term (cached by name)."""
+        out = [self._spec_cache.get(key) for key, _ in items]
+        todo = [i for i, c in enumerate(out) if c is None]
+        if todo:
+            u = np.empty((len(todo), self.run.n))
+            for j, i in enumerate(todo):
+                u[j] = items[i][1]
+            spec = fft.dct(u, type=2, norm="ortho", axis=-1, overwrite_x=True)
+            for j, i in enumerate(todo):
+                col = spec[j, 1:].copy()
+                out[i] = self._spec_cache.get_or(items[i][0], lambda c=col: c)
+        for key, _ in items:
+            self._spec_cache.move_to_end(key)
+        return out  # type: ignore[return-value]
 
     def _solve_white(self, st: AxisState, dm: np.ndarray) -> np.ndarray:
         """``D^{-1/2} L⁻¹ dm`` for differenced columns dm (N-1, c)."""
@@ -300,24 +350,57 @@ class Extensions:
         r = self.reference(k, st.tau, st.limit)
         names, cols = self.columns(k, st)
         items: list[tuple[Hashable, np.ndarray]] = [(("r", k, st.tau, st.limit), r)]
-        items += [(("col", k, st.linear, st.tau, st.limit, j), c) for j, c in enumerate(cols)]
+        items += [(("col", k, n, st.tau, st.limit), c) for n, c in zip(names, cols, strict=True)]
         if tilt:
             items.append((("tilt", k, st.tau), self.tilt_column(k, st)))
         return ["scale", *names], items
 
-    def _white_system(self, k: int, st: AxisState, tilt: bool) -> tuple[np.ndarray, list[str]]:
-        """Fortran-ordered ``[H | z | y]`` of axis k in the form of :meth:`white`, unscaled
-        by σ when q = 0 (its factor is then independent of σ²), and the names of H."""
+    def _note(self, k: int, st: AxisState, tilt: bool) -> set:
+        """Record that axis k's columns were asked for the noise (σ², q) of ``st``."""
+        seen = self._seen.get_or((k, st.linear, st.tau, st.limit, tilt), set)
+        seen.add((st.sigma2_eff, st.q))
+        return seen
+
+    def _use_spectra(self, k: int, st: AxisState, tilt: bool,
+                     items: list[tuple[Hashable, np.ndarray]]) -> bool:
+        """Whether to whiten axis k's columns in the DCT basis (module docstring): uniform
+        step, and the spectra are cached, or these columns were already asked for another
+        (σ², q) and none of them is whitened for this one (a profile of q or σ²; a profile
+        of τ or L keeps the data column and solves only its few new columns)."""
+        if self._dt_uniform is None:
+            return False
+        sq = (st.sigma2_eff, st.q)
+        seen = self._note(k, st, tilt)
+        if all(key in self._spec_cache for key, _ in items):
+            return True
+        return len(seen) > 1 and not any((key, *sq) in self._white_cache for key, _ in items)
+
+    def _white_system(self, k: int, st: AxisState, tilt: bool, spectral: bool = True
+                      ) -> tuple[np.ndarray, list[str]]:
+        """Fortran-ordered ``[H | z | y]`` of axis k in the form of :meth:`white` (or, when
+        ``spectral`` allows it, in the DCT basis), unscaled by σ when q = 0 (its factor is
+        then independent of σ²), and the names of H."""
         names, items = self._axis_items(k, st, tilt)
         y = self.run.datos[:, k]
         if st.q == 0:
+            self._note(k, st, tilt)  # a profile of q from here goes spectral at once
             a = np.empty((self.run.n, len(items) + 1), order="F")
             for j, (_, c) in enumerate(items):
                 a[:, j] = c
             np.subtract(y, items[0][1], out=a[:, -1])
             a -= a.mean(axis=0)
             return a, names
-        cols = self._white_columns(st, [*items, (("y", k), y)])
+        items = [*items, (("y", k), y)]
+        if spectral and self._use_spectra(k, st, tilt, items):
+            spec = self._spectra(items)
+            w, _ = self._weights(st.sigma2_eff, st.q)
+            a = np.empty((self.run.n - 1, len(items)), order="F")
+            for j, c in enumerate(spec[:-1]):
+                np.multiply(c, w, out=a[:, j])
+            np.subtract(spec[-1], spec[0], out=a[:, -1])
+            a[:, -1] *= w
+            return a, names
+        cols = self._white_columns(st, items)
         a = np.empty((self.run.n - 1, len(cols)), order="F")
         for j, c in enumerate(cols[:-1]):
             a[:, j] = c
@@ -325,9 +408,10 @@ class Extensions:
         return a, names
 
     def _axis_factor(self, k: int, st: AxisState, tilt: bool
-                     ) -> tuple[np.ndarray, list[str]] | None:
-        """R of axis k's whitened ``[H | z | y]`` (module docstring), and the names of H;
-        None when the rows cannot identify the columns."""
+                     ) -> tuple[np.ndarray, list[str], float] | None:
+        """R of axis k's whitened ``[H | z | y]`` (module docstring), the names of H and the
+        equilibrated condition number of H alone (without tilt); None when the rows cannot
+        identify the columns."""
         if st.q == 0:
             key = ("c", k, st.linear, st.tau, st.limit, tilt)
         else:
@@ -337,15 +421,17 @@ class Extensions:
             a, names = self._white_system(k, st, tilt)
             if a.shape[0] <= a.shape[1]:
                 return None
-            return _r_factor(a), names
+            r = _r_factor(a)
+            p = len(names)
+            return r, names, (np.nan if tilt else _equilibrated_cond(r[:p, :p]))
 
         got = self._axis_cache.get_or(key, make)
         if got is None:
             return None
-        r, names = got
+        r, names, cond = got
         if st.q == 0:
             r = r / np.sqrt(st.sigma2_eff)
-        return r, names
+        return r, names, cond
 
     def axis_system(self, k: int, st: AxisState, tilt: bool
                     ) -> tuple[np.ndarray, np.ndarray, list[str], float, np.ndarray | None]:
@@ -405,15 +491,14 @@ class Extensions:
         if got[0] is None or got[1] is None:
             self._full_fit(state)  # raises the named error
             raise NotIdentifiableError("fewer samples than parameters")
-        (rx, nx), (ry, ny) = got
+        (rx, nx, cx_h), (ry, ny, cy_h) = got
         names = [f"x.{s}" for s in nx] + [f"y.{s}" for s in ny]
         ps = (len(nx), len(ny))
         tri = [np.abs(np.diag(r[:p, :p])) for r, p in ((rx, ps[0]), (ry, ps[1]))]
         logdet_h = float(sum(2.0 * np.sum(np.log(d)) for d in tri))
         if not state.tilt:
             rss = (float(rx[-1, -1] ** 2), float(ry[-1, -1] ** 2))
-            cond = max(_equilibrated_cond(rx[:ps[0], :ps[0]]),
-                       _equilibrated_cond(ry[:ps[1], :ps[1]]))
+            cond = max(cx_h, cy_h)
         else:
             names.append("sin_tilt")
             (ax, bx, cx), (ay, by, cy) = ((r[p, p], r[p, p + 1], r[p + 1, p + 1])
@@ -449,7 +534,7 @@ class Extensions:
         """Axis k of the model's fit in the form of :meth:`white`: (residual with unit
         variance, design ``[H | z]``: the columns the residual is orthogonal to or shares)."""
         st = state.axes[k]
-        a, _ = self._white_system(k, st, state.tilt)
+        a, _ = self._white_system(k, st, state.tilt, spectral=False)
         if st.q == 0:
             a /= np.sqrt(st.sigma2_eff)
         ncol = a.shape[1] - 1
@@ -458,7 +543,7 @@ class Extensions:
         if state.tilt:  # ŝ of the joint fit (module docstring)
             ab = []
             for j in range(2):
-                r, _ = self._axis_factor(j, state.axes[j], True)
+                r, _, _ = self._axis_factor(j, state.axes[j], True)
                 pj = r.shape[1] - 2
                 ab.append((r[pj, pj], r[pj, pj + 1]))
             (ax, bx), (ay, by) = ab
