@@ -237,21 +237,36 @@ def flat_top_score(resid_w: np.ndarray, design_w: np.ndarray | None,
     ``Z(L) = ⟨r, h̃_L⟩ / ‖h̃_L‖`` with ``h̃_L`` the hinge column with the design projected out;
     one-sided (a limit pulls the reading towards zero, coefficient 1 + scale > 0). Columns that
     the design already spans (‖h̃‖ < 1e-8 ‖h‖: e.g. two levels of |A_r| only) are skipped.
+
+    With Q an orthonormal basis of the design, ``⟨r, h̃⟩ = ⟨r, h⟩ - ⟨Qᵀr, Qᵀh⟩`` and
+    ``‖h̃‖² = ‖h‖² - ‖Qᵀh‖²``: one pass over the (n, G) hinges and no (n, G) temporary. Where
+    the design spans most of a column (``‖h̃‖² < 1e-8 ‖h‖²``, the difference would cancel) that
+    column is projected explicitly.
     """
     h = np.asarray(hinges_w, dtype=float)
+    r = np.asarray(resid_w, dtype=float)
+    raw2 = np.einsum("ij,ij->j", h, h)
+    dot = r @ h
+    perp2 = raw2.copy()
     if design_w is not None and design_w.size:
         d = np.asarray(design_w, dtype=float)
         d = d.reshape(d.shape[0], -1)
-        norms = np.linalg.norm(d, axis=0)
-        u, sv, _ = np.linalg.svd(d[:, norms > 0] / norms[norms > 0], full_matrices=False)
+        dn = np.linalg.norm(d, axis=0)
+        u, sv, _ = np.linalg.svd(d[:, dn > 0] / dn[dn > 0], full_matrices=False)
         q = u[:, sv > sv[0] * max(d.shape) * np.finfo(float).eps] if sv.size else u[:, :0]
-        h = h - q @ (q.T @ h)
-    norms = np.linalg.norm(h, axis=0)
-    raw = np.linalg.norm(hinges_w, axis=0)
-    ok = norms > 1e-8 * np.maximum(raw, 1e-300)
+        qh = q.T @ h
+        dot -= (q.T @ r) @ qh
+        perp2 -= np.einsum("ij,ij->j", qh, qh)
+        close = np.flatnonzero(perp2 < 1e-8 * raw2)
+        if close.size:
+            hc = h[:, close] - q @ qh[:, close]
+            perp2[close] = np.einsum("ij,ij->j", hc, hc)
+            dot[close] = r @ hc
+    norms = np.sqrt(np.maximum(perp2, 0.0))
+    ok = norms > 1e-8 * np.maximum(np.sqrt(raw2), 1e-300)
     if not np.any(ok):
         return 0.0, 0.0
-    z = (resid_w @ h[:, ok]) / norms[ok]
+    z = dot[ok] / norms[ok]
     m, _, logp = davies_logp(z)
     return m, logp
 
