@@ -264,10 +264,23 @@ class Extensions:
         return self._factor_cache.get_or((sigma2, q), make)
 
     def _weights(self, sigma2: float, q: float) -> tuple[np.ndarray, float]:
-        """Uniform step: ``sqrt(λ_j / (σ²λ_j + q²Δt))`` (j = 1 … N-1) and ``log det Σ_Δ``."""
+        """Uniform step: ``sqrt(λ_j / (σ²λ_j + q²Δt))`` (j = 1 … N-1) and ``log det Σ_Δ``.
+
+        ``Σ_Δ`` is then the (N-1)² tridiagonal Toeplitz matrix with ``a = 2σ² + q²Δt`` on the
+        diagonal and ``-σ²`` beside it: ``det = (r₊^N - r₋^N)/(r₊ - r₋)``, ``r± = (a ± s)/2``,
+        ``s = sqrt(a² - 4σ⁴) = q·sqrt(Δt·(4σ² + q²Δt))`` (the recursion ``D_k = a D_{k-1} -
+        σ⁴ D_{k-2}``), evaluated in logs with ``log1p``/``expm1``: O(1) and to rounding of
+        ``Σ_j log(σ²λ_j + q²Δt)``.
+        """
         def make() -> tuple[np.ndarray, float]:
-            ev = sigma2 * self._lam + q * q * self._dt_uniform
-            return np.sqrt(self._lam / ev), float(np.sum(np.log(ev)))
+            h = self._dt_uniform
+            w = np.sqrt(self._lam / (sigma2 * self._lam + q * q * h))
+            a = 2.0 * sigma2 + q * q * h
+            s = q * np.sqrt(h * (4.0 * sigma2 + q * q * h))
+            n = self.run.n
+            logdet = (n * np.log(0.5 * (a + s)) - np.log(s)
+                      + np.log(-np.expm1(n * np.log1p(-2.0 * s / (a + s)))))
+            return w, float(logdet)
 
         return self._weight_cache.get_or((sigma2, q), make)
 
