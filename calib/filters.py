@@ -7,6 +7,8 @@ and the model of it cannot drift apart.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy import signal
 
@@ -111,23 +113,28 @@ def walk_filter(z: np.ndarray, sigma2: float, qk: np.ndarray
     (innovations, b0, var_b0): normalised innovations (N,) (the first, which only fixes the
     diffuse level, set to 0), and the smoothed bias at the first sample with its variance.
     """
-    n = z.size
-    m = np.empty(n)
-    p = np.empty(n)
-    innov = np.zeros(n)
-    m[0], p[0] = z[0], sigma2  # diffuse prior updated with z_0
+    # Plain Python floats (IEEE doubles, the same operations in the same order as numpy
+    # scalars, so the same bits) run the scalar recursion ~5× faster than indexing arrays.
+    zl = np.asarray(z, dtype=float).tolist()
+    ql = np.asarray(qk, dtype=float).tolist()
+    sigma2 = float(sigma2)
+    n = len(zl)
+    m = [0.0] * n
+    p = [0.0] * n
+    innov = [0.0] * n
+    m[0], p[0] = zl[0], sigma2  # diffuse prior updated with z_0
     for k in range(1, n):
-        pp = p[k - 1] + qk[k - 1]
+        pp = p[k - 1] + ql[k - 1]
         f = pp + sigma2
-        e = z[k] - m[k - 1]
-        innov[k] = e / np.sqrt(f)
+        e = zl[k] - m[k - 1]
+        innov[k] = e / math.sqrt(f)
         gain = pp / f
         m[k] = m[k - 1] + gain * e
         p[k] = (1.0 - gain) * pp
     ms, ps = m[-1], p[-1]
     for k in range(n - 2, -1, -1):  # Rauch-Tung-Striebel
-        pp = p[k] + qk[k]
+        pp = p[k] + ql[k]
         c = p[k] / pp
         ms = m[k] + c * (ms - m[k])
         ps = p[k] + c * c * (ps - pp)
-    return innov, float(ms), float(ps)
+    return np.array(innov), float(ms), float(ps)

@@ -14,9 +14,9 @@ Axis a's whitened system is ``W Δ [H_a | z_a | y_a]`` with ``H_a = [r, extensio
            [0,    α_a,  β_a ],
            [0,    0,    γ_a ]]
 
-(the z row and column only with tilt). Without tilt ``RSS_a = β_a²`` (the last diagonal).
-With tilt the joint fit shares ``s = sin δ``: per axis the residual left after ``H_a`` is
-``(β_a - α_a s)² + γ_a²``, so ``ŝ = Σ α_a β_a / Σ α_a²`` and
+(the z row and column only with tilt). Without tilt ``RSS_a`` is the square of the last
+diagonal entry. With tilt the joint fit shares ``s = sin δ``: per axis the residual left
+after ``H_a`` is ``(β_a - α_a s)² + γ_a²``, so ``ŝ = Σ α_a β_a / Σ α_a²`` and
 ``RSS = Σ γ_a² + (α_x β_y - α_y β_x)² / (α_x² + α_y²)`` — the joint least squares of the
 package docstring without forming the 2N-row joint design. ``log det(H_wᵀH_w) =
 Σ_a 2 Σ log|diag R_HH| (+ log(α_x² + α_y²) with tilt)`` (REML), and the equilibrated condition
@@ -24,7 +24,7 @@ number of the whitened design comes from the same triangles (equal column norms 
 The factor of each axis is cached by its state, so a profile or a test on one axis never
 refits the other.
 
-Whitening, two exact forms:
+Whitening, three exact forms:
 
 * q = 0: ``Σ_Δ = σ² T = σ² Δ Δᵀ`` and ``Δᵀ(ΔΔᵀ)⁻¹Δ = I - 11ᵀ/N``, so
   ``⟨L⁻¹Δu, L⁻¹Δv⟩ = ⟨u - ū, v - v̄⟩ / σ²``: the centred columns over σ are an isometric image
@@ -41,8 +41,9 @@ Whitening, two exact forms:
   differencing removes), so ``ΔᵀΣ_Δ⁻¹Δ = V diag(λ_j / (σ²λ_j + q²Δt)) Vᵀ`` and
   ``ũ_j·sqrt(λ_j / (σ²λ_j + q²Δt))`` (ũ = DCT-II of u, j ≥ 1) is an isometric image of the
   whitened column. The transforms do not depend on (σ², q), so each new (σ², q) costs one
-  scaling and one QR, no O(N) recursion. With a uniform step ``log det Σ_Δ =
-  Σ_j log(σ²λ_j + q²Δt)`` for every q > 0 (the two forms give one likelihood).
+  scaling and one QR, no O(N) recursion. With a uniform step ``log det Σ_Δ`` comes in
+  closed form (:meth:`Extensions._weights`) for every q > 0, so the two forms give one
+  likelihood.
 
 Every cache is bounded (least recently used), so memory stays O(N).
 """
@@ -68,13 +69,6 @@ from calib.ls import FitResult, NotIdentifiableError, fit_linear
 COND_MAX = 1e10
 """An extension whose whitened design has a larger (equilibrated) condition number is not
 testable in this experiment (its columns are collinear with the model's)."""
-
-
-def _logdet_gram(h: np.ndarray) -> float:
-    """``log det(HᵀH)`` from the QR factor of H (``2 Σ log|R_ii|``), no normal matrix."""
-    if h.size == 0:
-        return 0.0
-    return float(2.0 * np.sum(np.log(np.abs(np.diag(_r_factor(h))))))
 
 
 def _r_factor(a: np.ndarray) -> np.ndarray:
