@@ -227,9 +227,9 @@ def flat_top_score(resid_w: np.ndarray, design_w: np.ndarray | None,
     design_w : (n, p) whitened design of the current model (or None): hinge columns are
         projected out of the space it spans (the residual is orthogonal to it). The design may
         be rank-deficient (a tilt offset and the misalignment of the same axis have
-        proportional columns on that axis): the basis of that space is taken from the SVD of
-        the equilibrated design with lstsq's rank cut-off (``eps·max(n, p)·s_max``), never from
-        a QR whose extra column would be a rounding-error direction.
+        proportional columns on that axis): then the basis of that space is taken from the SVD
+        of the equilibrated design with lstsq's rank cut-off (``eps·max(n, p)·s_max``), not
+        from a QR whose extra column would be a rounding-error direction.
     hinges_w : (n, G) whitened hinge columns ``clip(A_r, ±L) - A_r`` for the grid of L.
 
     Notes
@@ -237,38 +237,41 @@ def flat_top_score(resid_w: np.ndarray, design_w: np.ndarray | None,
     ``Z(L) = ⟨r, h̃_L⟩ / ‖h̃_L‖`` with ``h̃_L`` the hinge column with the design projected out;
     one-sided (a limit pulls the reading towards zero, coefficient 1 + scale > 0). Columns that
     the design already spans (‖h̃‖ < 1e-8 ‖h‖: e.g. two levels of |A_r| only) are skipped.
-
-    With Q an orthonormal basis of the design, ``⟨r, h̃⟩ = ⟨r, h⟩ - ⟨Qᵀr, Qᵀh⟩`` and
-    ``‖h̃‖² = ‖h‖² - ‖Qᵀh‖²``: one pass over the (n, G) hinges and no (n, G) temporary. Where
-    the design spans most of a column (``‖h̃‖² < 1e-8 ‖h‖²``, the difference would cancel) that
-    column is projected explicitly.
     """
     h = np.asarray(hinges_w, dtype=float)
-    r = np.asarray(resid_w, dtype=float)
-    raw2 = np.einsum("ij,ij->j", h, h)
-    dot = r @ h
-    perp2 = raw2.copy()
     if design_w is not None and design_w.size:
-        d = np.asarray(design_w, dtype=float)
-        d = d.reshape(d.shape[0], -1)
-        dn = np.linalg.norm(d, axis=0)
-        u, sv, _ = np.linalg.svd(d[:, dn > 0] / dn[dn > 0], full_matrices=False)
-        q = u[:, sv > sv[0] * max(d.shape) * np.finfo(float).eps] if sv.size else u[:, :0]
-        qh = q.T @ h
-        dot -= (q.T @ r) @ qh
-        perp2 -= np.einsum("ij,ij->j", qh, qh)
-        close = np.flatnonzero(perp2 < 1e-8 * raw2)
-        if close.size:
-            hc = h[:, close] - q @ qh[:, close]
-            perp2[close] = np.einsum("ij,ij->j", hc, hc)
-            dot[close] = r @ hc
-    norms = np.sqrt(np.maximum(perp2, 0.0))
-    ok = norms > 1e-8 * np.maximum(np.sqrt(raw2), 1e-300)
+        q, r = np.linalg.qr(design_w)
+        if _equilibrated_cond(r) * max(q.shape) * np.finfo(float).eps >= 1.0:
+            q = _range_basis(np.asarray(design_w, dtype=float))
+        h = h - q @ (q.T @ h)
+    norms = np.linalg.norm(h, axis=0)
+    raw = np.linalg.norm(hinges_w, axis=0)
+    ok = norms > 1e-8 * np.maximum(raw, 1e-300)
     if not np.any(ok):
         return 0.0, 0.0
-    z = dot[ok] / norms[ok]
+    z = (resid_w @ h[:, ok]) / norms[ok]
     m, _, logp = davies_logp(z)
     return m, logp
+
+
+def _equilibrated_cond(r: np.ndarray) -> float:
+    """Condition number of a design with unit-norm columns from its R factor (inf if
+    singular)."""
+    norms = np.linalg.norm(r, axis=0)
+    if np.any(norms == 0) or not np.all(np.isfinite(r)):
+        return float("inf")
+    s = np.linalg.svd(r / norms, compute_uv=False)
+    return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
+
+
+def _range_basis(d: np.ndarray) -> np.ndarray:
+    """Orthonormal basis of the column space of ``d`` (n, p) at lstsq's numerical rank."""
+    d = d.reshape(d.shape[0], -1)
+    dn = np.linalg.norm(d, axis=0)
+    u, sv, _ = np.linalg.svd(d[:, dn > 0] / dn[dn > 0], full_matrices=False)
+    if not sv.size:
+        return u[:, :0]
+    return u[:, sv > sv[0] * max(d.shape) * np.finfo(float).eps]
 
 
 # ------------------------------------------------------------------------------ whiteness
