@@ -25,6 +25,7 @@ lint: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
 	$(BIN)/python benchmarks/cli_startup.py
+	$(BIN)/python benchmarks/gap_scaling.py
 
 octave-check: $(STAMP)
 	BIN=$(BIN) tools/octave_check.sh

@@ -225,7 +225,11 @@ def flat_top_score(resid_w: np.ndarray, design_w: np.ndarray | None,
     ----------
     resid_w : (n,) whitened residual of the current model (unit variance under H0).
     design_w : (n, p) whitened design of the current model (or None): hinge columns are
-        projected out of it (the residual is orthogonal to it).
+        projected out of the space it spans (the residual is orthogonal to it). The design may
+        be rank-deficient (a tilt offset and the misalignment of the same axis have
+        proportional columns on that axis): then the basis of that space is taken from the SVD
+        of the equilibrated design with lstsq's rank cut-off (``eps·max(n, p)·s_max``), not
+        from a QR whose extra column would be a rounding-error direction.
     hinges_w : (n, G) whitened hinge columns ``clip(A_r, ±L) - A_r`` for the grid of L.
 
     Notes
@@ -236,7 +240,9 @@ def flat_top_score(resid_w: np.ndarray, design_w: np.ndarray | None,
     """
     h = np.asarray(hinges_w, dtype=float)
     if design_w is not None and design_w.size:
-        q, _ = np.linalg.qr(design_w)
+        q, r = np.linalg.qr(design_w)
+        if _equilibrated_cond(r) * max(q.shape) * np.finfo(float).eps >= 1.0:
+            q = _range_basis(np.asarray(design_w, dtype=float))
         h = h - q @ (q.T @ h)
     norms = np.linalg.norm(h, axis=0)
     raw = np.linalg.norm(hinges_w, axis=0)
@@ -246,6 +252,26 @@ def flat_top_score(resid_w: np.ndarray, design_w: np.ndarray | None,
     z = (resid_w @ h[:, ok]) / norms[ok]
     m, _, logp = davies_logp(z)
     return m, logp
+
+
+def _equilibrated_cond(r: np.ndarray) -> float:
+    """Condition number of a design with unit-norm columns from its R factor (inf if
+    singular)."""
+    norms = np.linalg.norm(r, axis=0)
+    if np.any(norms == 0) or not np.all(np.isfinite(r)):
+        return float("inf")
+    s = np.linalg.svd(r / norms, compute_uv=False)
+    return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
+
+
+def _range_basis(d: np.ndarray) -> np.ndarray:
+    """Orthonormal basis of the column space of ``d`` (n, p) at lstsq's numerical rank."""
+    d = d.reshape(d.shape[0], -1)
+    dn = np.linalg.norm(d, axis=0)
+    u, sv, _ = np.linalg.svd(d[:, dn > 0] / dn[dn > 0], full_matrices=False)
+    if not sv.size:
+        return u[:, :0]
+    return u[:, sv > sv[0] * max(d.shape) * np.finfo(float).eps]
 
 
 # ------------------------------------------------------------------------------ whiteness

@@ -7,6 +7,8 @@ and the model of it cannot drift apart.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy import signal
 
@@ -43,18 +45,58 @@ def lowpass(u: np.ndarray, t: np.ndarray, tau: float, h_uniform: float | None = 
     h = np.diff(t)
     shape = (-1,) + (1,) * (u.ndim - 1)
     c = np.diff(u, axis=0) / h.reshape(shape)
-    e = np.zeros_like(u)
-    if h_uniform is not None:
+    if h_uniform is not None:  # y = u + e, e_0 = 0 (y_0 = u_0 + 0.0: -0.0 becomes 0.0)
         a = float(np.exp(-h_uniform / tau))
-        e[1:] = signal.lfilter([1.0], [1.0, -a], -tau * (1.0 - a) * c, axis=0)
-    else:
-        a = np.exp(-h / tau).reshape(shape)
-        drive = -tau * (1.0 - a) * c
-        prev = np.zeros(u.shape[1:])
-        for k in range(h.size):
-            prev = a[k] * prev + drive[k]
-            e[k + 1] = prev
+        y = u.copy()
+        y[0] += 0.0
+        y[1:] += signal.lfilter([1.0], [1.0, -a], -tau * (1.0 - a) * c, axis=0)
+        return y
+    e = np.zeros_like(u)
+    a = np.exp(-h / tau).reshape(shape)
+    e[1:] = first_order_recursion(np.broadcast_to(a, c.shape), -tau * (1.0 - a) * c)
     return u + e
+
+
+def first_order_recursion(a: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``x_k = a_k x_{k-1} + d_k`` (``x_{-1} = 0``) along axis 0, for coefficients that change
+    at every step (``scipy.signal.lfilter`` needs constant ones).
+
+    Parameters
+    ----------
+    a, d : (n, …) coefficients (|a_k| ≤ 1 here: ``e^{-h_k/τ}``) and inputs.
+
+    Notes
+    -----
+    Blocks of B ≈ √n steps: every block runs its own recursion from zero, all blocks at once
+    (B vector steps), with the product ``P_k = Π a`` since the block start; then the value at
+    each block's end is carried to the next (n/B steps) and ``x = local + P·carry``. About
+    2√n numpy steps instead of n Python steps; the same terms summed in another order
+    (differences of a few ulps of the largest term).
+    """
+    a = np.asarray(a, dtype=float)
+    d = np.asarray(d, dtype=float)
+    n = d.shape[0]
+    if n == 0:
+        return d.copy()
+    b = max(1, int(np.sqrt(n)))
+    nb = -(-n // b)
+    rest = d.shape[1:]
+    aa = np.ones((nb * b, *rest))
+    dd = np.zeros((nb * b, *rest))
+    aa[:n], dd[:n] = a, d
+    aa = aa.reshape(nb, b, *rest)
+    dd = dd.reshape(nb, b, *rest)
+    loc = np.empty_like(dd)
+    prod = np.empty_like(aa)
+    loc[:, 0], prod[:, 0] = dd[:, 0], aa[:, 0]
+    for j in range(1, b):
+        loc[:, j] = aa[:, j] * loc[:, j - 1] + dd[:, j]
+        prod[:, j] = aa[:, j] * prod[:, j - 1]
+    carry = np.zeros((nb, *rest))
+    for i in range(1, nb):
+        carry[i] = loc[i - 1, -1] + prod[i - 1, -1] * carry[i - 1]
+    x = loc + prod * carry[:, None]
+    return x.reshape(nb * b, *rest)[:n]
 
 
 def walk_filter(z: np.ndarray, sigma2: float, qk: np.ndarray
@@ -71,23 +113,28 @@ def walk_filter(z: np.ndarray, sigma2: float, qk: np.ndarray
     (innovations, b0, var_b0): normalised innovations (N,) (the first, which only fixes the
     diffuse level, set to 0), and the smoothed bias at the first sample with its variance.
     """
-    n = z.size
-    m = np.empty(n)
-    p = np.empty(n)
-    innov = np.zeros(n)
-    m[0], p[0] = z[0], sigma2  # diffuse prior updated with z_0
+    # Plain Python floats (IEEE doubles, the same operations in the same order as numpy
+    # scalars, so the same bits) run the scalar recursion ~5× faster than indexing arrays.
+    zl = np.asarray(z, dtype=float).tolist()
+    ql = np.asarray(qk, dtype=float).tolist()
+    sigma2 = float(sigma2)
+    n = len(zl)
+    m = [0.0] * n
+    p = [0.0] * n
+    innov = [0.0] * n
+    m[0], p[0] = zl[0], sigma2  # diffuse prior updated with z_0
     for k in range(1, n):
-        pp = p[k - 1] + qk[k - 1]
+        pp = p[k - 1] + ql[k - 1]
         f = pp + sigma2
-        e = z[k] - m[k - 1]
-        innov[k] = e / np.sqrt(f)
+        e = zl[k] - m[k - 1]
+        innov[k] = e / math.sqrt(f)
         gain = pp / f
         m[k] = m[k - 1] + gain * e
         p[k] = (1.0 - gain) * pp
     ms, ps = m[-1], p[-1]
     for k in range(n - 2, -1, -1):  # Rauch-Tung-Striebel
-        pp = p[k] + qk[k]
+        pp = p[k] + ql[k]
         c = p[k] / pp
         ms = m[k] + c * (ms - m[k])
         ps = p[k] + c * c * (ps - pp)
-    return innov, float(ms), float(ps)
+    return np.array(innov), float(ms), float(ps)

@@ -40,21 +40,23 @@ Likelihood (one code path for every model)
 The readings are differenced, ``Δy_k = y_k - y_{k-1}``; this removes the bias (an exact
 reparametrisation: it is the likelihood restricted with respect to the bias) and makes the
 random-walk model banded: ``Δy = ΔH β + q√Δt_k w_k + v_k - v_{k-1}`` has the tridiagonal
-covariance ``Σ_Δ = σ² T + q² diag(Δt)`` (T: 2 on the diagonal, -1 beside it). With its banded
-Cholesky factor ``Σ_Δ = L Lᵀ`` (``scipy.linalg.cholesky_banded``, O(N)) the model is whitened,
-``L⁻¹Δy ≈ L⁻¹ΔH β``, solved by :func:`calib.ls.fit_linear` (QR / lstsq, never a normal matrix)
-and ``-2 log L = RSS + log det Σ_Δ`` (+ a constant common to all models). With q = 0 this is
-exactly ordinary least squares with an intercept. This is the exact Gaussian likelihood of
+covariance ``Σ_Δ = σ² T + q² diag(Δt)`` (T: 2 on the diagonal, -1 beside it). With its
+factor ``Σ_Δ = L Lᵀ`` (tridiagonal, O(N)) the model is whitened, ``L⁻¹Δy ≈ L⁻¹ΔH β``, solved
+by Householder QR (never a normal matrix), and ``-2 log L = RSS + log det Σ_Δ`` (+ a constant
+common to all models). With q = 0 this is exactly ordinary least squares with an intercept
+(the engine computes it so: centred columns, no solve); how each form is evaluated and
+cached: :mod:`calib.effects.engine`. This is the exact Gaussian likelihood of
 the local-level (random-walk bias) model that a Kalman filter with a diffuse initial level
 computes (the filter itself gives the innovations and the smoothed bias in :mod:`calib.gap`),
 at O(N) per evaluation without a Python loop. q is estimated by restricted ML (REML, see
 :meth:`Extensions.nll`). Nested models are compared by the likelihood ratio
 ``LR = Δ(-2 log L)``.
 
-The low-pass is the bench's own (:func:`calib.filters.lowpass`, one home for both sides): exact for an input linear
-between samples, ``y_k = u_k - τc_k + e^{-h/τ}(y_{k-1} - u_{k-1} + τc_k)``, ``c_k = (u_k -
-u_{k-1})/h``, starting at rest (``y_0 = u_0``); it acts on the signal (response stage) and the
-white noise of the reading stays white.
+The low-pass is the bench's own (:func:`calib.filters.lowpass`, one home for both sides):
+exact for an input linear between samples,
+``y_k = u_k - τc_k + e^{-h/τ}(y_{k-1} - u_{k-1} + τc_k)``, ``c_k = (u_k - u_{k-1})/h``,
+starting at rest (``y_0 = u_0``); it acts on the signal (response stage) and the white noise
+of the reading stays white.
 
 Layout (one job per module; an effect is one small object, registered once)
 ---------------------------------------------------------------------------

@@ -117,7 +117,11 @@ class Effect:
     # --- likelihood and test --------------------------------------------------------------
 
     def columns(self, ext: Extensions, k: int, st: AxisState) -> list[np.ndarray]:
-        """Design columns (N,) of axis k, one per coefficient (linear effects only)."""
+        """Design columns (N,) of axis k, one per coefficient (linear effects only).
+
+        A function of k and of the axis state's τ and L only (through the reference and the
+        low-pass): :meth:`Extensions.columns` caches them by (k, linear effects, τ, L).
+        """
         return []
 
     def raw_physical(self, run, k: int) -> dict[str, np.ndarray]:

@@ -81,7 +81,7 @@ class Misalignment(LinearEffect):
         return {"mis": SIGN_P[k] * run.a_ref[:, 1 - k]}
 
     def columns(self, ext: Extensions, k: int, st: AxisState) -> list[np.ndarray]:
-        return [ext.physical(k, st.tau)["mis"]]
+        return [ext.physical_column(k, st.tau, "mis")]
 
     def estimate(self, fit, axis: str) -> tuple[dict, dict]:
         sc, cn = f"{axis}.scale", f"{axis}.c_mis"
@@ -157,10 +157,9 @@ class LeverArm(LinearEffect):
         return {"w2": run.omega**2, "alpha": run.alpha}
 
     def columns(self, ext: Extensions, k: int, st: AxisState) -> list[np.ndarray]:
-        phys = ext.physical(k, st.tau)
-        if "w2" not in phys:
+        if ext.run.omega is None:
             raise UntestableError("lever_arm needs sample times")
-        return [phys["w2"], phys["alpha"]]
+        return [ext.physical_column(k, st.tau, "w2"), ext.physical_column(k, st.tau, "alpha")]
 
     def estimate(self, fit, axis: str) -> tuple[dict, dict]:
         sc, w2, al = f"{axis}.scale", f"{axis}.c_w2", f"{axis}.c_alpha"

@@ -156,18 +156,21 @@ class Saturation(ProfiledEffect):
     def score(self, ext: Extensions, state: ModelState, k: int) -> float:
         """log p of the flat-top score test (clip at ±L, L unknown) on axis k."""
         st = state.axes[k]
-        levels = hinge_levels(ext.run.a_ref[:, k])
+        levels = self.levels(ext, k)
         if levels.size == 0:
             raise UntestableError("no range of |A_r| to clip")
-        fit = ext.fit(state)
-        yw, hw, _ = fit.blocks[k]
-        design = hw
-        if state.tilt:
-            design = np.column_stack([hw, ext.whiten(st, ext.tilt_column(k, st))])
-        a = ext.run.a_ref[:, k]
-        hinges = ext.filter(hinge_columns(a, levels), st.tau)
-        _, logp = flat_top_score(fit.resid[k], design, ext.whiten(st, hinges))
+        ext.fit(state)  # raises when the model is not identifiable
+        resid, design = ext.whitened_residual(k, state)
+        hinges = ext.memo((self.name, "hinges", k, st.tau), lambda: ext.filter(
+            hinge_columns(ext.run.a_ref[:, k], levels), st.tau))
+        hinges_w = ext.memo((self.name, "hinges_w", k, st.tau, st.sigma2_eff, st.q),
+                            lambda: ext.white(st, hinges))
+        _, logp = flat_top_score(resid, design, hinges_w)
         return logp
+
+    def levels(self, ext: Extensions, k: int) -> np.ndarray:
+        """The grid of limits of axis k (:func:`calib.diagnostics.hinge_levels`), m/s²."""
+        return ext.memo((self.name, "levels", k), lambda: hinge_levels(ext.run.a_ref[:, k]))
 
     def profile(self, ext: Extensions, state: ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:
@@ -178,7 +181,7 @@ class Saturation(ProfiledEffect):
             return ext.safe_nll(state.with_axis(k, replace(st, limit=float(lim))))
 
         if window is None:
-            grid = np.sort(hinge_levels(ext.run.a_ref[:, k]))
+            grid = np.sort(self.levels(ext, k))
         else:
             grid = st.limit * np.linspace(1 - window, 1 + window, 7)
         if grid.size == 0:

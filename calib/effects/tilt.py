@@ -32,7 +32,7 @@ class TiltOffset(Effect):
     def shared_column(self, ext: Extensions, k: int, st: AxisState) -> np.ndarray:
         """``sgn·(1 + ŝ_k)·LPF_τ(A_p)``: the reading change per unit sin δ of a tilt offset
         (the misalignment's physical column times the nominal gain)."""
-        return ext.gains[k] * ext.physical(k, st.tau)["mis"]
+        return ext.gains[k] * ext.physical_column(k, st.tau, "mis")
 
     def in_model(self, state: ModelState, axis: str) -> bool:
         return state.tilt
