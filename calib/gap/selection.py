@@ -51,7 +51,7 @@ structured effects, on the residuals of the extended model.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -118,11 +118,33 @@ def _remaining(state: ModelState, candidates: list[tuple[str, str]]) -> list[tup
     return [(name, axis) for name, axis in candidates if not state.has(name, axis)]
 
 
-def _try(ext: Extensions, state: ModelState, name: str, axis: str) -> Trial | None:
+_MISS = object()
+
+
+def _try(ext: Extensions, state: ModelState, name: str, axis: str,
+         memo: dict | None = None) -> Trial | None:
+    """``ext.test`` or None when the extension is not identifiable here.
+
+    ``memo``: without a tilt offset the two axes' likelihoods are separate, so the test of a
+    per-axis extension depends only on that axis' state; a test made before on the same axis
+    state is reused with the other axis brought up to date (same LR and p-value)."""
+    key = None
+    if memo is not None and axis in AXES and not state.tilt:
+        k = AXES.index(axis)
+        key = (name, axis, state.axes[k])
+        hit = memo.get(key, _MISS)
+        if hit is None:
+            return None
+        if hit is not _MISS:
+            new = state.with_axis(k, hit.state.axes[k])
+            return replace(hit, state=new, nll=ext.nll(new))
     try:
-        return ext.test(state, name, axis)
+        trial = ext.test(state, name, axis)
     except NotIdentifiableError:
-        return None
+        trial = None
+    if key is not None:
+        memo[key] = trial
+    return trial
 
 
 def _drop(state: ModelState, name: str, axis: str, stated: np.ndarray) -> ModelState:
@@ -159,13 +181,19 @@ def _first_step(ext: Extensions, state: ModelState, candidates: list[tuple[str, 
     return trials, untestable
 
 
+def _evidence(t: Trial) -> tuple[float, float]:
+    """Sort key, strongest first: the log p-value, then the likelihood ratio (very strong
+    effects all reach the floor of log p, :data:`calib.diagnostics.LOGP_FLOOR`)."""
+    return (t.logp, -t.lr)
+
+
 def _flexible_choice(ext: Extensions, trials: list[Trial], log_alpha: float
                      ) -> tuple[Trial | None, list[dict]]:
     """The flexible candidate to add, if any: it passes ``α_step`` and beats every structured
     candidate on its axis by AIC with its effective dof (module docstring, step 3)."""
     notes = []
     flexible = sorted((t for t in trials if t.name in FLEXIBLE and t.logp < log_alpha),
-                      key=lambda t: t.logp)
+                      key=_evidence)
     for t in flexible:
         k = AXES.index(t.axis)
         st = t.state.axes[k]
@@ -185,29 +213,30 @@ def _flexible_choice(ext: Extensions, trials: list[Trial], log_alpha: float
 
 
 def _forward(ext: Extensions, state: ModelState, trials: list[Trial],
-             candidates: list[tuple[str, str]], log_alpha: float, steps: list[dict]
-             ) -> ModelState:
+             candidates: list[tuple[str, str]], log_alpha: float, steps: list[dict],
+             memo: dict | None = None) -> ModelState:
     """Add the best structured candidate while its p-value passes, else a flexible one that
-    pays for its effective dof; refit the nonlinear parameters after each addition."""
+    pays for its cost; refit the nonlinear parameters after each addition."""
+    memo = {} if memo is None else memo
     for _ in range(MAX_STEPS):
         if not trials:
             break
         pool = [t for t in trials if t.name not in FLEXIBLE]
-        best = min(pool, key=lambda t: t.logp) if pool else None
+        best = min(pool, key=_evidence) if pool else None
         notes: list[dict] = []
         if best is None or best.logp >= log_alpha:
             best, notes = _flexible_choice(ext, trials, log_alpha)
         step = {"added": [best.name, best.axis] if best is not None else None,
                 "candidates": [[t.name, t.axis, t.lr, t.p_value]
-                               for t in sorted(trials, key=lambda t: t.logp)]}
+                               for t in sorted(trials, key=_evidence)]}
         if notes:
             step["flexible"] = notes
         steps.append(step)
         if best is None:
             break
         state = ext.refine(best.state)
-        trials = [t for t in (_try(ext, state, n, a) for n, a in _remaining(state, candidates))
-                  if t is not None]
+        trials = [t for t in (_try(ext, state, n, a, memo)
+                              for n, a in _remaining(state, candidates)) if t is not None]
     return state
 
 
@@ -263,11 +292,16 @@ def select(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]]
     alpha_step = family_alpha / n_tests
     log_alpha = float(np.log(alpha_step))
     steps: list[dict] = []
-    state = _forward(ext, state, first, candidates, log_alpha, steps)
+    memo: dict = {}
+    if not state.tilt:
+        for t in first:
+            if t.axis in AXES:
+                memo[(t.name, t.axis, state.axes[AXES.index(t.axis)])] = t
+    state = _forward(ext, state, first, candidates, log_alpha, steps, memo)
     swapped = _flexible_swap(ext, state, candidates, log_alpha, steps)
     if swapped is not state:  # structured candidates again, on top of the walk
-        trials = [t for t in (_try(ext, swapped, n, a)
+        trials = [t for t in (_try(ext, swapped, n, a, memo)
                               for n, a in _remaining(swapped, candidates)) if t is not None]
-        state = _forward(ext, swapped, trials, candidates, log_alpha, steps)
+        state = _forward(ext, swapped, trials, candidates, log_alpha, steps, memo)
     state = _backward(ext, state, ext.run.sigma2, log_alpha, steps)
     return Selection(state, candidates, untestable, n_tests, alpha_step, tuple(steps))
