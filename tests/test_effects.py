@@ -389,3 +389,27 @@ def test_generate_all_theta_designs_with_an_effect(tmp_path, design):
         assert np.sum(np.diff(np.sign(np.diff(tita))) != 0) >= 5  # oscillates
     if "--positions" in design:
         assert np.unique(tita).size == 12
+
+
+def test_bounded_caches_survive_eviction_during_one_request(monkeypatch):
+    """A request for more columns than a cache holds evicts entries of the same request
+    (a walk profile in the DCT basis on a lever-arm run once raised KeyError): the answer
+    must not depend on the cache sizes."""
+    from calib.effects import engine
+    from calib.gap import analyze_gap
+    from calib.io import Ensayo
+
+    rng = np.random.default_rng(4)
+    n = 1500
+    t = np.arange(n) / 100.0
+    th = 2.0 * np.sin(2 * np.pi * t / 7.5) + 0.5 * t
+    y = np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)]) + rng.normal(0, 0.5, (n, 2))
+    y[:, 0] += np.cumsum(rng.normal(0.0, 0.02, n))
+    ens = Ensayo(th, y, t)
+    full = analyze_gap(ens, [0.25, 0.25])
+    original = engine._LRU.__init__
+    monkeypatch.setattr(engine._LRU, "__init__",
+                        lambda self, size: original(self, min(size, 2)))
+    tiny = analyze_gap(ens, [0.25, 0.25])
+    assert tiny.named == full.named and tiny.verdict == full.verdict
+    np.testing.assert_allclose(tiny.final.params, full.final.params, rtol=1e-6, atol=1e-12)

@@ -298,8 +298,9 @@ class Extensions:
             for j, i in enumerate(todo):
                 col = spec[j, 1:].copy()
                 out[i] = self._spec_cache.get_or(items[i][0], lambda c=col: c)
-        for key, _ in items:
-            self._spec_cache.move_to_end(key)
+        for key, _ in items:  # (one may have been evicted by the insertions above)
+            if key in self._spec_cache:
+                self._spec_cache.move_to_end(key)
         return out  # type: ignore[return-value]
 
     def _solve_white(self, st: AxisState, dm: np.ndarray) -> np.ndarray:
