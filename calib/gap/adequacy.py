@@ -331,8 +331,8 @@ def _groups(order: np.ndarray, n: int) -> list[np.ndarray]:
 def _variance(z: np.ndarray, order: np.ndarray, name: str, what: str, axis: str,
               scale: float) -> Check | None:
     groups = _groups(order, z.size)
-    if not groups:
-        return None
+    if not groups or min(float(np.var(z[g])) for g in groups) <= 0.0:
+        return None  # (a group without spread: noiseless or rounded data, no test)
     stat, p = stats.bartlett(*[z[g] for g in groups])
     sd = np.array([np.std(z[g]) for g in groups]) * scale
     return Check(name, axis, float(stat), float(np.log(max(p, 1e-300))),
