@@ -46,3 +46,29 @@ def course(course_dir):
     acel = read_acel(course_dir / "acel.mat")
     cal = calibrate(ensayo, ref.NOISE_VAR)
     return ensayo, acel, read_puntos(course_dir / "puntos.mat"), cal, compute_trajectory(acel, cal)
+
+
+class FuzzCounter:
+    """Cases tried by the fuzz and fault tests, by kind (printed at the end of the run)."""
+
+    def __init__(self) -> None:
+        self.counts: dict[str, int] = {}
+
+    def tried(self, kind: str, n: int = 1) -> None:
+        self.counts[kind] = self.counts.get(kind, 0) + n
+
+
+_FUZZ = FuzzCounter()
+
+
+@pytest.fixture(scope="session")
+def fuzz_counter() -> FuzzCounter:
+    """Count a case: ``fuzz_counter.tried("readers")`` (session scope: usable in @given)."""
+    return _FUZZ
+
+
+def pytest_terminal_summary(terminalreporter):
+    if _FUZZ.counts:
+        parts = ", ".join(f"{k} {v}" for k, v in sorted(_FUZZ.counts.items()))
+        terminalreporter.write_line(
+            f"fuzz and fault cases tried: {sum(_FUZZ.counts.values())} ({parts})")
