@@ -211,13 +211,17 @@ def sweep_readings(sweep: SweepProfile, table: TableEdits | None = None
     model, _ = tilt_table(table)
     data = mujoco.MjData(model)
     dt = model.opt.timestep
+    if not (np.isfinite(sweep.rate) and sweep.rate > 0):
+        raise ValueError(f"sample rate must be positive and finite, got {sweep.rate} Hz")
     stride = 1.0 / (sweep.rate * dt)
-    if sweep.rate <= 0 or abs(stride - round(stride)) > 1e-9:
+    if stride < 0.5 or abs(stride - round(stride)) > 1e-9:
         raise ValueError(f"sample period 1/{sweep.rate} Hz must be a multiple of the model "
                          f"timestep {dt} s")
     stride = int(round(stride))
-    if sweep.duration <= 0:
-        raise ValueError(f"sweep duration must be positive, got {sweep.duration}")
+    if not (np.isfinite(sweep.duration) and sweep.duration > 0):
+        raise ValueError(f"sweep duration must be positive and finite, got {sweep.duration}")
+    if not (np.isfinite(sweep.cycles) and sweep.cycles > 0):
+        raise ValueError(f"sweep cycles must be positive and finite, got {sweep.cycles}")
     n_samples = int(np.floor(sweep.duration * sweep.rate + 1e-9)) + 1
     nstep = (n_samples - 1) * stride + 1
     t_step = np.arange(nstep) * dt
@@ -228,7 +232,17 @@ def sweep_readings(sweep: SweepProfile, table: TableEdits | None = None
                                            cmd.reshape(1, nstep, 1), nstep=nstep)
     sx, sy, enc = _accel_columns(model)
     rows = sensordata[0, ::stride]
-    return t_step[::stride], rows[:, [sx, sy]], rows[:, enc]
+    a, theta = rows[:, [sx, sy]], rows[:, enc]
+    # A run that never moves (θ ≡ θ_cmd(0): zero cycles, a sub-sample duration, start = stop)
+    # or a simulation that diverged is not a calibration run: say so instead of writing it.
+    if not (np.isfinite(a).all() and np.isfinite(theta).all()):
+        raise ValueError("the sweep's simulation diverged (non-finite readings); lower the "
+                         "sweep speed (range / duration) or the cycles")
+    if n_samples < 3 or np.ptp(theta) == 0.0:
+        raise ValueError(f"the sweep never moves (θ stays at {theta[0]:g} rad over "
+                         f"{n_samples} samples); give a longer duration, start ≠ stop and "
+                         "cycles > 0")
+    return t_step[::stride], a, theta
 
 
 def generate_calibration(config: CalibrationConfig, seed: int) -> CalibrationRun:

@@ -91,3 +91,13 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:  # calib.io.DataError, bench.cli.options.OptionError, …
         print(f"tiltbench {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except (MemoryError, OverflowError, ZeroDivisionError, FloatingPointError,
+            RecursionError) as exc:
+        # Last resort: options and sizes are checked before work starts (bench.cli.options,
+        # bench.limits), so reaching this is a bug; still one line, never a traceback.
+        name = " ".join(filter(None, (args.command, getattr(args, "kind", None))))
+        detail = f": {exc}" if str(exc) else ""
+        print(f"tiltbench {args.command}: error: {type(exc).__name__}{detail} — the inputs of "
+              f"'tiltbench {name}' are outside what it can compute; please report this "
+              "command line", file=sys.stderr)
+        return 2

@@ -14,7 +14,13 @@ from bench.cli.options import (
     check_positive,
     noise_var_from_args,
 )
-from bench.cli.output import print_files, print_json, refuse_overwrite, warnings_to_stderr
+from bench.cli.output import (
+    check_finite,
+    print_files,
+    print_json,
+    refuse_overwrite,
+    warnings_to_stderr,
+)
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
@@ -39,6 +45,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     if args.json:
         print_json(cal.to_dict())
         return 0
+    check_finite(cal.to_dict(), "the estimates")  # the readable output too: no nan/inf
     if nv is None:
         print("note: noise variances not given; estimated from the residuals "
               "(intervals use Student t)", file=sys.stderr)

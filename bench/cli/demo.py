@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from bench.cli.options import Deferred, OptionError, add_force, add_json, check_level
+from bench.cli.options import Deferred, add_force, add_json, check_count, check_level, integer
 from bench.cli.output import print_json
 from bench.cli.progress import Progress
 
@@ -41,11 +41,16 @@ def _result_json(res, ok: bool) -> dict:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
+    from bench import limits
     from bench.demo import run_demo  # start-up time of `tiltbench --help`
 
     check_level(args.level)
-    if args.coverage_runs < 0:
-        raise OptionError(f"--coverage-runs must be >= 0, got {args.coverage_runs}")
+    check_count(args.coverage_runs, "--coverage-runs", 0)
+    # the coverage check spawns one seed stream per run up front, then redraws the design's
+    # readings (the course's 20001 samples) once per run
+    limits.check_memory(limits.SEED_STREAM_BYTES * args.coverage_runs
+                        + limits.synthetic_runs_bytes(20001, 0),
+                        f"--coverage-runs {args.coverage_runs}")
     formats = ("png", "svg") if args.figures == "both" else (args.figures,)
     res = run_demo(args.out, args.seed, args.force, args.course_data, args.level,
                    args.coverage_runs, None if args.quiet else Progress("demo"),
@@ -75,7 +80,7 @@ def register(sub) -> None:
                    "datos.txt) instead of generating a set")
     p.add_argument("--level", type=float, default=Deferred(_level),
                    help="confidence level of the arrival region")
-    p.add_argument("--coverage-runs", type=int, default=Deferred(_coverage_runs),
+    p.add_argument("--coverage-runs", type=integer, default=Deferred(_coverage_runs),
                    help="fresh synthetic calibrations in the coverage check (0: skip)")
     p.add_argument("--figures", choices=["png", "svg", "both"], default="both",
                    help="figure format(s) written to OUT/figures")

@@ -10,6 +10,7 @@ made here, after the set is written (the library does not import :mod:`bench.rec
 from __future__ import annotations
 
 import argparse
+import math
 
 from bench.cli.options import (
     DEFAULT_NOISE,
@@ -18,12 +19,14 @@ from bench.cli.options import (
     add_generate_common,
     add_gravity,
     add_sensor_options,
+    check_count,
     check_positive,
+    integer,
     parse_floats,
     parse_pair,
     parse_variances,
 )
-from bench.cli.output import print_summary, refuse_overwrite
+from bench.cli.output import check_finite, print_summary, refuse_overwrite
 from bench.cli.progress import Progress
 
 
@@ -35,7 +38,7 @@ def sensor_model(args: argparse.Namespace):
 
     return SensorErrorModel.from_pairs(parse_pair(args.bias, "--bias"),
                                        parse_pair(args.scale, "--scale"),
-                                       parse_pair(args.noise_var, "--noise-var"))
+                                       parse_variances(args.noise_var, allow_zero=True))
 
 
 def calibration_config(args: argparse.Namespace):
@@ -51,13 +54,19 @@ def calibration_config(args: argparse.Namespace):
         values = parse_floats(args.theta_list, "--theta-list")
         theta = ThetaDesign(kind="list", values=values)
     elif args.positions is not None:
-        theta = ThetaDesign(kind="positions", start=start, stop=stop, positions=args.positions,
-                            per_position=args.per_position)
+        theta = ThetaDesign(kind="positions", start=start, stop=stop,
+                            positions=check_count(args.positions, "--positions"),
+                            per_position=check_count(args.per_position, "--per-position"))
     else:
-        theta = ThetaDesign(kind="range", start=start, stop=stop, count=args.count)
-    sweep = SweepProfile(kind=args.profile, start=start, stop=stop, duration=args.duration,
-                         rate=args.rate, cycles=args.cycles)
+        theta = ThetaDesign(kind="range", start=start, stop=stop,
+                            count=check_count(args.count, "--count", 3))
+    sweep = SweepProfile(kind=args.profile, start=start, stop=stop,
+                         duration=check_positive(args.duration, "--duration"),
+                         rate=check_positive(args.rate, "--rate"),
+                         cycles=check_positive(args.cycles, "--cycles"))
     check_positive(args.g, "--g")
+    if args.mode == "sweep":
+        _check_sweep(sweep)
     config = CalibrationConfig(mode=args.mode, theta=theta, sweep=sweep, sensor=sensor,
                                table=TableEdits(g=args.g))
     if args.effect:  # effect catalog (docs/effects.md), bench/effects.py
@@ -65,6 +74,54 @@ def calibration_config(args: argparse.Namespace):
 
         config = apply_effects(config, [parse_effect_option(e) for e in args.effect])
     return config
+
+
+def _check_sweep(sweep) -> None:
+    """A sweep that moves: at least 3 samples, start ≠ stop, and (up-down, sine) at least two
+    samples per cycle — else the run would hold θ still (θ ≡ start)."""
+    samples = sweep.duration * sweep.rate
+    if samples < 2:
+        raise OptionError(f"--duration {sweep.duration:g} s at --rate {sweep.rate:g} Hz gives "
+                          f"{int(samples) + 1} sample(s); a sweep needs at least 3 "
+                          "(duration × rate >= 2)")
+    if sweep.start == sweep.stop:
+        raise OptionError(f"--theta-range: start and stop are both {sweep.start:g} rad; a "
+                          "sweep between them would never move")
+    if sweep.kind in ("updown", "sine") and sweep.cycles > samples / 2:
+        raise OptionError(f"--cycles {sweep.cycles:g}: at most duration × rate / 2 = "
+                          f"{samples / 2:g} (two samples per cycle), or the samples do not "
+                          "follow the motion")
+
+
+def _check_calibration_size(config) -> float:
+    """Refuse a run too large for this machine (:mod:`bench.limits`) before simulating it;
+    return the estimated peak, bytes."""
+    from bench import limits
+
+    if config.mode == "static":
+        th = config.theta
+        n = {"range": th.count, "list": len(th.values),
+             "positions": th.positions * th.per_position}[th.kind]
+        what = {"range": f"--count {th.count}", "list": f"--theta-list of {n} values",
+                "positions": f"--positions {th.positions} --per-position {th.per_position}"
+                }[th.kind]
+        return limits.check_memory(limits.static_run_bytes(n), what)
+    else:
+        from bench.model import tilt_table
+
+        dt = tilt_table(config.table)[0].opt.timestep
+        sw = config.sweep
+        return limits.check_memory(limits.sweep_run_bytes(sw.duration, dt),
+                            f"--duration {sw.duration:g} s (sweep, {dt:g} s physics steps)")
+
+
+def _check_vehicle_size(cfg, extra: float = 0.0, what: str = "") -> float:
+    """Refuse a vehicle run (plus ``extra`` bytes, named by ``what``) too large for this
+    machine before its time grid is built; return the estimated peak, bytes."""
+    from bench import limits
+
+    return limits.check_memory(limits.vehicle_run_bytes(cfg.duration * cfg.rate) + extra,
+                        f"--duration {cfg.duration:g} s at --rate {cfg.rate:g} Hz{what}")
 
 
 def parse_profile(text: str):
@@ -78,31 +135,43 @@ def parse_profile(text: str):
     for part in filter(None, (p.strip() for p in text.split(";"))):
         try:
             dur, acc = part.split(":")
-            segs.append(Segment(float(dur), tuple(parse_pair(acc, "--profile"))))
+            seconds = float(dur)
+            accel = tuple(parse_pair(acc, "--profile"))
+        except OptionError:
+            raise
         except ValueError:
             raise OptionError(f"--profile: segment {part!r} must be 'duration:ax,ay' "
                               "(s : m/s²), segments separated by ';'") from None
+        if not (math.isfinite(seconds) and seconds >= 0):
+            raise OptionError(f"--profile: segment {part!r}: the duration must be a finite "
+                              "number of seconds >= 0")
+        segs.append(Segment(seconds, accel))
     if not segs:
         raise OptionError("--profile: no segments given")
     return tuple(segs)
 
 
-def vehicle_config(args: argparse.Namespace, sensor, profile):
+def vehicle_config(args: argparse.Namespace, sensor, profile, extra: float = 0.0,
+                   extra_what: str = ""):
     """:class:`bench.vehicle.VehicleConfig` from ``--duration``, ``--rate``, ``--p0``, ``--v0``,
     ``--g`` and the given sensor model and profile."""
     from bench.vehicle import VehicleConfig
 
     check_positive(args.g, "--g")
+    check_positive(args.duration, "--duration")
+    check_positive(args.rate, "--rate")
     cfg = VehicleConfig(duration=args.duration, rate=args.rate,
                         p0=tuple(parse_pair(args.p0, "--p0")),
                         v0=tuple(parse_pair(args.v0, "--v0")), profile=profile,
                         sensor=sensor, g=args.g)
+    _check_vehicle_size(cfg, extra, extra_what)  # before the grid is built
     cfg.command()  # validate the grid now, with a clear message
     return cfg
 
 
 def course_config(args: argparse.Namespace):
     """:class:`bench.course.CourseConfig` from the options of ``generate course``."""
+    from bench import limits
     from bench.course import CourseConfig
     from bench.sensors import SensorErrorModel
     from bench.tilt import ThetaDesign
@@ -116,22 +185,38 @@ def course_config(args: argparse.Namespace):
         sensor = SensorErrorModel.from_pairs(parse_pair(args.bias, "--bias"),
                                              parse_pair(args.scale, "--scale"), nv)
     profile = parse_profile(args.profile) if args.profile else COURSE_PROFILE
-    vcfg = vehicle_config(args, sensor or SensorErrorModel(), profile)
-    if args.count < 3:
-        raise OptionError(f"--count must be >= 3, got {args.count}")
-    if args.min_separation <= 0:
-        raise OptionError(f"--min-separation must be positive, got {args.min_separation}")
+    check_count(args.count, "--count", 3)
+    check_positive(args.min_separation, "--min-separation")
+    vcfg = vehicle_config(args, sensor or SensorErrorModel(), profile,
+                          limits.static_run_bytes(args.count), f" and --count {args.count}")
     return CourseConfig(vehicle=vcfg, random_profile=args.profile is None, sensor=sensor,
                         noise_var=tuple(nv), theta=ThetaDesign(count=args.count),
                         min_separation=args.min_separation, g=args.g)
 
 
 # ---------------------------------------------------------------- handlers
+BIG_RUN_BYTES = 512 * 2**20
+"""Runs estimated above this (seconds to minutes) say on stderr that they started."""
+
+
+def _announce(command: str, need: float) -> None:
+    """A progress line on stderr for a big run that fits (:mod:`bench.limits`): it starts
+    and says how big it is; a small run prints nothing (outputs unchanged)."""
+    if need >= BIG_RUN_BYTES:
+        from bench.limits import gib
+
+        Progress(command)(f"a large run (about {gib(need)} of memory): simulating")
+
+
 def _cmd_calibration(args: argparse.Namespace) -> int:
     from bench.tilt import generate_calibration, write_calibration
 
     refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
-    run = generate_calibration(calibration_config(args), args.seed)
+    config = calibration_config(args)
+    _announce("generate calibration", _check_calibration_size(config))
+    run = generate_calibration(config, args.seed)
+    check_finite({"tita": run.tita, "datos": run.datos, "truth": run.truth()},
+                 f"{args.out}: the run")
     paths = write_calibration(run, args.out, force=args.force)
     if args.rrd:
         from bench.record import record_calibration_truth
@@ -148,7 +233,10 @@ def _cmd_vehicle(args: argparse.Namespace) -> int:
 
     refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
     cfg = vehicle_config(args, sensor_model(args), parse_profile(args.profile))
+    _announce("generate vehicle", _check_vehicle_size(cfg))
     run = make_vehicle_run(cfg, args.seed)
+    check_finite({"t": run.t, "Aerr": run.aerr, "truth": run.truth_dict()},
+                 f"{args.out}: the run")
     paths = write_vehicle(run, args.out, force=args.force)
     if args.rrd:
         from bench.record import record_vehicle_truth
@@ -161,10 +249,19 @@ def _cmd_vehicle(args: argparse.Namespace) -> int:
 
 
 def _cmd_course(args: argparse.Namespace) -> int:
+    from bench import limits
     from bench.course import make_course_set, write_course
 
     refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
-    course = make_course_set(course_config(args), args.seed)
+    config = course_config(args)
+    _announce("generate course", limits.vehicle_run_bytes(config.vehicle.n_samples)
+              + limits.static_run_bytes(args.count))
+    try:
+        course = make_course_set(config, args.seed)
+    except RuntimeError as exc:  # bench.course.place_candidates: no room for the decoys
+        raise OptionError(f"--min-separation {args.min_separation:g}: {exc}") from None
+    check_finite({"ensayo.mat": course.calibration.datos, "acel.mat": course.vehicle.aerr,
+                  "truth.json": course.truth()}, f"{args.out}: the course set")
     paths = write_course(course, args.out, force=args.force)
     if args.rrd:
         from bench.record import record_course_truth
@@ -178,12 +275,16 @@ def _cmd_course(args: argparse.Namespace) -> int:
 
 
 def _cmd_class(args: argparse.Namespace) -> int:
+    from bench import limits
     from bench.classset import generate_class
     from bench.course import CourseConfig
 
     nv = parse_variances(args.noise_var)
-    if args.students < 1:
-        raise OptionError(f"--students must be >= 1, got {args.students}")
+    check_count(args.students, "--students")
+    what = f"--students {args.students}"
+    limits.check_memory(limits.CLASS_STUDENT_BYTES * args.students
+                        + limits.vehicle_run_bytes(6000) + limits.static_run_bytes(20001), what)
+    limits.check_disk(limits.COURSE_SET_DISK_BYTES * args.students, args.out, what)
     if args.seed < 0:
         raise OptionError(f"--seed must be >= 0, got {args.seed}")
     if not args.prefix or "/" in args.prefix or "\\" in args.prefix:
@@ -226,11 +327,11 @@ def _register_calibration(kinds) -> None:
     p.add_argument("--theta-range", default=FULL_TURN,
                    help="θ range start,stop in rad, any finite values (static range/positions; "
                         "sweep)")
-    p.add_argument("--count", type=int, default=20001, help="static: samples over the range")
+    p.add_argument("--count", type=integer, default=20001, help="static: samples over the range")
     p.add_argument("--theta-list",
                    help="static: explicit θ values in rad (any finite), comma separated")
-    p.add_argument("--positions", type=int, help="static: number of discrete held positions")
-    p.add_argument("--per-position", type=int, default=100,
+    p.add_argument("--positions", type=integer, help="static: number of discrete held positions")
+    p.add_argument("--per-position", type=integer, default=100,
                    help="static: samples held at each position")
     p.add_argument("--profile", choices=["constant", "accel", "updown", "sine"],
                    default="constant", help="sweep: commanded angle profile")
@@ -262,7 +363,7 @@ def _register_course(kinds) -> None:
     p.add_argument("--noise-var", default=DEFAULT_NOISE, help="noise variances x,y (m/s²)²")
     p.add_argument("--bias", help="true bias x,y in m/s²; omitted: drawn from the seed")
     p.add_argument("--scale", help="true scale-factor error x,y; omitted: drawn from the seed")
-    p.add_argument("--count", type=int, default=20001, help="calibration samples over [0, 2π]")
+    p.add_argument("--count", type=integer, default=20001, help="calibration samples over [0, 2π]")
     p.add_argument("--min-separation", type=float, default=100.0,
                    help="smallest distance between candidate points, m")
     add_gravity(p)
@@ -276,7 +377,7 @@ def _register_class(kinds) -> None:
                          "and the private answer key DIR/answer_key.csv and "
                          "DIR/answer_key.json.")
     add_generate_common(p)
-    p.add_argument("--students", type=int, required=True, metavar="K",
+    p.add_argument("--students", type=integer, required=True, metavar="K",
                    help="number of students K")
     p.add_argument("--prefix", default="student", help="folder prefix (student_001, …)")
     p.add_argument("--noise-var", default=DEFAULT_NOISE,

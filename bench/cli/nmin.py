@@ -6,9 +6,18 @@ from __future__ import annotations
 
 import argparse
 
+from bench import limits
 from bench.cli.inputs import add_course_inputs, read_course_inputs
-from bench.cli.options import Deferred, OptionError, check_level, parse_ints
-from bench.cli.output import print_json
+from bench.cli.options import (
+    Deferred,
+    OptionError,
+    check_count,
+    check_initial_state,
+    check_level,
+    integer,
+    parse_ints,
+)
+from bench.cli.output import check_finite, print_json
 from bench.cli.progress import Progress
 
 
@@ -22,19 +31,23 @@ def _cmd_nmin(args: argparse.Namespace) -> int:
     from calib.nmin import analyze_nmin  # start-up time of `tiltbench --help`
 
     level = check_level(args.level)
-    ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
+    check_initial_state(args)
     steps = parse_ints(args.steps, "--steps")
     mc_n = parse_ints(args.mc_n, "--mc-n")
     if any(s < 1 for s in steps) or any(n < 3 for n in mc_n):
         raise OptionError("--steps must be >= 1 and --mc-n values >= 3")
-    if args.runs < 0:
-        raise OptionError(f"--runs must be >= 0, got {args.runs}")
+    check_count(args.runs, "--runs", 0)
+    if args.runs > 0 and mc_n:  # one synthetic run in memory at a time, all seeds up front
+        limits.check_memory(limits.synthetic_runs_bytes(max(mc_n), args.runs),
+                            f"--mc-n {max(mc_n)} --runs {args.runs}")
+    ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
     res = analyze_nmin(ensayo, acel, candidates, p0, v0, nv, level, args.method,
                        args.integrator, args.g, steps, mc_n, args.runs, args.seed,
                        progress=Progress("nmin"))
     if args.json:
         print_json(res.to_dict())
     else:
+        check_finite(res.to_dict(), "the result")  # the readable output too: no nan/inf
         print(res.summary())
     return 0
 
@@ -46,6 +59,6 @@ def register(sub) -> None:
                    help="subsampling steps of the course experiment (every k-th sample)")
     q.add_argument("--mc-n", default="20001,1539,1429",
                    help="calibration sizes N for fresh synthetic runs (the design N is added)")
-    q.add_argument("--runs", type=int, default=100, help="synthetic runs per N (0: none)")
+    q.add_argument("--runs", type=integer, default=100, help="synthetic runs per N (0: none)")
     q.add_argument("--seed", type=int, default=0, help="seed of the synthetic runs")
     q.set_defaults(handler=_cmd_nmin)

@@ -100,6 +100,10 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = re.compile(r"^-\.?\d[\d.eE+\-,\s]*$")
 
+    def error(self, message: str):
+        """One line on stderr, exit code 2 (argparse prints the usage first: two lines)."""
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
 
 # ---------------------------------------------------------------- option groups
 def add_json(p: argparse.ArgumentParser) -> None:
@@ -138,8 +142,47 @@ def add_sensor_options(p: argparse.ArgumentParser) -> None:
 
 
 # ---------------------------------------------------------------- option values
+# Rules for numbers, checked where an option enters, before any work (issue 11, part 2):
+# every value is finite; rates, durations, cycles, gravity and distances are > 0; counts are
+# integers >= 1 (or the command's minimum); levels leave room for a finite quantile; and the
+# magnitudes below keep every derived number (squares, sums over a run, positions after a
+# run) far from overflow, so that a result is finite or the option is refused.
+MAGNITUDE_LIMITS: dict[str, float] = {
+    "--p0": 1e9,      # m: a million km; positions stay resolved to < 1 µm in float64
+    "--v0": 1e6,      # m/s: far past any vehicle; v0·t over a day stays < 1e11 m
+    "--bias": 1e6,    # m/s²: 10⁵ g
+    "--scale": 1e6,   # dimensionless gain error
+    "--profile": 1e6,  # m/s², segment accelerations
+    "--g": 1e4,       # m/s²: ≈ 1000 g (the Sun's surface: 274)
+    "--min-separation": 1e7,  # m: the size of the Earth
+    "--rate": 1e9,    # Hz (sizes are checked separately: bench.limits)
+    "--duration": 1e9,  # s
+    "--cycles": 1e9,
+}
+"""Largest magnitude of each numeric option (each has one meaning across commands)."""
+
+VARIANCE_RANGE = (1e-100, 1e100)
+"""Noise variances, (m/s²)²: positive, not subnormal, and within these bounds, so that
+residuals²/σ² summed over any run and σ²·(HᵀH)⁻¹ stay finite."""
+
+LEVEL_MAX = 1.0 - 1e-12
+"""Largest confidence level: the tail 1 − level must be resolved in double precision (its
+spacing near 1 is 1.1e-16; at 1e-12 the quantile is known to 1e-4 relative, and
+(1 + level)/2 of a two-sided quantile stays below 1, so the quantile is finite)."""
+
+
+def _check_magnitude(value: float, what: str) -> None:
+    limit = MAGNITUDE_LIMITS.get(what)
+    if limit is not None and abs(value) > limit:
+        raise OptionError(f"{what}: magnitude at most {limit:g} (a sane value keeps every "
+                          f"result finite), got {value:g}")
+
+
 def parse_pair(text: str, what: str):
-    """Parse ``'a,b'`` into a (2,) float array; :class:`OptionError` names the option ``what``."""
+    """Parse ``'a,b'`` into a (2,) float array; :class:`OptionError` names the option ``what``.
+
+    Both values must be finite and, for the options of :data:`MAGNITUDE_LIMITS`, within it.
+    """
     import numpy as np  # start-up time: only when a pair is parsed
 
     try:
@@ -148,14 +191,24 @@ def parse_pair(text: str, what: str):
         raise OptionError(f"{what}: expected two numbers 'x,y', got {text!r}") from None
     if len(vals) != 2 or not all(math.isfinite(v) for v in vals):
         raise OptionError(f"{what}: expected two finite numbers 'x,y', got {text!r}")
+    for v in vals:
+        _check_magnitude(v, what)
     return np.array(vals)
 
 
-def parse_variances(text: str, what: str = "--noise-var"):
-    """Parse ``'σx²,σy²'`` into a (2,) array of positive variances, (m/s²)²."""
+def parse_variances(text: str, what: str = "--noise-var", allow_zero: bool = False):
+    """Parse ``'σx²,σy²'`` into a (2,) array of variances, (m/s²)², in :data:`VARIANCE_RANGE`
+    (``allow_zero``: 0 also, a noiseless generated run)."""
     nv = parse_pair(text, what)
-    if (nv <= 0).any():
-        raise OptionError(f"{what}: variances must be positive, got {text}")
+    lo, hi = VARIANCE_RANGE
+    for v in nv:
+        if allow_zero and v == 0:
+            continue
+        if v <= 0:
+            raise OptionError(f"{what}: variances must be positive, got {text}")
+        if not lo <= v <= hi:
+            raise OptionError(f"{what}: variances must be between {lo:g} and {hi:g} (m/s²)² "
+                              f"(smaller or larger ones overflow the fit), got {text}")
     return nv
 
 
@@ -170,26 +223,65 @@ def parse_floats(text: str, what: str) -> tuple[float, ...]:
     return values
 
 
-def parse_ints(text: str, what: str) -> list[int]:
-    """Parse ``'a,b,…'`` into integers (empty text: no values)."""
+def _to_int(s: str) -> int:
+    """``'20001'`` or an integral float such as ``'1e8'`` → int; ValueError otherwise."""
     try:
-        return [int(s) for s in text.split(",")] if text else []
+        return int(s)
+    except ValueError:
+        x = float(s)  # ValueError for text
+        if not (math.isfinite(x) and x.is_integer()):
+            raise ValueError(s) from None
+        return int(x)
+
+
+def integer(text: str) -> int:
+    """argparse ``type`` of counts: an integer, also written as ``1e6``."""
+    try:
+        return _to_int(text.strip())
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+
+
+def parse_ints(text: str, what: str) -> list[int]:
+    """Parse ``'a,b,…'`` into integers (``1e6`` allowed; empty text: no values)."""
+    try:
+        return [_to_int(s.strip()) for s in text.split(",")] if text else []
     except ValueError:
         raise OptionError(f"{what}: expected comma-separated integers, got {text!r}") from None
 
 
+def check_count(value: int, what: str, minimum: int = 1) -> int:
+    """``value`` if it is an integer >= ``minimum``, else :class:`OptionError` naming ``what``."""
+    if value < minimum:
+        raise OptionError(f"{what} must be >= {minimum}, got {value}")
+    return int(value)
+
+
 def check_positive(value: float, what: str) -> float:
-    """``value`` if it is a positive finite number, else :class:`OptionError` naming ``what``."""
+    """``value`` if it is a positive finite number (within :data:`MAGNITUDE_LIMITS` for the
+    options listed there), else :class:`OptionError` naming ``what``."""
     if not (math.isfinite(value) and value > 0):
         raise OptionError(f"{what} must be a positive finite number, got {value}")
+    _check_magnitude(value, what)
     return float(value)
 
 
 def check_level(level: float) -> float:
-    """A confidence level in (0, 1) given as ``--level``."""
+    """A confidence level in (0, 1) given as ``--level``, at most :data:`LEVEL_MAX`."""
     if not 0.0 < level < 1.0:
         raise OptionError(f"--level must be in (0, 1), e.g. 0.95, got {level}")
+    if level > LEVEL_MAX:
+        raise OptionError(f"--level must be at most 1 - 1e-12 (the tail 1 - level is not "
+                          f"resolved in double precision beyond), got {level!r}")
     return level
+
+
+def check_initial_state(args: argparse.Namespace) -> None:
+    """``--p0`` / ``--v0`` of ``trajectory`` and ``nmin``, checked before the files are read
+    (finite, within :data:`MAGNITUDE_LIMITS`)."""
+    for what, text in (("--p0", args.p0), ("--v0", args.v0)):
+        if text is not None:
+            parse_pair(text, what)
 
 
 def noise_var_from_args(args: argparse.Namespace):

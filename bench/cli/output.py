@@ -16,11 +16,65 @@ from typing import Any, TypeVar
 T = TypeVar("T")
 
 
-def print_json(obj: Any) -> None:
-    """``obj`` as stable JSON (:func:`calib.io.dumps`) on stdout."""
+class NonFiniteError(ValueError):
+    """An output that would hold NaN or Infinity; the message names the field and why."""
+
+
+def _non_finite_path(obj: Any, path: str = "") -> tuple[str, Any] | None:
+    """Path (``a.b[3]``) and value of the first NaN/±Infinity in a JSON-like tree, or None.
+    Iterative (a deep tree cannot exhaust the recursion limit)."""
+    import math
+
+    stack = [(path, obj)]
+    while stack:
+        where, node = stack.pop()
+        if isinstance(node, float) and not math.isfinite(node):
+            return where or "(the value)", node
+        if isinstance(node, dict):
+            stack += [(f"{where}.{k}" if where else str(k), v)
+                      for k, v in reversed(list(node.items()))]
+        elif isinstance(node, (list, tuple)):
+            stack += [(f"{where}[{i}]", v) for i, v in reversed(list(enumerate(node)))]
+        elif hasattr(node, "dtype") and hasattr(node, "shape"):  # a numpy array or scalar
+            import numpy as np
+
+            if node.dtype.kind in "fc":
+                bad = np.argwhere(~np.isfinite(np.asarray(node)))
+                if bad.size:
+                    idx = tuple(int(i) for i in bad[0])
+                    return f"{where}{list(idx) if idx else ''}", np.asarray(node)[idx]
+    return None
+
+
+def check_finite(obj: Any, what: str) -> None:
+    """Refuse (:class:`NonFiniteError`) an output ``obj`` (JSON tree, arrays or a mapping of
+    arrays) holding NaN or ±Infinity, naming ``what`` (the output) and the field. JSON has no
+    such numbers (``json.dumps(..., allow_nan=False)`` would refuse them without saying
+    where); a non-finite result means an input out of the range the options allow."""
+    found = _non_finite_path(obj)
+    if found is not None:
+        field, value = found
+        raise NonFiniteError(f"{what}: {field} would be {value} (not a finite number): the "
+                             "computation overflowed or is undefined for these inputs; "
+                             "nothing was written")
+
+
+def json_text(obj: Any, what: str = "the JSON output") -> str:
+    """``obj`` as stable JSON (:func:`calib.io.dumps`), refused if a number is not finite."""
+    import json
+
     from calib.io import dumps
 
-    print(dumps(obj), end="")
+    text = dumps(obj)
+    if "NaN" in text or "Infinity" in text:  # the only spellings json.dumps gives them
+        check_finite(json.loads(text), what)  # (or a string that holds the word: passes)
+    return text
+
+
+def print_json(obj: Any) -> None:
+    """``obj`` as stable JSON (:func:`calib.io.dumps`) on stdout; NaN or ±Infinity anywhere
+    is an error naming the field (:func:`check_finite`), and nothing is printed."""
+    print(json_text(obj), end="")
 
 
 def print_summary(args: argparse.Namespace, title: str, summary: dict) -> None:

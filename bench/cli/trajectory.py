@@ -10,8 +10,14 @@ from __future__ import annotations
 import argparse
 
 from bench.cli.inputs import add_course_inputs, read_course_inputs
-from bench.cli.options import add_force, check_level
-from bench.cli.output import print_files, print_json, refuse_overwrite, warnings_to_stderr
+from bench.cli.options import add_force, check_initial_state, check_level
+from bench.cli.output import (
+    check_finite,
+    print_files,
+    print_json,
+    refuse_overwrite,
+    warnings_to_stderr,
+)
 
 
 def _cmd_trajectory(args: argparse.Namespace) -> int:
@@ -22,6 +28,7 @@ def _cmd_trajectory(args: argparse.Namespace) -> int:
     from calib.trajectory_report import trajectory_tree
 
     level = check_level(args.level)
+    check_initial_state(args)
     refuse_overwrite([args.plot, args.rrd], args.force)
     ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
     cal = warnings_to_stderr(lambda: calibrate(ensayo, nv, args.method, args.g))
@@ -40,6 +47,7 @@ def _cmd_trajectory(args: argparse.Namespace) -> int:
     if args.json:
         print_json(out)
         return 0
+    check_finite(out, "the result")  # the readable output too: no nan/inf
     print(traj.summary())
     print(region.summary())
     print_files([args.plot, args.rrd])
