@@ -128,6 +128,12 @@ def test_reported_generate_inputs_are_refused(tmp_path, argv, option):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("rate", ["0", "nan", "inf", "-3"])
+def test_gap_rate_is_checked_before_reading(tmp_path, rate):
+    msg = _error("gap", tmp_path / "missing.mat", "--noise-var", "0.25,0.64", "--rate", rate)
+    assert "--rate" in msg
+
+
 def test_sizes_are_stated_in_gib(tmp_path):
     msg = _error("generate", "calibration", "--count", "1e11", "--out", tmp_path / "o")
     assert "GiB of memory" in msg and "the machine has" in msg

@@ -49,6 +49,9 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     from bench.gap import run_gap
     from calib.io import read_ensayo
 
+    check_positive(args.g, "--g")
+    if args.rate is not None:
+        check_positive(args.rate, "--rate")
     ensayo = read_ensayo(args.ensayo)
     nv = noise_var_from_args(args)
     if nv is None:
@@ -57,7 +60,6 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     if args.rate is not None and ensayo.t is not None:
         print(f"warning: {args.ensayo} has sample times 't'; --rate {args.rate} is ignored",
               file=sys.stderr)
-    check_positive(args.g, "--g")
     report = run_gap(ensayo, nv, g=args.g, rate=None if ensayo.t is not None else args.rate,
                      report_dir=args.report, rrd=args.rrd, force=args.force,
                      progress=lambda msg: print(f"[gap] {msg}", file=sys.stderr, flush=True))
