@@ -38,7 +38,6 @@ import functools
 import json
 import math
 import os
-import reprlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -133,17 +132,31 @@ ANSWER_KEY_SCHEMA = {
                   "required": ["student", "truth"]}}},
     "required": ["students"]}
 
-_REPR = reprlib.Repr()
-_REPR.maxlevel, _REPR.maxstring, _REPR.maxother, _REPR.maxlong = 3, 40, 40, 40
-
-
-def _short(v: Any) -> str:
-    """A bounded one-line rendering of a JSON value (deep or long values are cut)."""
+def _short(v: Any, depth: int = 3) -> str:
+    """A bounded one-line JSON-like rendering of a value (deep, long or huge values are cut)."""
     if v is None:
         return "null"
     if isinstance(v, bool):
         return "true" if v else "false"
-    return _REPR.repr(v).replace("\n", "\\n")
+    if isinstance(v, int):
+        digits = int(v.bit_length() * 0.30103)
+        return str(v) if abs(v) < 10**30 else f"an integer of ~{digits} digits"
+    if isinstance(v, float):
+        return {math.inf: "Infinity", -math.inf: "-Infinity"}.get(v, "NaN" if v != v else repr(v))
+    if isinstance(v, str):
+        return json.dumps(v if len(v) <= 40 else v[:40] + "…", ensure_ascii=False)
+    if isinstance(v, Mapping):
+        if depth == 0:
+            return "{…}"
+        items = list(v.items())
+        body = ", ".join(f"{_short(str(k))}: {_short(x, depth - 1)}" for k, x in items[:4])
+        return "{" + body + (", …" if len(items) > 4 else "") + "}"
+    if isinstance(v, (list, tuple)):
+        if depth == 0:
+            return "[…]"
+        body = ", ".join(_short(x, depth - 1) for x in v[:6])
+        return "[" + body + (", …" if len(v) > 6 else "") + "]"
+    return _short(str(v))
 
 
 def _is_finite_number(checker, v: Any) -> bool:
