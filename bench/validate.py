@@ -160,7 +160,8 @@ def _short(v: Any, depth: int = 3) -> str:
 
 
 def _is_finite_number(checker, v: Any) -> bool:
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer,
+                                                              np.floating)):
         return False
     try:
         return math.isfinite(v)
@@ -177,7 +178,9 @@ def _validator_class():
     from jsonschema import Draft202012Validator, validators
 
     checker = Draft202012Validator.TYPE_CHECKER.redefine_many(
-        {"number": _is_finite_number, "integer": _is_finite_integer})
+        {"number": _is_finite_number, "integer": _is_finite_integer,
+         # library callers pass Python objects: a tuple (asdict of a dataclass) is an array
+         "array": lambda checker, v: isinstance(v, (list, tuple))})
     return validators.extend(Draft202012Validator, type_checker=checker)
 
 
