@@ -34,7 +34,10 @@ Exit codes of ``tiltbench validate``: 0 pass, 1 fail, 2 bad input.
 
 from __future__ import annotations
 
+import functools
 import json
+import math
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -50,73 +53,353 @@ from calib.results import ResultMixin
 StdSource = Literal["auto", "reported", "design"]
 
 
-def _find_sensor(truth: Mapping) -> Mapping | None:
-    """The first ``sensor`` mapping with x/y bias and scale (breadth first)."""
-    queue: list[Any] = [truth]
+# --- The JSON inputs, checked against a schema -----------------------------------------------
+# One JSON Schema (draft 2020-12, checked by the ``jsonschema`` package) per object validate
+# reads; every leaf says in its ``description`` what it expects, which is what the message says.
+# Numbers must be finite: the type checker's "number" and "integer" exclude NaN, ±Infinity,
+# booleans and integers beyond the float range (``json`` reads ``NaN``, ``1e999`` and 400-digit
+# integers without complaint).
+
+FINITE = {"type": "number", "description": "a finite number"}
+NONNEG = {"type": "number", "minimum": 0, "description": "a non-negative finite number"}
+POSITIVE = {"type": "number", "exclusiveMinimum": 0, "description": "a positive finite number"}
+POS_INT = {"type": "integer", "minimum": 1, "description": "a positive integer"}
+NONNEG_INT = {"type": "integer", "minimum": 0, "description": "a non-negative integer"}
+
+TRUTH_AXIS_SCHEMA = {
+    "type": "object", "description": "an object {bias, scale, noise_var}",
+    "properties": {"bias": FINITE, "scale": FINITE, "noise_var": NONNEG},
+    "required": ["bias", "scale"]}
+SENSOR_SCHEMA = {
+    "type": "object", "description": "an object {x: {bias, scale, noise_var}, y: {...}}",
+    "properties": {"x": TRUTH_AXIS_SCHEMA, "y": TRUTH_AXIS_SCHEMA}, "required": ["x", "y"]}
+THETA_DESIGN_SCHEMA = {
+    "type": "object", "description": "an object {kind, start, stop, count, values, positions, "
+                                     "per_position} (bench.tilt.ThetaDesign)",
+    "properties": {
+        "kind": {"enum": ["range", "list", "positions"],
+                 "description": "one of 'range', 'list', 'positions'"},
+        "start": FINITE, "stop": FINITE, "count": POS_INT,
+        "values": {"type": "array", "items": FINITE,
+                   "description": "an array of finite numbers (rad)"},
+        "positions": NONNEG_INT, "per_position": NONNEG_INT},
+    "additionalProperties": False,
+    # kind defaults to "range" (an absent kind satisfies the first "if")
+    "allOf": [
+        {"if": {"properties": {"kind": {"const": "range"}}},
+         "then": {"properties": {"count": {"minimum": 3, "description":
+                                           "an integer ≥ 3 (kind 'range')"}}}},
+        {"if": {"properties": {"kind": {"const": "list"}}, "required": ["kind"]},
+         "then": {"required": ["values"], "properties": {"values": {
+             "minItems": 3, "description": "at least 3 angles (kind 'list')"}}}},
+        {"if": {"properties": {"kind": {"const": "positions"}}, "required": ["kind"]},
+         "then": {"required": ["positions", "per_position"], "properties": {
+             "positions": {"minimum": 1, "description": "a positive integer (kind 'positions')"},
+             "per_position": {"minimum": 1,
+                              "description": "a positive integer (kind 'positions')"}}}}]}
+SWEEP_SCHEMA = {
+    "type": "object", "description": "an object {kind, start, stop, duration, rate, cycles} "
+                                     "(bench.tilt.SweepProfile)",
+    "properties": {
+        "kind": {"enum": ["constant", "accel", "updown", "sine"],
+                 "description": "one of 'constant', 'accel', 'updown', 'sine'"},
+        "start": FINITE, "stop": FINITE, "duration": POSITIVE, "rate": POSITIVE,
+        "cycles": POSITIVE},
+    "required": ["kind"], "additionalProperties": False}
+THETA_SUMMARY_SCHEMA = {
+    "type": "object", "description": "an object {min, max, distinct}",
+    "properties": {"min": FINITE, "max": FINITE, "distinct": POS_INT}}
+EST_AXIS_SCHEMA = {
+    "type": "object", "description": "an object {bias, scale, bias_std, scale_std, cov}",
+    "properties": {
+        "bias": FINITE, "scale": FINITE, "bias_std": POSITIVE, "scale_std": POSITIVE,
+        "n": POS_INT,
+        "cov": {"type": "array", "minItems": 2, "maxItems": 2,
+                "description": "a 2×2 array [[var_bias, cov], [cov, var_scale]]",
+                "items": {"type": "array", "minItems": 2, "maxItems": 2, "items": FINITE,
+                          "description": "a row of 2 finite numbers"}}},
+    "required": ["bias", "scale"]}
+EST_AXES_SCHEMA = {
+    "type": "object", "description": "an object {x: {bias, scale, ...}, y: {...}}",
+    "properties": {"x": EST_AXIS_SCHEMA, "y": EST_AXIS_SCHEMA}, "required": ["x", "y"]}
+EST_TOP_SCHEMA = {"type": "object", "properties": {"g": POSITIVE, "n": POS_INT}}
+ANSWER_KEY_SCHEMA = {
+    "type": "object", "properties": {"students": {
+        "type": "array", "description": "an array of {student, truth}",
+        "items": {"type": "object", "description": "an object {student, truth}",
+                  "properties": {"student": {"type": "string", "description": "a folder name"},
+                                 "truth": {"type": "object", "description": "an object"}},
+                  "required": ["student", "truth"]}}},
+    "required": ["students"]}
+
+def _short(v: Any, depth: int = 3) -> str:
+    """A bounded one-line JSON-like rendering of a value (deep, long or huge values are cut)."""
+    if v is None:
+        return "null"
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        digits = int(v.bit_length() * 0.30103)
+        return str(v) if abs(v) < 10**30 else f"an integer of ~{digits} digits"
+    if isinstance(v, float):
+        return {math.inf: "Infinity", -math.inf: "-Infinity"}.get(v, "NaN" if v != v else repr(v))
+    if isinstance(v, str):
+        return json.dumps(v if len(v) <= 40 else v[:40] + "…", ensure_ascii=False)
+    if isinstance(v, Mapping):
+        if depth == 0:
+            return "{…}"
+        items = list(v.items())
+        body = ", ".join(f"{_short(str(k))}: {_short(x, depth - 1)}" for k, x in items[:4])
+        return "{" + body + (", …" if len(items) > 4 else "") + "}"
+    if isinstance(v, (list, tuple)):
+        if depth == 0:
+            return "[…]"
+        body = ", ".join(_short(x, depth - 1) for x in v[:6])
+        return "[" + body + (", …" if len(v) > 6 else "") + "]"
+    return _short(str(v))
+
+
+def _is_finite_number(checker, v: Any) -> bool:
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer,
+                                                              np.floating)):
+        return False
+    try:
+        return math.isfinite(v)
+    except OverflowError:  # an integer beyond the float range
+        return False
+
+
+def _is_finite_integer(checker, v: Any) -> bool:
+    return _is_finite_number(checker, v) and float(v).is_integer()
+
+
+@functools.cache
+def _validator_class():
+    from jsonschema import Draft202012Validator, validators
+
+    checker = Draft202012Validator.TYPE_CHECKER.redefine_many(
+        {"number": _is_finite_number, "integer": _is_finite_integer,
+         # library callers pass Python objects: a tuple (asdict of a dataclass) is an array
+         "array": lambda checker, v: isinstance(v, (list, tuple))})
+    return validators.extend(Draft202012Validator, type_checker=checker)
+
+
+def _path(parts) -> str:
+    out = ""
+    for p in parts:
+        if isinstance(p, int):
+            out += f"[{p}]"
+        else:
+            key = p if p.isidentifier() else json.dumps(p, ensure_ascii=False)
+            out += f".{key}" if out else key
+    return out
+
+
+def check_schema(obj: Any, schema: Mapping, name: str, at: tuple = ()) -> None:
+    """Raise :class:`DataError` "NAME: field.path: expected …, got …" for the first violation.
+
+    Parameters
+    ----------
+    obj : the JSON value.  schema : a JSON Schema (draft 2020-12) whose leaves carry a
+    ``description`` of what they expect.  name : the file name for the message.
+    at : the path of ``obj`` inside the file (for objects found below the top).
+    """
+    err = next(iter(_validator_class()(schema).iter_errors(obj)), None)
+    if err is None:
+        return
+    where = list(at) + list(err.absolute_path)
+    if err.validator == "required":
+        missing = next(k for k in err.validator_value if k not in err.instance)
+        raise DataError(f"{name}: {_path([*where, missing])} is missing")
+    if err.validator == "additionalProperties":
+        known = list(err.schema.get("properties", {}))
+        extra = next(k for k in err.instance if k not in known)
+        raise DataError(f"{name}: {_path(where) or 'top level'}: unknown key {_short(extra)} "
+                        f"(known: {', '.join(known)})")
+    expected = err.schema.get("description") or err.message
+    raise DataError(f"{name}: {_path(where) or 'top level'}: expected {expected}, got "
+                    f"{_short(err.instance)}")
+
+
+def _find(root: Any, pred) -> tuple[tuple, Any] | None:
+    """``(path, mapping)`` of the first mapping (breadth first) for which ``pred`` holds."""
+    queue: list[tuple[tuple, Any]] = [((), root)]
     while queue:
-        d = queue.pop(0)
+        path, d = queue.pop(0)
         if not isinstance(d, Mapping):
             continue
-        s = d.get("sensor")
-        if isinstance(s, Mapping) and all(
-                isinstance(s.get(a), Mapping) and "bias" in s[a] and "scale" in s[a]
-                for a in AXES):
-            return s
-        queue.extend(v for v in d.values() if isinstance(v, Mapping))
+        if pred(d):
+            return path, d
+        queue.extend(((*path, k), v) for k, v in d.items() if isinstance(v, Mapping))
     return None
 
 
-def _find_key(truth: Mapping, key: str) -> Any:
-    queue: list[Any] = [truth]
-    while queue:
-        d = queue.pop(0)
-        if isinstance(d, Mapping):
-            if key in d:
-                return d[key]
-            queue.extend(v for v in d.values() if isinstance(v, Mapping))
-    return None
+@dataclass(frozen=True)
+class _Truth:
+    """What validate reads from a truth object, checked (paths for messages)."""
+
+    params: dict | None          # true_sensor_params
+    g: float | None
+    design_at: tuple | None      # path of theta_design / sweep
+    design: dict | None          # the checked design mapping
+    static: bool
+    n: int | None                # the run's sample count recorded beside the design
+    summary: Mapping | None      # theta_summary {min, max, distinct}
+
+
+def read_truth(truth: Any, name: str = "truth.json") -> _Truth:
+    """Check a ``truth.json`` object against the schemas; :class:`DataError` names the field.
+
+    Located breadth first (a course truth nests the calibration): the first ``sensor`` with
+    x/y bias and scale, the first ``g``, the first ``theta_design`` or ``sweep`` (with the
+    ``n`` and ``theta_summary`` of the same object).
+    """
+    if not isinstance(truth, Mapping):
+        raise DataError(f"{name}: expected a JSON object at the top level, got {_short(truth)}")
+    params = None
+    hit = _find(truth, lambda d: "sensor" in d)
+    good = _find(truth, lambda d: isinstance(d.get("sensor"), Mapping) and all(
+        isinstance(d["sensor"].get(a), Mapping) and "bias" in d["sensor"][a]
+        and "scale" in d["sensor"][a] for a in AXES))
+    if good is not None or hit is not None:
+        at, holder = good if good is not None else hit
+        check_schema(holder["sensor"], SENSOR_SCHEMA, name, (*at, "sensor"))
+        s = holder["sensor"]
+        params = {}
+        for a in AXES:
+            params[f"bias_{a}"] = float(s[a]["bias"])
+            params[f"scale_{a}"] = float(s[a]["scale"])
+            if "noise_var" in s[a]:
+                params[f"noise_var_{a}"] = float(s[a]["noise_var"])
+    g = None
+    hit = _find(truth, lambda d: "g" in d)
+    if hit is not None:
+        check_schema(hit[1]["g"], POSITIVE, name, (*hit[0], "g"))
+        g = float(hit[1]["g"])
+    design_at = design = holder = None
+    static = False
+    hit = _find(truth, lambda d: "theta_design" in d)
+    if hit is not None:
+        static, key = True, "theta_design"
+        check_schema(hit[1][key], THETA_DESIGN_SCHEMA, name, (*hit[0], key))
+    else:
+        hit, key = _find(truth, lambda d: "sweep" in d), "sweep"
+        if hit is not None:
+            check_schema(hit[1][key], SWEEP_SCHEMA, name, (*hit[0], key))
+    n = summary = None
+    if hit is not None:
+        holder = hit[1]
+        design_at, design = (*hit[0], key), dict(holder[key])
+        if "n" in holder:
+            check_schema(holder["n"], POS_INT, name, (*hit[0], "n"))
+            n = int(holder["n"])
+        if "theta_summary" in holder:
+            check_schema(holder["theta_summary"], THETA_SUMMARY_SCHEMA, name,
+                         (*hit[0], "theta_summary"))
+            summary = holder["theta_summary"]
+    return _Truth(params, g, design_at, design, static, n, summary)
+
+
+def check_answer_key(key: Any, name: str = "answer_key.json") -> None:
+    """Check a class ``answer_key.json`` object: ``students`` is a list of {student, truth}."""
+    check_schema(key, ANSWER_KEY_SCHEMA, name)
 
 
 def true_sensor_params(truth: Mapping) -> dict[str, float] | None:
     """``{bias_x, scale_x, bias_y, scale_y, noise_var_x, noise_var_y}`` from a truth object.
 
     Looks for ``sensor.{x,y}.{bias, scale, noise_var}`` (top level first, then nested, e.g.
-    the calibration part of a course truth). None when absent.
+    the calibration part of a course truth). None when absent; :class:`DataError` naming the
+    field when present but malformed.
     """
-    s = _find_sensor(truth)
-    if s is None:
-        return None
-    out = {}
-    for a in AXES:
-        out[f"bias_{a}"] = float(s[a]["bias"])
-        out[f"scale_{a}"] = float(s[a]["scale"])
-        if "noise_var" in s[a]:
-            out[f"noise_var_{a}"] = float(s[a]["noise_var"])
-    return out
+    return read_truth(truth).params
 
 
-def design_theta(truth: Mapping) -> np.ndarray:
+BYTES_PER_SAMPLE = 160
+"""Peak memory of rebuilding θ and its design covariance, per sample (measured with
+``tracemalloc`` at N = 10⁶: 159 B for a static range, 152 B for a sweep)."""
+
+
+def available_memory() -> int | None:
+    """Bytes this process can still allocate: ``MemAvailable`` of ``/proc/meminfo`` (else
+    ``SC_AVPHYS_PAGES × SC_PAGE_SIZE``), capped by a cgroup ``memory.max``; None if unknown."""
+    avail = None
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                avail = int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    if avail is None:
+        try:
+            avail = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (ValueError, OSError, AttributeError):
+            return None
+    try:
+        cap = Path("/sys/fs/cgroup/memory.max").read_text().strip()
+        if cap.isdigit():
+            avail = min(avail, int(cap))
+    except OSError:
+        pass
+    return avail
+
+
+def design_size(truth: Mapping, name: str = "truth.json") -> tuple[int, str]:
+    """Sample count N of the design in ``truth.json`` and the field it comes from, computed
+    without building θ. :class:`DataError` when there is no design."""
+    t = read_truth(truth, name)
+    if t.design is None:
+        raise DataError(f"{name}: no 'theta_design' or 'sweep' found to rebuild θ; pass "
+                        "--ensayo ENSAYO.mat (the run the estimates came from)")
+    d, at = t.design, _path(t.design_at)
+    if t.static:
+        kind = d.get("kind", "range")
+        if kind == "range":
+            return int(d.get("count", 20001)), f"{at}.count = {_short(d.get('count', 20001))}"
+        if kind == "list":
+            return len(d["values"]), f"{at}.values ({len(d['values'])} angles)"
+        n = int(d["positions"]) * int(d["per_position"])
+        return n, f"{at}.positions × per_position = {d['positions']} × {d['per_position']}"
+    samples = float(d.get("duration", 20.0)) * float(d.get("rate", 100.0))
+    label = f"{at}.duration × rate = {_short(d.get('duration', 20.0))} s × " \
+            f"{_short(d.get('rate', 100.0))} Hz"
+    if not math.isfinite(samples) or samples > 2**62:
+        return 2**62, label
+    return int(math.floor(samples + 1e-9)) + 1, label
+
+
+def _check_memory(n: int, label: str, name: str) -> None:
+    need, avail = n * BYTES_PER_SAMPLE, available_memory()
+    if avail is not None and need > avail:
+        raise DataError(f"{name}: {label} means {n:,} samples; rebuilding θ and its design "
+                        f"covariance needs {need / 2**30:,.1f} GiB, this machine has "
+                        f"{avail / 2**30:,.1f} GiB available")
+
+
+def design_theta(truth: Mapping, name: str = "truth.json") -> np.ndarray:
     """θ (rad) of the calibration run, rebuilt from the design recorded in ``truth.json``.
 
     Static runs: exact (:class:`bench.tilt.ThetaDesign` ``angles()``; the encoder reads the
     pose exactly). Sweeps: the commanded profile at the sample times (approximate: the
-    encoder lags the command slightly). Raises :class:`DataError` when no design is found.
+    encoder lags the command slightly). Raises :class:`DataError` when no design is found,
+    when it is malformed (the message names the field) or when it needs more memory than is
+    available (the size is checked before anything is allocated).
     """
     from bench.tilt import SweepProfile, ThetaDesign
 
-    design = _find_key(truth, "theta_design")
-    if isinstance(design, Mapping):
-        d = dict(design)
+    n, label = design_size(truth, name)
+    _check_memory(n, label, name)
+    t = read_truth(truth, name)
+    d = dict(t.design)
+    if t.static:
         if "values" in d:
-            d["values"] = tuple(d["values"])
+            d["values"] = tuple(float(v) for v in d["values"])
+        for k in ("count", "positions", "per_position"):
+            if k in d:
+                d[k] = int(d[k])
         return ThetaDesign(**d).angles()
-    sweep = _find_key(truth, "sweep")
-    if isinstance(sweep, Mapping) and "kind" in sweep:
-        prof = SweepProfile(**sweep)
-        n = int(np.floor(prof.duration * prof.rate + 1e-9)) + 1
-        return prof.command(np.arange(n) / prof.rate)
-    raise DataError("truth.json: no 'theta_design' or 'sweep' found to rebuild θ; pass "
-                    "--ensayo ENSAYO.mat (the run the estimates came from)")
+    prof = SweepProfile(**{k: (v if k == "kind" else float(v)) for k, v in d.items()})
+    return prof.command(np.arange(n) / prof.rate)
 
 
 def design_cov(theta: np.ndarray, noise_var, g: float = G) -> np.ndarray:
@@ -137,71 +420,96 @@ def design_cov(theta: np.ndarray, noise_var, g: float = G) -> np.ndarray:
     return cov
 
 
-def _num(v: Any, where: str) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise DataError(f"{where}: expected a number, got {v!r}")
-    if not np.isfinite(v):
-        raise DataError(f"{where}: not finite ({v})")
-    return float(v)
-
-
-def parse_estimates(est: Mapping, where: str = "est.json") -> dict[str, Any]:
-    """Normalise an ``est.json`` object.
+def parse_estimates(est: Any, where: str = "est.json") -> dict[str, Any]:
+    """Normalise an ``est.json`` object (checked against :data:`EST_AXIS_SCHEMA`).
 
     Accepted forms (``docs/validate.md``): ``{"axes": {"x": {...}, "y": {...}}, ...}`` (the
     ``calibrate --json`` object), the same without the ``axes`` wrapper, or flat keys
-    ``bias_x, scale_x, bias_y, scale_y`` (optionally ``*_std``). Per axis ``bias`` and
-    ``scale`` are required; ``bias_std``, ``scale_std``, ``cov`` (2×2, [bias, scale]) are
-    optional.
+    ``bias_x, scale_x, bias_y, scale_y`` (optionally ``bias_std_x``, …). Per axis ``bias`` and
+    ``scale`` are required; ``bias_std``, ``scale_std``, ``cov`` (2×2, [bias, scale]) and
+    ``n`` are optional. :class:`DataError` names the file and the field path.
 
     Returns
     -------
-    ``{"params": (4,), "std": (4,) or None, "cov": (4, 4) or None, "g": float}``.
+    ``{"params": (4,), "std": (4,) or None, "cov": (4, 4) or None, "g": float,
+    "n": {field path: int}}`` (the sample counts the file states).
     """
     if not isinstance(est, Mapping):
-        raise DataError(f"{where}: expected a JSON object")
+        raise DataError(f"{where}: expected a JSON object at the top level, got {_short(est)}")
+    check_schema(est, EST_TOP_SCHEMA, where)
     if "axes" in est:
-        axes = est["axes"]
+        check_schema(est["axes"], EST_AXES_SCHEMA, where, ("axes",))
+        axes, at = est["axes"], lambda a, k: f"axes.{a}.{k}"
     elif all(a in est for a in AXES):
-        axes = est
+        check_schema({a: est[a] for a in AXES}, EST_AXES_SCHEMA, where)
+        axes, at = est, lambda a, k: f"{a}.{k}"
     elif all(f"{p}_{a}" in est for a in AXES for p in ("bias", "scale")):
         axes = {a: {k[:-2]: v for k, v in est.items() if k.endswith(f"_{a}")} for a in AXES}
+        for a in AXES:  # paths named by the flat keys
+            keep = ("bias", "scale", "bias_std", "scale_std", "cov")
+            for k in keep:
+                if k in axes[a]:
+                    check_schema(axes[a][k], EST_AXIS_SCHEMA["properties"][k], where,
+                                 (f"{k}_{a}",))
+            axes[a] = {k: v for k, v in axes[a].items() if k in keep}
+        at = lambda a, k: f"{k}_{a}"  # noqa: E731
     else:
         raise DataError(f"{where}: expected 'axes': {{'x': {{'bias', 'scale'}}, 'y': ...}} "
                         "or keys bias_x, scale_x, bias_y, scale_y (see docs/validate.md)")
     params, std, cov = np.zeros(4), np.zeros(4), np.zeros((4, 4))
     have_std, have_cov = True, True
+    counts = {"n": int(est["n"])} if "n" in est else {}
     for k, a in enumerate(AXES):
-        ax = axes.get(a) if isinstance(axes, Mapping) else None
-        if not isinstance(ax, Mapping):
-            raise DataError(f"{where}: axis '{a}' is missing")
+        ax = axes[a]
+        if "n" in ax:
+            counts[at(a, "n")] = int(ax["n"])
         for j, p in enumerate(("bias", "scale")):
-            if p not in ax:
-                raise DataError(f"{where}: axes.{a}.{p} is missing")
-            params[2 * k + j] = _num(ax[p], f"{where}: axes.{a}.{p}")
+            params[2 * k + j] = float(ax[p])
             if f"{p}_std" in ax:
-                std[2 * k + j] = _num(ax[f"{p}_std"], f"{where}: axes.{a}.{p}_std")
-                if std[2 * k + j] <= 0:
-                    raise DataError(f"{where}: axes.{a}.{p}_std must be positive")
+                std[2 * k + j] = float(ax[f"{p}_std"])
             else:
                 have_std = False
         if "cov" in ax:
-            try:
-                c = np.asarray(ax["cov"], dtype=float)
-            except (TypeError, ValueError):
-                c = np.full((0,), np.nan)  # reported below with the expected form
-            if c.shape != (2, 2) or not np.all(np.isfinite(c)) or not np.allclose(c, c.T) \
-                    or np.any(np.linalg.eigvalsh(c) <= 0):
-                raise DataError(f"{where}: axes.{a}.cov must be a symmetric positive definite "
+            c = np.asarray(ax["cov"], dtype=float)
+            if not np.allclose(c, c.T) or np.any(np.linalg.eigvalsh(c) <= 0):
+                raise DataError(f"{where}: {at(a, 'cov')} must be a symmetric positive definite "
                                 "2×2 [[var_bias, cov], [cov, var_scale]]")
             cov[2 * k:2 * k + 2, 2 * k:2 * k + 2] = c
         else:
             have_cov = False
     if have_cov and not have_std:
         std, have_std = np.sqrt(np.diag(cov)), True
-    g = est.get("g", G)
     return {"params": params, "std": std if have_std else None,
-            "cov": cov if have_cov else None, "g": _num(g, f"{where}: g")}
+            "cov": cov if have_cov else None, "g": float(est.get("g", G)), "n": counts}
+
+
+STD_ALPHA = 1e-6
+"""False-alarm probability of the std check for an honest estimator (two-sided)."""
+STD_FACTOR = 2.0
+"""Smallest accepted spread of reported/design std: [1/STD_FACTOR, STD_FACTOR]."""
+
+
+def std_ratio_limits(n: int, p: int = 2) -> tuple[float, float]:
+    """Accepted range of (reported std)/(design std) for an honest per-axis fit of N samples.
+
+    Notes
+    -----
+    With σ² known the OLS covariance is ``σ²(HᵀH)⁻¹`` exactly, the design covariance: the
+    ratio is 1. With σ² estimated from the residuals, ``s²/σ² ~ χ²_ν/ν`` with ``ν = N − p``
+    (p = 2: bias and scale), so the ratio ``s/σ`` lies in
+    ``[sqrt(χ²_ν(α/2)/ν), sqrt(χ²_ν(1 − α/2)/ν)]`` except with probability α = 10⁻⁶
+    (:data:`STD_ALPHA`). That interval is 1 ± 0.025 at N = 20001 — too tight for honest tools
+    that round the std, weight the samples, use the encoder θ of a sweep instead of the
+    commanded one, or absorb unmodelled effects into σ²; so the accepted range is the union
+    with the fixed factor ``[1/2, 2]`` (:data:`STD_FACTOR`), which only the χ² interval widens
+    (N ≲ 30). A reported std 2× too large shrinks d² by 4 (an estimate 2σ off looks 1σ off):
+    the largest loss of power accepted. An honest estimator fails this check with probability
+    ≤ 10⁻⁶, so the verdict still passes with probability L (to 10⁻⁶).
+    """
+    nu = max(int(n) - p, 1)
+    lo = math.sqrt(float(stats.chi2.ppf(STD_ALPHA / 2, nu)) / nu)
+    hi = math.sqrt(float(stats.chi2.ppf(1 - STD_ALPHA / 2, nu)) / nu)
+    return min(lo, 1 / STD_FACTOR), max(hi, STD_FACTOR)
 
 
 @dataclass(frozen=True, eq=False)
@@ -210,8 +518,11 @@ class Validation(ResultMixin):
 
     names : parameter names.  estimate, truth, std, z : (4,).  cov : (4, 4) used.
     level : L.  quantile : ``Φ⁻¹((1 + L)/2)``.  chi2 : d².  chi2_limit : ``χ²₄(L)``.
-    passed_each : (4,) bool.  passed : the verdict (joint test).  std_source : "reported"
-    or "design".  theta_source : where θ came from for a design covariance.
+    passed_each : (4,) bool.  passed : the verdict (joint test and, when it ran, the std
+    check).  std_source : "reported" or "design".  theta_source : where θ came from for a
+    design covariance.  std_ratio : (4,) reported/design std, or None when not checked (design
+    std used, or no design to compare with).  std_limits : accepted (low, high) ratio
+    (:func:`std_ratio_limits`).  std_passed : all ratios within the limits, or None.
     Units: order ``[bias_x, scale_x, bias_y, scale_y]``, bias in m/s², scale dimensionless.
 
     Serialisation: :meth:`to_dict` (printed by ``validate --json``) has the standard
@@ -238,8 +549,21 @@ class Validation(ResultMixin):
     passed: bool
     std_source: str
     theta_source: str | None
+    std_ratio: np.ndarray | None = None
+    std_limits: tuple[float, float] | None = None
+    std_passed: bool | None = None
+
+    def _std_check(self) -> dict:
+        return {"passed": bool(self.std_passed), "limits": list(self.std_limits),
+                "ratio": {n: float(self.std_ratio[i]) for i, n in enumerate(self.names)}}
 
     def to_dict(self) -> dict:
+        d = self._to_dict()
+        if self.std_passed is False:
+            d["std_check"] = self._std_check()
+        return d
+
+    def _to_dict(self) -> dict:
         return {
             "passed": self.passed, "level": self.level, "test": "joint chi2, 4 dof",
             "chi2": self.chi2, "chi2_limit": self.chi2_limit,
@@ -253,8 +577,10 @@ class Validation(ResultMixin):
 
     def to_state(self) -> dict:
         """:meth:`to_dict` plus ``names`` and the (4, 4) ``cov`` used — an exact rebuild."""
-        return {**self.to_dict(), "names": list(self.names),
-                "cov": np.asarray(self.cov).tolist()}
+        d = {**self.to_dict(), "names": list(self.names), "cov": np.asarray(self.cov).tolist()}
+        if self.std_passed is not None:
+            d["std_check"] = self._std_check()
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> Validation:
@@ -293,9 +619,13 @@ class Validation(ResultMixin):
 
         std = col("std")
         cov = np.array(d["cov"], dtype=float) if "cov" in d else np.diag(std**2)
+        sc = d.get("std_check")
+        ratio = None if sc is None else np.array([sc["ratio"][n] for n in names], dtype=float)
+        limits = None if sc is None else (float(sc["limits"][0]), float(sc["limits"][1]))
         return cls(names, col("estimate"), col("truth"), std, cov, col("z"), float(d["level"]),
                    float(d["z_limit"]), float(d["chi2"]), float(d["chi2_limit"]),
-                   col("passed", bool), bool(d["passed"]), d["std_source"], d["theta_source"])
+                   col("passed", bool), bool(d["passed"]), d["std_source"], d["theta_source"],
+                   ratio, limits, None if sc is None else bool(sc["passed"]))
 
     def summary(self) -> str:
         pct = f"{100 * self.level:g}%"
@@ -306,8 +636,19 @@ class Validation(ResultMixin):
                          f"{self.std[i]:>12.4g}{self.z[i]:>+9.2f}"
                          f"{'pass' if self.passed_each[i] else 'FAIL':>11}")
         lines.append(f"joint test: d² = {self.chi2:.3f} vs χ²₄({pct}) = {self.chi2_limit:.3f} "
-                     f"→ {'PASS' if self.passed else 'FAIL'}  (std: {self.std_source}"
+                     f"→ {'PASS' if self.chi2 <= self.chi2_limit else 'FAIL'}  (std: "
+                     f"{self.std_source}"
                      + (f", θ from {self.theta_source}" if self.theta_source else "") + ")")
+        if self.std_passed is False:
+            lo, hi = self.std_limits
+            worst = int(np.argmax(np.abs(np.log(self.std_ratio))))
+            lines.append(
+                "std check: reported/design std = "
+                + ", ".join(f"{n} {self.std_ratio[i]:.3g}" for i, n in enumerate(self.names))
+                + f"; accepted [{lo:.3g}, {hi:.3g}] → FAIL (worst: {self.names[worst]}, "
+                f"{self.std_ratio[worst]:.3g}× the design std)")
+            lines.append("verdict: FAIL (the reported standard deviations do not match the "
+                         "design)")
         return "\n".join(lines)
 
 
@@ -347,39 +688,49 @@ def validate(truth: Mapping, estimates: Mapping, level: float = 0.99,
     """
     if not 0.0 < level < 1.0:
         raise DataError(f"--level must be in (0, 1), got {level}")
-    tp = true_sensor_params(truth)
+    tr = read_truth(truth, truth_name)
+    tp = tr.params
     if tp is None:
         raise DataError(f"{truth_name}: no sensor.{{x,y}}.{{bias,scale}} found")
     est = parse_estimates(estimates, est_name)
+    if theta is not None:
+        theta = np.asarray(theta, dtype=float)
+        check_run(tr, est, theta, theta_source or "the given θ", truth, truth_name, est_name)
     p_true = np.array([tp[n] for n in JOINT_PARAM_NAMES])
-    g = float(_find_key(truth, "g") or est["g"])
+    g = tr.g or est["g"]
 
     def dcov() -> tuple[np.ndarray, str]:
         nv = [tp.get(f"noise_var_{a}") for a in AXES]
         if any(v is None or v <= 0 for v in nv):
-            raise DataError(f"{truth_name}: positive sensor noise variances are needed to "
+            raise _NoDesignError(f"{truth_name}: positive sensor noise variances are needed to "
                             "recompute the standard deviations from the design")
         if theta is not None:
             return design_cov(theta, nv, g), theta_source or "given θ"
-        return design_cov(design_theta(truth), nv, g), "truth.json design"
+        if tr.design is None:
+            raise _NoDesignError(f"{truth_name}: no 'theta_design' or 'sweep' found to rebuild "
+                                 "θ; pass --ensayo ENSAYO.mat (the run the estimates came from)")
+        return design_cov(design_theta(truth, truth_name), nv, g), "truth.json design"
 
     src = std_source
     if src == "auto":
         src = "reported" if est["std"] is not None else "design"
-    t_src = None
+    t_src, dc = None, None
     if src == "reported":
         if est["std"] is None:
             raise DataError(f"{est_name}: no bias_std/scale_std/cov reported; use the design "
                             "standard deviations (--std design)")
+        try:
+            dc, d_src = dcov()
+        except _NoDesignError:
+            dc = d_src = None
         if est["cov"] is not None:
             cov = est["cov"]
         else:
             s = est["std"]
-            try:
-                dc, t_src = dcov()
-                corr = dc / np.sqrt(np.outer(np.diag(dc), np.diag(dc)))
-            except DataError:
-                corr, t_src = np.eye(4), None
+            if dc is not None:
+                corr, t_src = dc / np.sqrt(np.outer(np.diag(dc), np.diag(dc))), d_src
+            else:
+                corr = np.eye(4)
             cov = corr * np.outer(s, s)
     elif src == "design":
         cov, t_src = dcov()
@@ -391,12 +742,73 @@ def validate(truth: Mapping, estimates: Mapping, level: float = 0.99,
     d2 = float(e @ np.linalg.solve(cov, e))
     q = float(stats.norm.ppf(0.5 + level / 2))
     lim = float(stats.chi2.ppf(level, 4))
+    ratio = limits = std_ok = None
+    if dc is not None:  # the std check (std_ratio_limits): reported vs design std
+        n = theta.size if theta is not None else design_size(truth, truth_name)[0]
+        ratio = std / np.sqrt(np.diag(dc))
+        limits = std_ratio_limits(n)
+        std_ok = bool(np.all((ratio >= limits[0]) & (ratio <= limits[1])))
     return Validation(JOINT_PARAM_NAMES, est["params"], p_true, std, cov, z, float(level), q,
-                      d2, lim, np.abs(z) <= q, d2 <= lim, src, t_src)
+                      d2, lim, np.abs(z) <= q, d2 <= lim and std_ok is not False, src, t_src,
+                      ratio, limits, std_ok)
+
+
+class _NoDesignError(DataError):
+    """No design covariance can be computed (no noise variances or no θ design)."""
+
+
+def check_run(tr: _Truth, est: Mapping, theta: np.ndarray, theta_name: str, truth: Mapping,
+              truth_name: str = "truth.json", est_name: str = "est.json") -> None:
+    """Refuse a θ (``--ensayo``) that is not the run of the truth and the estimates.
+
+    Checked, where the files state them: N against the estimates' ``n`` and the truth's
+    ``n``; N against the size of the truth's θ design; θ against ``theta_summary``
+    (min, max to 10⁻⁶ relative — a single-precision copy passes —, the number of distinct
+    angles exactly); for a static design θ against the rebuilt angles (the encoder reads a
+    static pose exactly) to the same tolerance.
+    """
+    n = int(theta.size)
+    if not np.all(np.isfinite(theta)):
+        raise DataError(f"{theta_name}: θ has non-finite values")
+    for field, m in est["n"].items():
+        if m != n:
+            raise DataError(f"{theta_name}: N = {n} samples, but {est_name} says {field} = {m}: "
+                            "the estimates come from another run")
+    if tr.n is not None and tr.n != n:
+        raise DataError(f"{theta_name}: N = {n} samples, but {truth_name} says n = {tr.n}: "
+                        "this ensayo is not the run of that truth")
+    if tr.design is not None:
+        m, label = design_size(truth, truth_name)
+        if m != n:
+            raise DataError(f"{theta_name}: N = {n} samples, but the θ design of {truth_name} "
+                            f"({label}) has {m}: this ensayo is not the run of that truth")
+
+    def close(a: float, b: float) -> bool:
+        return abs(a - b) <= 1e-6 * max(1.0, abs(a), abs(b))
+
+    if tr.summary is not None:
+        sm = tr.summary
+        for key, got in (("min", float(theta.min())), ("max", float(theta.max()))):
+            if key in sm and not close(got, float(sm[key])):
+                raise DataError(f"{theta_name}: θ {key} = {got:.9g} rad, but {truth_name} says "
+                                f"theta_summary.{key} = {float(sm[key]):.9g}: this ensayo is not "
+                                "the run of that truth")
+        if "distinct" in sm and int(np.unique(theta).size) != int(sm["distinct"]):
+            raise DataError(f"{theta_name}: {np.unique(theta).size} distinct θ, but "
+                            f"{truth_name} says theta_summary.distinct = {int(sm['distinct'])}: "
+                            "this ensayo is not the run of that truth")
+    if tr.static and tr.design is not None:
+        ref = design_theta(truth, truth_name)
+        scale = max(1.0, float(np.max(np.abs(ref))))
+        worst = float(np.max(np.abs(theta - ref)))
+        if worst > 1e-6 * scale:
+            raise DataError(f"{theta_name}: θ differs from the θ design of {truth_name} by up to "
+                            f"{worst:.3g} rad: this ensayo is not the run of that truth")
 
 
 def load_json(path: str | Path, what: str) -> Any:
-    """Read a JSON file; :class:`DataError` naming the file on failure."""
+    """Read a JSON file; :class:`DataError` naming the file on failure (not JSON, not UTF-8,
+    nested too deeply for the reader, an integer too long to convert)."""
     path = Path(path)
     if not path.exists():
         raise DataError(f"{path}: {what} not found")
@@ -406,7 +818,13 @@ def load_json(path: str | Path, what: str) -> Any:
         return json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise DataError(f"{path}: not valid JSON ({exc})") from exc
+    except RecursionError as exc:
+        raise DataError(f"{path}: JSON nested too deeply to read (the {what} has a few "
+                        "levels)") from exc
+    except ValueError as exc:  # e.g. an integer of more than 4300 digits
+        raise DataError(f"{path}: not readable as JSON ({exc})") from exc
 
 
-__all__ = ["Validation", "design_cov", "design_theta", "parse_estimates",
+__all__ = ["Validation", "check_answer_key", "check_run", "check_schema", "design_cov",
+           "design_size", "design_theta", "parse_estimates", "read_truth", "std_ratio_limits",
            "true_sensor_params", "validate"]

@@ -178,3 +178,27 @@ def test_generated_calibration_and_ensayo_option(tmp_path, capsys):
         for p in ("bias", "scale"):
             assert res["parameters"][f"{p}_{a}"]["std"] == pytest.approx(
                 est["axes"][a][f"{p}_std"], rel=1e-9)
+
+
+def test_std_check_accepts_honest_estimated_sigma_and_refuses_inflated_std():
+    """Monte Carlo, R = 200 seeded runs (N = 40, short arc), σ² estimated from the residuals:
+    reported/design std = s/σ = sqrt(χ²₃₈/38), inside the accepted range except with
+    probability ≤ 1e-6 per run (``std_ratio_limits``), so every run passes the std check; the
+    same estimates with stds 10× larger fail it every time, whatever d² says."""
+    R = 200
+    truth = truth_for(SHORT_ARC)
+    theta = design_theta(truth)
+    for ss in np.random.SeedSequence(20240612).spawn(R):
+        rng = np.random.default_rng(ss)
+        datos = (1 + SCALE) * reference_accel(theta, G) + BIAS + np.sqrt(NOISE) * \
+            rng.standard_normal((theta.size, 2))
+        est = calibrate(Ensayo(theta, datos)).to_dict()
+        v = validate(truth, est, 0.99)
+        assert v.std_passed is True
+        for a in "xy":
+            ax = est["axes"][a]
+            ax["bias_std"], ax["scale_std"] = 10 * ax["bias_std"], 10 * ax["scale_std"]
+            ax["cov"] = (100 * np.asarray(ax["cov"])).tolist()
+        bad = validate(truth, est, 0.99)
+        assert bad.std_passed is False and not bad.passed
+        np.testing.assert_allclose(bad.std_ratio, 10 * v.std_ratio, rtol=1e-9)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from bench.cli.options import OptionError, add_json
 from bench.cli.output import print_json
@@ -10,16 +11,21 @@ from bench.cli.output import print_json
 
 def _cmd_validate(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
-    from bench.validate import load_json, validate
+    from bench.validate import check_answer_key, load_json, validate
 
     truth = load_json(args.truth, "truth file")
+    truth_name = str(args.truth)
     if isinstance(truth, dict) and "students" in truth:  # a class answer key
         from bench.classset import student_truth
 
         if not args.student:
             raise OptionError(f"{args.truth}: a class answer key; name the student with "
                               "--student (e.g. student_001)")
+        check_answer_key(truth, truth_name)
+        idx = next((i for i, s in enumerate(truth["students"])
+                    if s["student"] == args.student), None)
         truth = student_truth(truth, args.student)
+        truth_name = f"{args.truth} (students[{idx}].truth)"
     est = load_json(args.estimates, "estimates file")
     theta, src = None, None
     if args.ensayo:
@@ -27,7 +33,10 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
         theta, src = read_ensayo(args.ensayo).tita, str(args.ensayo)
     result = validate(truth, est, args.level, args.std, theta, src,
-                      truth_name=str(args.truth), est_name=str(args.estimates))
+                      truth_name=truth_name, est_name=str(args.estimates))
+    if result.std_passed is None and result.std_source == "reported":
+        print(f"note: {args.estimates}: the reported std was not checked against the design "
+              f"({args.truth} has no noise variances or θ design)", file=sys.stderr)
     if args.json:
         print_json(result.to_dict())
     else:
@@ -40,8 +49,10 @@ def register(sub) -> None:
     p = sub.add_parser(
         "validate", help="check estimates against the truth (exit 0 pass, 1 fail, 2 bad input)",
         description="Per-parameter z-scores of bias and scale against truth.json and a joint "
-        "chi-square test at the level (pass probability = level for an honest estimator). "
-        "Exit code 0: pass, 1: fail, 2: bad input. Formats: docs/validate.md.")
+        "chi-square test at the level (pass probability = level for an honest estimator); a "
+        "reported std outside [1/2, 2]× the std the design implies also fails (the interval "
+        "widens for N < 30). Exit code 0: pass, 1: fail, 2: bad input. Formats: "
+        "docs/validate.md.")
     p.add_argument("--truth", required=True,
                    help="truth.json of the generated set, or a class answer_key.json")
     p.add_argument("--student", help="student folder name when --truth is a class "
@@ -53,6 +64,7 @@ def register(sub) -> None:
     p.add_argument("--std", choices=["auto", "reported", "design"], default="auto",
                    help="standard deviations: reported in est.json, or recomputed from the "
                    "design with the true noise variances (auto: reported if present)")
-    p.add_argument("--ensayo", help="ensayo.mat the estimates came from (θ for --std design)")
+    p.add_argument("--ensayo", help="ensayo.mat the estimates came from (θ for the design "
+                   "std; refused when its N or θ does not match the truth or the estimates)")
     add_json(p)
     p.set_defaults(handler=_cmd_validate)
