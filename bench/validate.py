@@ -144,7 +144,9 @@ def _short(v: Any, depth: int = 3) -> str:
     if isinstance(v, float):
         return {math.inf: "Infinity", -math.inf: "-Infinity"}.get(v, "NaN" if v != v else repr(v))
     if isinstance(v, str):
-        return json.dumps(v if len(v) <= 40 else v[:40] + "…", ensure_ascii=False)
+        text = json.dumps(v if len(v) <= 40 else v[:40] + "…", ensure_ascii=False)
+        # one line whatever the string holds (U+2028, U+0085, \x1c … break lines too)
+        return "".join(c if c.isprintable() else f"\\u{ord(c):04x}" for c in text)
     if isinstance(v, Mapping):
         if depth == 0:
             return "{…}"

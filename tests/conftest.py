@@ -67,6 +67,38 @@ def fuzz_counter() -> FuzzCounter:
     return _FUZZ
 
 
+FUZZ_MODULES = ("test_readers_fuzz", "test_options_fuzz", "test_validate_inputs",
+                "test_faults", "test_angles")
+"""Modules whose cases are counted: one per explicit test, one per hypothesis example."""
+
+
+def _counted(kind: str, inner):
+    def run(*args, **kwargs):
+        _FUZZ.tried(kind)
+        return inner(*args, **kwargs)
+    return run
+
+
+def pytest_collection_modifyitems(items):
+    for item in items:
+        module = item.module.__name__.rsplit(".", 1)[-1] if item.module else ""
+        if module not in FUZZ_MODULES:
+            continue
+        handle = getattr(item.obj, "hypothesis", None)  # @given: count every example
+        if handle is not None and not getattr(handle.inner_test, "_counted", False):
+            handle.inner_test = _counted(module, handle.inner_test)
+            handle.inner_test._counted = True
+        elif handle is None:
+            item.user_properties.append(("fuzz_kind", module))
+
+
+@pytest.fixture(autouse=True)
+def _count_explicit_case(request):
+    kind = dict(request.node.user_properties).get("fuzz_kind")
+    if kind is not None:
+        _FUZZ.tried(kind)
+
+
 def pytest_terminal_summary(terminalreporter):
     if _FUZZ.counts:
         parts = ", ".join(f"{k} {v}" for k, v in sorted(_FUZZ.counts.items()))

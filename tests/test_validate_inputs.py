@@ -107,6 +107,15 @@ def test_truth_field_of_the_wrong_type_names_file_and_path(capsys, run, field, k
         assert str(truth) in msg and ".".join(field) in msg
 
 
+@pytest.mark.parametrize("text", ["a\u2028b", "x\x1cy", "p\nq", "r\u0085s"])
+def test_bad_strings_are_quoted_on_one_line(capsys, run, text):
+    """Characters that break lines (U+2028, U+0085, FS, LF) are escaped in the message."""
+    truth, est, _ = run
+    _with(truth, lambda t: t.__setitem__("g", text))
+    msg = _error(capsys, "--truth", truth, "--estimates", est)
+    assert "g:" in msg and len(msg.splitlines()) == 1
+
+
 def test_the_example_message_of_the_issue(capsys, run):
     truth, est, _ = run
     _with(truth, lambda t: t["theta_design"].__setitem__("count", [1, 2]))
