@@ -19,6 +19,9 @@ Guarantees (each writer here):
 * **errors name the target**, never a temporary name (a full disk reads
   ``OUT: No space left on device``).
 
+Exception: a target that is a mount point or holds the working directory is not swapped;
+its new files are renamed into it one by one (each file atomic, the set not).
+
 Files that are not ours are kept: entries of an existing target directory that the new set
 does not write are carried into it (hard links), except inside the ``exclusive`` folders,
 which the new set replaces whole.
@@ -319,6 +322,32 @@ def _commit(tmp: Path, real: Path) -> None:
     shutil.rmtree(backup, ignore_errors=True)
 
 
+def _holds_cwd(path: Path) -> bool:
+    try:
+        cwd = Path(os.getcwd())
+    except OSError:
+        return False
+    return cwd == path or path in cwd.parents
+
+
+def _commit_in_place(tmp: Path, real: Path, exclusive: set[str]) -> None:
+    """Move the new entries into ``real`` one file at a time (each rename atomic, the set
+    not): for a target that cannot be swapped (a mount point, the working directory)."""
+    for rel in sorted(exclusive):
+        old, new = real / rel, tmp / rel
+        if new.is_dir() and old.is_dir() and not old.is_symlink():
+            for entry in os.listdir(old):
+                if not os.path.lexists(new / entry):
+                    _remove(old / entry)
+    for here, _dirs, files in os.walk(tmp):
+        rel = Path(here).relative_to(tmp)
+        (real / rel).mkdir(exist_ok=True)
+        for f in files:
+            os.replace(Path(here) / f, real / rel / f)
+        _fsync_dir(real / rel)
+    shutil.rmtree(tmp, ignore_errors=True)
+
+
 @contextlib.contextmanager
 def atomic_dir(target: str | os.PathLike, force: bool = False, owned: Iterable[str] = (),
                exclusive: Iterable[str] = ()) -> Iterator[Path]:
@@ -345,24 +374,35 @@ def atomic_dir(target: str | os.PathLike, force: bool = False, owned: Iterable[s
         real.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         _reraise(exc, shown)
+    # A target that cannot be renamed (a mount point) or that holds the working directory
+    # (the shell would be left in the removed old one) gets its new files one by one, from a
+    # temporary directory inside it: each file atomic, the set not.
+    in_place = real.is_dir() and (os.path.ismount(real) or _holds_cwd(real))
+    tmp_parent = real if in_place else real.parent
     with output_lock(shown):
         clean_stale(real, locked=True)
+        if in_place:
+            clean_stale(real / real.name, locked=True)
         if not force and real.is_dir():
             clash = [n for n in owned if os.path.lexists(real / n)]
             if clash:
                 raise FileExistsError(f"{shown}: {', '.join(clash[:4])}"
                                       f"{' …' if len(clash) > 4 else ''} already exist(s)")
         try:
-            tmp = Path(tempfile.mkdtemp(dir=real.parent, prefix=_tmp_prefix(real.name),
+            tmp = Path(tempfile.mkdtemp(dir=tmp_parent, prefix=_tmp_prefix(real.name),
                                         suffix=TMP_SUFFIX))
         except OSError as exc:
             _reraise(exc, shown)
         try:
             yield tmp
-            if real.is_dir():
-                _carry_over(real, tmp, set(exclusive))
-            _fsync_tree(tmp)
-            _commit(tmp, real)
+            if in_place:
+                _fsync_tree(tmp)
+                _commit_in_place(tmp, real, set(exclusive))
+            else:
+                if real.is_dir():
+                    _carry_over(real, tmp, set(exclusive))
+                _fsync_tree(tmp)
+                _commit(tmp, real)
         except OSError as exc:
             shutil.rmtree(tmp, ignore_errors=True)
             _reraise(exc, shown, tmp)

@@ -316,3 +316,20 @@ def test_injected_enospc_on_a_recording(capsys, tmp_path, monkeypatch):
     assert f"{rrd}: No space left on device" in line
     assert _tree(rrd.parent) == {"cal.rrd": b"previous recording"}
     assert _leftovers(tmp_path) == []
+
+
+def test_working_directory_as_out_is_filled_in_place(tmp_path, monkeypatch):
+    """``--out .``: the directory is not swapped (the shell would stay in the old one)."""
+    target = tmp_path / "here"
+    target.mkdir()
+    (target / "a.txt").write_text("old")
+    (target / "mine.txt").write_text("kept")
+    inode = target.stat().st_ino
+    monkeypatch.chdir(target)
+    with atomic.atomic_dir(".", force=True, owned=["a.txt"]) as tmp:
+        (tmp / "a.txt").write_text("new")
+        (tmp / "sub").mkdir()
+        (tmp / "sub" / "b.txt").write_text("b")
+    assert target.stat().st_ino == inode
+    assert _tree(target) == {"a.txt": b"new", "mine.txt": b"kept", "sub/b.txt": b"b"}
+    assert sorted(os.listdir(tmp_path)) == ["here"]
