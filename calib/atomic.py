@@ -39,6 +39,7 @@ import secrets
 import shutil
 import stat
 import tempfile
+import time
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
@@ -69,6 +70,12 @@ def _stale_pattern(name: str) -> re.Pattern:
                       rf"(\.bak)?\.tmp$")
 
 
+_ANY_TMP = re.compile(r"^\..+\.(?:\d+-[A-Za-z0-9_]+|[A-Za-z0-9_]{8})(?:\.bak)?\.tmp$")
+"""Any of our temporary names (not carried into a new set)."""
+LEGACY_AGE = 3600.0
+"""Seconds after which a temporary name without a pid (older versions) counts as stale."""
+
+
 def _alive(pid: int) -> bool:
     if pid == os.getpid():
         return True
@@ -92,7 +99,8 @@ def _remove(path: Path) -> None:
 def clean_stale(target: str | os.PathLike, locked: bool = False) -> list[Path]:
     """Remove temporary names of ``target`` left by killed runs; return what was removed.
 
-    A temporary name is stale when the process named in it is gone, or when ``locked``
+    A temporary name is stale when the process named in it is gone (a name without a pid,
+    from older versions: when untouched for :data:`LEGACY_AGE`), or when ``locked``
     (the caller holds :func:`output_lock` of ``target``, so no live run can own one). A
     backup of an interrupted swap is renamed back to ``target`` if ``target`` is missing.
     Best effort: what cannot be removed (a read-only directory) is left.
@@ -110,9 +118,13 @@ def clean_stale(target: str | os.PathLike, locked: bool = False) -> list[Path]:
         if not m:
             continue
         pid = m.group(1)
-        if not locked and (pid is None or _alive(int(pid))):
-            continue
         path = parent / entry
+        if not locked and pid is not None and _alive(int(pid)):
+            continue
+        if not locked and pid is None:
+            with contextlib.suppress(OSError):
+                if time.time() - os.lstat(path).st_mtime < LEGACY_AGE:
+                    continue
         if m.group(2) and not os.path.lexists(target):
             with contextlib.suppress(OSError):
                 os.rename(path, target)  # the old set of an interrupted swap
@@ -178,14 +190,13 @@ def _fsync_tree(root: Path) -> None:
 def write_bytes(path: str | os.PathLike, data: bytes, force: bool = False) -> Path:
     """Write ``data`` to ``path`` atomically and durably (temporary file, fsync, rename).
 
-    Refuses a directory (:class:`IsADirectoryError`) and an existing file unless ``force``
+    Refuses a directory (:class:`ValueError`) and an existing file unless ``force``
     (:class:`FileExistsError`). Stale temporary files of ``path`` left by killed runs are
     removed first. The file gets the mode a plain ``open()`` would give it.
     """
     path = Path(path)
-    if path.is_dir():
-        raise IsADirectoryError(errno.EISDIR, "is a directory; expected an output file name",
-                                str(path))
+    if path.is_dir():  # a ValueError, as calib.io.DataError: one line at the command line
+        raise ValueError(f"{path}: is a directory; expected an output file name")
     if path.exists() and not force:
         raise FileExistsError(f"{path}: exists")
     parent = path.parent
@@ -277,6 +288,8 @@ def _exchange(a: Path, b: Path) -> bool:
 def _carry_over(old: Path, new: Path, exclusive: set[str], rel: str = "") -> None:
     """Hard-link (else copy) into ``new`` every entry of ``old`` that ``new`` does not have."""
     for entry in os.scandir(old):
+        if _ANY_TMP.match(entry.name):  # a killed writer's leftover: dropped with the old set
+            continue
         r = f"{rel}{entry.name}"
         dst = new / entry.name
         if entry.is_dir(follow_symlinks=False):

@@ -333,3 +333,25 @@ def test_working_directory_as_out_is_filled_in_place(tmp_path, monkeypatch):
     assert target.stat().st_ino == inode
     assert _tree(target) == {"a.txt": b"new", "mine.txt": b"kept", "sub/b.txt": b"b"}
     assert sorted(os.listdir(tmp_path)) == ["here"]
+
+
+def test_leftover_temporary_files_are_not_carried_into_the_new_set(tmp_path):
+    target = tmp_path / "demo"
+    target.mkdir()
+    (target / ".demo.rrd.k2j4_x9q.tmp").write_bytes(b"7 MB of a killed recording")
+    (target / ".report.md.123-abcdefgh.tmp").write_text("half")
+    (target / "notes.txt").write_text("mine")
+    with atomic.atomic_dir(target, force=True) as tmp:
+        (tmp / "report.md").write_text("new")
+    assert _tree(target) == {"notes.txt": b"mine", "report.md": b"new"}
+
+
+def test_stale_file_of_a_dead_writer_is_removed_by_the_next_write(tmp_path):
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    stale = tmp_path / f".x.rrd.{dead.pid}-abcdefgh.tmp"
+    stale.write_bytes(b"left by a kill")
+    live = tmp_path / f".x.rrd.{os.getpid()}-abcdefgh.tmp"  # a live writer's: kept
+    live.write_bytes(b"being written")
+    atomic.write_bytes(tmp_path / "x.rrd", b"data")
+    assert sorted(os.listdir(tmp_path)) == [live.name, "x.rrd"]

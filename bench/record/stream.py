@@ -9,7 +9,6 @@ through ``rerun.send_columns`` (one call per entity, not one per sample).
 
 from __future__ import annotations
 
-import errno
 import json
 import os
 import uuid
@@ -71,8 +70,7 @@ def open_recording(path: str | os.PathLike, force: bool = False, blueprint: Any 
 
     path = Path(path)
     if path.is_dir():
-        raise IsADirectoryError(errno.EISDIR, "is a directory; expected an output file name",
-                                str(path))
+        raise ValueError(f"{path}: is a directory; expected an output file name")
     if path.exists() and not force:
         raise FileExistsError(f"{path}: exists; pass --force to overwrite")
     rec = rr.RecordingStream(APP_ID, recording_id=uuid.uuid4())
