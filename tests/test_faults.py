@@ -284,8 +284,16 @@ def test_full_disk_recording_ends_within_seconds(tmp_path):
         assert _leftovers(fs) == []
 
 
-def _no_space(fd):
-    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+def _no_space_under(root: Path):
+    """An ``os.fsync`` that fails with ENOSPC for files and directories under ``root``."""
+    real_fsync = os.fsync
+
+    def fsync(fd):
+        if os.readlink(f"/proc/self/fd/{fd}").startswith(str(root)):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real_fsync(fd)
+
+    return fsync
 
 
 def test_injected_enospc_on_a_set(capsys, tmp_path, monkeypatch):
@@ -293,7 +301,7 @@ def test_injected_enospc_on_a_set(capsys, tmp_path, monkeypatch):
     target = tmp_path / "set"
     assert _run(capsys, *COURSE, "--seed", "1", "--out", target)[0] == 0
     old = _tree(tmp_path)
-    monkeypatch.setattr(atomic.os, "fsync", _no_space)
+    monkeypatch.setattr(atomic.os, "fsync", _no_space_under(tmp_path))
     rc, err = _run(capsys, *COURSE, "--seed", "2", "--out", target, "--force")
     assert rc == 2
     line, = err.strip().splitlines()
@@ -306,7 +314,7 @@ def test_injected_enospc_on_a_recording(capsys, tmp_path, monkeypatch):
     rrd = tmp_path / "r" / "cal.rrd"
     rrd.parent.mkdir()
     rrd.write_bytes(b"previous recording")
-    monkeypatch.setattr(atomic.os, "fsync", _no_space)
+    monkeypatch.setattr(atomic.os, "fsync", _no_space_under(rrd.parent))
     t0 = time.monotonic()
     rc, err = _run(capsys, "generate", "calibration", "--count", "2001", "--out",
                    tmp_path / "cal", "--rrd", rrd, "--force")
