@@ -34,7 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from calib.io import DataError, atomic_write_text, dumps
+from calib.atomic import atomic_dir, write_text
+from calib.io import DataError, dumps
 
 STUDENT_FILES = ("ensayo.mat", "acel.mat", "puntos.mat", "datos.txt")
 KEY_CSV = "answer_key.csv"
@@ -104,51 +105,58 @@ def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = Fal
     ----------
     out : class directory.  count : number of students K.  seed : class seed S.
     force : replace existing files (checked for every target before anything is written).
+        The class directory is written as one set: see the comment in the body.
     config : :class:`bench.course.CourseConfig` shared by all sets (default: the course's).
     prefix : folder prefix.  progress : called as ``progress(done, count)``.
     """
-    from bench.course import make_course_set, write_course
+    from bench.course import make_course_set, write_course_files
+    from bench.dataset import versions
 
     out = Path(out)
     seeds = student_seeds(seed, count)
     names = [student_name(i, count, prefix) for i in range(count)]
-    targets = [out / KEY_CSV, out / KEY_JSON] + [out / n / f for n in names
-                                                 for f in (*STUDENT_FILES, "truth.json")]
-    clash = [str(p) for p in targets if p.exists()]
+    owned = [KEY_CSV, KEY_JSON] + [f"{n}/{f}" for n in names
+                                   for f in (*STUDENT_FILES, "truth.json")]
+    clash = [str(out / p) for p in owned if (out / p).exists()]
     if clash and not force:
         raise FileExistsError(f"{out}: {clash[0]}{' and others' if len(clash) > 1 else ''} "
                               "already exist(s)")
     folders, rows, truths, digests = {}, [], {}, {}
-    for i, (name, s) in enumerate(zip(names, seeds, strict=True)):
-        folder = out / name
-        course = make_course_set(config, s)
-        write_course(course, folder, force=True)
-        tpath = folder / "truth.json"
-        truth = json.loads(tpath.read_text(encoding="utf-8"))
-        tpath.unlink()  # the truth never stays in a student folder
-        h = hashlib.sha256()
-        for f in STUDENT_FILES:
-            h.update((folder / f).read_bytes())
-        digest = h.hexdigest()
-        if digest in digests:
-            raise RuntimeError(f"{name} and {digests[digest]} got identical files")
-        digests[digest] = name
-        folders[name] = folder
-        truths[name] = truth
-        rows.append(_row(name, s, truth))
-        if progress:
-            progress(i + 1, count)
-    key_csv = atomic_write_text(out / KEY_CSV, key_csv_text(rows), force=True)
-    from bench.dataset import versions
-
-    key = {"kind": "class", "class_seed": int(seed), "count": int(count),
-           "seed_derivation": "SeedSequence(class_seed).spawn(count)[i]"
-                              ".generate_state(1, uint64)[0] >> 1",
-           "versions": versions(), "columns": list(CSV_COLUMNS),
-           "students": [{"student": r["student"], "folder": r["student"], "seed": r["seed"],
-                         "answer": r["answer"], "truth": truths[r["student"]]} for r in rows]}
-    key_json = atomic_write_text(out / KEY_JSON, dumps(key), force=True)
-    return ClassSet(out, folders, key_csv, key_json, rows)
+    # The class is one set (calib.atomic.atomic_dir): written beside OUT and swapped in
+    # whole. The truth of a student is kept in memory and goes to the answer key only; it
+    # is never written inside a student folder, not even for a moment. Student folders are
+    # replaced whole (nothing of an old folder is carried into the new one).
+    with atomic_dir(out, force, owned=owned, exclusive=names) as tmp:
+        for i, (name, s) in enumerate(zip(names, seeds, strict=True)):
+            folder = tmp / name
+            folder.mkdir()
+            course = make_course_set(config, s)
+            write_course_files(course, folder, truth=False)
+            # exactly what truth.json of `generate course --seed s` holds, read back
+            truth = json.loads(dumps({**course.truth(), "seed": int(s),
+                                      "versions": versions()}))
+            h = hashlib.sha256()
+            for f in STUDENT_FILES:
+                h.update((folder / f).read_bytes())
+            digest = h.hexdigest()
+            if digest in digests:
+                raise RuntimeError(f"{name} and {digests[digest]} got identical files")
+            digests[digest] = name
+            folders[name] = out / name
+            truths[name] = truth
+            rows.append(_row(name, s, truth))
+            if progress:
+                progress(i + 1, count)
+        write_text(tmp / KEY_CSV, key_csv_text(rows), force=True)
+        key = {"kind": "class", "class_seed": int(seed), "count": int(count),
+               "seed_derivation": "SeedSequence(class_seed).spawn(count)[i]"
+                                  ".generate_state(1, uint64)[0] >> 1",
+               "versions": versions(), "columns": list(CSV_COLUMNS),
+               "students": [{"student": r["student"], "folder": r["student"],
+                             "seed": r["seed"], "answer": r["answer"],
+                             "truth": truths[r["student"]]} for r in rows]}
+        write_text(tmp / KEY_JSON, dumps(key), force=True)
+    return ClassSet(out, folders, out / KEY_CSV, out / KEY_JSON, rows)
 
 
 def student_truth(key: dict, student: str) -> dict:

@@ -40,6 +40,7 @@ from bench.vehicle import (
     VehicleRun,
     make_vehicle_run,
 )
+from calib.atomic import atomic_dir
 from calib.conventions import G
 
 COURSE_FILES = ("ensayo.mat", "acel.mat", "puntos.mat", "datos.txt", "truth.json")
@@ -199,24 +200,47 @@ def make_course_set(config: CourseConfig | None = None, seed: int = 0) -> Course
                      int(seed))
 
 
-def write_course(course: CourseSet, out: str | Path, force: bool = False) -> dict[str, str]:
-    """Write the five files into ``out`` (atomic; refuses to overwrite without ``force``)."""
-    from bench.dataset import prepare_out_dir, save_mat, write_datos, write_truth
+def write_course_files(course: CourseSet, folder: str | Path, truth: bool = True
+                       ) -> dict[str, Path]:
+    """Write the set's files into the existing, empty ``folder`` (no checks, no lock): the
+    body of :func:`write_course`, also used inside a class set and the demo's output.
+    ``truth=False`` leaves ``truth.json`` out (a student folder)."""
+    from bench.dataset import save_mat, write_datos, write_truth
 
-    out = prepare_out_dir(out, list(COURSE_FILES), force)
+    folder = Path(folder)
     v = course.vehicle
     nv = [course.sensor.x.noise_var, course.sensor.y.noise_var]
     paths = {
-        "ensayo": save_mat(out / "ensayo.mat", {"tita": course.calibration.tita,
-                                                "datos": course.calibration.datos}, force=True),
-        "acel": save_mat(out / "acel.mat", {"t": v.t, "Aerr": v.aerr}, force=True),
-        "puntos": save_mat(out / "puntos.mat",
+        "ensayo": save_mat(folder / "ensayo.mat", {"tita": course.calibration.tita,
+                                                   "datos": course.calibration.datos},
+                           force=True),
+        "acel": save_mat(folder / "acel.mat", {"t": v.t, "Aerr": v.aerr}, force=True),
+        "puntos": save_mat(folder / "puntos.mat",
                            {k: np.asarray(p, float).reshape(1, 2)
                             for k, p in course.candidates.items()}, force=True),
-        "datos": write_datos(out / "datos.txt", v.config.p0, v.config.v0, nv, force=True),
-        "truth": write_truth(out / "truth.json", course.truth(), course.seed, force=True),
+        "datos": write_datos(folder / "datos.txt", v.config.p0, v.config.v0, nv, force=True),
     }
-    return {k: str(p) for k, p in paths.items()}
+    if truth:
+        paths["truth"] = write_truth(folder / "truth.json", course.truth(), course.seed,
+                                     force=True)
+    return paths
+
+
+def write_course(course: CourseSet, out: str | Path, force: bool = False) -> dict[str, str]:
+    """Write the five files into ``out`` as one set (:func:`calib.atomic.atomic_dir`).
+
+    The files go to a temporary directory beside ``out``, which replaces ``out`` as a whole
+    when complete: an interrupted run leaves the old set or the new one, never a mix; other
+    files in ``out`` are kept. Refuses to overwrite without ``force`` (before writing) and
+    while another run writes ``out`` (:class:`calib.atomic.OutputBusyError`).
+    """
+    out = Path(out)
+    clash = [n for n in COURSE_FILES if (out / n).exists()]
+    if clash and not force:  # checked again under the lock by atomic_dir
+        raise FileExistsError(f"{out}: {', '.join(clash)} already exist(s)")
+    with atomic_dir(out, force, owned=COURSE_FILES) as tmp:
+        written = write_course_files(course, tmp)
+    return {k: str(out / p.name) for k, p in written.items()}
 
 
 def generate_course(out: str | Path, seed: int = 0, force: bool = False,
@@ -230,4 +254,5 @@ def generate_course(out: str | Path, seed: int = 0, force: bool = False,
 __all__ = [
     "COURSE_FILES", "CourseConfig", "CourseSet", "generate_course", "make_course_set",
     "place_candidates", "random_profile", "random_sensor", "write_course",
+    "write_course_files",
 ]

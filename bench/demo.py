@@ -31,13 +31,13 @@ from typing import Any
 
 import numpy as np
 
+from calib.atomic import atomic_dir, write_text
 from calib.calibration import Calibration, calibrate
 from calib.conventions import AXES, G
 from calib.correct import apply_errors
 from calib.io import (
     Acel,
     Ensayo,
-    atomic_write_text,
     dumps,
     read_acel,
     read_datos,
@@ -195,7 +195,8 @@ class DemoResult:
         return demo_summary(self)
 
 
-def _prepare(out: Path, force: bool, generate: bool, formats: tuple[str, ...]) -> None:
+def _prepare(out: Path, force: bool, generate: bool, formats: tuple[str, ...]) -> list[str]:
+    """Refuse existing outputs without ``force``; return the outputs (relative paths)."""
     from bench.course import COURSE_FILES
 
     names = list(OUTPUT_NAMES) + [f"figures/{n}.{f}" for n in FIGURE_NAMES for f in formats]
@@ -205,6 +206,7 @@ def _prepare(out: Path, force: bool, generate: bool, formats: tuple[str, ...]) -
     if clash and not force:
         raise FileExistsError(f"{out}: {', '.join(clash[:4])}{' …' if len(clash) > 4 else ''} "
                               "already exist(s)")
+    return names
 
 
 FIGURE_FORMATS = ("png", "svg")
@@ -241,12 +243,13 @@ class _Truth:
         return np.asarray(self.manifest["true_final_position"], dtype=float)
 
 
-def _generate(out: Path, seed: int, force: bool, files: dict[str, Path]) -> _Truth:
+def _generate(out: Path, seed: int, files: dict[str, Path]) -> _Truth:
     """Generate and write the course set into ``out/data``; return its true path."""
-    from bench.course import make_course_set, write_course
+    from bench.course import make_course_set, write_course_files
 
     course = make_course_set(None, seed)
-    written = write_course(course, out / "data", force=force)
+    (out / "data").mkdir()
+    written = write_course_files(course, out / "data")
     files.update({f"data/{Path(p).name}": Path(p) for p in written.values()})
     return _Truth(path=course.vehicle.truth.pos, acc=course.vehicle.truth.acc)
 
@@ -268,7 +271,7 @@ def _read_truth(data_dir: Path, truth: _Truth) -> _Truth:
 
 
 def _write_json(out: Path, name: str, obj: Any, files: dict[str, Path]) -> None:
-    files[name] = atomic_write_text(out / name, dumps(obj), True)
+    files[name] = write_text(out / name, dumps(obj), True)
 
 
 def _figures(out: Path, ana: CourseAnalysis, truth: _Truth, formats: tuple[str, ...],
@@ -330,44 +333,48 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
         raise ValueError(f"coverage_runs must be >= 0, got {coverage_runs}")
     if not formats or set(formats) - {"png", "svg"}:
         raise ValueError(f"figure formats must be png and/or svg, got {', '.join(formats)}")
-    _prepare(out, force, generate, formats)
-    data_dir = out / "data" if generate else Path(course_data)
-    has_truth = generate or (data_dir / "truth.json").exists()
-    steps = _Steps(_step_labels(generate, has_truth, generate and coverage_runs > 0, seed,
-                                coverage_runs, formats), progress)
-    files: dict[str, Path] = {}
-    truth = _Truth()
-    if generate:
-        with steps.step():
-            truth = _generate(out, seed, force, files)
-        source = f"generated course set, seed {seed}"
-    else:
-        source = f"course files in {data_dir}"
-    truth = _read_truth(data_dir, truth)
-    with steps.step():
-        ana = analyze_course_dir(data_dir, level)
-        est = ana.cal.to_dict()
-        tj = ana.trajectory_json()
-        _write_json(out, "estimates.json", est, files)
-        _write_json(out, "trajectory.json", tj, files)
-        nmin = _nmin(ana)
-    val = cov = None
-    if truth.manifest is not None:
-        with steps.step():
-            val = validate(truth.manifest, est, VALIDATE_LEVEL)
-            _write_json(out, "validation.json", val.to_dict(), files)
-        if generate and coverage_runs > 0:
+    owned = _prepare(out, force, generate, formats)
+    # The output directory is one set (calib.atomic.atomic_dir): everything is written to a
+    # temporary directory beside OUT (`work`) and replaces OUT's outputs as a whole at the
+    # end; an interrupted demo leaves the old outputs or the new ones, never a mix.
+    with atomic_dir(out, force, owned=owned) as work:
+        data_dir = work / "data" if generate else Path(course_data)
+        has_truth = generate or (data_dir / "truth.json").exists()
+        steps = _Steps(_step_labels(generate, has_truth, generate and coverage_runs > 0, seed,
+                                    coverage_runs, formats), progress)
+        files: dict[str, Path] = {}
+        truth = _Truth()
+        if generate:
             with steps.step():
-                cov = coverage_check(truth.manifest, coverage_runs, COVERAGE_LEVEL, seed)
-    with steps.step():
-        _figures(out, ana, truth, formats, files)
-    with steps.step():
-        recovered = _recording(out, ana, truth, est, tj, files)
-    result = DemoResult(out, files, ana, truth.manifest, val, cov, nmin, recovered,
-                        steps.times, 0.0, source)
-    with steps.step():
-        files["report.md"] = atomic_write_text(out / "report.md", report_markdown(result),
-                                               True)
+                truth = _generate(work, seed, files)
+            source = f"generated course set, seed {seed}"
+        else:
+            source = f"course files in {data_dir}"
+        truth = _read_truth(data_dir, truth)
+        with steps.step():
+            ana = analyze_course_dir(data_dir, level)
+            est = ana.cal.to_dict()
+            tj = ana.trajectory_json()
+            _write_json(work, "estimates.json", est, files)
+            _write_json(work, "trajectory.json", tj, files)
+            nmin = _nmin(ana)
+        val = cov = None
+        if truth.manifest is not None:
+            with steps.step():
+                val = validate(truth.manifest, est, VALIDATE_LEVEL)
+                _write_json(work, "validation.json", val.to_dict(), files)
+            if generate and coverage_runs > 0:
+                with steps.step():
+                    cov = coverage_check(truth.manifest, coverage_runs, COVERAGE_LEVEL, seed)
+        with steps.step():
+            _figures(work, ana, truth, formats, files)
+        with steps.step():
+            recovered = _recording(work, ana, truth, est, tj, files)
+        result = DemoResult(out, files, ana, truth.manifest, val, cov, nmin, recovered,
+                            steps.times, 0.0, source)
+        with steps.step():
+            files["report.md"] = write_text(work / "report.md", report_markdown(result), True)
+    result.files = {k: out / p.relative_to(work) for k, p in files.items()}
     result.elapsed = steps.elapsed
     return result
 

@@ -11,8 +11,8 @@ from bench.dataset import write_json
 from bench.gap.figure import save_gap_figure
 from bench.gap.report import GapReport, shrink_word
 from bench.model import edit_tilt_table, load_spec
+from calib.atomic import atomic_dir, write_text
 from calib.conventions import AXES
-from calib.io import atomic_write_text
 
 PathLike = str | os.PathLike
 
@@ -119,22 +119,26 @@ def write_model_after(report: GapReport, path: PathLike, force: bool = False) ->
     spec = load_spec()
     edit_tilt_table(spec, report.table_after)
     spec.compile()
-    return atomic_write_text(path, spec.to_xml(), force=force)
+    return write_text(path, spec.to_xml(), force=force)
 
 
 def write_report(report: GapReport, out_dir: PathLike, force: bool = False) -> dict[str, str]:
-    """Write ``gap.json``, ``gap.md``, ``gap.png``, ``gap.svg``, ``model_after.xml``."""
+    """Write ``gap.json``, ``gap.md``, ``gap.png``, ``gap.svg``, ``model_after.xml``.
+
+    The directory is written as one set (:func:`calib.atomic.atomic_dir`): into a temporary
+    directory beside ``out_dir`` that replaces the report as a whole when complete (other
+    files in ``out_dir`` are kept); refused while another run writes ``out_dir``.
+    """
     out = Path(out_dir)
     if not force:
         check_outputs(out, None)
-    out.mkdir(parents=True, exist_ok=True)
     files = {"json": str(out / "gap.json"), "markdown": str(out / "gap.md"),
              "png": str(out / "gap.png"), "svg": str(out / "gap.svg"),
              "model_after": str(out / "model_after.xml")}
-    write_model_after(report, files["model_after"], force=True)
-    save_gap_figure(report, files["png"])
-    save_gap_figure(report, files["svg"])
-    atomic_write_text(files["markdown"], gap_markdown(report), force=True)
-    write_json(files["json"], replace(report, files=files).to_dict(), force=True)
+    with atomic_dir(out, force, owned=REPORT_FILES) as tmp:
+        write_model_after(report, tmp / "model_after.xml", force=True)
+        save_gap_figure(report, tmp / "gap.png")
+        save_gap_figure(report, tmp / "gap.svg")
+        write_text(tmp / "gap.md", gap_markdown(report), force=True)
+        write_json(tmp / "gap.json", replace(report, files=files).to_dict(), force=True)
     return files
-

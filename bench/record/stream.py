@@ -1,8 +1,9 @@
 """Rerun primitives: the recording stream, series, JSON trees, fixed colours and sizes.
 
 Every recording is written with its own :class:`rerun.RecordingStream` (never the global one),
-so one process can write several; the file is written to a temporary name beside the target
-and renamed when complete (an existing file is replaced only with ``force``). Large arrays go
+so one process can write several; the recording is kept in memory and written by
+:func:`calib.atomic.write_bytes` when complete (temporary name beside the target, fsync,
+rename; an existing file is replaced only with ``force``). Large arrays go
 through ``rerun.send_columns`` (one call per entity, not one per sample).
 """
 
@@ -10,7 +11,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 import uuid
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from calib.atomic import write_bytes
 from calib.io import to_jsonable
 
 if TYPE_CHECKING:
@@ -49,12 +50,14 @@ LINE_WIDTH = 2.5
 @contextmanager
 def open_recording(path: str | os.PathLike, force: bool = False, blueprint: Any = None,
                    name: str | None = None) -> Iterator[rr.RecordingStream]:
-    """A recording-scoped stream writing atomically to ``path``.
+    """A recording-scoped stream written atomically to ``path``.
 
-    Yields a :class:`rerun.RecordingStream` saving to a temporary file in the target
-    directory; on normal exit the stream is flushed, closed and the file renamed to
-    ``path``. On error the temporary file is removed. Refuses to replace an existing file
-    unless ``force`` (checked before anything is logged).
+    Yields a :class:`rerun.RecordingStream` whose sink is memory; on normal exit its bytes
+    are written by :func:`calib.atomic.write_bytes` (temporary file beside ``path``, fsync,
+    rename). No rerun writer thread touches the disk, so a full disk is an ``OSError``
+    naming ``path`` at once (rerun's file sink could hang or fail in its flush), and an
+    error leaves no file behind. Refuses to replace an existing file unless ``force``
+    (checked before anything is logged).
 
     Parameters
     ----------
@@ -66,29 +69,21 @@ def open_recording(path: str | os.PathLike, force: bool = False, blueprint: Any 
     import rerun as rr
 
     path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"{path}: is a directory; expected an output file name")
     if path.exists() and not force:
         raise FileExistsError(f"{path}: exists; pass --force to overwrite")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a recording is an ordinary file
     rec = rr.RecordingStream(APP_ID, recording_id=uuid.uuid4())
     try:
-        rec.save(tmp, default_blueprint=blueprint)
+        memory = rec.memory_recording()
+        if blueprint is not None:  # what save(path, default_blueprint=...) stores
+            rec.send_blueprint(blueprint, make_active=False, make_default=True)
         rec.send_recording_name(name or path.stem)
         yield rec
-        rec.flush()
+        data = memory.drain_as_bytes()
+    finally:
         rec.disconnect()
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            rec.disconnect()
-        finally:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-        raise
+    write_bytes(path, data, force=True)
 
 
 def json_normal(obj: Any) -> Any:
