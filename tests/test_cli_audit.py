@@ -48,7 +48,8 @@ def vehicle_files(tmp_path):
     acel = tmp_path / "acel.mat"
     scipy.io.savemat(acel, {"t": t[:, None], "Aerr": np.zeros((t.size, 2))})
     puntos = tmp_path / "puntos.mat"
-    scipy.io.savemat(puntos, {"A": np.array([[0.0, 9.0]]), "B": np.array([[50.0, 50.0]])})
+    scipy.io.savemat(puntos, {"A": np.array([[0.0, 9.0]]), "B": np.array([[50.0, 50.0]]),
+                              "C": np.array([[-50.0, 50.0]]), "D": np.array([[0.0, -60.0]])})
     return acel, puntos
 
 
@@ -85,7 +86,8 @@ def test_non_numeric_variable_names_file_and_variable(capsys, tmp_path, value, k
 def test_non_numeric_candidate_point(capsys, tmp_path, ensayo, vehicle_files):
     acel, _ = vehicle_files
     puntos = tmp_path / "p.mat"
-    scipy.io.savemat(puntos, {"A": "hello", "B": np.array([[1.0, 2.0]])})
+    scipy.io.savemat(puntos, {"A": "hello", "B": np.array([[1.0, 2.0]]),
+                              "C": np.array([[3.0, 4.0]]), "D": np.array([[5.0, 6.0]])})
     msg = _error(capsys, "trajectory", "--ensayo", ensayo, "--acel", acel, "--puntos", puntos)
     assert str(puntos) in msg and "'A'" in msg
 
@@ -180,7 +182,13 @@ def test_unidentifiable_design_names_the_file(capsys, tmp_path):
     path = tmp_path / "flat.mat"
     scipy.io.savemat(path, {"tita": np.full((5, 1), 0.5), "datos": np.ones((5, 2))})
     msg = _error(capsys, "calibrate", path, "--noise-var", "0.25,0.64")
-    assert str(path) in msg and "scale_x" in msg
+    assert str(path) in msg and "'tita'" in msg and "only 1 distinct θ" in msg
+    two = tmp_path / "mirror.mat"  # θ and π - θ: two distinct θ, the same A_rx
+    th = np.repeat([0.5, np.pi - 0.5], 3)
+    scipy.io.savemat(two, {"tita": th[:, None], "datos": np.column_stack(
+        [-9.8 * np.sin(th), -9.8 * np.cos(th)]) + np.arange(6)[:, None] * 1e-3})
+    msg = _error(capsys, "calibrate", two, "--noise-var", "0.25,0.64")
+    assert str(two) in msg and "scale_x" in msg
 
 
 def test_record_entities_on_a_bad_file(capsys, tmp_path):
