@@ -22,11 +22,12 @@ gain ``K_k = 1 + scale_k``, ``A_rx = -g sin θ``, ``A_ry = -g cos θ``, g = :dat
    ``+g sin θ``). ``se`` is the standard error of the slope, ``σ̂/‖A_rk - mean A_rk‖``, with
    the noise level ``σ̂² = RSS/(N - rank)`` of the column fitted on ``[1, sin θ, cos θ]``: the
    noise whichever gravity component the column follows, so the signal of a swapped column
-   is not mistaken for noise (which would widen ``se`` and let it through). The bound is deliberately loose: :data:`MIN_GAIN` = 0.05 accepts a
-   local g down to 5 % of 9.8 m/s² (Pluto's 0.62 m/s² passes) and a strongly mis-scaled
-   sensor; an axis whose θ range is too small to determine the gain (large ``se``) is never
-   refused here — :mod:`calib.ls` reports it as poorly identified. Readings that follow the
-   reference are never refused: their gain is ≈ 1 ± a few se.
+   is not mistaken for noise (which would widen ``se`` and let it through). The bound is
+   deliberately loose: :data:`MIN_GAIN` = 0.05 accepts a local g down to 5 % of 9.8 m/s²
+   (Pluto's 0.62 m/s² passes) and a strongly mis-scaled sensor; an axis whose θ range is
+   too small to determine the gain (large ``se``) is never refused here — :mod:`calib.ls`
+   reports it as poorly identified. Readings that follow the reference are never refused:
+   their gain is ≈ 1 ± a few se.
 
 Magnitudes (:data:`MAX_ABS_READING`, :data:`MAX_ABS_THETA`) are checked first so that the
 fits below cannot overflow.
