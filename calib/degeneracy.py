@@ -131,8 +131,9 @@ def check_signal(tita: np.ndarray, datos: np.ndarray, where: str, g: float = G) 
         raise DegenerateDataError(
             f"{where}: variable 'tita' has only {distinct.size} distinct θ "
             f"({float(distinct[0]):.6g} rad for all {tita.size} samples): a calibration needs "
-            f"at least {MIN_DISTINCT_THETA} (3 to tell radians from degrees, and spread over a "
-            "turn to determine both scale factors)")
+            f"at least {MIN_DISTINCT_THETA} (3 to tell radians from degrees); with one pose "
+            "bias and scale are confounded (scale_x, scale_y cannot be identified): tilt the "
+            "table to several angles, spread over a turn")
     ref = np.column_stack([-g * np.sin(tita), -g * np.cos(tita)])
     for k, axis in enumerate(AXES):
         col, rk = datos[:, k], ref[:, k]

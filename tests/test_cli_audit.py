@@ -182,13 +182,7 @@ def test_unidentifiable_design_names_the_file(capsys, tmp_path):
     path = tmp_path / "flat.mat"
     scipy.io.savemat(path, {"tita": np.full((5, 1), 0.5), "datos": np.ones((5, 2))})
     msg = _error(capsys, "calibrate", path, "--noise-var", "0.25,0.64")
-    assert str(path) in msg and "'tita'" in msg and "only 1 distinct θ" in msg
-    two = tmp_path / "mirror.mat"  # θ and π - θ: two distinct θ, the same A_rx
-    th = np.repeat([0.5, np.pi - 0.5], 3)
-    scipy.io.savemat(two, {"tita": th[:, None], "datos": np.column_stack(
-        [-9.8 * np.sin(th), -9.8 * np.cos(th)]) + np.arange(6)[:, None] * 1e-3})
-    msg = _error(capsys, "calibrate", two, "--noise-var", "0.25,0.64")
-    assert str(two) in msg and "scale_x" in msg
+    assert str(path) in msg and "scale_x" in msg
 
 
 def test_record_entities_on_a_bad_file(capsys, tmp_path):

@@ -319,6 +319,15 @@ def test_degenerate_data_are_told_in_the_users_terms(kind, tmp_path, capsys):
             assert bad not in msg
 
 
+def test_mirror_poses_name_the_unidentifiable_scale(tmp_path, capsys):
+    """θ and π - θ: two distinct θ, but the same A_rx — the fit says which scale."""
+    th = np.repeat([0.5, np.pi - 0.5], 3)
+    datos = _readings(th) + np.arange(6)[:, None] * 1e-3
+    path = _save(tmp_path / "mirror.mat", tita=th[:, None], datos=datos)
+    msg = _error(capsys, "calibrate", path, "--noise-var", NV)
+    assert str(path) in msg and "scale_x" in msg
+
+
 def test_weak_but_real_signals_are_accepted(tmp_path, capsys):
     """Not refused: a tiny θ range (the gain is undetermined, not contradicted), a local g of
     1.62 m/s² (gain 0.17 at g = 9.8), a sensor 40 % off, noiseless data, two poses."""
