@@ -36,7 +36,7 @@ import re
 import unicodedata
 import warnings
 
-from calib.io import MAX_ABS_POSITION, MAX_ABS_VELOCITY, DataError, DataNote
+from calib.input_rules import MAX_ABS_POSITION, MAX_ABS_VELOCITY, DataError, DataNote
 
 FIELDS: dict[str, tuple[tuple[str, ...], str, str]] = {
     "p0": (("posici", "position"), "Posición inicial = [x y]", "initial position, m"),

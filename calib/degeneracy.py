@@ -40,7 +40,7 @@ import math
 import numpy as np
 
 from calib.conventions import AXES, G
-from calib.io import MAX_ABS_ACCEL, DataError
+from calib.input_rules import MAX_ABS_ACCEL, DataError
 
 MIN_DISTINCT_THETA = 2
 """Fewest distinct θ a calibration needs (bias and scale per axis)."""

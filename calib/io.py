@@ -22,10 +22,16 @@ from pathlib import Path
 import numpy as np
 
 from calib.angles import compare_angle_units
-
-
-class DataError(ValueError):
-    """Input data that cannot be used as given (message names file, variable and fix)."""
+from calib.datos_txt import parse_datos
+from calib.degeneracy import check_magnitudes, check_signal
+from calib.input_rules import (  # noqa: F401  (re-exported: calib.io is where users look)
+    MAX_ABS_ACCEL,
+    MAX_ABS_POSITION,
+    MAX_ABS_TIME,
+    MAX_ABS_VELOCITY,
+    DataError,
+    DataNote,
+)
 
 
 @dataclass(frozen=True)
@@ -85,19 +91,6 @@ class Datos:
 CANDIDATES: tuple[str, ...] = ("A", "B", "C", "D")
 """Candidate points every ``puntos.mat`` must hold (course: four, 1×2 each, m)."""
 
-MAX_ABS_TIME = 1e12
-"""Largest |t| accepted, s (≈ 31 700 years): beyond it integrals overflow or lose the step."""
-
-MAX_ABS_POSITION = 1e15
-"""Largest |coordinate| accepted in ``puntos.mat`` and ``datos.txt``, m."""
-
-MAX_ABS_ACCEL = 1e9
-"""Largest |acceleration| accepted in a file, m/s² (≈ 10⁸ g: no accelerometer reads that;
-a units or file error)."""
-
-MAX_ABS_VELOCITY = 1e9
-"""Largest |initial velocity| accepted in ``datos.txt``, m/s."""
-
 _NUMERIC_CLASSES = frozenset({"double", "single", "int8", "uint8", "int16", "uint16", "int32",
                               "uint32", "int64", "uint64", "sparse"})
 """MATLAB classes that hold real numbers (``scipy.io.whosmat`` names; sparse is numeric unless
@@ -106,11 +99,6 @@ it is logical, which whosmat reports as ``logical``)."""
 _CLASS_WORDS = {"logical": "logical (true/false)", "char": "text (char)",
                 "cell": "a cell array", "struct": "a struct", "object": "a MATLAB object",
                 "function": "a function handle", "opaque": "an opaque MATLAB object"}
-
-
-class DataNote(UserWarning):
-    """Something about an input file the user should know that does not stop the run
-    (extra variables ignored). The command line prints it on stderr as ``warning: …``."""
 
 
 @dataclass(frozen=True)
@@ -280,8 +268,6 @@ def validate_ensayo(
         raise DataError(f"{where}: only {tita.shape[0]} samples; at least 3 are needed")
     check_finite(tita, where, "tita")
     check_finite(datos, where, "datos")
-    from calib.degeneracy import check_magnitudes, check_signal  # imports this module
-
     check_magnitudes(tita, datos, where)
     check_angle_units(tita, datos, where)
     check_signal(tita, datos, where)
@@ -458,8 +444,6 @@ def read_datos(path: str | os.PathLike) -> Datos:
     >>> d.v0.tolist(), d.noise_var.tolist()  # doctest: +SKIP
     ([1.0, 3.0], [0.25, 0.64])
     """
-    from calib.datos_txt import parse_datos  # imports this module
-
     path = Path(path)
     if not path.exists():
         raise DataError(f"{path}: file not found")
