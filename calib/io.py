@@ -14,18 +14,24 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import tempfile
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from calib.angles import compare_angle_units
-
-
-class DataError(ValueError):
-    """Input data that cannot be used as given (message names file, variable and fix)."""
+from calib.datos_txt import parse_datos
+from calib.degeneracy import check_magnitudes, check_signal
+from calib.input_rules import (  # noqa: F401  (re-exported: calib.io is where users look)
+    MAX_ABS_ACCEL,
+    MAX_ABS_POSITION,
+    MAX_ABS_TIME,
+    MAX_ABS_VELOCITY,
+    DataError,
+    DataNote,
+)
 
 
 @dataclass(frozen=True)
@@ -82,7 +88,36 @@ class Datos:
     noise_var: np.ndarray
 
 
-def _loadmat(path: Path) -> dict:
+CANDIDATES: tuple[str, ...] = ("A", "B", "C", "D")
+"""Candidate points every ``puntos.mat`` must hold (course: four, 1×2 each, m)."""
+
+_NUMERIC_CLASSES = frozenset({"double", "single", "int8", "uint8", "int16", "uint16", "int32",
+                              "uint32", "int64", "uint64", "sparse"})
+"""MATLAB classes that hold real numbers (``scipy.io.whosmat`` names; sparse is numeric unless
+it is logical, which whosmat reports as ``logical``)."""
+
+_CLASS_WORDS = {"logical": "logical (true/false)", "char": "text (char)",
+                "cell": "a cell array", "struct": "a struct", "object": "a MATLAB object",
+                "function": "a function handle", "opaque": "an opaque MATLAB object"}
+
+
+@dataclass(frozen=True)
+class _Mat:
+    """A loaded .mat file: its variables and their MATLAB classes (``whosmat``)."""
+
+    path: Path
+    variables: dict
+    classes: dict
+
+    @property
+    def names(self) -> list[str]:
+        return sorted(k for k in self.variables if not k.startswith("__"))
+
+    def __contains__(self, name: str) -> bool:
+        return name in self.variables
+
+
+def _loadmat(path: Path) -> _Mat:
     import scipy.io
 
     path = Path(path)
@@ -91,26 +126,70 @@ def _loadmat(path: Path) -> dict:
     if path.is_dir():
         raise DataError(f"{path}: is a directory; expected a MATLAB .mat file")
     try:
-        return scipy.io.loadmat(str(path))
+        variables = scipy.io.loadmat(str(path))
+        # loadmat returns MATLAB logicals as uint8; the class in the header tells them apart
+        classes = {name: cls for name, _, cls in scipy.io.whosmat(str(path))}
+    except NotImplementedError as exc:  # MATLAB v7.3 (HDF5)
+        raise DataError(f"{path}: a MATLAB v7.3 (HDF5) file, which cannot be read here; save "
+                        f"it with save(..., '-v7') ({exc})") from exc
     except Exception as exc:  # scipy raises several types for a bad file
         raise DataError(f"{path}: not a readable MATLAB .mat file ({exc})") from exc
+    return _Mat(path, variables, classes)
 
 
-def _get(mat: dict, path: Path, name: str) -> np.ndarray:
-    if name not in mat:
-        found = sorted(k for k in mat if not k.startswith("__"))
-        raise DataError(f"{path}: variable '{name}' is missing (found: {', '.join(found)})")
-    return _numeric(mat[name], path, name)
+def _note_extra(mat: _Mat, expected: tuple[str, ...], what: str) -> None:
+    """Name the variables a reader ignores (e.g. MATLAB's leftover ``ans``) in a
+    :class:`DataNote`; they are never used."""
+    extra = [k for k in mat.names if k not in expected]
+    if extra:
+        warnings.warn(DataNote(
+            f"{mat.path}: ignored variable(s) {', '.join(repr(k) for k in extra)}; "
+            f"{what} uses only {', '.join(expected)}"), stacklevel=3)
 
 
-def _numeric(value, where, name: str) -> np.ndarray:
-    """A .mat variable as a real float array; text, cells, structs and complex are errors."""
+def _require(mat: _Mat, names: tuple[str, ...]) -> None:
+    missing = [k for k in names if k not in mat]
+    if missing:
+        found = ", ".join(mat.names) or "no variables"
+        raise DataError(
+            f"{mat.path}: variable(s) {', '.join(repr(k) for k in missing)} missing "
+            f"(found: {found}); the file must hold {', '.join(names)}")
+
+
+def _get(mat: _Mat, path: Path, name: str) -> np.ndarray:
+    _require(mat, (name,))
+    return _numeric(mat.variables[name], path, name, mat.classes.get(name))
+
+
+def _numeric(value, where, name: str, mclass: str | None = None) -> np.ndarray:
+    """A .mat variable as a float64 array (single precision and integers converted exactly).
+
+    Logical, text, cell, struct, object and complex variables are errors: none of them is a
+    number a reader can use (a logical θ would be read as 0/1 rad).
+    """
+    if mclass is not None and mclass not in _NUMERIC_CLASSES:
+        what = _CLASS_WORDS.get(mclass, f"of MATLAB class '{mclass}'")
+        raise DataError(f"{where}: variable '{name}' is {what}; expected real numbers "
+                        "(double or single)")
+    if hasattr(value, "toarray"):  # scipy.sparse: a MATLAB sparse matrix
+        value = value.toarray()
     arr = np.asarray(value)
-    if arr.dtype.kind not in "biuf":
-        what = {"c": "complex", "U": "text", "S": "text", "O": "a cell array or struct",
+    if arr.dtype.kind not in "iuf":
+        what = {"b": "logical (true/false)", "c": "complex", "U": "text (char)",
+                "S": "text (char)", "O": "a cell array or struct",
                 "V": "a struct"}.get(arr.dtype.kind, f"of type {arr.dtype}")
-        raise DataError(f"{where}: variable '{name}' is {what}; expected real numbers")
-    return arr.astype(float)
+        raise DataError(f"{where}: variable '{name}' is {what}; expected real numbers "
+                        "(double or single)")
+    # float32 → float64 is exact: equal angles stay equal, distinct ones distinct, so every
+    # comparison made later happens in the file's own precision
+    return arr.astype(np.float64)
+
+
+def _check_magnitude(arr: np.ndarray, limit: float, where: str, name: str, unit: str) -> None:
+    big = float(np.max(np.abs(arr))) if arr.size else 0.0
+    if big > limit:
+        raise DataError(f"{where}: variable '{name}' reaches {big:.3g} {unit}, beyond "
+                        f"{limit:.3g} {unit}; check the units or the file")
 
 
 def check_finite(arr: np.ndarray, where: str, name: str) -> None:
@@ -169,10 +248,14 @@ def _two_columns(arr: np.ndarray, where: str, name: str) -> np.ndarray:
 def validate_ensayo(
     tita: np.ndarray, datos: np.ndarray, t: np.ndarray | None = None, where: str = "<memory>"
 ) -> Ensayo:
-    """Check shapes, finiteness, units and time order; return an :class:`Ensayo`.
+    """Check shapes, finiteness, units, the data's content and time order; return an
+    :class:`Ensayo`.
 
     Any finite ``tita`` in radians is accepted; it is refused as degrees only when the
-    readings say so (:func:`check_angle_units`, rule in :mod:`calib.angles`).
+    readings say so (:func:`check_angle_units`, rule in :mod:`calib.angles`). Data that
+    cannot determine bias and scale — one distinct θ, a dead sensor, a column that does not
+    follow gravity at all — are refused with a message about the data
+    (:func:`calib.degeneracy.check_signal`).
     """
     tita = _column(np.asarray(tita, dtype=float), where, "tita")
     datos = _two_columns(np.asarray(datos, dtype=float), where, "datos")
@@ -185,12 +268,15 @@ def validate_ensayo(
         raise DataError(f"{where}: only {tita.shape[0]} samples; at least 3 are needed")
     check_finite(tita, where, "tita")
     check_finite(datos, where, "datos")
+    check_magnitudes(tita, datos, where)
     check_angle_units(tita, datos, where)
+    check_signal(tita, datos, where)
     if t is not None:
         t = _column(np.asarray(t, dtype=float), where, "t")
         if t.shape[0] != tita.shape[0]:
             raise DataError(f"{where}: 't' has {t.shape[0]} samples, 'tita' {tita.shape[0]}")
         check_finite(t, where, "t")
+        _check_magnitude(t, MAX_ABS_TIME, where, "t", "s")
         check_time(t, where)
     return Ensayo(tita=tita, datos=datos, t=t, source=where)
 
@@ -209,10 +295,14 @@ def read_ensayo(path: str | os.PathLike) -> Ensayo:
 
     Raises
     ------
-    DataError : missing variable, bad shape, NaN/Inf, non-monotonic ``t``, or ``tita`` that
-        the readings show to be in degrees (:mod:`calib.angles`; the message names the file,
-        the variable and the fix). Any finite ``tita`` in radians is valid: several turns,
-        negative, oscillating or overshooting 2π.
+    DataError : missing variable, a variable that is not real numbers (logical, char, cell,
+        struct, complex), bad shape, NaN/Inf, non-monotonic ``t``, ``tita`` that the
+        readings show to be in degrees (:mod:`calib.angles`), or data that cannot determine
+        the errors (:mod:`calib.degeneracy`: one distinct θ, a dead sensor, no gravity
+        signal). The message names the file, the variable and the fix. Any finite ``tita``
+        in radians is valid: several turns, negative, oscillating or overshooting 2π; double
+        or single precision. Other variables (MATLAB's ``ans``) are ignored and named in a
+        :class:`DataNote` warning.
 
     Examples
     --------
@@ -223,8 +313,12 @@ def read_ensayo(path: str | os.PathLike) -> Ensayo:
     """
     path = Path(path)
     mat = _loadmat(path)
+    _require(mat, ("tita", "datos"))
+    tita, datos = _get(mat, path, "tita"), _get(mat, path, "datos")
     t = _get(mat, path, "t") if "t" in mat else None
-    return validate_ensayo(_get(mat, path, "tita"), _get(mat, path, "datos"), t, str(path))
+    e = validate_ensayo(tita, datos, t, str(path))
+    _note_extra(mat, ("tita", "datos", "t"), "a calibration run")
+    return e
 
 
 def read_acel(path: str | os.PathLike) -> Acel:
@@ -249,29 +343,45 @@ def read_acel(path: str | os.PathLike) -> Acel:
     path = Path(path)
     mat = _loadmat(path)
     where = str(path)
+    _require(mat, ("t", "Aerr"))
     t = _column(_get(mat, path, "t"), where, "t")
     aerr = _two_columns(_get(mat, path, "Aerr"), where, "Aerr")
     if aerr.shape[0] != t.shape[0]:
         raise DataError(f"{where}: 't' has {t.shape[0]} samples but 'Aerr' has {aerr.shape[0]}")
     check_finite(t, where, "t")
     check_finite(aerr, where, "Aerr")
+    _check_magnitude(t, MAX_ABS_TIME, where, "t", "s")
+    _check_magnitude(aerr, MAX_ABS_ACCEL, where, "Aerr", "m/s²")
+    if t.shape[0] < 3:
+        raise DataError(f"{where}: only {t.shape[0]} samples in 't'; at least 3 are needed "
+                        "to integrate")
     check_time(t, where)
     d = np.diff(t)
     if d.size and np.max(np.abs(d - d.mean())) > 1e-6 * max(d.mean(), 1e-12) + 1e-9:
         raise DataError(f"{where}: 't' is not uniformly sampled; resample before integrating")
+    _note_extra(mat, ("t", "Aerr"), "a vehicle run")
     return Acel(t=t, aerr=aerr, source=where)
 
 
-def read_puntos(path: str | os.PathLike) -> dict[str, np.ndarray]:
-    """Read a course ``puntos.mat``: candidate points (1×2 each, m), named by letter.
+def read_puntos(path: str | os.PathLike,
+                names: tuple[str, ...] = CANDIDATES) -> dict[str, np.ndarray]:
+    """Read a course ``puntos.mat``: candidate points ``A``, ``B``, ``C``, ``D`` (1×2 each, m).
 
     Parameters
     ----------
-    path : the MATLAB v5 file; every variable is one candidate ``[x, y]`` (1×2), m.
+    path : the MATLAB v5 file; each candidate is one variable ``[x, y]`` (1×2 or 2×1), m.
+    names : the candidates the file must hold (course: ``A`` … ``D``, :data:`CANDIDATES`).
 
     Returns
     -------
-    dict : name → (2,) position, m, sorted by name (at least two).
+    dict : name → (2,) position, m, in the order of ``names``.
+
+    Raises
+    ------
+    DataError : a candidate missing (a file truncated after ``A`` and ``B`` is refused, the
+        missing ones named), not real numbers, not 1×2, NaN/Inf or absurdly large.
+        Other variables (MATLAB's leftover ``ans``) are ignored — never a further
+        candidate — and named in a :class:`DataNote` warning.
 
     Examples
     --------
@@ -280,20 +390,29 @@ def read_puntos(path: str | os.PathLike) -> dict[str, np.ndarray]:
     ['A', 'B', 'C', 'D']
     """
     path = Path(path)
+    names = tuple(names)
+    if len(names) < 2:
+        raise ValueError(f"read_puntos needs at least two candidate names, got {names}")
     mat = _loadmat(path)
+    missing = [k for k in names if k not in mat]
+    if missing:
+        found = ", ".join(mat.names) or "no variables"
+        raise DataError(
+            f"{path}: candidate point(s) {', '.join(missing)} missing (found: {found}); "
+            f"puntos.mat must hold {', '.join(names)}, each 1×2 [x y] in m — is the file "
+            "truncated?")
     out = {}
-    for name in sorted(k for k in mat if not k.startswith("__")):
-        p = _numeric(mat[name], path, name).ravel()
-        if p.shape != (2,):
-            raise DataError(f"{path}: variable '{name}' must be 1×2 (x, y), got {p.shape}")
+    for name in names:
+        p = _numeric(mat.variables[name], path, name, mat.classes.get(name))
+        if p.size != 2 or (p.ndim == 2 and 1 not in p.shape) or p.ndim > 2:
+            raise DataError(f"{path}: variable '{name}' must be 1×2 [x y] in m, got shape "
+                            f"{p.shape}")
+        p = p.ravel()
         check_finite(p, str(path), name)
+        _check_magnitude(p, MAX_ABS_POSITION, str(path), name, "m")
         out[name] = p
-    if len(out) < 2:
-        raise DataError(f"{path}: needs at least two candidate points, found {len(out)}")
+    _note_extra(mat, names, "the arrival decision")
     return out
-
-
-_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 
 
 def read_datos(path: str | os.PathLike) -> Datos:
@@ -301,7 +420,9 @@ def read_datos(path: str | os.PathLike) -> Datos:
 
     Lines: ``Posición inicial = [x y]``, ``Velocidad inicial = [vx vy]``,
     ``varianza del ruido de los acelerómetros = [σx² σy²]``. Matching is by keyword
-    (``posici``, ``velocidad``, ``varianza``), so accents and spacing do not matter.
+    (``posici``, ``velocidad``, ``varianza``), so case, accents and spacing do not matter.
+    UTF-8 (BOM or not), UTF-16, Latin-1; CRLF; the Unicode minus and dashes as minus; decimal
+    commas where unambiguous (rules: :mod:`calib.datos_txt`).
 
     Parameters
     ----------
@@ -310,6 +431,11 @@ def read_datos(path: str | os.PathLike) -> Datos:
     Returns
     -------
     Datos : ``p0`` (2,) m, ``v0`` (2,) m/s, ``noise_var`` (2,) (m/s²)².
+
+    Raises
+    ------
+    DataError : a field missing or given twice, not two numbers, a bad number, a variance
+        that is not positive — naming the file, the line and the field.
 
     Examples
     --------
@@ -323,28 +449,8 @@ def read_datos(path: str | os.PathLike) -> Datos:
         raise DataError(f"{path}: file not found")
     if path.is_dir():
         raise DataError(f"{path}: is a directory; expected the course datos.txt")
-    text = path.read_bytes().decode("utf-8", errors="replace")
-    found: dict[str, np.ndarray] = {}
-    for line in text.splitlines():
-        low = line.lower()
-        m = re.search(r"\[([^\]]*)\]", line)
-        if not m:
-            continue
-        nums = [float(v) for v in re.findall(_NUM, m.group(1))]
-        key = "p0" if "posici" in low else "v0" if "velocidad" in low else (
-            "noise_var" if "varianza" in low else None)
-        if key is None:
-            continue
-        if len(nums) != 2:
-            raise DataError(f"{path}: line {line.strip()!r} must hold two numbers in [ ]")
-        found[key] = np.array(nums)
-    missing = [k for k in ("p0", "v0", "noise_var") if k not in found]
-    if missing:
-        raise DataError(f"{path}: could not find {', '.join(missing)} (initial position, "
-                        "initial velocity, noise variances) in the course wording")
-    if np.any(found["noise_var"] <= 0):
-        raise DataError(f"{path}: noise variances must be positive, got {found['noise_var']}")
-    return Datos(**found)
+    found = parse_datos(path.read_bytes(), str(path))
+    return Datos(**{k: np.array(v, dtype=float) for k, v in found.items()})
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes, force: bool = False) -> Path:

@@ -72,12 +72,13 @@ def _save(path, tita, datos, **extra):
 
 @pytest.fixture
 def course_like(tmp_path):
-    """acel.mat (still vehicle), puntos.mat (two candidates), datos.txt in the course wording."""
+    """acel.mat (still vehicle), puntos.mat (four candidates), datos.txt in the course wording."""
     t = np.arange(300) * 0.01
     acel = tmp_path / "acel.mat"
     scipy.io.savemat(acel, {"t": t[:, None], "Aerr": np.tile(BIAS, (t.size, 1))})
     puntos = tmp_path / "puntos.mat"
-    scipy.io.savemat(puntos, {"A": np.array([[3.0, 9.0]]), "B": np.array([[50.0, 50.0]])})
+    scipy.io.savemat(puntos, {"A": np.array([[3.0, 9.0]]), "B": np.array([[50.0, 50.0]]),
+                              "C": np.array([[-50.0, 50.0]]), "D": np.array([[3.0, -60.0]])})
     datos = tmp_path / "datos.txt"
     datos.write_text("Posición inicial = [0 0]\nVelocidad inicial = [1 3]\n"
                      "varianza del ruido de los acelerómetros = [0.25 0.64]\n", encoding="utf-8")
@@ -193,12 +194,17 @@ def test_small_degree_range_is_refused_at_course_noise_over_seeds():
 
 # ------------------------------------------------------------------ edge cases
 def test_undecidable_designs_are_read_as_radians(tmp_path):
-    """One pose or two: both readings fit the pose means exactly; a tiny range: both readings
-    are the same line/parabola in θ. Nothing says degrees: accept."""
+    """Two poses: both readings fit the pose means exactly; a tiny range: both readings
+    are the same line/parabola in θ. Nothing says degrees: accept. (One pose is refused, but
+    for having one distinct θ — no calibration possible — never as degrees.)"""
     one = np.full(60, 40.0)
+    path = _save(tmp_path / "one.mat", one, readings(one, noise=1.0))
+    with pytest.raises(ValueError, match="only 1 distinct θ") as info:
+        read_ensayo(path)
+    assert "degrees, not radians" not in str(info.value)
     two = np.repeat([0.0, 90.0], 30)  # would be degrees, but two poses cannot tell
     tiny = np.linspace(0.3, 0.31, 400)
-    for label, theta, noise in [("one", one, 1.0), ("two", two, 1.0), ("two0", two, 0.0),
+    for label, theta, noise in [("two", two, 1.0), ("two0", two, 0.0),
                                 ("tiny", tiny, 1.0), ("tiny0", tiny, 0.0)]:
         path = _save(tmp_path / f"{label}.mat", theta, readings(np.deg2rad(theta) if
                                                                 label.startswith("two")

@@ -48,7 +48,8 @@ def vehicle_files(tmp_path):
     acel = tmp_path / "acel.mat"
     scipy.io.savemat(acel, {"t": t[:, None], "Aerr": np.zeros((t.size, 2))})
     puntos = tmp_path / "puntos.mat"
-    scipy.io.savemat(puntos, {"A": np.array([[0.0, 9.0]]), "B": np.array([[50.0, 50.0]])})
+    scipy.io.savemat(puntos, {"A": np.array([[0.0, 9.0]]), "B": np.array([[50.0, 50.0]]),
+                              "C": np.array([[-50.0, 50.0]]), "D": np.array([[0.0, -60.0]])})
     return acel, puntos
 
 
@@ -85,7 +86,8 @@ def test_non_numeric_variable_names_file_and_variable(capsys, tmp_path, value, k
 def test_non_numeric_candidate_point(capsys, tmp_path, ensayo, vehicle_files):
     acel, _ = vehicle_files
     puntos = tmp_path / "p.mat"
-    scipy.io.savemat(puntos, {"A": "hello", "B": np.array([[1.0, 2.0]])})
+    scipy.io.savemat(puntos, {"A": "hello", "B": np.array([[1.0, 2.0]]),
+                              "C": np.array([[3.0, 4.0]]), "D": np.array([[5.0, 6.0]])})
     msg = _error(capsys, "trajectory", "--ensayo", ensayo, "--acel", acel, "--puntos", puntos)
     assert str(puntos) in msg and "'A'" in msg
 
