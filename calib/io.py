@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,6 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from calib.angles import compare_angle_units
+from calib.atomic import write_bytes as atomic_write_bytes  # noqa: F401  (one home)
+from calib.atomic import write_text as atomic_write_text  # noqa: F401
 from calib.datos_txt import parse_datos
 from calib.degeneracy import check_magnitudes, check_signal
 from calib.input_rules import (  # noqa: F401  (re-exported: calib.io is where users look)
@@ -451,41 +452,6 @@ def read_datos(path: str | os.PathLike) -> Datos:
         raise DataError(f"{path}: is a directory; expected the course datos.txt")
     found = parse_datos(path.read_bytes(), str(path))
     return Datos(**{k: np.array(v, dtype=float) for k, v in found.items()})
-
-
-def atomic_write_bytes(path: str | os.PathLike, data: bytes, force: bool = False) -> Path:
-    """Write ``data`` to ``path`` through a temporary file and a rename.
-
-    Refuses to replace an existing file unless ``force`` (:class:`FileExistsError`); a crash
-    never leaves half a file.
-    """
-    path = Path(path)
-    if path.is_dir():
-        raise DataError(f"{path}: is a directory; expected an output file name")
-    if path.exists() and not force:
-        raise FileExistsError(f"{path}: exists")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    except OSError as exc:  # name the file asked for, not the temporary one
-        raise type(exc)(exc.errno, exc.strerror, str(path)) from exc
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        # mkstemp creates 0600; give the file the mode a plain open() would (umask applied).
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
-
-
-def atomic_write_text(path: str | os.PathLike, text: str, force: bool = False) -> Path:
-    return atomic_write_bytes(path, text.encode("utf-8"), force=force)
 
 
 def to_jsonable(obj):

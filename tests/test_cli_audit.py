@@ -203,12 +203,12 @@ def test_trajectory_note_shows_the_initial_state_used(capsys, ensayo, vehicle_fi
 
 
 def test_unwritable_output_names_the_requested_file(capsys, tmp_path, monkeypatch, ensayo):
-    import calib.io
+    import calib.atomic as calib_atomic
 
     def deny(dir=None, prefix="", suffix=""):
         raise PermissionError(13, "Permission denied", f"{dir}/{prefix}XXXX{suffix}")
 
-    monkeypatch.setattr(calib.io.tempfile, "mkstemp", deny)
+    monkeypatch.setattr(calib_atomic.tempfile, "mkstemp", deny)
     png = tmp_path / "fit.png"
     msg = _error(capsys, "calibrate", ensayo, "--plot", png, "--json")
     assert f"{png}: Permission denied" in msg and ".tmp" not in msg
