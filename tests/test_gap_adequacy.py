@@ -204,3 +204,14 @@ def test_clean_run_says_nothing_detected_at_alpha():
     d = res.to_dict()
     assert d["verdict"] == "nothing_detected" and d["unexplained"] == []
     assert all(c["passed"] for c in d["adequacy"]["checks"])
+
+
+def test_a_sensor_that_does_not_follow_the_tilt_is_refused_in_data_terms():
+    """Pure noise over a small θ range passes the readers (its gain is not determined well
+    enough to refuse) but a gain ≤ 0 leaves nothing for the gap workflow to extend."""
+    rng = np.random.default_rng(2)
+    th = np.linspace(0.0, 0.2, 500)
+    y = rng.normal(0.0, 1.0, (500, 2))
+    y[:, 0] += 0.05 * G * np.sin(th)  # gain ≈ -0.05 ± 0.04: not refused by the readers
+    with pytest.raises(ValueError, match=r"x readings do not follow −g sin θ .*gain"):
+        analyze_gap(Ensayo(th, y, None, source="noise.mat"), STATED)

@@ -57,6 +57,15 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     stated = run.sigma2
     nominal = calibrate(ensayo, stated, "ols", g)
     gains = 1.0 + nominal.scale
+    for k, a in enumerate(AXES):  # the extensions act through the sensor's gain
+        if not gains[k] > 0:
+            std = float(nominal.fits[a].std[1])
+            ref = "−g sin θ" if a == "x" else "−g cos θ"
+            raise ValueError(
+                f"{ensayo.source}: variable 'datos' column {k + 1}: the {a} readings do not "
+                f"follow {ref} (fitted gain 1 + scale = {gains[k]:.3g} ± {std:.2g}, expected "
+                "≈ 1): the gap workflow needs a sensor that responds to the tilt; is this "
+                "the right column/file, or is the θ range too small to tell?")
     ext = Extensions(run, gains)
 
     lattice = [detect_lattice(run.datos[:, k]) for k in range(2)]
