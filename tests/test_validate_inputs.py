@@ -204,6 +204,11 @@ def test_std_limits():
     assert lo < 1e-5 and 4.5 < hi < 5.5
 
 
+def _readings(tita: np.ndarray) -> np.ndarray:
+    """Noiseless readings of a calibrated sensor at θ (a plausible run, not a dead sensor)."""
+    return np.column_stack([-9.8 * np.sin(tita), -9.8 * np.cos(tita)])
+
+
 def test_ensayo_of_another_run_is_refused(capsys, tmp_path, run):
     truth, est, _ = run
     _, _, other_n = _run_files(tmp_path, n=2 * N + 1, name="other-n")
@@ -212,15 +217,15 @@ def test_ensayo_of_another_run_is_refused(capsys, tmp_path, run):
     # the same N, another θ range
     d = tmp_path / "arc"
     d.mkdir()
-    scipy.io.savemat(d / "ensayo.mat", {"tita": np.linspace(0, 3, N)[:, None],
-                                        "datos": np.zeros((N, 2))})
+    arc = np.linspace(0, 3, N)
+    scipy.io.savemat(d / "ensayo.mat", {"tita": arc[:, None], "datos": _readings(arc)})
     msg = _error(capsys, "--truth", truth, "--estimates", est, "--ensayo", d / "ensayo.mat")
     assert "θ max" in msg and "theta_summary.max" in msg
     # the same N and range, other angles (no summary in the truth: the design decides)
     _with(truth, lambda t: t.pop("theta_summary"))
     tita = np.linspace(0.0, 2 * np.pi, N)
     tita[1:-1] += 1e-3
-    scipy.io.savemat(d / "ensayo.mat", {"tita": tita[:, None], "datos": np.zeros((N, 2))})
+    scipy.io.savemat(d / "ensayo.mat", {"tita": tita[:, None], "datos": _readings(tita)})
     assert "θ design" in _error(capsys, "--truth", truth, "--estimates", est, "--ensayo",
                                 d / "ensayo.mat")
 
