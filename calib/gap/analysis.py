@@ -12,7 +12,7 @@ from calib.diagnostics import GapMeasure, Lattice, detect_lattice, gap_measure
 from calib.effects import Extensions, ModelState, RunData, effect
 from calib.effects.catalog import REFINED
 from calib.gap.adequacy import ADEQUACY_ALPHA, Battery, run_battery
-from calib.gap.confusions import _confusions, prefer_less_assuming
+from calib.gap.confusions import _confusions, merge_tilt, prefer_less_assuming
 from calib.gap.estimates import _Reporter
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
 from calib.gap.selection import _try, candidate_list, initial_state, select
@@ -73,6 +73,7 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     sel = select(ext, initial_state(run, lattice), candidates, family_alpha)
     steps = list(sel.steps)
     state = prefer_less_assuming(ext, sel.state, stated, sel.candidates, steps)
+    state = merge_tilt(ext, state, stated, sel.candidates, steps)
 
     rep = _Reporter(ext, state, lattice)
     effects = _named_effects(ext, rep, state, lattice)

@@ -65,6 +65,33 @@ def prefer_less_assuming(ext: Extensions, state: ModelState, stated: np.ndarray,
     return state
 
 
+def merge_tilt(ext: Extensions, state: ModelState, stated: np.ndarray,
+               candidates: list[tuple[str, str]], steps: list[dict]) -> ModelState:
+    """A tilt offset δ_t with a misalignment δ_a of one axis is the same rotation as a
+    misalignment δ_t of the other axis when δ_a ≈ -δ_t: one parameter instead of two. When
+    that simpler model fits within the ambiguity margin (AIC-penalised), it is named."""
+    if not state.tilt:
+        return state
+    mis = [a for a in AXES if state.has("misalignment", a)]
+    if len(mis) != 1:
+        return state
+    other = AXES[1 - AXES.index(mis[0])]
+    if ("misalignment", other) not in candidates:
+        return state
+    base = _drop(_drop(state, "tilt_offset", "both", stated), "misalignment", mis[0], stated)
+    t = _try(ext, base, "misalignment", other)
+    if t is None:
+        return state
+    delta = ext.nll(t.state) - 2.0 - ext.nll(state)  # one parameter fewer: AIC -2
+    if delta < AMBIGUITY_LR:
+        steps.append({"tie": ["tilt_offset + misalignment", mis[0]],
+                      "named_instead": ["misalignment", other], "delta_m2logL": float(delta),
+                      "rule": "one rotation of one sensor rather than a tilt offset and the "
+                              "opposite rotation of the other"})
+        return ext.refine(t.state)
+    return state
+
+
 def _confusions(ext: Extensions, state: ModelState, stated: np.ndarray,
                 candidates: list[tuple[str, str]], untestable: dict) -> list[dict]:
     """``not_identifiable`` entries (see the module docstring).
