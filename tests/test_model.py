@@ -109,7 +109,7 @@ def test_wheel_carries_the_models(tmp_path):
     src.mkdir()
     for name in ("pyproject.toml", "README.md", "LICENSE"):
         shutil.copy(root / name, src / name)
-    for name in ("bench", "calib", "models", "validation"):  # every listed package
+    for name in ("bench", "calib", "models", "validation", "data", "docs"):  # every package dir
         shutil.copytree(root / name, src / name, ignore=shutil.ignore_patterns("__pycache__"))
     subprocess.run(
         [sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(tmp_path), str(src)],

@@ -29,6 +29,7 @@ from bench import __version__  # noqa: E402
 from bench.cli import (  # noqa: E402
     calibrate,
     demo,
+    examples,
     gap,
     generate,
     nmin,
@@ -38,7 +39,7 @@ from bench.cli import (  # noqa: E402
 )
 from bench.cli.options import Parser, resolve_deferred  # noqa: E402
 
-COMMANDS = (generate, calibrate, trajectory, nmin, record, validate, gap, demo)
+COMMANDS = (generate, calibrate, trajectory, nmin, record, validate, gap, demo, examples)
 """Command modules, in the order of the help."""
 
 
