@@ -125,3 +125,28 @@ def test_docs_pages_named_by_help_and_readme_are_shipped():
     named = {m for t in texts for m in re.findall(r"docs/[\w.-]+\.md", " ".join(t.split()))}
     assert named
     assert named <= set(shipped_files()), sorted(named - set(shipped_files()))
+
+
+def test_missing_recording_extra_is_one_line(monkeypatch, capsys, tmp_path):
+    """Without the ``rrd`` extra a command that records says which extra to install."""
+    import bench.cli as cli
+
+    def no_rerun(args):
+        raise ModuleNotFoundError("No module named 'rerun'", name="rerun")
+
+    parser_main = cli.main
+    monkeypatch.setattr(cli, "build_parser", _parser_with_handler(cli.build_parser, no_rerun))
+    rc = parser_main(["examples", str(tmp_path / "ex")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and 'pip install "tiltbench[rrd]"' in err[0]
+
+
+def _parser_with_handler(build, handler):
+    def patched():
+        parser = build()
+        parser.set_defaults(handler=handler)
+        for action in parser._subparsers._group_actions:
+            for sub in action.choices.values():
+                sub.set_defaults(handler=handler)
+        return parser
+    return patched

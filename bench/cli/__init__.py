@@ -89,6 +89,12 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # FileExistsError, FileNotFoundError, IsADirectoryError, …
         print(f"tiltbench {args.command}: error: {_os_error_message(exc)}", file=sys.stderr)
         return 2
+    except ModuleNotFoundError as exc:  # an optional extra that is not installed
+        if not (exc.name or "").startswith("rerun"):
+            raise
+        print(f"tiltbench {args.command}: error: recordings need rerun-sdk, an optional "
+              "extra: pip install \"tiltbench[rrd]\"", file=sys.stderr)
+        return 2
     except ValueError as exc:  # calib.io.DataError, bench.cli.options.OptionError, …
         print(f"tiltbench {args.command}: error: {exc}", file=sys.stderr)
         return 2
