@@ -66,8 +66,8 @@ from calib.region import (
     noise_cov_matrix,
 )
 from calib.results import ResultMixin
-from calib.units import with_units
 from calib.trajectory import Integrator, compute_trajectory, correct_and_integrate
+from calib.units import with_units
 
 N_MAX = 10**12
 """Largest N searched; a crossing beyond it is reported as 'never' (None)."""
