@@ -251,7 +251,7 @@ class GapAnalysis:
         for a in AXES:
             m = self.gap_before[a]
             out.append(f"  {a}: χ²/dof = {m.chi2_dof:.4f}, max signature z = "
-                       f"{m.max_signature_z:.2f} ({m.worst}, p = {m.max_signature_p:.3g})")
+                       f"{m.max_signature_z:.2f} ({m.worst}, {format_p(m.max_signature_p)})")
         if self.effects:
             out.append("named effects" + (" (tentative)" if self.verdict == "unexplained"
                                           else "") + ":")
@@ -261,7 +261,7 @@ class GapAnalysis:
         if self.unexplained:
             out.append("unexplained structure remains:")
             for u in self.unexplained:
-                p = "" if u.get("p_value") is None else f", p = {u['p_value']:.3g}"
+                p = "" if u.get("p_value") is None else f", {format_p(u['p_value'])}"
                 out.append(f"  {u['description']} [{u['signature']}, statistic "
                            f"{u['statistic']:.4g}{p}]")
         for d in self.not_identifiable:
@@ -272,6 +272,6 @@ class GapAnalysis:
         for a in AXES:
             m = self.gap_after_fit[a]
             out.append(f"  {a}: χ²/dof = {m.chi2_dof:.4f}, max signature z = "
-                       f"{m.max_signature_z:.2f} ({m.worst}, p = {m.max_signature_p:.3g})")
+                       f"{m.max_signature_z:.2f} ({m.worst}, {format_p(m.max_signature_p)})")
         return "\n".join(out)
 
