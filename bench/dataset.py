@@ -74,12 +74,60 @@ def write_json(path: str | Path, obj: dict, force: bool = False) -> Path:
     return atomic_write_text(path, dumps(obj), force=force)
 
 
+def _run_units() -> dict[str, str]:
+    """Units of one run's truth object (calibration or vehicle: the keys they have)."""
+    from calib.units import effect_units
+
+    out = {f"sensor.*.terms.{k}": u for k, u in effect_units().items()}
+    out.update({
+        "g": "m/s²", "n": "count", "n_samples": "count", "seed": "—",
+        "sensor.*.bias": "m/s²", "sensor.*.scale": "1", "sensor.*.noise_var": "(m/s²)²",
+        "table.g": "m/s²", "table.misalignment": "rad", "table.tilt_offset": "rad",
+        "table.lever_arm": "m", "table.cutoff": "m/s²",
+        "theta_design.start": "rad", "theta_design.stop": "rad",
+        "theta_design.count": "count", "theta_design.per_position": "count",
+        "theta_design.positions": "count",
+        "theta_summary.min": "rad", "theta_summary.max": "rad",
+        "theta_summary.distinct": "count",
+        "sweep.start": "rad", "sweep.stop": "rad", "sweep.duration": "s", "sweep.rate": "Hz",
+        "sweep.cycles": "1",
+        "duration": "s", "rate": "Hz", "p0": "m", "v0": "m/s",
+        "raw_final_position": "m", "profile.accel": "m/s²", "profile.duration": "s",
+        "trajectory.final_position": "m", "trajectory.final_velocity": "m/s",
+        "trajectory.mass": "kg", "trajectory.t_final": "s", "trajectory.samples.t": "s",
+        "trajectory.samples.pos": "m", "trajectory.samples.vel": "m/s",
+    })
+    return out
+
+
+def truth_units() -> dict[str, str]:
+    """The ``units`` of every ``truth.json`` (calibration, vehicle and course sets; a course
+    set nests a calibration and a vehicle truth under ``calibration`` / ``vehicle``), the one
+    home of truth units (docs/units.md)."""
+    from calib.units import nest
+
+    run = _run_units()
+    out = dict(run)
+    out.update(nest("calibration", run))
+    out.update(nest("vehicle", run))
+    out.update({
+        "candidates.*": "m", "true_final_position": "m",
+        "course.g": "m/s²", "course.accel_limits": "m/s²", "course.bias_limit": "m/s²",
+        "course.scale_limit": "1", "course.noise_var": "(m/s²)²", "course.min_separation": "m",
+        "course.raw_jitter": "m", "course.n_segments": "count",
+    })
+    return out
+
+
 def write_truth(path: str | Path, truth: dict, seed: int, force: bool = False) -> Path:
-    """Write ``truth.json``: the given parameters plus the seed and the package versions."""
+    """Write ``truth.json``: the given parameters plus the seed, the package versions and the
+    units of its numbers (:func:`truth_units`)."""
+    from calib.units import with_units
+
     manifest = dict(truth)
     manifest["seed"] = int(seed)
     manifest["versions"] = versions()
-    return write_json(path, manifest, force=force)
+    return write_json(path, with_units(manifest, truth_units()), force=force)
 
 
 def datos_text(p0, v0, noise_var) -> str:

@@ -11,6 +11,7 @@ from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G
 from calib.io import Ensayo
 from calib.ls import FitResult, NotIdentifiableError, chi2_from_dof, fit_axis, fit_joint
 from calib.results import ResultMixin
+from calib.units import with_units
 
 Method = Literal["ols", "wls"]
 
@@ -40,6 +41,12 @@ class Calibration(ResultMixin):
     _UNITS = ("bias m/s² (positive: the reading is shifted up); scale dimensionless "
               "(positive: the sensor reads too much); std and confidence limits in the units of "
               "their parameter; σ² (m/s²)²; g m/s²; N samples")
+
+    _JSON_UNITS = {  # the units of to_dict(), one home (docs/units.md)
+        "g": "m/s²", "axes.*.bias": "m/s²", "axes.*.bias_std": "m/s²", "axes.*.scale": "1",
+        "axes.*.scale_std": "1", "axes.*.cov": "[(m/s²)², m/s², m/s², 1]",
+        "axes.*.sigma2": "(m/s²)²", "axes.*.chi2_dof": "1", "axes.*.n": "count",
+    }
 
     method: Method
     g: float
@@ -82,7 +89,7 @@ class Calibration(ResultMixin):
                 "cov": f.cov.tolist(), "sigma2": f.sigma2.item(),
                 "sigma2_source": f.sigma2_source, "chi2_dof": f.chi2_dof, "n": self.n,
             }
-        return {"method": self.method, "g": self.g, "axes": axes}
+        return with_units({"method": self.method, "g": self.g, "axes": axes}, self._JSON_UNITS)
 
     def to_state(self) -> dict:
         """:meth:`to_dict` plus the full per-axis fits and the joint fit (exact rebuild)."""
@@ -138,8 +145,26 @@ class Calibration(ResultMixin):
         out = [f"Calibration: {title[self.method]}, g = {self.g} m/s², N = {self.n}"]
         for a in AXES:
             out.append(f"-- axis {a}")
-            out.append(self.fits[a].summary(level))
+            out += _axis_table(self.fits[a], level)
         return "\n".join(out)
+
+
+_ROW_UNITS = {"bias": "m/s²", "scale": "1"}  # scale is dimensionless (1 + scale = gain)
+
+
+def _axis_table(fit: FitResult, level: float) -> list[str]:
+    """One axis: estimate, std and the ``level`` interval per parameter, each row with its
+    unit; then σ² in (m/s²)², χ²/dof, dof and the condition number."""
+    lo, hi = fit.conf_int(level).T
+    pct = f"{100 * level:g}%"
+    rows = [f"{'param':<8}{'unit':<6}{'estimate':>14}{'std':>13}{'[' + pct:>14}{pct + ']':>13}"]
+    for i, name in enumerate(fit.param_names):
+        rows.append(f"{name:<8}{_ROW_UNITS.get(name, ''):<6}{fit.params[i]:>14.6g}"
+                    f"{fit.std[i]:>13.4g}{lo[i]:>14.6g}{hi[i]:>13.6g}")
+    s2 = fit.sigma2.item()
+    rows.append(f"σ² = {s2:.4g} (m/s²)² ({fit.sigma2_source}); χ²/dof = {fit.chi2_dof:.4f}; "
+                f"dof = {fit.dof}; cond = {fit.cond:.3g}")
+    return rows
 
 
 def calibrate(

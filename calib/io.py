@@ -118,7 +118,43 @@ class _Mat:
         return name in self.variables
 
 
-def _loadmat(path: Path) -> _Mat:
+def _file_kind(path: Path) -> str | None:
+    """What a file that scipy cannot read as .mat is, in words (None: nothing recognisable):
+    an empty file, a text file (the course ``datos.txt``, a JSON file) or another format."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(4096)
+    except OSError:
+        return None
+    if not head:
+        return "is an empty file"
+    if head.startswith(b"MATLAB"):
+        return None  # a .mat header: a damaged or truncated MATLAB file
+    if head.startswith(b"\x89HDF"):
+        return "is an HDF5 file"
+    if head.startswith(b"PK\x03\x04"):
+        return "is a zip archive (a .npz or an office document?)"
+    if head.startswith(b"\x93NUMPY"):
+        return "is a NumPy .npy file"
+    if head.startswith(b"RRF") or path.suffix == ".rrd":
+        return "is a rerun recording"
+    if b"\x00" in head and not head.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return None
+    from calib.datos_txt import decode
+
+    try:
+        text = decode(head, str(path))
+    except Exception:  # not text in any encoding the course files use
+        return None
+    folded = text.lower()
+    if text.lstrip().startswith(("{", "[")):
+        return "is a JSON text file (truth.json, cal.json or a --json output?)"
+    if "inicial" in folded or "varianza" in folded:
+        return "is a text file (it looks like the course datos.txt)"
+    return "is a text file"
+
+
+def _loadmat(path: Path, expected: str = "a MATLAB .mat file") -> _Mat:
     import scipy.io
 
     path = Path(path)
@@ -134,7 +170,12 @@ def _loadmat(path: Path) -> _Mat:
         raise DataError(f"{path}: a MATLAB v7.3 (HDF5) file, which cannot be read here; save "
                         f"it with save(..., '-v7') ({exc})") from exc
     except Exception as exc:  # scipy raises several types for a bad file
-        raise DataError(f"{path}: not a readable MATLAB .mat file ({exc})") from exc
+        kind = _file_kind(path)
+        if kind is not None:  # say what the file is, not scipy's parser error
+            raise DataError(f"{path}: {kind}, not a MATLAB .mat file; this input expects "
+                            f"{expected}") from exc
+        raise DataError(f"{path}: not a readable MATLAB .mat file (damaged or truncated? "
+                        f"scipy says: {exc})") from exc
     return _Mat(path, variables, classes)
 
 
@@ -313,7 +354,7 @@ def read_ensayo(path: str | os.PathLike) -> Ensayo:
     (20001, (20001, 2))
     """
     path = Path(path)
-    mat = _loadmat(path)
+    mat = _loadmat(path, "the ensayo .mat file (tita N×1 rad, datos N×2 m/s²)")
     _require(mat, ("tita", "datos"))
     tita, datos = _get(mat, path, "tita"), _get(mat, path, "datos")
     t = _get(mat, path, "t") if "t" in mat else None
@@ -342,7 +383,7 @@ def read_acel(path: str | os.PathLike) -> Acel:
     ((6000,), (6000, 2))
     """
     path = Path(path)
-    mat = _loadmat(path)
+    mat = _loadmat(path, "the acel .mat file (t M×1 s, Aerr M×2 m/s²)")
     where = str(path)
     _require(mat, ("t", "Aerr"))
     t = _column(_get(mat, path, "t"), where, "t")
@@ -394,7 +435,7 @@ def read_puntos(path: str | os.PathLike,
     names = tuple(names)
     if len(names) < 2:
         raise ValueError(f"read_puntos needs at least two candidate names, got {names}")
-    mat = _loadmat(path)
+    mat = _loadmat(path, "the puntos .mat file (A, B, C, D, 1×2 m each)")
     missing = [k for k in names if k not in mat]
     if missing:
         found = ", ".join(mat.names) or "no variables"

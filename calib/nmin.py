@@ -67,6 +67,7 @@ from calib.region import (
 )
 from calib.results import ResultMixin
 from calib.trajectory import Integrator, compute_trajectory, correct_and_integrate
+from calib.units import with_units
 
 N_MAX = 10**12
 """Largest N searched; a crossing beyond it is reported as 'never' (None)."""
@@ -425,8 +426,26 @@ class NminResult(ResultMixin):
     notes: tuple = field(default_factory=tuple)
     area_comparison: dict = field(default_factory=dict)
 
+    _JSON_UNITS = {  # the units of to_dict(), one home (docs/units.md)
+        "level": "1", "n_data": "count", "estimate": "m",
+        **{f"{k}.{leaf}": u for k in ("design", "design_calibration_only")
+           for leaf, u in (("level", "1"), ("n", "count"), ("required_separation", "1"),
+                           ("limiting_separation", "1"), ("*", "1"))},
+        **{f"{k}.{leaf}": "count" for k in ("posterior", "posterior_calibration_only",
+                                            "posterior_course_box")
+           for leaf in ("n_min", "n_max", "crossings.*", "*")},
+        "subsample.step": "count", "subsample.n": "count", "subsample.estimate": "m",
+        "subsample.std": "m", "subsample.semi_axes": "m", "subsample.course_box": "m",
+        "subsample.mahalanobis.*": "1",
+        "monte_carlo.n": "count", "monte_carlo.level": "1", "monte_carlo.right_rate": "1",
+        "monte_carlo.coverage": "1", "monte_carlo.*": "count",
+        "area_comparison.ellipse_area": "m²", "area_comparison.calibration_only_area": "m²",
+        "area_comparison.course_box_area": "m²", "area_comparison.course_ellipse_area": "m²",
+        "area_comparison.*": "1",
+    }
+
     def to_dict(self) -> dict:
-        return {
+        return with_units({
             "level": self.level, "n_data": self.n_data,
             "estimate": np.asarray(self.estimate).tolist(), "decision": self.decision,
             "design": self.design, "design_calibration_only": self.design_calibration_only,
@@ -436,7 +455,7 @@ class NminResult(ResultMixin):
             "subsample": [r.to_dict() for r in self.subsample],
             "monte_carlo": [r.to_dict() for r in self.monte_carlo],
             "notes": list(self.notes), "area_comparison": self.area_comparison,
-        }
+        }, self._JSON_UNITS)
 
     @classmethod
     def from_dict(cls, d: dict) -> NminResult:

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from calib.units import nest, with_units
+
 if TYPE_CHECKING:
     from calib.calibration import Calibration
     from calib.region import ArrivalRegion
@@ -15,6 +17,24 @@ if TYPE_CHECKING:
 
 ELLIPSE_KEYS = ("level", "semi_axes", "angle_rad", "area", "center")
 """Keys of the arrival ellipse kept in the report."""
+
+TRAJECTORY_UNITS: dict[str, str] = {
+    "duration": "s", "n_samples": "count", "level": "1", "p0": "m", "v0": "m/s",
+    "bias": "m/s²", "scale": "1", "std": "m", "noise_var": "(m/s²)²",
+    "final_raw": "m", "final_corrected": "m",
+    "final_velocity_raw": "m/s", "final_velocity_corrected": "m/s",
+    "cov": "m²", "cov_calibration": "m²", "cov_noise": "m²",
+    "jacobian": "[s², m, s², m] (∂position m / ∂[bias_x m/s², scale_x, bias_y m/s², scale_y])",
+    "candidates.*.pos": "m", "candidates.*.mahalanobis": "1", "candidates.*.likelihood": "1",
+    "course_box_k": "1", "course_box_a_max": "m/s²", "course_box_bound": "m",
+    "ellipse.level": "1", "ellipse.semi_axes": "m", "ellipse.angle_rad": "rad",
+    "ellipse.area": "m²", "ellipse.center": "m",
+    "area_comparison.ellipse_area": "m²", "area_comparison.calibration_only_area": "m²",
+    "area_comparison.course_box_area": "m²", "area_comparison.course_ellipse_area": "m²",
+    "area_comparison.*": "1",
+}
+"""Units of :func:`trajectory_tree` (``trajectory --json``, ``trajectory.json``); the
+calibration under ``"calibration"`` has :attr:`calib.calibration.Calibration._JSON_UNITS`."""
 
 
 def trajectory_tree(traj: Trajectory, region: ArrivalRegion, cal: Calibration | None = None,
@@ -41,4 +61,15 @@ def trajectory_tree(traj: Trajectory, region: ArrivalRegion, cal: Calibration | 
     if cal is not None:
         out["calibration"] = cal.to_dict()
     out["ellipse"] = {k: region.ellipse.to_dict()[k] for k in ELLIPSE_KEYS}
-    return out
+    return with_units(out, tree_units(out))
+
+
+def tree_units(tree: dict) -> dict[str, str]:
+    """The ``units`` of a trajectory object: :data:`TRAJECTORY_UNITS` plus, when the object
+    holds one, the calibration's (under ``calibration.``)."""
+    from calib.calibration import Calibration
+
+    units = dict(TRAJECTORY_UNITS)
+    if "calibration" in tree:
+        units.update(nest("calibration", Calibration._JSON_UNITS))
+    return units

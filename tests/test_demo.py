@@ -34,7 +34,8 @@ def listed_files(stdout: str, cwd: Path) -> list[Path]:
 
 
 def printed_estimates(stdout: str) -> dict[str, float]:
-    rows = re.findall(r"^\s+(bias|scale)_([xy])\s+(\S+)\s+(\S+)\s+(\S+)", stdout, re.M)
+    rows = re.findall(r"^\s+(bias|scale)_([xy])\s+(?:m/s²|1)\s+(\S+)\s+(\S+)\s+(\S+)", stdout,
+                      re.M)
     return {f"{p}_{a}": float(est) for p, a, _true, est, _std in rows}
 
 
@@ -84,7 +85,7 @@ def test_demo_library_truth_beside_estimates(tmp_path):
     assert res.recovered is True
     assert res.truth is not None and res.validation is not None
     assert f"true arrival point: {res.truth['answer']}" in text
-    assert "Coverage:" in text and res.coverage["runs"] == 20
+    assert "Coverage at 95%:" in text and res.coverage["runs"] == 20
     for p in res.files.values():
         assert p.exists() and p.stat().st_size > 0
 
@@ -113,6 +114,11 @@ def test_demo_json_is_one_object_and_steps_count_right(tmp_path, course_dir, cap
     obj = json.loads(cap.out)  # one JSON object, nothing else on stdout
     assert obj["passed"] is True and obj["recovered"] is True and obj["answer"] is None
     assert obj["estimates"] == json.loads((out / "estimates.json").read_text())
+    from calib.units import missing_units
+
+    assert missing_units(obj) == []  # every number of the object has a unit (docs/units.md)
+    for name in ("estimates.json", "trajectory.json"):
+        assert missing_units(json.loads((out / name).read_text())) == [], name
     assert all(Path(p).exists() for p in obj["files"].values())
     # no truth.json, no generation: calibrate, figures, recording, report
     done = re.findall(r"\[(\d+)/(\d+)\] [^\n]*: done \(", cap.err)

@@ -28,16 +28,37 @@ def _coverage_runs() -> int:
     return COVERAGE_RUNS
 
 
+def _demo_units() -> dict[str, str]:
+    """The ``units`` of the ``demo --json`` object (docs/units.md): the estimates' (a
+    calibration), the validation's (bias m/s², scale 1, test statistics 1), the coverage's."""
+    from calib.calibration import Calibration
+    from calib.units import nest
+
+    units = nest("estimates", Calibration._JSON_UNITS)
+    for name in ("bias_x", "scale_x", "bias_y", "scale_y"):
+        u = "m/s²" if name.startswith("bias") else "1"
+        units.update({f"validation.parameters.{name}.{k}": u
+                      for k in ("estimate", "truth", "std")})
+    units.update({"validation.parameters.*.z": "1", "validation.std_check.*": "1",
+                  "validation.std_check.ratio.*": "1", "validation.*": "1",
+                  "coverage.runs": "count", "coverage.n": "count", "coverage.seed": "—",
+                  "coverage.pass_rate_each.*": "1", "coverage.*": "1", "elapsed_s": "s"})
+    return units
+
+
 def _result_json(res, ok: bool) -> dict:
-    """The ``--json`` object: what was written and the numbers of the summary."""
+    """The ``--json`` object: what was written and the numbers of the summary, and
+    ``units`` (:func:`_demo_units`)."""
+    from calib.units import with_units
+
     r = res.analysis.region
-    return {"out": str(res.out), "source": res.source, "passed": ok,
+    return with_units({"out": str(res.out), "source": res.source, "passed": ok,
             "files": {k: str(p) for k, p in sorted(res.files.items())},
             "estimates": res.analysis.cal.to_dict(),
             "decision": r.decision, "answer": (res.truth or {}).get("answer"),
             "validation": None if res.validation is None else res.validation.to_dict(),
             "coverage": res.coverage, "recovered": res.recovered,
-            "elapsed_s": res.elapsed}
+            "elapsed_s": res.elapsed}, _demo_units())
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:

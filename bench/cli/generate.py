@@ -224,7 +224,8 @@ def _cmd_calibration(args: argparse.Namespace) -> int:
         paths["rrd"] = str(record_calibration_truth(run, args.rrd, force=args.force))
     print_summary(args, f"generate calibration: {run.tita.shape[0]} samples ({run.config.mode}), "
                   f"seed {args.seed}",
-                  {"n": int(run.tita.shape[0]), "mode": run.config.mode, "files": paths})
+                  {"n": int(run.tita.shape[0]), "mode": run.config.mode, "files": paths},
+                  {"n": "count"})
     return 0
 
 
@@ -244,7 +245,8 @@ def _cmd_vehicle(args: argparse.Namespace) -> int:
         paths["rrd"] = str(record_vehicle_truth(run, args.rrd, force=args.force))
     print_summary(args, f"generate vehicle: {run.t.shape[0]} samples, seed {args.seed}",
                   {"n": int(run.t.shape[0]), "files": paths,
-                   "final_position": run.truth.final_position.tolist()})
+                   "final_position": run.truth.final_position.tolist()},
+                  {"n": "count", "final_position": "m"})
     return 0
 
 
@@ -270,7 +272,8 @@ def _cmd_course(args: argparse.Namespace) -> int:
     print_summary(args, f"generate course: a course set, seed {args.seed} (the answer is in "
                   "truth.json only)",
                   {"files": paths, "n_calibration": int(course.calibration.tita.shape[0]),
-                   "n_vehicle": int(course.vehicle.t.shape[0])})
+                   "n_vehicle": int(course.vehicle.t.shape[0])},
+                  {"n_calibration": "count", "n_vehicle": "count"})
     return 0
 
 
@@ -301,9 +304,9 @@ def _cmd_class(args: argparse.Namespace) -> int:
                "note": "keep answer_key.* private; hand out the student folders"}
     title = f"generate class: {len(res.folders)} course sets, seed {args.seed}"
     if args.json:  # the JSON object is unchanged; the readable output lists every file
-        print_summary(args, title, summary)
+        print_summary(args, title, summary, {"count": "count"})
     else:
-        print_summary(args, title, {**summary, "files": files})
+        print_summary(args, title, {**summary, "files": files}, {"count": "count"})
     return 0
 
 

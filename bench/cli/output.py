@@ -77,21 +77,32 @@ def print_json(obj: Any) -> None:
     print(json_text(obj), end="")
 
 
-def print_summary(args: argparse.Namespace, title: str, summary: dict) -> None:
-    """What a generate command wrote: one JSON object with ``--json``, else readable lines
-    (the title, scalar entries as ``key: value``, nested mappings one entry per line)."""
+def print_summary(args: argparse.Namespace, title: str, summary: dict,
+                  units: dict[str, str] | None = None) -> None:
+    """What a generate command wrote: one JSON object with ``--json`` (with ``units``, the
+    unit of each numeric key: docs/units.md), else readable lines (the title, scalar entries
+    as ``key: value unit``, nested mappings one entry per line)."""
+    from calib.units import unit_of, with_units
+
+    units = dict(units or {})
     if args.json:
-        print_json(summary)
+        print_json(with_units(summary, units))
         return
     lines = [title]
     for key, value in summary.items():
         if isinstance(value, dict):
             lines.append(f"{key}:")
             width = max(map(len, value), default=0)
-            lines += [f"  {k:<{width}}  {v}" for k, v in value.items()]
+            lines += [f"  {k:<{width}}  {v} {_shown_unit(unit_of(units, f'{key}.{k}'))}".rstrip()
+                      for k, v in value.items()]
         else:
-            lines.append(f"{key}: {value}")
+            lines.append(f"{key}: {value} {_shown_unit(unit_of(units, key))}".rstrip())
     print("\n".join(lines))
+
+
+def _shown_unit(unit: str | None) -> str:
+    """A unit as printed after a number: none for counts, dimensionless and non-quantities."""
+    return "" if unit in (None, "1", "count", "—") else unit
 
 
 def print_files(paths: Iterable[str | Path | None]) -> None:

@@ -18,6 +18,8 @@ from bench.gap.replay import TRACKING_LIMIT, Replay
 from bench.model import TableEdits
 from bench.sensors import SensorErrorModel
 from calib.conventions import AXES
+from calib.gap.results import gap_units
+from calib.units import effect_units, format_estimate, format_p, nest, with_units
 
 if TYPE_CHECKING:  # pragma: no cover
     from calib.gap import GapAnalysis
@@ -284,7 +286,7 @@ class GapReport:
                 d["used_in_model"] = dict(self.effects[i].params)
             effects.append(d)
         before, after = self._gap_dicts()
-        return {
+        return with_units({
             "verdict": self.verdict,
             "unexplained": self.unexplained,
             "adequacy": self.adequacy,
@@ -314,9 +316,9 @@ class GapReport:
             },
             "analysis": {k: v for k, v in a.items()
                          if k not in ("effects", "not_identifiable", "verdict", "unexplained",
-                                      "adequacy")},
+                                      "adequacy", "units")},
             "files": dict(self.files),
-        }
+        }, report_units())
 
     def summary(self) -> str:
         """A readable report (what ``tiltbench gap`` prints without ``--json``): the verdict
@@ -328,16 +330,18 @@ class GapReport:
                 f"replay: {self.replay.mode} ({self.replay.reason}); timing: {self.timing}"]
         if self.replay.mode == "sweep":
             out.append(f"  replay tracks the measured encoder to {self.tracking_error:.2g} rad")
+        units = effect_units()
         out.append("effects named:" if d["effects"] else "effects named: none")
         for e in d["effects"]:
-            params = ", ".join(f"{k} = {v:.6g} ± {e['std'].get(k, float('nan')):.2g}"
-                               for k, v in e["params"].items())
+            params = ", ".join(
+                f"{k} = " + format_estimate(v, e["std"].get(k, float("nan")), units.get(k, ""))
+                for k, v in e["params"].items())
             out.append(f"  {effect_name(e)}: {params}; statistic {e['statistic']:.4g}, "
-                       f"p = {e['p_value']:.3g}"
+                       f"{format_p(e['p_value'])}"
                        + ("" if e["timing"] == "no" else f" [timing: {e['timing']}]"))
             if "params" in e.get("sysid", {}):
                 s = e["sysid"]
-                sp = ", ".join(f"{k} = {v:.6g} ± {s['std'][k]:.2g}"
+                sp = ", ".join(f"{k} = " + format_estimate(v, s["std"][k], units.get(k, ""))
                                for k, v in s["params"].items())
                 out.append(f"      mujoco.sysid re-simulation: {sp}")
         for item in d["not_identifiable"]:
@@ -367,6 +371,39 @@ class GapReport:
         return "\n".join(out)
 
 
+def report_units() -> dict[str, str]:
+    """The ``units`` of :meth:`GapReport.to_dict` (``gap --json``, ``gap.json``): the
+    analysis's (:func:`calib.gap.results.gap_units`) plus the bench's keys (docs/units.md)."""
+    calib_units = gap_units()
+    eff = effect_units()
+    out = dict(calib_units)
+    out.update({f"effects.sysid.*.{k}": u for k, u in eff.items()})
+    out.update({f"model_after.sensor.*.{k}": u for k, u in eff.items()})
+    out.update({
+        "effects.sysid.bias.*": "m/s²", "effects.sysid.scale.*": "1",
+        "effects.sysid.cost_start": "1", "effects.sysid.cost_end": "1",
+        "effects.sysid.iterations": "count", "effects.sysid.n_residuals": "count",
+        "gap_before.*.details.dof": "count", "gap_after.*.details.dof": "count",
+        "gap_before.*.details.*": "1", "gap_after.*.details.*": "1",
+        "gap_before.*.details.signatures.*": "1", "gap_after.*.details.signatures.*": "1",
+        "gap_after.*.noise_var": "(m/s²)²", "gap_after.*.noise_var_model": "(m/s²)²",
+        "gap_after.*.chi2_dof_model": "1",
+        "shrink.*.readings_change.max_abs": "m/s²", "shrink.*.readings_change.*": "1",
+        "shrink.*.*": "1",
+        "family_alpha": "1", "g": "m/s²", "noise_var": "(m/s²)²",
+        "replay.tracking_error_rad": "rad", "replay.tracking_limit_rad": "rad",
+        "replay.holds": "count", "replay.jumps": "count",
+        "nominal.*.bias": "m/s²", "nominal.*.scale": "1",
+        "model_after.table.g": "m/s²", "model_after.table.misalignment": "rad",
+        "model_after.table.tilt_offset": "rad", "model_after.table.lever_arm": "m",
+        "model_after.table.cutoff": "m/s²",
+        "model_after.sensor.*.bias": "m/s²", "model_after.sensor.*.scale": "1",
+        "model_after.sensor.*.noise_var": "(m/s²)²",
+    })
+    out.update(nest("analysis", calib_units))
+    return out
+
+
 def shrink_word(sh: dict) -> str:
     """"shrank", "unchanged" (nothing named on the axis) or "did not shrink"."""
     return "shrank" if sh["shrunk"] else ("did not shrink" if sh["effects"] else "unchanged")
@@ -386,7 +423,7 @@ def signature_line(u: dict) -> str:
     if u.get("statistic") is not None:
         parts.append(f"statistic {float(u['statistic']):.4g}")
     if u.get("p_value") is not None:
-        parts.append(f"p = {float(u['p_value']):.3g}")
+        parts.append(format_p(u["p_value"]))
     details = ", ".join(p for p in parts if p)
     return (f"{u.get('axis', '?')}: {u.get('description', u.get('signature', '?'))}"
             + (f" [{details}]" if details else ""))

@@ -9,6 +9,7 @@ import numpy as np
 from calib.calibration import Calibration
 from calib.conventions import AXES, G
 from calib.effects import ModelState
+from calib.units import effect_units, format_estimate, format_p, with_units
 
 
 @dataclass(frozen=True)
@@ -50,12 +51,35 @@ class EffectEstimate:
         return out
 
     def __str__(self) -> str:
-        vals = ", ".join(f"{k} = {v:.6g} ± {self.std.get(k, float('nan')):.3g}"
+        """``misalignment (x): delta = 0.01952 ± 0.0012 rad; statistic = 265.3, p < 1e-300``
+        (units from :data:`calib.conventions.EFFECTS`; an underflowed p printed as a bound)."""
+        units = effect_units()
+        vals = ", ".join(f"{k} = " + format_estimate(v, self.std.get(k, float("nan")),
+                                                      units.get(k, ""))
                          for k, v in self.params.items())
-        ci = "".join(f"; 95% interval of {k}: [{lo:.6g}, {hi:.6g}]"
+        ci = "".join(f"; 95% interval of {k}: [{lo:.6g}, {hi:.6g}] {units.get(k, '')}".rstrip()
                      for k, (lo, hi) in self.interval.items())
         return (f"{self.name} ({self.axis}): {vals}{ci}; statistic = {self.statistic:.4g}, "
-                f"p = {self.p_value:.3g}")
+                f"{format_p(self.p_value)}")
+
+
+def gap_units() -> dict[str, str]:
+    """The ``units`` of :meth:`GapAnalysis.to_dict` (the bench's ``gap --json`` extends it):
+    effect parameters in their catalog units (:data:`calib.conventions.EFFECTS`, under
+    ``effects.params`` / ``std`` / ``interval``), statistics, z's, χ²/dof, α's and p-values
+    dimensionless, a signature's ``size`` in the unit its entry names (``"@unit"``)."""
+    out = {f"effects.*.{k}": u for k, u in effect_units().items()}
+    out.update({
+        "effects.statistic": "1", "effects.p_value": "1",
+        "gap_before.*.chi2_dof": "1", "gap_before.*.max_signature_z": "1",
+        "gap_after.*.chi2_dof": "1", "gap_after.*.max_signature_z": "1",
+        "criterion.n_tests": "count", "criterion.*": "1",
+        "unexplained.size": "@unit", "unexplained.statistic": "1", "unexplained.p_value": "1",
+        "adequacy.family_alpha": "1", "adequacy.alpha_check": "1",
+        "adequacy.checks.size": "@unit", "adequacy.checks.statistic": "1",
+        "adequacy.checks.p_value": "1",
+    })
+    return out
 
 
 @dataclass(frozen=True)
@@ -187,8 +211,9 @@ class GapAnalysis:
 
     def to_dict(self) -> dict:
         """The documented JSON object (``gap_after`` here is the fitted one; the bench
-        replaces it by the re-simulated gap), plus ``needs_timing`` and ``criterion``."""
-        return {
+        replaces it by the re-simulated gap), plus ``needs_timing`` and ``criterion``, and
+        ``units`` (:func:`gap_units`)."""
+        return with_units({
             "effects": [e.to_dict() for e in self.effects],
             "not_identifiable": [{"names": list(d["names"]), "reason": d["reason"]}
                                  for d in self.not_identifiable],
@@ -199,7 +224,7 @@ class GapAnalysis:
             "verdict": self.verdict,
             "unexplained": [dict(u) for u in self.unexplained],
             "adequacy": dict(self.adequacy),
-        }
+        }, gap_units())
 
     def verdict_line(self) -> str:
         """The verdict in one sentence (first line of every report)."""
@@ -226,7 +251,7 @@ class GapAnalysis:
         for a in AXES:
             m = self.gap_before[a]
             out.append(f"  {a}: χ²/dof = {m.chi2_dof:.4f}, max signature z = "
-                       f"{m.max_signature_z:.2f} ({m.worst}, p = {m.max_signature_p:.3g})")
+                       f"{m.max_signature_z:.2f} ({m.worst}, {format_p(m.max_signature_p)})")
         if self.effects:
             out.append("named effects" + (" (tentative)" if self.verdict == "unexplained"
                                           else "") + ":")
@@ -236,7 +261,7 @@ class GapAnalysis:
         if self.unexplained:
             out.append("unexplained structure remains:")
             for u in self.unexplained:
-                p = "" if u.get("p_value") is None else f", p = {u['p_value']:.3g}"
+                p = "" if u.get("p_value") is None else f", {format_p(u['p_value'])}"
                 out.append(f"  {u['description']} [{u['signature']}, statistic "
                            f"{u['statistic']:.4g}{p}]")
         for d in self.not_identifiable:
@@ -247,6 +272,6 @@ class GapAnalysis:
         for a in AXES:
             m = self.gap_after_fit[a]
             out.append(f"  {a}: χ²/dof = {m.chi2_dof:.4f}, max signature z = "
-                       f"{m.max_signature_z:.2f} ({m.worst}, p = {m.max_signature_p:.3g})")
+                       f"{m.max_signature_z:.2f} ({m.worst}, {format_p(m.max_signature_p)})")
         return "\n".join(out)
 
