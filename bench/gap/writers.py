@@ -13,6 +13,7 @@ from bench.gap.report import GapReport, shrink_word
 from bench.model import edit_tilt_table, load_spec
 from calib.atomic import atomic_dir, write_text
 from calib.conventions import AXES
+from calib.units import format_p
 
 PathLike = str | os.PathLike
 
@@ -83,7 +84,7 @@ def gap_markdown(report: GapReport) -> str:
                   else s.get("error", "—"))
             name = f"`{e['name']}`" + (" *(tentative)*" if e["tentative"] else "")
             lines.append(f"| {name} | {e['axis']} | {est} | {sy} | "
-                         f"{e['statistic']:.4g} | {e['p_value']:.3g} | {e['timing']} |")
+                         f"{e['statistic']:.4g} | {format_p(e['p_value']).removeprefix('p = ').removeprefix('p ')} | {e['timing']} |")
     if d["not_identifiable"]:
         lines += ["", "## Not identifiable", ""]
         lines += [f"- {', '.join(i['names'])}: {i['reason']}" for i in d["not_identifiable"]]
