@@ -83,8 +83,9 @@ def gap_markdown(report: GapReport) -> str:
                             for k, v in s["params"].items()) if "params" in s
                   else s.get("error", "—"))
             name = f"`{e['name']}`" + (" *(tentative)*" if e["tentative"] else "")
+            p = format_p(e["p_value"]).removeprefix("p = ").removeprefix("p ")
             lines.append(f"| {name} | {e['axis']} | {est} | {sy} | "
-                         f"{e['statistic']:.4g} | {format_p(e['p_value']).removeprefix('p = ').removeprefix('p ')} | {e['timing']} |")
+                         f"{e['statistic']:.4g} | {p} | {e['timing']} |")
     if d["not_identifiable"]:
         lines += ["", "## Not identifiable", ""]
         lines += [f"- {', '.join(i['names'])}: {i['reason']}" for i in d["not_identifiable"]]
