@@ -118,7 +118,7 @@ def _labels(path, entity: str) -> list[str]:
 def _assert_plane_has_scale(path, bp: dict) -> None:
     """The vehicle plane view shows its grid with values in m and the axis names."""
     plane = next(v for v in bp["views"] if v["origin"] == "vehicle" and v["class"] == "2D")
-    assert {"/vehicle/plane/grid", "/vehicle/plane/grid/labels"} <= _shown(plane, path)
+    assert {"vehicle/plane/grid", "vehicle/plane/grid/labels"} <= _shown(plane, path)
     labels = _labels(path, "/vehicle/plane/grid/labels")
     assert "x (m)" in labels and "y (m)" in labels
     assert sum(1 for t in labels if t.lstrip("-").replace(".", "").isdigit()) >= 4

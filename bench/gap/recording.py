@@ -48,7 +48,7 @@ def recording_blueprint(report: GapReport | None = None) -> Any:
     def view(ax: str, which: str) -> Any:
         name = f"{ax}: residual {which} (dots), ±σ (orange), binned mean (white) vs θ (rad); m/s²"
         if which == "after" and flagged.get(ax):
-            name = f"{ax}: residual after — UNEXPLAINED: {'; '.join(flagged[ax])}"
+            name = f"{ax}: residual after vs θ (rad) — UNEXPLAINED: {'; '.join(flagged[ax])}"
         return rrb.Spatial2DView(origin=f"gap/{ax}", name=name,
                                  contents=[f"+ gap/{ax}/plot_{which}/**"],
                                  visual_bounds=plot_bounds())
