@@ -34,11 +34,11 @@ PathLike = str | os.PathLike
 
 
 def recording_blueprint(report: GapReport | None = None) -> Any:
-    """Layout of the gap recording: per axis the residual before (top) and after (bottom)
-    adding the named effects, each with its ±σ band and binned mean over the whole θ range,
-    and the text view (verdict first, then the effects). An axis with unexplained structure
-    says so in the name of its "after" view. ``gap_report/**`` (the JSON tree) is left out of
-    every view."""
+    """Layout of the gap recording: per axis the residual before and after adding the named
+    effects, each a static 2-D plot against θ in rad (``gap/{axis}/plot_{before,after}``)
+    with its ±σ lines and binned mean, one per row, and the text view (verdict first, then
+    the effects). An axis with unexplained structure says so in the name of its "after"
+    view. ``gap_report/**`` (the JSON tree) is left out of every view."""
     import rerun.blueprint as rrb
 
     flagged = {} if report is None or report.verdict != "unexplained" else {
@@ -103,8 +103,9 @@ def write_recording(report: GapReport, path: PathLike, force: bool = False) -> P
     ``gap/{x,y}/mean_{before,after}`` (binned means), ``gap/effects`` (Markdown: the verdict
     with each unexplained signature, then the effects, gap and shrink) and the ``gap --json``
     object as a tree under ``gap_report`` (read back with ``tiltbench record read``), with a
-    blueprint (2 × 2 grid; an axis with unexplained structure names it in its "after"
-    view)."""
+    blueprint that shows the same residuals as static 2-D plots against θ in rad
+    (``gap/{x,y}/plot_{before,after}``: translucent samples, ±σ lines, binned mean on top;
+    an axis with unexplained structure names it in its "after" view)."""
     import rerun as rr
 
     theta = report.replay.tita
