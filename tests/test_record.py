@@ -103,6 +103,44 @@ def _assert_blueprint_shows_content(path) -> dict:
     return bp
 
 
+def _shown(view: dict, path) -> set[str]:
+    """Entities a blueprint view shows."""
+    idx = _entity_index(path)
+    return set().union(*(_query_matches(e, view["origin"], idx) for e in view["contents"]))
+
+
+def _labels(path, entity: str) -> list[str]:
+    chunk = next(c for c in RrdReader(str(path)).stream().to_chunks()
+                 if c.entity_path == entity)
+    return chunk.to_record_batch().column("Points2D:labels").to_pylist()[-1]
+
+
+def _assert_plane_has_scale(path, bp: dict) -> None:
+    """The vehicle plane view shows its grid with values in m and the axis names."""
+    plane = next(v for v in bp["views"] if v["origin"] == "vehicle" and v["class"] == "2D")
+    assert {"vehicle/plane/grid", "vehicle/plane/grid/labels"} <= _shown(plane, path)
+    labels = _labels(path, "/vehicle/plane/grid/labels")
+    assert "x (m)" in labels and "y (m)" in labels
+    assert sum(1 for t in labels if t.lstrip("-").replace(".", "").isdigit()) >= 4
+
+
+def _component(path, entity: str, name: str):
+    chunk = next(c for c in RrdReader(str(path)).stream().to_chunks()
+                 if c.entity_path == entity)
+    return chunk.to_record_batch().column(name).to_pylist()[-1][-1]
+
+
+def _assert_means_over_samples(path, plots: list[str]) -> None:
+    """In each static plot the raw samples are translucent (alpha < 255) and drawn under the
+    binned mean (a larger draw order)."""
+    for p in plots:
+        samples = next(f"{p}/{k}" for k in ("residual", "measured")
+                       if f"{p}/{k}" in recording_entities(path))
+        assert _component(path, samples, "Points2D:colors") & 0xFF < 255, samples
+        assert (_component(path, f"{p}/mean", "LineStrips2D:draw_order")
+                > _component(path, samples, "Points2D:draw_order")), p
+
+
 def _cli_json(capsys, argv: list[str]) -> dict:
     capsys.readouterr()
     assert main(argv) == 0
@@ -246,6 +284,12 @@ def test_course_data_blueprint_shows_every_view_on_open(course_data_rrd):
     assert len(cal) == 6 and all(v["class"] == "2D" for v in cal)
     assert {v["origin"] for v in bp["views"] if v["class"] == "TextDocument"} == {
         "summary/decision", "summary/parameters"}
+    _assert_plane_has_scale(path, bp)
+    _assert_means_over_samples(path, [f"/calibration/{a}/{k}" for a in "xy"
+                                      for k in ("residual_plot", "vs_ar")])
+    for a in "xy":  # the axes are named with their units (θ in rad)
+        assert "θ (rad)" in _labels(path, f"/calibration/{a}/theta_plot/axes/labels")
+        assert "A_r (m/s²)" in _labels(path, f"/calibration/{a}/vs_ar/axes/labels")
 
 
 def test_docs_table_is_generated_from_entity_docs():
@@ -343,6 +387,7 @@ def test_record_trajectory_vehicle_only(course_data_rrd, tmp_path):
     assert back["estimates"] == json.loads(json.dumps(ana.cal.to_dict()))
     _assert_documented(recording_entities(path), {"vehicle"})
     bp = _assert_blueprint_shows_content(path)
+    _assert_plane_has_scale(path, bp)
     assert not any(v["origin"].startswith("calibration") for v in bp["views"])
 
 
@@ -360,7 +405,14 @@ def test_gap_recording_entities_are_documented(tmp_path, capsys):
         if "gap" in d.kinds and not d.optional:
             assert any(d.regex().match(e.lstrip("/")) for e in ents), d.pattern
     bp = _assert_blueprint_shows_content(rrd)
-    assert sorted(v["class"] for v in bp["views"]) == ["TextDocument"] + ["TimeSeries"] * 4
+    # θ in rad: static 2-D plots with frame, tick values and axis names (not µrad indices)
+    assert sorted(v["class"] for v in bp["views"]) == ["2D"] * 4 + ["TextDocument"]
+    for v in bp["views"]:
+        if v["class"] == "2D":
+            assert "θ (rad)" in v["name"], v["name"]
+            assert any(e.endswith("/axes/labels") for e in _shown(v, rrd)), v["name"]
+    _assert_means_over_samples(rrd, [f"/gap/{a}/plot_{w}" for a in "xy"
+                                     for w in ("before", "after")])
     # the effects text has no image: gap.png is a path relative to the report directory
     chunk = next(c for c in RrdReader(str(rrd)).stream().to_chunks()
                  if c.entity_path == "/gap/effects")
@@ -385,4 +437,5 @@ def test_generate_vehicle_and_course_rrd_give_truth_json(tmp_path, capsys, kind)
     assert ("/vehicle/plane/candidates" in ents) == (kind == "course")
     _assert_documented(ents, {"truth-run"})
     bp = _assert_blueprint_shows_content(tmp_path / "t.rrd")
+    _assert_plane_has_scale(tmp_path / "t.rrd", bp)
     assert any(v["origin"].startswith("calibration") for v in bp["views"]) == (kind == "course")

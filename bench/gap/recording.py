@@ -20,10 +20,11 @@ from bench.gap.writers import gap_markdown
 from bench.record import (
     COLORS,
     THETA_TIMELINE,
-    full_time_axis,
+    StaticPlot,
     log_series,
     log_tree,
     open_recording,
+    plot_bounds,
     time_panel,
 )
 from calib.binning import binned_mean
@@ -33,11 +34,11 @@ PathLike = str | os.PathLike
 
 
 def recording_blueprint(report: GapReport | None = None) -> Any:
-    """Layout of the gap recording: per axis the residual before (top) and after (bottom)
-    adding the named effects, each with its ±σ band and binned mean over the whole θ range,
-    and the text view (verdict first, then the effects). An axis with unexplained structure
-    says so in the name of its "after" view. ``gap_report/**`` (the JSON tree) is left out of
-    every view."""
+    """Layout of the gap recording: per axis the residual before and after adding the named
+    effects, each a static 2-D plot against θ in rad (``gap/{axis}/plot_{before,after}``)
+    with its ±σ lines and binned mean, one per row, and the text view (verdict first, then
+    the effects). An axis with unexplained structure says so in the name of its "after"
+    view. ``gap_report/**`` (the JSON tree) is left out of every view."""
     import rerun.blueprint as rrb
 
     flagged = {} if report is None or report.verdict != "unexplained" else {
@@ -45,21 +46,21 @@ def recording_blueprint(report: GapReport | None = None) -> Any:
              if u.get("axis") in (ax, "both")] for ax in AXES}
 
     def view(ax: str, which: str) -> Any:
-        name = f"{ax}: residual {which}, ±σ, binned mean vs θ (µrad), m/s²"
+        name = f"{ax}: residual {which} (dots), ±σ (orange), binned mean (white) vs θ (rad); m/s²"
         if which == "after" and flagged.get(ax):
-            name = f"{ax}: residual after — UNEXPLAINED: {'; '.join(flagged[ax])}"
-        return rrb.TimeSeriesView(
-            origin=f"gap/{ax}", name=name,
-            contents=[f"+ gap/{ax}/residual_{which}", f"+ gap/{ax}/band_{which}/**",
-                      f"+ gap/{ax}/mean_{which}"], axis_x=full_time_axis())
+            name = f"{ax}: residual after vs θ (rad) — UNEXPLAINED: {'; '.join(flagged[ax])}"
+        return rrb.Spatial2DView(origin=f"gap/{ax}", name=name,
+                                 contents=[f"+ gap/{ax}/plot_{which}/**"],
+                                 visual_bounds=plot_bounds())
 
-    grid = rrb.Horizontal(*(rrb.Vertical(view(ax, "before"), view(ax, "after"))
-                            for ax in AXES))
+    # one 3:1 plot per row (x before, x after, y before, y after: before and after of an axis
+    # share their y range), the text view wide enough for its tables
+    plots = rrb.Vertical(*(view(ax, which) for ax in AXES for which in ("before", "after")))
     verdict = "" if report is None else f" — verdict: {report.verdict}"
     return rrb.Blueprint(
-        rrb.Horizontal(grid, rrb.TextDocumentView(origin="gap/effects",
-                                                  name=f"verdict and effects{verdict}"),
-                       column_shares=[3, 1]),
+        rrb.Horizontal(plots, rrb.TextDocumentView(origin="gap/effects",
+                                                   name=f"verdict and effects{verdict}"),
+                       column_shares=[3, 2]),
         time_panel(THETA_TIMELINE), collapse_panels=True)
 
 
@@ -69,14 +70,42 @@ def recording_markdown(report: GapReport) -> str:
     return re.sub(r"\n{3,}", "\n\n", "\n".join(lines))
 
 
+def _shared_box(theta: np.ndarray, residuals, variances) -> StaticPlot:
+    """One plot box for the before and after residuals of an axis (same y range), covering
+    the residuals and 1.2 σ of both models, m/s²; θ in rad on x."""
+    lim = max([float(np.max(np.abs(r))) for r in residuals if r.size]
+              + [1.2 * float(np.sqrt(v)) for v in variances])
+    return StaticPlot.around(theta, [-lim, lim], symmetric_y=True)
+
+
+def _log_plot(rec: Any, entity: str, plot: StaticPlot, theta: np.ndarray, res: np.ndarray,
+              sigma: float, th_mean: np.ndarray, mean: np.ndarray) -> None:
+    """Static 2-D plot at ``entity`` (θ in rad against the residual, m/s²): small translucent
+    samples under the ±σ lines, the binned mean on top, frame and tick values."""
+    import rerun as rr
+
+    plot.log_frame(rec, entity, zero_line=True, xlabel="θ (rad)", ylabel="residual (m/s²)")
+    rec.log(f"{entity}/residual", rr.Points2D(
+        np.column_stack([theta, res]), radii=rr.Radius.ui_points(0.8), colors=COLORS["sample"],
+        draw_order=10.0), static=True)
+    t0, t1 = float(np.min(theta)), float(np.max(theta))
+    rec.log(f"{entity}/band", rr.LineStrips2D(
+        [np.array([[t0, sigma], [t1, sigma]]), np.array([[t0, -sigma], [t1, -sigma]])],
+        radii=rr.Radius.ui_points(1.25), colors=COLORS["band"], draw_order=20.0), static=True)
+    rec.log(f"{entity}/mean", rr.LineStrips2D(
+        [np.column_stack([th_mean, mean])], radii=rr.Radius.ui_points(1.25),
+        colors=COLORS["mean"], draw_order=30.0), static=True)
+
+
 def write_recording(report: GapReport, path: PathLike, force: bool = False) -> Path:
     """Rerun recording: ``gap/{x,y}/residual_before``, ``…/residual_after`` (timelines
     ``sample`` and ``theta_urad``), ``gap/{x,y}/band_{before,after}/{plus,minus}`` (±σ),
     ``gap/{x,y}/mean_{before,after}`` (binned means), ``gap/effects`` (Markdown: the verdict
     with each unexplained signature, then the effects, gap and shrink) and the ``gap --json``
     object as a tree under ``gap_report`` (read back with ``tiltbench record read``), with a
-    blueprint (2 × 2 grid; an axis with unexplained structure names it in its "after"
-    view)."""
+    blueprint that shows the same residuals as static 2-D plots against θ in rad
+    (``gap/{x,y}/plot_{before,after}``: translucent samples, ±σ lines, binned mean on top;
+    an axis with unexplained structure names it in its "after" view)."""
     import rerun as rr
 
     theta = report.replay.tita
@@ -85,6 +114,9 @@ def write_recording(report: GapReport, path: PathLike, force: bool = False) -> P
              "theta_urad": np.round(theta * 1e6).astype(np.int64)}
     # ±σ bands span the θ range (the first and last samples of an up-then-down sweep share θ)
     ends = {tl: v[[int(np.argmin(theta)), int(np.argmax(theta))]] for tl, v in index.items()}
+    plot = {ax: _shared_box(theta, (report.residual_before[:, k], report.residual_after[:, k]),
+                            (report.noise_var[k], report.after[ax].sigma2))
+            for k, ax in enumerate(AXES)}
     with open_recording(path, force=force, blueprint=recording_blueprint(report),
                         name="tiltbench gap") as rec:
         for k, ax in enumerate(AXES):
@@ -102,6 +134,8 @@ def write_recording(report: GapReport, path: PathLike, force: bool = False) -> P
                 log_series(rec, f"gap/{ax}/mean_{which}", mean,
                            {"sample": at, "theta_urad": np.round(th * 1e6).astype(np.int64)},
                            color=COLORS["mean"], name=f"binned mean {which}")
+                _log_plot(rec, f"gap/{ax}/plot_{which}", plot[ax], theta, res[:, k],
+                          float(np.sqrt(s2)), th, mean)
         rec.log("gap/effects", rr.TextDocument(recording_markdown(report),
                                                media_type=rr.MediaType.MARKDOWN), static=True)
         log_tree(rec, "gap_report", report.to_dict())

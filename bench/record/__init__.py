@@ -64,7 +64,7 @@ from bench.record.calibration import (
     record_calibration,
     record_calibration_truth,
 )
-from bench.record.plot import PLOT_BOX, StaticPlot
+from bench.record.plot import PLOT_BOX, StaticPlot, log_grid, plane_box, plot_bounds
 from bench.record.reader import read_blueprint, read_recording, read_trees, recording_entities
 from bench.record.schema import (
     ENTITY_DOCS,
@@ -102,7 +102,8 @@ __all__ = [
     "PLOT_BOX", "POINT_SIZE", "SAMPLE_TIMELINE", "SNAPSHOTS", "THETA_TIMELINE",
     "TIME_TIMELINE", "TREE_ROOTS", "EntityDoc", "StaticPlot",
     "decision_markdown", "documented", "entity_table_markdown", "full_time_axis",
-    "log_series", "log_tree", "open_recording", "parameters_markdown", "plane_bounds",
+    "log_grid", "log_series", "log_tree", "open_recording", "parameters_markdown",
+    "plane_box", "plane_bounds", "plot_bounds",
     "read_blueprint", "read_recording", "read_trees",
     "record_calibration", "record_calibration_truth", "record_course", "record_course_truth",
     "record_series", "record_trajectory", "record_vehicle_truth", "recording_entities",

@@ -8,9 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
-from bench.record.plot import plot_bounds
+from bench.record.plot import plane_box, plot_bounds
 from bench.record.stream import THETA_TIMELINE, TIME_TIMELINE
 from calib.conventions import AXES
 
@@ -68,18 +66,17 @@ def calibration_blueprint(fit: bool = True, true: bool = False) -> Any:
 
 
 def plane_bounds(*arrays, margin: float = 0.06) -> Any:
-    """View bounds around all given (n, 2) plane positions (m) with a margin on each side.
+    """View bounds of the plane's grid (:func:`~bench.record.plot.plane_box` of all given
+    (n, 2) positions, m) plus room for the grid's values left of and under it.
 
     The plane is drawn under ``vehicle/plane`` (scale (1, −1, 1)), so the view's y is −y.
     """
     import rerun.blueprint as rrb
 
-    pts = np.concatenate([np.asarray(a, float).reshape(-1, 2) for a in arrays if a is not None])
-    pts = pts[np.all(np.isfinite(pts), axis=1)]
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    pad = margin * max(float(np.max(hi - lo)), 1.0)
-    return rrb.VisualBounds2D(x_range=[lo[0] - pad, hi[0] + pad],
-                              y_range=[-hi[1] - pad, -lo[1] + pad])
+    x0, x1, y0, y1 = plane_box(*arrays, margin=margin)
+    d = max(x1 - x0, y1 - y0)
+    return rrb.VisualBounds2D(x_range=[x0 - 0.07 * d, x1 + 0.01 * d],
+                              y_range=[-y1 - 0.05 * d, -y0 + 0.09 * d])
 
 
 def vehicle_blueprint(bounds: Any, *, estimated: bool, acc: tuple[str, ...],
@@ -119,7 +116,10 @@ def vehicle_blueprint(bounds: Any, *, estimated: bool, acc: tuple[str, ...],
         side.append(rrb.Tabs(*docs))
     else:
         side += docs
-    vehicle = rrb.Horizontal(plane, rrb.Vertical(*side), column_shares=[3, 2], name="vehicle")
+    # the text view gets the largest share: its tables must fit without scrolling
+    shares = [2.0] * (len(side) - 1) + [4.0] if docs else None
+    vehicle = rrb.Horizontal(plane, rrb.Vertical(*side, row_shares=shares), column_shares=[3, 2],
+                             name="vehicle")
     tabs = [vehicle]
     if calibration is not None:
         fit, true = calibration

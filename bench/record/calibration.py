@@ -107,7 +107,7 @@ def _radii() -> dict[str, rr.Radius]:
     """Marker and line radii of the static plots (UI points)."""
     import rerun as rr
 
-    return {"points": rr.Radius.ui_points(0.6), "line": rr.Radius.ui_points(LINE_WIDTH / 2),
+    return {"points": rr.Radius.ui_points(0.5), "line": rr.Radius.ui_points(LINE_WIDTH / 2),
             "thin": rr.Radius.ui_points(LINE_WIDTH / 4)}  # the true line, on top of the fit
 
 
@@ -118,9 +118,9 @@ def _log_theta_plot(rec: rr.RecordingStream, o: str, theta: np.ndarray, a_m: np.
 
     r = _radii()
     plot = StaticPlot.around(theta, np.r_[a_m, *(c[sub] for c in curves.values())])
-    plot.log_frame(rec, f"{o}/theta_plot")
+    plot.log_frame(rec, f"{o}/theta_plot", xlabel="θ (rad)", ylabel="A_m (m/s²)")
     rec.log(f"{o}/theta_plot/measured", rr.Points2D(
-        np.column_stack([theta, a_m]), radii=r["points"], colors=COLORS["measured"],
+        np.column_stack([theta, a_m]), radii=r["points"], colors=COLORS["sample"],
         draw_order=10.0), static=True)
     for name, curve in curves.items():
         rec.log(f"{o}/theta_plot/{name}", rr.LineStrips2D(
@@ -137,9 +137,10 @@ def _log_residual_plot(rec: rr.RecordingStream, o: str, theta: np.ndarray, resid
     r = _radii()
     lim = max(float(np.max(np.abs(resid))) if resid.size else 0.0, 1.2 * sigma)
     plot = StaticPlot.around(theta, [-lim, lim], symmetric_y=True)
-    plot.log_frame(rec, f"{o}/residual_plot", zero_line=True)
+    plot.log_frame(rec, f"{o}/residual_plot", zero_line=True, xlabel="θ (rad)",
+                   ylabel="residual (m/s²)")
     rec.log(f"{o}/residual_plot/residual", rr.Points2D(
-        np.column_stack([theta, resid]), radii=r["points"], colors=COLORS["measured"],
+        np.column_stack([theta, resid]), radii=r["points"], colors=COLORS["sample"],
         draw_order=10.0), static=True)
     t0, t1 = float(np.min(theta)), float(np.max(theta))
     rec.log(f"{o}/residual_plot/band", rr.LineStrips2D(
@@ -163,9 +164,9 @@ def _log_vs_ar(rec: rr.RecordingStream, o: str, a_r: np.ndarray, a_m: np.ndarray
     lines = {name: _line(lo, hi, *ln) for name, ln in
              (("fit", fit_line), ("true", true_line), ("ideal", (0.0, 0.0))) if ln is not None}
     plot = StaticPlot.around(a_r, np.r_[err, *(ln[:, 1] for ln in lines.values())])
-    plot.log_frame(rec, f"{o}/vs_ar")
+    plot.log_frame(rec, f"{o}/vs_ar", xlabel="A_r (m/s²)", ylabel="A_m − A_r (m/s²)")
     rec.log(f"{o}/vs_ar/measured", rr.Points2D(np.column_stack([a_r, err]), radii=r["points"],
-                                                colors=COLORS["measured"], draw_order=10.0),
+                                                colors=COLORS["sample"], draw_order=10.0),
             static=True)
     ar_mean, e_mean, _ = binned_mean(a_r, err, MEAN_BINS)
     rec.log(f"{o}/vs_ar/mean", rr.LineStrips2D(

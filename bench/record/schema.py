@@ -102,6 +102,12 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
               "standard deviation of the corrected position (calibration + noise), m",
               ("vehicle",)),
     EntityDoc("vehicle/plane", "Transform3D", "static", "2-D frame with +y up", _VEH),
+    EntityDoc("vehicle/plane/grid", "LineStrips2D", "static",
+              "the plane's scale: frame and grid lines at round metres (one step for x and "
+              "y), drawn under everything", _VEH),
+    EntityDoc("vehicle/plane/grid/labels", "Points2D (labels)", "static",
+              "grid values in m under the bottom and left of the frame, and the axis names "
+              "`x (m)`, `y (m)`", _VEH),
     EntityDoc("vehicle/plane/path/{k}", "LineStrips2D", "static",
               "trajectory, k = raw (uncorrected), corrected or true, m", _VEH),
     EntityDoc("vehicle/plane/position/{k}", "Points2D", "time",
@@ -133,6 +139,19 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
     EntityDoc("gap/{axis}/mean_{k}", "Scalars + SeriesLines", "sample, theta_urad",
               "binned mean of the residual before / after (≈ 80 samples per θ bin, at most 100 "
               "bins), m/s²", ("gap",)),
+    EntityDoc("gap/{axis}/plot_{k}", "Transform3D", "static",
+              "static 2-D plot of the residual before / after against θ (rad), shown by the "
+              "blueprint (as `theta_plot`; before and after share the y range)", ("gap",)),
+    EntityDoc("gap/{axis}/plot_{k}/residual", "Points2D", "static",
+              "(θ rad, residual m/s²) per sample, small and translucent", ("gap",)),
+    EntityDoc("gap/{axis}/plot_{k}/band", "LineStrips2D", "static",
+              "±σ lines of the before / after model over the θ range, m/s²", ("gap",)),
+    EntityDoc("gap/{axis}/plot_{k}/mean", "LineStrips2D", "static",
+              "binned mean of the residual (as `mean_{k}`), drawn on top, m/s²", ("gap",)),
+    EntityDoc("gap/{axis}/plot_{k}/axes", "LineStrips2D", "static",
+              "frame, ticks and zero line of the plot, in its data units", ("gap",)),
+    EntityDoc("gap/{axis}/plot_{k}/axes/labels", "Points2D (labels)", "static",
+              "tick values and axis names of the plot", ("gap",)),
     EntityDoc("gap/effects", "TextDocument (Markdown)", "static",
               "the named effects with their evidence (`gap.md` without its image)", ("gap",)),
     EntityDoc("gap_report/**", "Scalars | TextDocument, + json_type, json_path", "static",

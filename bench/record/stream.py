@@ -36,10 +36,13 @@ COLORS = {
     "band": (240, 160, 30), "true": (40, 190, 80), "raw": (150, 150, 150),
     "corrected": (60, 120, 255), "candidate": (210, 60, 190), "ellipse": (230, 50, 40),
     "growth": (240, 160, 30), "mean": (250, 250, 250), "axes": (120, 120, 120),
+    "grid": (60, 60, 60), "sample": (90, 140, 220, 160), "raw_light": (150, 150, 150, 120),
     "before": (90, 140, 220), "after": (110, 200, 140),
     "std_x": (80, 200, 220), "std_y": (230, 200, 60),
 }
-"""Fixed colours, so a series has the same colour in every view and every recording."""
+"""Fixed colours, so a series has the same colour in every view and every recording.
+Raw samples are translucent (``sample``, ``raw_light``: RGBA) and small, so the binned means
+and model lines drawn over them stay visible."""
 
 POINT_SIZE = 0.5
 """Marker size (UI points) of raw samples: 20001 points must not hide the lines on top."""

@@ -63,7 +63,7 @@ def truth_manifest(truth: Mapping, seed: int) -> dict:
 
 def decision_markdown(region: ArrivalRegion, true_arrival: str | None = None) -> str:
     """Markdown summary of the arrival decision (and the truth, when known)."""
-    lines = [f"# Arrival: {region.decision or 'undecided'}", "", region.reason, "",
+    lines = [f"### Arrival: {region.decision or 'undecided'}", "", region.reason, "",
              f"Estimate ({region.estimate[0]:.2f}, {region.estimate[1]:.2f}) m, std "
              f"({region.std[0]:.2f}, {region.std[1]:.2f}) m; {100 * region.level:g}% ellipse "
              f"semi-axes {region.ellipse.semi_axes[0]:.2f} × {region.ellipse.semi_axes[1]:.2f} m.",

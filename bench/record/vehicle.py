@@ -16,6 +16,7 @@ import numpy as np
 
 from bench.record.blueprint import plane_bounds, vehicle_blueprint
 from bench.record.calibration import log_calibration, log_truth_axes
+from bench.record.plot import log_grid, plane_box
 from bench.record.stream import COLORS, TIME_TIMELINE, log_series, log_tree, open_recording
 from bench.record.summary import (
     decision_markdown,
@@ -94,8 +95,10 @@ def _log_accelerations(rec: rr.RecordingStream, t: np.ndarray,
         if acc is None:
             continue
         for k, a in enumerate(AXES):
+            # the measured samples thin and translucent, under the corrected and true lines
             log_series(rec, f"vehicle/acceleration/{name}/{a}", acc[:, k], tl, "line",
-                       COLORS["raw" if name == "measured" else name], f"{name} {a}", 1.0)
+                       COLORS["raw_light" if name == "measured" else name], f"{name} {a}",
+                       0.5 if name == "measured" else 1.5)
 
 
 def _log_arrival(rec: rr.RecordingStream, region: ArrivalRegion) -> None:
@@ -164,6 +167,7 @@ def log_vehicle(rec: rr.RecordingStream, traj: Trajectory, region: ArrivalRegion
     _log_candidates(rec, region.candidates)
     _log_arrival(rec, region)
     _log_uncertainty(rec, traj, region, cal, n_ellipses)
+    log_grid(rec, "vehicle/plane/grid", plane_box(*_region_points(traj, region, true_path)))
 
 
 def record_vehicle_truth(run: VehicleRun, path: str | os.PathLike, force: bool = False,
@@ -185,7 +189,8 @@ def record_vehicle_truth(run: VehicleRun, path: str | os.PathLike, force: bool =
     manifest = truth_manifest(truth if truth is not None else run.truth_dict(), run.seed)
     raw, _ = integrate_twice(run.t, run.aerr, run.config.p0, run.config.v0)
     cand = None if candidates is None else np.array(list(candidates.values()), dtype=float)
-    blueprint = vehicle_blueprint(plane_bounds(raw, run.truth.pos, cand), estimated=False,
+    blueprint = vehicle_blueprint(plane_bounds(raw, run.truth.pos, cand),
+                                  estimated=False,
                                   acc=("measured", "true"), paths=("raw", "true"),
                                   candidates=candidates is not None,
                                   calibration=None if calibration is None else (False, True),
@@ -193,6 +198,7 @@ def record_vehicle_truth(run: VehicleRun, path: str | os.PathLike, force: bool =
     with open_recording(path, force, blueprint, "truth") as rec:
         _log_accelerations(rec, run.t, {"measured": run.aerr, "true": run.truth.acc})
         _log_paths(rec, run.t, {"raw": raw, "true": run.truth.pos})
+        log_grid(rec, "vehicle/plane/grid", plane_box(raw, run.truth.pos, cand))
         if candidates is not None:
             _log_candidates(rec, candidates)
         if calibration is not None:
@@ -260,10 +266,16 @@ def _path_kinds(true_path) -> tuple[str, ...]:
     return ("raw", "corrected") + (("true",) if true_path is not None else ())
 
 
+def _region_points(traj: Trajectory, region: ArrivalRegion, true_path) -> tuple:
+    """Everything drawn on the plane (paths, candidates, arrival ellipse), m: the grid and
+    the view bounds cover them."""
+    return (traj.pos_raw, traj.pos_corrected, true_path,
+            np.array(list(region.candidates.values()), dtype=float),
+            region.ellipse.boundary(256))
+
+
 def _region_bounds(traj: Trajectory, region: ArrivalRegion, true_path) -> Any:
-    return plane_bounds(traj.pos_raw, traj.pos_corrected, true_path,
-                        np.array(list(region.candidates.values()), dtype=float),
-                        region.ellipse.boundary(256))
+    return plane_bounds(*_region_points(traj, region, true_path))
 
 
 def record_course(path: str | os.PathLike, *, cal: Calibration, ensayo: Ensayo,
