@@ -36,6 +36,7 @@ import numpy as np
 
 from calib.atomic import atomic_dir, write_text
 from calib.io import DataError, dumps
+from calib.units import nest, with_units
 
 STUDENT_FILES = ("ensayo.mat", "acel.mat", "puntos.mat", "datos.txt")
 KEY_CSV = "answer_key.csv"
@@ -110,7 +111,7 @@ def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = Fal
     prefix : folder prefix.  progress : called as ``progress(done, count)``.
     """
     from bench.course import make_course_set, write_course_files
-    from bench.dataset import versions
+    from bench.dataset import truth_units, versions
 
     out = Path(out)
     seeds = student_seeds(seed, count)
@@ -155,7 +156,9 @@ def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = Fal
                "students": [{"student": r["student"], "folder": r["student"],
                              "seed": r["seed"], "answer": r["answer"],
                              "truth": truths[r["student"]]} for r in rows]}
-        write_text(tmp / KEY_JSON, dumps(key), force=True)
+        units = {"class_seed": "—", "count": "count", "students.seed": "—",
+                 **nest("students.truth", truth_units())}  # docs/units.md
+        write_text(tmp / KEY_JSON, dumps(with_units(key, units)), force=True)
     return ClassSet(out, folders, out / KEY_CSV, out / KEY_JSON, rows)
 
 

@@ -49,6 +49,7 @@ from scipy import stats
 from calib.conventions import AXES, JOINT_PARAM_NAMES, G, reference_accel
 from calib.io import DataError
 from calib.results import ResultMixin
+from calib.units import with_units
 
 StdSource = Literal["auto", "reported", "design"]
 
@@ -559,11 +560,19 @@ class Validation(ResultMixin):
         return {"passed": bool(self.std_passed), "limits": list(self.std_limits),
                 "ratio": {n: float(self.std_ratio[i]) for i, n in enumerate(self.names)}}
 
+    _JSON_UNITS = {  # the units of to_dict(), one home (docs/units.md)
+        "level": "1", "chi2": "1", "chi2_limit": "1", "z_limit": "1",
+        **{f"parameters.{n}.{k}": u for n, u in (("bias_x", "m/s²"), ("bias_y", "m/s²"),
+                                                  ("scale_x", "1"), ("scale_y", "1"))
+           for k in ("estimate", "truth", "std")},
+        "parameters.*.z": "1", "std_check.limits": "1", "std_check.ratio.*": "1",
+    }
+
     def to_dict(self) -> dict:
         d = self._to_dict()
         if self.std_passed is False:
             d["std_check"] = self._std_check()
-        return d
+        return with_units(d, self._JSON_UNITS)
 
     def _to_dict(self) -> dict:
         return {

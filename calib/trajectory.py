@@ -331,7 +331,7 @@ class Trajectory(ResultMixin):
             f"{self.integrator} double integration, P0 = {self.p0.tolist()} m, "
             f"V0 = {self.v0.tolist()} m/s",
             f"  correction: bias = [{self.bias[0]:.6g}, {self.bias[1]:.6g}] m/s², "
-            f"scale = [{self.scale[0]:.6g}, {self.scale[1]:.6g}]",
+            f"scale = [{self.scale[0]:.6g}, {self.scale[1]:.6g}] (dimensionless)",
             f"  final position, raw       : ({fr[0]:10.3f}, {fr[1]:10.3f}) m",
             f"  final position, corrected : ({fc[0]:10.3f}, {fc[1]:10.3f}) m",
             f"  final velocity, corrected : ({vc[0]:10.3f}, {vc[1]:10.3f}) m/s",

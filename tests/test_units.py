@@ -129,3 +129,22 @@ def test_a_json_file_given_as_a_mat_file_is_named_as_such(tmp_path, course_args)
     code, _, err = _run(["trajectory", "--ensayo", course_args["e"], "--acel", str(p),
                          "--puntos", course_args["p"], "--datos", course_args["d"]])
     assert code == 2 and "JSON" in err and "acel .mat" in err
+
+
+def test_validate_json_and_the_class_answer_key_have_units(tmp_path):
+    out = tmp_path / "cal"
+    _json(["generate", "calibration", "--seed", "5", "--count", "201", "--out", str(out),
+           "--json"])
+    est = json.loads(_run(["calibrate", str(out / "ensayo.mat"), "--noise-var", "0.25,0.64",
+                           "--json"])[1])
+    (tmp_path / "est.json").write_text(json.dumps(est))
+    rc, stdout, _ = _run(["validate", "--truth", str(out / "truth.json"), "--estimates",
+                          str(tmp_path / "est.json"), "--json"])
+    assert rc in (0, 1)
+    v = json.loads(stdout)
+    _covered(v, "validate --json")
+    assert v["units"]["parameters.bias_x.estimate"] == "m/s²"
+    _json(["generate", "class", "--students", "2", "--seed", "1", "--out",
+           str(tmp_path / "class"), "--json"])
+    key = json.loads((tmp_path / "class" / "answer_key.json").read_text())
+    _covered(key, "answer_key.json")
