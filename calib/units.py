@@ -101,16 +101,21 @@ P_FLOOR = 1e-300
 """Below this a p-value is printed as a bound (``p < 1e-300``): the float underflowed."""
 
 
-def format_p(p: float) -> str:
+def format_p(p: float | None) -> str:
     """``"p = 0.0123"`` (3 significant digits), or ``"p < 1e-300"`` when ``p`` underflowed
     (a p-value of exactly 0 is never true: only the tail probability was too small for a
-    double)."""
+    double); ``"p = —"`` when there is none (a test this design cannot make)."""
+    if p is None or float(p) != float(p):  # None or nan
+        return "p = —"
     p = float(p)
-    if p != p:  # nan
-        return "p = nan"
     if p < P_FLOOR:
         return f"p < {P_FLOOR:.0e}"
     return f"p = {p:.3g}"
+
+
+def format_stat(x: float | None, spec: str = ".4g") -> str:
+    """A test statistic for the text reports, ``"—"`` when there is none."""
+    return "—" if x is None or float(x) != float(x) else format(float(x), spec)
 
 
 def effect_units() -> dict[str, str]:

@@ -8,6 +8,8 @@ over many clean runs in tests/test_validation_score.py.
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from scipy import signal
@@ -151,6 +153,7 @@ def test_random_walk_named_and_passes_adequacy():
     assert res.verdict == "explained", res.summary()
     names = {c["name"] for c in res.adequacy["checks"] if c["axis"] == "y"}
     assert {"walk_whiteness", "rival_shapes"} <= names
+    json.dumps(res.to_dict(), allow_nan=False)  # every size and statistic is a number
 
 
 def test_periodic_bias_is_not_taken_for_a_random_walk():

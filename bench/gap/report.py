@@ -19,7 +19,7 @@ from bench.model import TableEdits
 from bench.sensors import SensorErrorModel
 from calib.conventions import AXES
 from calib.gap.results import gap_units
-from calib.units import effect_units, format_estimate, format_p, nest, with_units
+from calib.units import effect_units, format_estimate, format_p, format_stat, nest, with_units
 
 if TYPE_CHECKING:  # pragma: no cover
     from calib.gap import GapAnalysis
@@ -336,7 +336,7 @@ class GapReport:
             params = ", ".join(
                 f"{k} = " + format_estimate(v, e["std"].get(k, float("nan")), units.get(k, ""))
                 for k, v in e["params"].items())
-            out.append(f"  {effect_name(e)}: {params}; statistic {e['statistic']:.4g}, "
+            out.append(f"  {effect_name(e)}: {params}; statistic {format_stat(e['statistic'])}, "
                        f"{format_p(e['p_value'])}"
                        + ("" if e["timing"] == "no" else f" [timing: {e['timing']}]"))
             if "params" in e.get("sysid", {}):

@@ -13,7 +13,7 @@ from bench.gap.report import GapReport, shrink_word
 from bench.model import edit_tilt_table, load_spec
 from calib.atomic import atomic_dir, write_text
 from calib.conventions import AXES
-from calib.units import format_p
+from calib.units import format_p, format_stat
 
 PathLike = str | os.PathLike
 
@@ -85,7 +85,7 @@ def gap_markdown(report: GapReport) -> str:
             name = f"`{e['name']}`" + (" *(tentative)*" if e["tentative"] else "")
             p = format_p(e["p_value"]).removeprefix("p = ").removeprefix("p ")
             lines.append(f"| {name} | {e['axis']} | {est} | {sy} | "
-                         f"{e['statistic']:.4g} | {p} | {e['timing']} |")
+                         f"{format_stat(e['statistic'])} | {p} | {e['timing']} |")
     if d["not_identifiable"]:
         lines += ["", "## Not identifiable", ""]
         lines += [f"- {', '.join(i['names'])}: {i['reason']}" for i in d["not_identifiable"]]

@@ -261,7 +261,9 @@ def _periodic(space: _AxisSpace, run, axis: str) -> Check | None:
         return None
     g, logp, m, period, cols = peak
     fit = space.test(cols)
-    size = float(np.hypot(*fit[2])) if fit is not None else float("nan")
+    if fit is None:  # the frequency's columns are in the model already: nothing to size
+        return None
+    size = float(np.hypot(*fit[2]))
     unit_t = "s" if run.time_unit == "s" else "samples"
     return Check("periodic", axis, g, logp, f"Fisher g over {m} frequencies", size, "m/s²",
                  f"a periodic component on {axis} with period {period:.4g} {unit_t}, "
@@ -418,10 +420,15 @@ def _lattice(lat: Lattice, model_lsb: float, axis: str) -> Check | None:
 
 
 def _walk_whiteness(innov: np.ndarray, axis: str) -> Check:
-    q, h, logp = ljung_box_logp(innov[1:])
-    return Check("walk_whiteness", axis, q, logp, f"Ljung-Box chi2({h})", float("nan"), "",
-                 f"the random walk on {axis} leaves correlated innovations: the bias does "
-                 f"not move like a random walk")
+    x = innov[1:] - innov[1:].mean()
+    q, h, logp = ljung_box_logp(x)
+    den = float(x @ x)
+    rho = max((abs(float(x[k:] @ x[:-k])) / den for k in range(1, h + 1)), default=0.0) \
+        if den > 0 else 0.0
+    return Check("walk_whiteness", axis, q, logp, f"Ljung-Box chi2({h})", rho, "1",
+                 f"the random walk on {axis} leaves correlated innovations (largest "
+                 f"autocorrelation {rho:.2g} within {h} lags): the bias does not move like a "
+                 "random walk")
 
 
 def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> Check | None:

@@ -9,7 +9,12 @@ import numpy as np
 from calib.calibration import Calibration
 from calib.conventions import AXES, G
 from calib.effects import ModelState
-from calib.units import effect_units, format_estimate, format_p, with_units
+from calib.units import effect_units, format_estimate, format_p, format_stat, with_units
+
+
+def _finite(x: float) -> float | None:
+    x = float(x)
+    return x if np.isfinite(x) else None
 
 
 @dataclass(frozen=True)
@@ -44,7 +49,8 @@ class EffectEstimate:
         out = {"name": self.name, "axis": self.axis,
                "params": {k: float(v) for k, v in self.params.items()},
                "std": {k: float(v) for k, v in self.std.items()},
-               "statistic": float(self.statistic), "p_value": float(self.p_value),
+               # null when the drop-one test cannot be made in this design (not a number)
+               "statistic": _finite(self.statistic), "p_value": _finite(self.p_value),
                "tentative": bool(self.tentative)}
         if self.interval:
             out["interval"] = {k: [float(lo), float(hi)] for k, (lo, hi) in self.interval.items()}
@@ -59,7 +65,8 @@ class EffectEstimate:
                          for k, v in self.params.items())
         ci = "".join(f"; 95% interval of {k}: [{lo:.6g}, {hi:.6g}] {units.get(k, '')}".rstrip()
                      for k, (lo, hi) in self.interval.items())
-        return (f"{self.name} ({self.axis}): {vals}{ci}; statistic = {self.statistic:.4g}, "
+        stat = format_stat(self.statistic)
+        return (f"{self.name} ({self.axis}): {vals}{ci}; statistic = {stat}, "
                 f"{format_p(self.p_value)}")
 
 
