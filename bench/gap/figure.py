@@ -32,7 +32,7 @@ SIGNATURE_WORDS = {
     "other_ref": "the other axis' reference (misalignment)",
     "trend": "a drift in time",
     "whiteness": "correlated samples",
-    "lattice": "readings on a lattice (quantization)",
+    "lattice": "readings in equal steps (quantization)",
     "flat_top": "flat tops (saturation)",
     "rate_cos": "ω cos θ (a lag)",
     "rate_sin": "ω sin θ (a lag)",
