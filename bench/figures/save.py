@@ -43,6 +43,7 @@ def _freeze_layout(fig: Figure) -> None:
     the figure. The constrained-layout solver can differ in the last bit between the first
     figure drawn in a process and later ones; SVG clip-path ids hash the full-precision clip
     rectangle, so without rounding the same data would not always give the same bytes."""
+    fig.set_dpi(DPI)  # the layout at the dpi it is saved with (text sizes move it)
     fig.draw_without_rendering()
     fig.set_layout_engine("none")
     for ax in fig.get_axes():
