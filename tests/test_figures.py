@@ -102,3 +102,171 @@ def test_calibrate_plot_figure(tmp_path, small_cal):
     cal, ensayo, truth = small_cal
     assert_png(save_calibration_plot(tmp_path / "cal.png", cal, ensayo, truth=truth))
     assert_svg(save_calibration_plot(tmp_path / "cal.svg", cal, ensayo))
+
+
+# ---------------------------------------------------------------- what each figure must show
+# Each test below fails when the figure's message is hidden: lines drawn on top of each other,
+# the band under the samples, the course bound drawn as another shape, legend symbols that
+# cannot be told apart, the true point under a candidate's marker.
+
+def _px(ax, x, y) -> np.ndarray:
+    """Display pixel coordinates of data points (x, y) of ``ax`` (after a draw)."""
+    return ax.transData.transform(np.column_stack([np.atleast_1d(x), np.atleast_1d(y)]))
+
+
+def _line(ax, prefix: str):
+    found = [ln for ln in ax.get_lines() if ln.get_label().startswith(prefix)]
+    assert len(found) == 1, (prefix, [ln.get_label() for ln in ax.get_lines()])
+    return found[0]
+
+
+def _lw_px(line) -> float:
+    return line.get_linewidth() * line.figure.dpi / 72.0
+
+
+@pytest.fixture(scope="module")
+def large_errors():
+    """A 3 % scale error and a 0.09 m/s² bias on x (course-like sizes), N = 600, and a
+    truth that differs from the data's by 1 % of scale, so fit and truth must stand apart."""
+    from bench.sensors import SensorErrorModel
+
+    sensor = SensorErrorModel.from_pairs((0.09, -0.02), (-0.03, 0.02), (0.25, 0.64))
+    run = generate_calibration(CalibrationConfig(theta=ThetaDesign(count=600), sensor=sensor),
+                               3)
+    truth = {"sensor": SensorErrorModel.from_pairs((0.09, -0.02), (-0.02, 0.02),
+                                                   (0.25, 0.64)).to_dict()}
+    return calibrate(run.ensayo(), [0.25, 0.64]), run.ensayo(), truth
+
+
+def test_calibration_figure_separates_fit_truth_and_ideal(large_errors):
+    """At the ends of A_r (where a scale error matters most) the LS fit, the truth and the
+    ideal sensor lie more than a line width apart in display pixels — in the measured-vs-
+    reference form (A_m against A_r over ±g) a 0.1 m/s² gap is about one pixel."""
+    cal, ensayo, truth = large_errors
+    fig = calibration_axis_figure(cal, ensayo, "x", truth)
+    try:
+        fig.canvas.draw()
+        ax = next(a for a in fig.axes if a.get_xlabel().startswith("A_rx")
+                  and a.get_ylabel().startswith("sensor error"))
+        fit, true, ideal = (_line(ax, p) for p in ("LS fit", "truth", "ideal sensor"))
+        x = fit.get_xdata()
+        ends = [int(np.argmin(x)), int(np.argmax(x))]
+        y_fit = _px(ax, x[ends], np.asarray(fit.get_ydata())[ends])[:, 1]
+        y_true = _px(ax, x[ends], np.asarray(true.get_ydata())[ends])[:, 1]
+        y_ideal = _px(ax, x[ends], np.zeros(2))[:, 1]
+        width = max(_lw_px(fit), _lw_px(true), _lw_px(ideal))
+        assert np.all(np.abs(y_fit - y_ideal) > width), (y_fit, y_ideal, width)
+        assert np.all(np.abs(y_true - y_ideal) > width), (y_true, y_ideal, width)
+        assert np.max(np.abs(y_fit - y_true)) > width, (y_fit, y_true, width)
+        # the three are also told apart by style, not only by position
+        styles = {(ln.get_color(), ln.get_linestyle()) for ln in (fit, true, ideal)}
+        assert len(styles) == 3
+    finally:
+        plt.close(fig)
+
+
+def test_calibration_binned_band_is_drawn_above_light_samples(large_errors):
+    """In every panel with samples, the binned mean and its ±2σ/√n band have a higher zorder
+    than the scatter, and the scatter is light (alpha ≤ 0.3)."""
+    cal, ensayo, truth = large_errors
+    fig = calibration_axis_figure(cal, ensayo, "y", truth)
+    try:
+        panels = [a for a in fig.axes if any("per sample" in ln.get_label()
+                                             or ln.get_label().startswith("residual")
+                                             for ln in a.get_lines())]
+        assert len(panels) == 4
+        for ax in panels:
+            scatter = next(ln for ln in ax.get_lines() if ln.get_linestyle() == "None")
+            band = [c for c in ax.collections if c.get_label().startswith("±2σ/√n")]
+            binned = [ln for ln in ax.get_lines() if ln.get_label().startswith("binned mean")]
+            assert len(band) == 1 and len(binned) == 1
+            assert band[0].get_zorder() > scatter.get_zorder()
+            assert binned[0].get_zorder() > band[0].get_zorder()
+            assert scatter.get_alpha() <= 0.3
+    finally:
+        plt.close(fig)
+
+
+def test_calibration_text_box_states_std_as_the_command_line(large_errors):
+    """The box gives ± one std (the `std` column of `tiltbench calibrate`), says so, and
+    does not give the 95 % half-width instead."""
+    cal, ensayo, truth = large_errors
+    fig = calibration_axis_figure(cal, ensayo, "x", truth)
+    try:
+        f = cal.fits["x"]
+        std = dict(zip(f.param_names, f.std, strict=True))
+        box = next(t.get_text() for a in fig.axes for t in a.texts if "bias" in t.get_text())
+        assert "± 1 std" in box
+        assert f"± {std['bias']:.2g} m/s²" in box
+        assert f"± {std['scale']:.2g}" in box
+        half = f.quantile(0.95) * std["bias"]
+        assert f"± {half:.2g} m/s²" not in box
+    finally:
+        plt.close(fig)
+
+
+@pytest.fixture(scope="module")
+def course_analysis(course_dir):
+    from bench.demo import analyze_course_dir
+
+    return analyze_course_dir(course_dir)
+
+
+def test_trajectory_box_bound_is_a_rectangle_and_truth_on_top(course_analysis):
+    """The course's 3σ box bound is a rectangle c ± (δP_x, δP_y) around each candidate (no
+    ellipse); every legend entry has its own symbol; the true arrival, placed on candidate C,
+    is drawn above C's marker with a different marker."""
+    from matplotlib.patches import Rectangle
+
+    from bench.figures import trajectory_figure
+
+    region = course_analysis.region
+    truth = np.asarray(region.candidates["C"], float)
+    fig = trajectory_figure(course_analysis.traj, region, truth=truth)
+    try:
+        ax = fig.axes[0]
+        rects = [p for p in ax.patches if isinstance(p, Rectangle)]
+        assert len(rects) == len(region.candidates)
+        box = np.asarray(region.course_box_bound, float)
+        for rect, c in zip(rects, region.candidates.values(), strict=True):
+            assert rect.get_width() == pytest.approx(2 * box[0])
+            assert rect.get_height() == pytest.approx(2 * box[1])
+            assert np.asarray(rect.get_xy()) + box == pytest.approx(np.asarray(c, float))
+        assert not any("box" in ln.get_label() for ln in ax.get_lines())  # no ellipse lines
+        legend = ax.get_legend()
+        keys = []
+        for h in legend.legend_handles:
+            if hasattr(h, "get_marker"):
+                keys.append(("line", h.get_color(), h.get_linestyle(), h.get_marker()))
+            else:
+                keys.append(("patch", tuple(h.get_facecolor()), tuple(h.get_edgecolor()),
+                             h.get_linestyle()))
+        assert len(set(keys)) == len(keys), keys
+        labels = [t.get_text() for t in legend.get_texts()]
+        corrected = keys[labels.index("corrected path")]
+        region_key = keys[next(i for i, t in enumerate(labels) if "% region" in t)]
+        assert corrected != region_key
+        true_mark = _line(ax, "true arrival")
+        cand = next(ln for ln in ax.get_lines() if ln.get_marker() == "x"
+                    and np.allclose(ln.get_xydata()[0], truth))
+        assert true_mark.get_zorder() > cand.get_zorder()
+        assert true_mark.get_marker() != cand.get_marker()
+    finally:
+        plt.close(fig)
+
+
+def test_nmin_figure_says_why_the_distances_rise(course_analysis):
+    """The distances rise with N because Σ_P(N) shrinks: the figure says so (title and axis
+    label), and the calibration-only curve's unbounded rise is annotated."""
+    from bench.figures import nmin_figure
+
+    ana = course_analysis
+    fig = nmin_figure(ana.region, ana.ensayo.n, ana.cal.g)
+    try:
+        ax = fig.axes[0]
+        assert "rise" in ax.get_title() and "shrink" in ax.get_title()
+        assert "rises with N" in ax.get_ylabel()
+        notes = [t.get_text() for t in ax.texts]
+        assert any("√N" in t and "crosses r" in t for t in notes), notes
+    finally:
+        plt.close(fig)

@@ -393,3 +393,46 @@ def test_recording_reads_the_verdict_back(misaligned_report, tmp_path):
     names = [v["name"] for v in read_blueprint(path)["views"]]
     assert any("UNEXPLAINED: a 3rd harmonic of θ on x" in n for n in names)
     assert any("verdict: unexplained" in n for n in names)
+
+
+def _raw_signature_names() -> list[str]:
+    """The signature names of :mod:`calib.diagnostics` (its docstring's table), read
+    independently of the figure's own dictionary of words."""
+    import calib.diagnostics
+
+    doc = calib.diagnostics.__doc__
+    table = doc[doc.index("Signatures"):doc.index("Marginal regression")]
+    return sorted(set(re.findall(r"``([a-z][a-z0-9_]*)``", table)))
+
+
+@pytest.mark.parametrize("verdict", ["explained", "unexplained"])
+def test_gap_figure_shares_y_and_speaks_in_words(misaligned_report, verdict):
+    """Before and after panels of an axis share their y limits (the same scale shows what
+    shrank); no signature name of calib.diagnostics appears raw in any text of the figure;
+    the title gives each effect's estimate ± std with its unit."""
+    import matplotlib.pyplot as plt
+
+    names = _raw_signature_names()
+    assert {"other_ref", "flat_top", "h2_sin", "whiteness"} <= set(names)
+    report = _with_verdict(misaligned_report, verdict)
+    report = replace(report, analysis=replace(report.analysis, unexplained=tuple(
+        dict(u, description=f"{u['description']} (h2_sin)") for u in UNEXPLAINED)))
+    fig = gap_figure(report)
+    try:
+        fig.canvas.draw()
+        for ax_name in ("x", "y"):
+            before, after = (next(a for a in fig.axes
+                                  if a.get_title().startswith(f"{ax_name}, {w}"))
+                             for w in ("before", "after"))
+            assert before.get_ylim() == after.get_ylim(), ax_name
+        texts = [t.get_text() for t in fig.findobj(match=lambda o: hasattr(o, "get_text"))
+                 if t.get_text()]
+        raw = re.compile(r"\b(" + "|".join(names) + r")\b")
+        leaks = [t for t in texts if raw.search(t)]
+        assert not leaks, leaks
+        title = fig._suptitle.get_text()
+        e = report.to_dict()["effects"][0]
+        assert f"delta = {e['params']['delta']:.4g} ± {e['std']['delta']:.2g} rad" in title
+        assert "std" in title
+    finally:
+        plt.close(fig)

@@ -8,19 +8,23 @@ data give the same bytes.
 
 Figures (all quantities in SI units, angles in rad):
 
-* :func:`calibration_axis_figure` — per axis: measured A_m and the fitted line against A_r and
-  against θ (course reports' figures 3–6), with the true line when the truth is known; under
-  each, the residuals with the ±σ band, a binned mean (structure the model misses stands out)
-  and the χ²/dof.
+* :func:`calibration_axis_figure` — per axis: the sensor error A_m − A_r against A_r and
+  against θ, with the LS fit (scale·A_r + bias), the truth when known and the ideal sensor (0)
+  on a scale where a few per cent of scale and 0.1 m/s² of bias stand apart; the binned mean
+  and its ±2σ/√n band drawn over the light samples; estimates ± 1 std (as the command line);
+  under each, the residuals A_m − fit with ±σ, their binned mean and the χ²/dof.
 * :func:`parameters_figure` — the four estimates with their intervals at the level, next to
   the true values (z-scores).
 * :func:`acceleration_figure` — the vehicle's measured, corrected (and true) accelerations.
-* :func:`trajectory_figure` — raw and corrected paths, candidates, the confidence ellipse
-  (the ``trajectory --plot`` figure).
+* :func:`trajectory_figure` — raw and corrected paths, candidates, the level-L region (shaded
+  ellipse), the course's 3σ box bound (a rectangle around each candidate) and the true arrival
+  on top (the ``trajectory --plot`` figure).
 * :func:`uncertainty_growth_figure` — ellipses growing along the corrected path and the
   position standard deviation against time (calibration part and vehicle-noise part).
 * :func:`nmin_figure` — Mahalanobis distance of every candidate against the calibration size
-  N with the level-L threshold, the data's N, the design N and the a-posteriori range.
+  N with the level-L threshold, the data's N, the design N and the a-posteriori range; it says
+  why the distances rise with N (Σ_P shrinks) and where the calibration-only curve of the
+  nearest candidate crosses the threshold.
 
 One module per figure (``calibration``, ``parameters``, ``acceleration``, ``trajectory``,
 ``uncertainty``, ``nmin``), ``save`` for writing and ``write`` for the figure sets; this package

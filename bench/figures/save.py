@@ -29,9 +29,22 @@ def save_figure(fig: Figure, path: str | Path, force: bool = False) -> Path:
     if path.exists() and not force:
         plt.close(fig)
         raise FileExistsError(f"{path}: exists; pass --force to overwrite")
+    _freeze_layout(fig)
     buf = io.BytesIO()
     metadata = {"Date": None} if fmt == "svg" else {"Software": None}
     with plt.rc_context({"svg.hashsalt": "tiltbench"}):  # SVG ids without random salt
         fig.savefig(buf, format=fmt, dpi=DPI, metadata=metadata)
     plt.close(fig)
     return atomic_write_bytes(path, buf.getvalue(), force=force)
+
+
+def _freeze_layout(fig: Figure) -> None:
+    """Run the layout engine once, then fix every axes at its position rounded to 1e-9 of
+    the figure. The constrained-layout solver can differ in the last bit between the first
+    figure drawn in a process and later ones; SVG clip-path ids hash the full-precision clip
+    rectangle, so without rounding the same data would not always give the same bytes."""
+    fig.set_dpi(DPI)  # the layout at the dpi it is saved with (text sizes move it)
+    fig.draw_without_rendering()
+    fig.set_layout_engine("none")
+    for ax in fig.get_axes():
+        ax.set_position([round(float(v), 9) for v in ax.get_position().bounds])

@@ -11,7 +11,7 @@ import numpy as np
 
 from bench.gap.report import GapReport, shrink_word
 from calib.binning import binned_mean
-from calib.conventions import AXES
+from calib.conventions import AXES, EFFECTS
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -23,16 +23,58 @@ VERDICT_COLORS = {"explained": (0.85, 0.95, 0.85), "unexplained": (1.0, 0.87, 0.
 """Background of the verdict box (green-ish, red-ish, grey)."""
 UNEXPLAINED_EDGE = (0.8, 0.1, 0.1)
 """Frame and text colour of a panel with unexplained structure."""
+SIGNATURE_WORDS = {
+    "chi2": "noise level (χ²)",
+    "h1_cos": "a cos θ pattern",
+    "h1_sin": "a sin θ pattern",
+    "h2_cos": "a cos 2θ pattern",
+    "h2_sin": "a sin 2θ pattern (cross-axis)",
+    "other_ref": "the other axis' reference (misalignment)",
+    "trend": "a drift in time",
+    "whiteness": "correlated samples",
+    "lattice": "readings in equal steps (quantization)",
+    "flat_top": "flat tops (saturation)",
+    "rate_cos": "ω cos θ (a lag)",
+    "rate_sin": "ω sin θ (a lag)",
+    "rate_sq": "ω² (centripetal, lever arm)",
+    "accel": "angular acceleration (lever arm)",
+}
+"""Signature names of :mod:`calib.diagnostics` in words, as the figure shows them."""
+CAPTION = ("Dots: residual data − simulation; red line: binned mean (72 bins); band: ±σ "
+           "(before: the stated σ; after: the σ of the model with the effects). χ²/dof ≈ 1 and "
+           "max |z| small mean noise only; max |z| is the largest z-score among the "
+           "patterns tested, named after it.")
+"""The figure's caption: what the marks and numbers in the panel titles are."""
+
+
+def signature_words(text: str) -> str:
+    """``text`` with every signature name of :data:`SIGNATURE_WORDS` replaced by its words."""
+    import re
+
+    pattern = r"\b(" + "|".join(sorted(SIGNATURE_WORDS, key=len, reverse=True)) + r")\b"
+    return re.sub(pattern, lambda m: SIGNATURE_WORDS[m.group(1)], text)
+
+
+def _param_text(name: str, key: str, value: float, std: float | None) -> str:
+    """``key = value ± std unit`` in the catalog's unit (``calib.conventions.EFFECTS``)."""
+    info = EFFECTS.get(name)
+    units = dict(zip(info.keys, info.units, strict=True)) if info else {}
+    unit = units.get(key, "")
+    unit = "" if unit in ("", "1", "-") else f" {unit}"
+    pm = f" ± {std:.2g}" if std is not None and np.isfinite(std) else ""
+    return f"{key} = {value:.4g}{pm}{unit}"
 
 
 def effects_label(report: GapReport) -> str:
-    """One line naming the effects added and their parameters (figure title)."""
-    if not report.effects:
+    """One line naming the effects added, their estimates ± std and units (figure title)."""
+    effects = report.to_dict().get("effects", [])
+    if not effects:
         return "no effect named"
-    flags = report.tentative()
-    return "; ".join(f"{e.name} ({e.axis}{', tentative' if i < len(flags) and flags[i] else ''})"
-                     ": " + ", ".join(f"{k}={v:.4g}" for k, v in e.params.items())
-                     for i, e in enumerate(report.effects))
+    return "; ".join(
+        f"{e['name']} ({e['axis']}{', tentative' if e.get('tentative') else ''}): "
+        + ", ".join(_param_text(e["name"], k, float(v), e.get("std", {}).get(k))
+                    for k, v in e["params"].items())
+        for e in effects)
 
 
 def verdict_box_text(report: GapReport) -> str:
@@ -41,7 +83,7 @@ def verdict_box_text(report: GapReport) -> str:
     d = report.to_dict()
     lines = report.verdict_lines()
     lines += [f"{ax}: gap {shrink_word(sh)} — {sh['reason']}" for ax, sh in d["shrink"].items()]
-    return "\n".join(_wrap(line, 150) for line in lines)
+    return "\n".join(_wrap(signature_words(line), 150) for line in lines)
 
 
 def _wrap(line: str, width: int) -> str:
@@ -70,7 +112,9 @@ def gap_figure(report: GapReport) -> Figure:
     axs = np.empty((2, 2), dtype=object)
     for k in range(2):
         for j in range(2):
-            axs[k, j] = fig.add_subplot(grid[k, j], sharex=axs[0, 0] if k or j else None)
+            # after shares the before panel's y axis: the same scale shows what shrank
+            axs[k, j] = fig.add_subplot(grid[k, j], sharex=axs[0, 0] if k or j else None,
+                                        sharey=axs[k, 0] if j else None)
     unexplained = report.unexplained if report.verdict == "unexplained" else []
     for k, ax_name in enumerate(AXES):
         for j, (which, res, gaps) in enumerate((
@@ -90,9 +134,10 @@ def gap_figure(report: GapReport) -> Figure:
             ax.axhline(0.0, color="k", lw=0.6)
             ok = (report.consistent("before" if which == "before" else "after")[ax_name])
             chi2 = gm.chi2_dof if which == "before" else report.chi2_after(ax_name)
-            ax.set_title(f"{ax_name}, {which}: χ²/dof = {chi2:.3f}, max z = "
-                         f"{gm.max_signature_z:.1f} ({gm.worst}) — "
-                         f"{'consistent' if ok else 'GAP'}", fontsize=9)
+            ax.set_title(f"{ax_name}, {which}: χ²/dof = {chi2:.3f} — "
+                         f"{'consistent with noise' if ok else 'GAP: structure beyond noise'}\n"
+                         f"max |z| = {gm.max_signature_z:.1f}: "
+                         f"{signature_words(str(gm.worst))}", fontsize=9)
             ax.set_ylabel(f"residual {ax_name}, m/s²")
             if k == 1:
                 ax.set_xlabel("θ (encoder), rad")
@@ -103,12 +148,13 @@ def gap_figure(report: GapReport) -> Figure:
             _mark_unexplained(axs[k, 1], mine)
     box = fig.add_subplot(grid[2, :])
     box.axis("off")
-    box.text(0.0, 1.0, verdict_box_text(report), transform=box.transAxes, va="top",
+    box.text(0.0, 1.0, _wrap(CAPTION, 150) + "\n\n" + verdict_box_text(report),
+             transform=box.transAxes, va="top",
              ha="left", fontsize=8, family="monospace",
              bbox={"boxstyle": "round", "facecolor": VERDICT_COLORS.get(
                  report.verdict, VERDICT_COLORS["nothing_detected"]), "edgecolor": "0.5"})
-    fig.suptitle(f"{report.verdict_lines()[0]}\ngap before / after adding: "
-                 f"{effects_label(report)}", fontsize=10,
+    fig.suptitle(f"{signature_words(report.verdict_lines()[0])}\ngap before / after adding: "
+                 f"{effects_label(report)} (± 1 std)", fontsize=10,
                  color=UNEXPLAINED_EDGE if report.verdict == "unexplained" else "k")
     return fig
 
@@ -119,7 +165,8 @@ def _mark_unexplained(ax: Axes, signatures: list[dict]) -> None:
         spine.set_edgecolor(UNEXPLAINED_EDGE)
         spine.set_linewidth(2.0)
     text = "unexplained:\n" + "\n".join(
-        f"{u.get('description', u.get('signature', '?'))}" for u in signatures)
+        signature_words(f"{u.get('description', u.get('signature', '?'))}")
+        for u in signatures)
     ax.text(0.01, 0.98, text, transform=ax.transAxes, va="top", ha="left", fontsize=7.5,
             color=UNEXPLAINED_EDGE, zorder=5,
             bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.85,
