@@ -119,15 +119,20 @@ def truth_units() -> dict[str, str]:
     return out
 
 
-def write_truth(path: str | Path, truth: dict, seed: int, force: bool = False) -> Path:
-    """Write ``truth.json``: the given parameters plus the seed, the package versions and the
-    units of its numbers (:func:`truth_units`)."""
+def truth_manifest(truth: dict, seed: int) -> dict:
+    """The ``truth.json`` object: the given parameters plus the seed, the package versions and
+    the units of its numbers (:func:`truth_units`); recordings log the same object."""
     from calib.units import with_units
 
     manifest = dict(truth)
     manifest["seed"] = int(seed)
     manifest["versions"] = versions()
-    return write_json(path, with_units(manifest, truth_units()), force=force)
+    return with_units(manifest, truth_units())
+
+
+def write_truth(path: str | Path, truth: dict, seed: int, force: bool = False) -> Path:
+    """Write ``truth.json`` (:func:`truth_manifest`)."""
+    return write_json(path, truth_manifest(truth, seed), force=force)
 
 
 def datos_text(p0, v0, noise_var) -> str:

@@ -52,13 +52,10 @@ def parameters_markdown(estimates: Mapping | None, truth: Mapping | None,
 
 
 def truth_manifest(truth: Mapping, seed: int) -> dict:
-    """``truth.json`` as :func:`bench.dataset.write_truth` writes it (seed and versions)."""
-    from bench.dataset import versions
+    """``truth.json`` as :func:`bench.dataset.write_truth` writes it, JSON-normalised."""
+    from bench import dataset
 
-    manifest = dict(truth)
-    manifest["seed"] = int(seed)
-    manifest["versions"] = versions()
-    return json_normal(manifest)
+    return json_normal(dataset.truth_manifest(dict(truth), seed))
 
 
 def decision_markdown(region: ArrivalRegion, true_arrival: str | None = None) -> str:
