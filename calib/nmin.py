@@ -522,13 +522,13 @@ class NminResult(ResultMixin):
         if self.subsample:
             out.append("  subsampled course calibration (course report LS, section 3.2.4):")
             out.append(f"  {'step':>5}{'N':>7}{'x (m)':>9}{'y (m)':>9}{'ours':>7}{'inside':>10}"
-                       f"{'cal-only':>9}{'box x':>8}{'box y':>8}{'course':>8}{'inside':>10}")
+                       f"{'cal-only':>9}{'box x (m)':>10}{'box y (m)':>10}{'course':>8}{'inside':>10}")
             for r in self.subsample:
                 out.append(
                     f"  {r.step:>5}{r.n:>7}{r.estimate[0]:>9.1f}{r.estimate[1]:>9.1f}"
                     f"{r.decision or '-':>7}{','.join(r.inside) or '-':>10}"
-                    f"{r.calibration_only_decision or '-':>9}{r.course_box[0]:>8.1f}"
-                    f"{r.course_box[1]:>8.1f}{r.course_decision or '-':>8}"
+                    f"{r.calibration_only_decision or '-':>9}{r.course_box[0]:>10.1f}"
+                    f"{r.course_box[1]:>10.1f}{r.course_decision or '-':>8}"
                     f"{','.join(r.course_inside) or '-':>10}")
         if self.monte_carlo:
             out.append("  fresh synthetic runs (truth at the decided candidate):")
