@@ -522,7 +522,8 @@ class NminResult(ResultMixin):
         if self.subsample:
             out.append("  subsampled course calibration (course report LS, section 3.2.4):")
             out.append(f"  {'step':>5}{'N':>7}{'x (m)':>9}{'y (m)':>9}{'ours':>7}{'inside':>10}"
-                       f"{'cal-only':>9}{'box x (m)':>10}{'box y (m)':>10}{'course':>8}{'inside':>10}")
+                       f"{'cal-only':>9}{'box x (m)':>10}{'box y (m)':>10}{'course':>8}"
+                       f"{'inside':>10}")
             for r in self.subsample:
                 out.append(
                     f"  {r.step:>5}{r.n:>7}{r.estimate[0]:>9.1f}{r.estimate[1]:>9.1f}"

@@ -81,8 +81,8 @@ class Check:
     """One adequacy check on one axis.
 
     name, axis : the check and the axis ("x", "y").  statistic : its value (χ², g, |z|, …).
-    logp : log p-value under the model (0 for ``rival_shapes``, a model comparison).
-    reference : the reference distribution.  failed_by : "p" (p < α_check) or "criterion".
+    logp : log p-value under the model.
+    reference : the reference distribution.
     size, unit : how big the departure is, in the units of the readings.
     description : words a test engineer can act on ("a 3rd harmonic of θ on x, 0.04 m/s²").
     failed : whether the check failed (set by :func:`run_battery`).
@@ -96,12 +96,11 @@ class Check:
     size: float
     unit: str
     description: str
-    criterion_failed: bool | None = None
     failed: bool = False
 
     @property
-    def p_value(self) -> float | None:
-        return None if self.criterion_failed is not None else float(np.exp(self.logp))
+    def p_value(self) -> float:
+        return float(np.exp(self.logp))
 
     def to_dict(self) -> dict:
         return {"name": self.name, "axis": self.axis, "statistic": float(self.statistic),
@@ -545,11 +544,11 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
             found.append(_walk_whiteness(innovations[k], axis))
         found.append(_rivals(ext, state, k, run.sigma2))
         checks += [c for c in found if c is not None]
-    m = sum(1 for c in checks if c.criterion_failed is None)
+    m = len(checks)
     alpha_check = family_alpha / max(m, 1)
     log_a = float(np.log(alpha_check))
     out = []
     for c in checks:
-        failed = c.criterion_failed if c.criterion_failed is not None else c.logp < log_a
+        failed = c.logp < log_a
         out.append(Check(**{**c.__dict__, "failed": bool(failed)}))
     return Battery(tuple(out), float(family_alpha), float(alpha_check))
