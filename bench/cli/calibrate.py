@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from bench.cli.options import (
+    OptionError,
     add_force,
     add_gravity,
     add_json,
@@ -30,10 +32,16 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
     check_level(args.level)
     check_positive(args.g, "--g")
-    refuse_overwrite([args.plot, args.rrd], args.force)
+    if args.save and Path(args.save).suffix.lower() not in (".json", ".mat"):
+        raise OptionError(f"--save {args.save}: the name must end in .json (the calibration "
+                          "file) or .mat (the MATLAB/Octave export)")
+    refuse_overwrite([args.plot, args.rrd, args.save], args.force)
     ensayo = read_ensayo(args.ensayo)
     nv = noise_var_from_args(args)
     cal = warnings_to_stderr(lambda: calibrate(ensayo, nv, args.method, args.g))
+    if args.save:
+        check_finite(cal.to_dict(), "the estimates")  # a file of finite numbers only
+        _save(args, cal)
     if args.plot:
         from bench.figures import save_calibration_plot
 
@@ -51,8 +59,19 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
               "(intervals use Student t)", file=sys.stderr)
     print(f"{args.ensayo}")
     print(cal.summary(args.level))
-    print_files([args.plot, args.rrd])
+    print_files([args.save, args.plot, args.rrd])
     return 0
+
+
+def _save(args: argparse.Namespace, cal) -> None:
+    """``--save``: the calibration file (docs/calibration-file.md), or its .mat export."""
+    from bench.version import __version__
+    from calib.calfile import save_calibration
+
+    source = ("given" if args.noise_var is not None else
+              "datos.txt" if args.datos else "estimated")
+    save_calibration(args.save, cal, source=args.ensayo, sigma2_source=source,
+                     noise_file=args.datos, tool_version=__version__, force=args.force)
 
 
 def register(sub) -> None:
@@ -66,5 +85,7 @@ def register(sub) -> None:
     add_json(p)
     p.add_argument("--rrd", help="write a rerun recording of the fit to this file")
     p.add_argument("--plot", help="write the fit figure (.png or .svg)")
-    add_force(p, "an existing --rrd / --plot file")
+    p.add_argument("--save", metavar="CAL", help="write the calibration file (cal.json, read "
+                   "by trajectory/validate --calibration) or its MATLAB/Octave export (cal.mat)")
+    add_force(p, "an existing --save / --rrd / --plot file")
     p.set_defaults(handler=_cmd_calibrate)

@@ -2,6 +2,11 @@
 
 Without ``--datos`` the noise variances are estimated from the calibration residuals and P0,
 V0 are the course's (0, 0), (1, 3); a note says so on stderr.
+
+``--calibration cal.json`` (``calibrate --save``, docs/calibration-file.md) replaces
+``--ensayo``: the calibration is read, not re-fitted, and its method and g are the file's
+(``--method`` / ``--g`` given with it must agree). ``--datos`` then gives P0, V0 and the
+vehicle's noise variances only.
 """
 
 from __future__ import annotations
@@ -9,7 +14,23 @@ from __future__ import annotations
 import argparse
 import sys
 
-from bench.cli.options import Deferred, add_gravity, add_json, check_positive, parse_pair
+from bench.cli.options import (
+    GRAVITY,
+    Deferred,
+    OptionError,
+    add_json,
+    check_positive,
+    parse_pair,
+)
+
+
+class _Given(argparse.Action):
+    """Store the value and remember that the option was given (``args.given``): with
+    ``--calibration``, an explicit ``--method`` / ``--g`` is checked against the file."""
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        setattr(namespace, self.dest, values)
+        namespace.given = {*getattr(namespace, "given", ()), self.dest}
 
 
 def _integrators() -> tuple[str, ...]:
@@ -18,8 +39,16 @@ def _integrators() -> tuple[str, ...]:
     return INTEGRATORS
 
 
-def add_course_inputs(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--ensayo", required=True, help="calibration run ensayo.mat (tita, datos)")
+def add_course_inputs(p: argparse.ArgumentParser, calibration: bool = True) -> None:
+    """The course inputs; ``calibration``: ``--calibration`` may replace ``--ensayo``."""
+    if calibration:
+        src = p.add_mutually_exclusive_group(required=True)
+        src.add_argument("--ensayo", help="calibration run ensayo.mat (tita, datos)")
+        src.add_argument("--calibration", metavar="CAL", help="calibration file cal.json "
+                         "(calibrate --save) instead of re-fitting on --ensayo")
+    else:
+        p.add_argument("--ensayo", required=True, help="calibration run ensayo.mat (tita, "
+                       "datos)")
     p.add_argument("--acel", required=True, help="vehicle run acel.mat (t, Aerr)")
     p.add_argument("--puntos", required=True, help="candidate points puntos.mat (A, B, …)")
     p.add_argument("--datos", help="course datos.txt (P0, V0, noise variances)")
@@ -27,12 +56,12 @@ def add_course_inputs(p: argparse.ArgumentParser) -> None:
     p.add_argument("--v0", help="initial velocity x,y in m/s (overrides datos.txt)")
     p.add_argument("--level", type=float, default=0.997,
                    help="confidence level of the region (χ², 2 dof)")
-    p.add_argument("--method", choices=["ols", "wls"], default="ols",
+    p.add_argument("--method", choices=["ols", "wls"], default="ols", action=_Given,
                    help="calibration: per-axis OLS (course) or joint WLS")
     # an explicit metavar: argparse would list the choices (and import scipy) when building
     p.add_argument("--integrator", choices=Deferred(_integrators), default="trapezoid",
                    metavar="RULE", help="double integration rule: %(choices)s")
-    add_gravity(p)
+    p.add_argument("--g", type=float, default=GRAVITY, action=_Given, help="gravity, m/s²")
     add_json(p)
 
 
@@ -44,7 +73,7 @@ def read_course_inputs(args: argparse.Namespace):
     from calib.trajectory import COURSE_P0, COURSE_V0
 
     check_positive(args.g, "--g")
-    ensayo = read_ensayo(args.ensayo)
+    ensayo = read_ensayo(args.ensayo) if args.ensayo else None
     acel = read_acel(args.acel)
     candidates = read_puntos(args.puntos)
     p0, v0, nv = np.array(COURSE_P0), np.array(COURSE_V0), None
@@ -61,3 +90,23 @@ def read_course_inputs(args: argparse.Namespace):
               f"P0 = {p0.tolist()} m ({p0_src}), V0 = {v0.tolist()} m/s ({v0_src})",
               file=sys.stderr)
     return ensayo, acel, candidates, p0, v0, nv
+
+
+def read_calibration_file(args: argparse.Namespace):
+    """The :class:`calib.Calibration` of ``--calibration`` (None without it); sets
+    ``args.method`` and ``args.g`` to the file's, refusing an explicit one that differs."""
+    path = getattr(args, "calibration", None)
+    if not path:
+        return None
+    from calib.calfile import load_calibration
+
+    cal = load_calibration(path)
+    given = getattr(args, "given", set())
+    if "method" in given and args.method != cal.method:
+        raise OptionError(f"--method {args.method} but {path} holds a {cal.method} "
+                          "calibration; drop --method (the file's is used)")
+    if "g" in given and args.g != cal.g:
+        raise OptionError(f"--g {args.g} but {path} was fitted with g = {cal.g} m/s²; drop "
+                          "--g (the file's is used)")
+    args.method, args.g = cal.method, cal.g
+    return cal

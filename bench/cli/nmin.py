@@ -1,6 +1,11 @@
 """``tiltbench nmin``: how many calibration samples are needed to decide the arrival point
 (:mod:`calib.nmin`). ``--json`` prints exactly one JSON object on stdout; progress goes to
-stderr."""
+stderr.
+
+``--calibration cal.json`` is refused (exit 2, one line): every part of the analysis re-fits
+the calibration — on subsamples of the ensayo's θ design, and on fresh runs of that design —
+and a calibration file holds the estimates, not the design. Give ``--ensayo``.
+"""
 
 from __future__ import annotations
 
@@ -29,6 +34,11 @@ def _course_steps() -> str:
 
 def _cmd_nmin(args: argparse.Namespace) -> int:
     from calib.nmin import analyze_nmin  # start-up time of `tiltbench --help`
+
+    if args.calibration:
+        raise OptionError(f"--calibration {args.calibration}: nmin re-fits the calibration on "
+                          "subsamples of the ensayo's θ design, which a calibration file does "
+                          "not hold; give --ensayo E.mat (and --datos) instead")
 
     level = check_level(args.level)
     check_initial_state(args)

@@ -1,5 +1,6 @@
-"""``tiltbench trajectory``: calibrate on the ensayo, correct and integrate the vehicle run,
-decide the arrival point with its confidence region (:mod:`calib.region`).
+"""``tiltbench trajectory``: calibrate on the ensayo (or read ``--calibration cal.json``),
+correct and integrate the vehicle run, decide the arrival point with its confidence region
+(:mod:`calib.region`).
 
 ``--json`` prints exactly one JSON object on stdout (the tree of
 ``calib.trajectory_report.trajectory_tree``).
@@ -9,7 +10,7 @@ from __future__ import annotations
 
 import argparse
 
-from bench.cli.inputs import add_course_inputs, read_course_inputs
+from bench.cli.inputs import add_course_inputs, read_calibration_file, read_course_inputs
 from bench.cli.options import add_force, check_initial_state, check_level
 from bench.cli.output import (
     check_finite,
@@ -30,8 +31,10 @@ def _cmd_trajectory(args: argparse.Namespace) -> int:
     level = check_level(args.level)
     check_initial_state(args)
     refuse_overwrite([args.plot, args.rrd], args.force)
+    cal = read_calibration_file(args)  # None: fit on --ensayo
     ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
-    cal = warnings_to_stderr(lambda: calibrate(ensayo, nv, args.method, args.g))
+    if cal is None:
+        cal = warnings_to_stderr(lambda: calibrate(ensayo, nv, args.method, args.g))
     traj = compute_trajectory(acel, cal, p0, v0, args.integrator)
     region = arrival_region(traj, cal, candidates, nv, level)
     if args.plot:

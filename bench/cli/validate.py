@@ -1,4 +1,9 @@
-"""``tiltbench validate``: estimates from any tool against the truth of a generated set."""
+"""``tiltbench validate``: estimates from any tool against the truth of a generated set.
+
+The estimates are ``--estimates est.json`` (any tool, docs/validate.md) or
+``--calibration cal.json`` (``calibrate --save``: its ``calibrate --json`` object is checked;
+with ``--ensayo`` too, that file must be the one the calibration was fitted on, by SHA-256).
+"""
 
 from __future__ import annotations
 
@@ -26,21 +31,32 @@ def _cmd_validate(args: argparse.Namespace) -> int:
                     if s["student"] == args.student), None)
         truth = student_truth(truth, args.student)
         truth_name = f"{args.truth} (students[{idx}].truth)"
-    est = load_json(args.estimates, "estimates file")
+    if args.calibration:
+        from calib.calfile import file_sha256, read_calibration_document
+
+        doc = read_calibration_document(args.calibration)
+        est, est_name = doc["calibration"], str(args.calibration)
+        est = {k: v for k, v in est.items() if k not in ("fits", "joint")}  # calibrate --json
+        ref = doc["source"]
+        if args.ensayo and ref and file_sha256(args.ensayo) != ref.get("sha256"):
+            raise OptionError(f"--ensayo {args.ensayo} is not the file {args.calibration} was "
+                              f"fitted on ({ref.get('name')}, SHA-256 {ref.get('sha256')})")
+    else:
+        est, est_name = load_json(args.estimates, "estimates file"), str(args.estimates)
     theta, src = None, None
     if args.ensayo:
         from calib.io import read_ensayo
 
         theta, src = read_ensayo(args.ensayo).tita, str(args.ensayo)
     result = validate(truth, est, args.level, args.std, theta, src,
-                      truth_name=truth_name, est_name=str(args.estimates))
+                      truth_name=truth_name, est_name=est_name)
     if result.std_passed is None and result.std_source == "reported":
-        print(f"note: {args.estimates}: the reported std was not checked against the design "
+        print(f"note: {est_name}: the reported std was not checked against the design "
               f"({args.truth} has no noise variances or θ design)", file=sys.stderr)
     if args.json:
         print_json(result.to_dict())
     else:
-        print(f"{args.estimates} against {args.truth} at level {args.level:g}")
+        print(f"{est_name} against {args.truth} at level {args.level:g}")
         print(result.summary())
     return 0 if result.passed else 1
 
@@ -57,9 +73,12 @@ def register(sub) -> None:
                    help="truth.json of the generated set, or a class answer_key.json")
     p.add_argument("--student", help="student folder name when --truth is a class "
                    "answer_key.json (e.g. student_001)")
-    p.add_argument("--estimates", required=True,
-                   help="est.json: the calibrate --json object or {axes: {x: {bias, scale}, "
-                   "y: {...}}}")
+    est = p.add_mutually_exclusive_group(required=True)
+    est.add_argument("--estimates",
+                     help="est.json: the calibrate --json object or {axes: {x: {bias, scale}, "
+                     "y: {...}}}")
+    est.add_argument("--calibration", metavar="CAL",
+                     help="calibration file cal.json (calibrate --save) instead of --estimates")
     p.add_argument("--level", type=float, default=0.99, help="test level")
     p.add_argument("--std", choices=["auto", "reported", "design"], default="auto",
                    help="standard deviations: reported in est.json, or recomputed from the "

@@ -1,0 +1,214 @@
+"""The calibration file (``calibrate --save``, :mod:`calib.calfile`, docs/calibration-file.md):
+exact round trip, the same trajectory as re-fitting, clear refusals, the .mat export."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+
+import numpy as np
+import pytest
+import scipy.io
+
+from bench.cli import main
+from calib.calfile import FILE_UNITS, FORMAT, FORMAT_VERSION, load_calibration
+from calib.calibration import calibrate
+from calib.io import read_datos, read_ensayo
+from calib.units import missing_units
+
+
+def _run(capsys, *argv) -> tuple[int, str, str]:
+    rc = main([str(a) for a in argv])
+    cap = capsys.readouterr()
+    return rc, cap.out, cap.err
+
+
+def _error(capsys, *argv) -> str:
+    """A command that must fail on bad input: exit 2, nothing on stdout, one line on stderr."""
+    rc, out, err = _run(capsys, *argv)
+    assert rc == 2, err
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("tiltbench ") and "error:" in lines[0]
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def saved(tmp_path_factory, course_dir):
+    """``calibrate ensayo.mat --datos datos.txt --save cal.json`` (and ``cal.mat``) once."""
+    out = tmp_path_factory.mktemp("cal")
+    for name in ("cal.json", "cal.mat"):
+        assert main(["calibrate", str(course_dir / "ensayo.mat"), "--datos",
+                     str(course_dir / "datos.txt"), "--save", str(out / name), "--json"]) == 0
+    return out
+
+
+def _course_cal(course_dir, method="ols"):
+    return calibrate(read_ensayo(course_dir / "ensayo.mat"),
+                     read_datos(course_dir / "datos.txt").noise_var, method)
+
+
+def test_file_round_trips_exactly(saved, course_dir):
+    assert load_calibration(saved / "cal.json") == _course_cal(course_dir)
+
+
+@pytest.mark.parametrize("noise", ["datos", "none"])
+def test_wls_and_estimated_sigma2_round_trip(tmp_path, course_dir, capsys, noise):
+    extra = ["--datos", course_dir / "datos.txt"] if noise == "datos" else []
+    rc, _, _ = _run(capsys, "calibrate", course_dir / "ensayo.mat", "--method", "wls", *extra,
+                    "--save", tmp_path / "w.json", "--json")
+    assert rc == 0
+    nv = read_datos(course_dir / "datos.txt").noise_var if extra else None
+    assert load_calibration(tmp_path / "w.json") == calibrate(
+        read_ensayo(course_dir / "ensayo.mat"), nv, "wls")
+    doc = json.loads((tmp_path / "w.json").read_text())
+    assert doc["sigma2_source"] == ("datos.txt" if extra else "estimated")
+
+
+def test_header_names_format_source_units_and_tool(saved, course_dir):
+    doc = json.loads((saved / "cal.json").read_text())
+    assert (doc["format"], doc["format_version"]) == (FORMAT, FORMAT_VERSION)
+    assert list(doc)[:2] == ["format", "format_version"]  # the header comes first
+    sha = hashlib.sha256((course_dir / "ensayo.mat").read_bytes()).hexdigest()
+    assert doc["source"] == {"name": "ensayo.mat", "sha256": sha}
+    assert doc["noise_file"]["name"] == "datos.txt"
+    assert doc["sigma2_source"] == "datos.txt" and doc["sigma2"] == [0.25, 0.64]
+    assert doc["tool"] == {"name": "tiltbench", "version": "0.1.0"}
+    assert doc["units"] == FILE_UNITS and missing_units(doc) == []
+    cal = _course_cal(course_dir)
+    assert np.array_equal(doc["params"], cal.params) and np.array_equal(doc["cov"], cal.cov)
+
+
+def test_trajectory_from_the_file_equals_refitting(saved, course_dir, capsys):
+    common = ["--acel", course_dir / "acel.mat", "--puntos", course_dir / "puntos.mat",
+              "--datos", course_dir / "datos.txt", "--json"]
+    rc1, refit, _ = _run(capsys, "trajectory", "--ensayo", course_dir / "ensayo.mat", *common)
+    rc2, fromfile, _ = _run(capsys, "trajectory", "--calibration", saved / "cal.json", *common)
+    assert rc1 == rc2 == 0
+    a, b = json.loads(refit), json.loads(fromfile)
+
+    def close(x, y, path="") -> None:
+        if isinstance(x, dict):
+            assert x.keys() == y.keys(), path
+            for k in x:
+                close(x[k], y[k], f"{path}.{k}")
+        elif isinstance(x, list):
+            assert len(x) == len(y), path
+            for i, (u, v) in enumerate(zip(x, y, strict=True)):
+                close(u, v, f"{path}[{i}]")
+        elif isinstance(x, float):
+            assert abs(x - y) <= 1e-12 * max(1.0, abs(x)), path
+        else:
+            assert x == y, path
+
+    close(a, b)
+    assert a["decision"] == b["decision"]
+
+
+def test_trajectory_takes_method_from_the_file(saved, course_dir, capsys):
+    msg = _error(capsys, "trajectory", "--calibration", saved / "cal.json", "--method", "wls",
+                 "--acel", course_dir / "acel.mat", "--puntos", course_dir / "puntos.mat")
+    assert "--method wls" in msg and "cal.json" in msg
+
+
+def test_trajectory_refuses_ensayo_and_calibration_together(saved, course_dir, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["trajectory", "--calibration", str(saved / "cal.json"), "--ensayo",
+              str(course_dir / "ensayo.mat"), "--acel", str(course_dir / "acel.mat"),
+              "--puntos", str(course_dir / "puntos.mat")])
+    assert exit_.value.code == 2
+    assert "not allowed with" in capsys.readouterr().err
+
+
+def test_nmin_refuses_a_calibration_file(saved, course_dir, capsys):
+    msg = _error(capsys, "nmin", "--calibration", saved / "cal.json",
+                 "--acel", course_dir / "acel.mat", "--puntos", course_dir / "puntos.mat")
+    assert "--ensayo" in msg and "θ design" in msg
+
+
+def _edited(tmp_path, saved, edit) -> str:
+    doc = json.loads((saved / "cal.json").read_text())
+    edit(doc)
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(doc))
+    return str(path)
+
+
+@pytest.mark.parametrize("edit, field", [
+    (lambda d: d.update(format_version=2), "format_version"),
+    (lambda d: d.update(format="something-else"), "format"),
+    (lambda d: d.pop("format"), "format"),
+    (lambda d: d.pop("cov"), "cov"),
+    (lambda d: d.pop("sigma2_source"), "sigma2_source"),
+    (lambda d: d.update(params=[1.0, 2.0]), "params"),
+    (lambda d: d["calibration"].pop("method"), "calibration.method"),
+    (lambda d: d.update(method="lsq"), "method"),
+])
+def test_bad_files_are_one_line_naming_file_and_field(tmp_path, saved, course_dir, capsys,
+                                                      edit, field):
+    path = _edited(tmp_path, saved, edit)
+    msg = _error(capsys, "trajectory", "--calibration", path, "--acel",
+                 course_dir / "acel.mat", "--puntos", course_dir / "puntos.mat")
+    assert path in msg and f"'{field}'" in msg
+
+
+def test_a_calibrate_json_output_is_not_a_calibration_file(tmp_path, course_dir, capsys):
+    rc, out, _ = _run(capsys, "calibrate", course_dir / "ensayo.mat", "--json")
+    assert rc == 0
+    (tmp_path / "est.json").write_text(out)
+    msg = _error(capsys, "trajectory", "--calibration", tmp_path / "est.json", "--acel",
+                 course_dir / "acel.mat", "--puntos", course_dir / "puntos.mat")
+    assert "'format'" in msg and "--save" in msg
+
+
+def test_save_refuses_overwrite_without_force(saved, course_dir, capsys):
+    before = (saved / "cal.json").read_bytes()
+    msg = _error(capsys, "calibrate", course_dir / "ensayo.mat", "--method", "wls", "--save",
+                 saved / "cal.json")
+    assert "--force" in msg and (saved / "cal.json").read_bytes() == before
+    rc, _, _ = _run(capsys, "calibrate", course_dir / "ensayo.mat", "--datos",
+                    course_dir / "datos.txt", "--save", saved / "cal.json", "--force")
+    assert rc == 0 and (saved / "cal.json").read_bytes() == before  # same inputs, same bytes
+
+
+def test_save_needs_json_or_mat(tmp_path, course_dir, capsys):
+    msg = _error(capsys, "calibrate", course_dir / "ensayo.mat", "--save", tmp_path / "c.txt")
+    assert ".json" in msg and ".mat" in msg and not (tmp_path / "c.txt").exists()
+
+
+def test_mat_export_holds_the_same_numbers(saved):
+    doc = json.loads((saved / "cal.json").read_text())
+    m = scipy.io.loadmat(str(saved / "cal.mat"))
+    assert str(m["format"][0]) == FORMAT and m["format_version"].item() == FORMAT_VERSION
+    assert str(m["method"][0]) == doc["method"] and m["g"].item() == doc["g"]
+    assert m["n"].item() == doc["n"]
+    assert np.array_equal(m["params"].ravel(), doc["params"])
+    assert np.array_equal(m["cov"], doc["cov"])
+    assert np.array_equal(m["std"].ravel(), doc["std"])
+    assert np.array_equal(m["sigma2"].ravel(), doc["sigma2"])
+    assert str(m["sigma2_source"][0]) == "datos.txt"
+    assert str(m["source_sha256"][0]) == doc["source"]["sha256"]
+    assert str(m["param_names"][0]).split(",") == doc["param_names"]
+
+
+def test_validate_reads_the_calibration_file(tmp_path, capsys):
+    out = tmp_path / "set"
+    rc, _, _ = _run(capsys, "generate", "calibration", "--out", out, "--count", 300)
+    assert rc == 0
+    rc, est, _ = _run(capsys, "calibrate", out / "ensayo.mat", "--save", tmp_path / "c.json",
+                      "--json")
+    assert rc == 0
+    (tmp_path / "est.json").write_text(est)
+    base = ["validate", "--truth", out / "truth.json", "--json"]
+    rc1, a, _ = _run(capsys, *base, "--estimates", tmp_path / "est.json")
+    rc2, b, _ = _run(capsys, *base, "--calibration", tmp_path / "c.json")
+    assert rc1 == rc2 and a.replace("est.json", "c.json") == b
+    rc3, c, _ = _run(capsys, *base, "--calibration", tmp_path / "c.json", "--ensayo",
+                     out / "ensayo.mat")
+    assert rc3 in (0, 1) and json.loads(c)
+    other = tmp_path / "other"
+    _run(capsys, "generate", "calibration", "--out", other, "--count", 300, "--seed", 1)
+    msg = _error(capsys, *base, "--calibration", tmp_path / "c.json", "--ensayo",
+                 other / "ensayo.mat")
+    assert "SHA-256" in msg
