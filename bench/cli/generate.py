@@ -403,13 +403,13 @@ def _add_gps_options(p: argparse.ArgumentParser) -> None:
         "--gps-rate, --gps-latency whole IMU periods.")
     g.add_argument("--gps", action="store_true",
                    help="write gps.mat with the default receiver (1 Hz, 3 m, no velocity)")
-    g.add_argument("--gps-rate", type=float, metavar="HZ", help="fix rate, Hz (default 1)")
+    g.add_argument("--gps-rate", type=float, metavar="HZ", help="fix rate, Hz (1 if not given)")
     g.add_argument("--gps-sigma", type=float, metavar="M",
-                   help="position noise std per axis, m (default 3)")
+                   help="position noise std per axis, m (3 if not given)")
     g.add_argument("--gps-vel-sigma", type=float, metavar="MPS",
                    help="also velocity fixes with this noise std per axis, m/s (thesis: 0.1)")
     g.add_argument("--gps-latency", type=float, metavar="S",
-                   help="the fix at t reports the state at t - S, s (default 0)")
+                   help="the fix at t reports the state at t - S, s (0 if not given)")
     g.add_argument("--gps-outage", action="append", metavar="A,B",
                    help="no fixes for A <= t <= B, s (repeatable)")
 
