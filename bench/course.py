@@ -11,7 +11,9 @@ Random streams (all from the user's seed):
   the same sensor errors reproduces ``ensayo.mat`` byte for byte);
 * ``SeedSequence(seed).spawn(3)`` gives independent streams for (0) the scenario: sensor
   errors and acceleration profile, (1) the vehicle's white noise, (2) the answer letter and the
-  decoy points.
+  decoy points;
+* receiver fixes (``gps.mat``, only when asked for) use the child ``spawn_key=(13,)``
+  (:func:`bench.gnss.gnss_rng`), so the other files do not change.
 
 Candidates: exactly one is the true arrival point (MuJoCo's final position); its letter is
 drawn uniformly. One decoy sits near where the **uncorrected** trajectory ends (within
@@ -31,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bench.gnss import GPS_FILE, GnssFixes
 from bench.model import TableEdits
 from bench.sensors import SensorErrorModel
 from bench.tilt import CalibrationConfig, CalibrationRun, ThetaDesign, generate_calibration
@@ -165,9 +168,11 @@ class CourseSet:
     sensor: SensorErrorModel
     config: CourseConfig
     seed: int
+    gps: GnssFixes | None = None
+    """Receiver fixes on the vehicle run (:mod:`bench.gnss`), or None: no ``gps.mat``."""
 
     def truth(self) -> dict:
-        return {
+        out = {
             "kind": "course", "answer": self.answer, "raw_end_decoy": self.raw_decoy,
             "candidates": {k: np.asarray(v).tolist() for k, v in self.candidates.items()},
             "true_final_position": self.vehicle.truth.final_position.tolist(),
@@ -176,6 +181,10 @@ class CourseSet:
             "vehicle": self.vehicle.truth_dict(), "calibration": self.calibration.truth(),
             "files": list(COURSE_FILES[:-1]),
         }
+        if self.gps is not None:
+            out["gps"] = self.gps.truth_dict()
+            out["files"].append(GPS_FILE)
+        return out
 
 
 def make_course_set(config: CourseConfig | None = None, seed: int = 0) -> CourseSet:
@@ -206,6 +215,7 @@ def write_course_files(course: CourseSet, folder: str | Path, truth: bool = True
     body of :func:`write_course`, also used inside a class set and the demo's output.
     ``truth=False`` leaves ``truth.json`` out (a student folder)."""
     from bench.dataset import save_mat, write_datos, write_truth
+    from bench.gnss import write_gps
 
     folder = Path(folder)
     v = course.vehicle
@@ -220,6 +230,8 @@ def write_course_files(course: CourseSet, folder: str | Path, truth: bool = True
                             for k, p in course.candidates.items()}, force=True),
         "datos": write_datos(folder / "datos.txt", v.config.p0, v.config.v0, nv, force=True),
     }
+    if course.gps is not None:
+        paths["gps"] = write_gps(folder / GPS_FILE, course.gps, force=True)
     if truth:
         paths["truth"] = write_truth(folder / "truth.json", course.truth(), course.seed,
                                      force=True)
@@ -227,7 +239,8 @@ def write_course_files(course: CourseSet, folder: str | Path, truth: bool = True
 
 
 def write_course(course: CourseSet, out: str | Path, force: bool = False) -> dict[str, str]:
-    """Write the five files into ``out`` as one set (:func:`calib.atomic.atomic_dir`).
+    """Write the five files (six with ``gps.mat``) into ``out`` as one set
+    (:func:`calib.atomic.atomic_dir`).
 
     The files go to a temporary directory beside ``out``, which replaces ``out`` as a whole
     when complete: an interrupted run leaves the old set or the new one, never a mix; other
@@ -235,10 +248,11 @@ def write_course(course: CourseSet, out: str | Path, force: bool = False) -> dic
     while another run writes ``out`` (:class:`calib.atomic.OutputBusyError`).
     """
     out = Path(out)
-    clash = [n for n in COURSE_FILES if (out / n).exists()]
+    owned = COURSE_FILES + (() if course.gps is None else (GPS_FILE,))
+    clash = [n for n in owned if (out / n).exists()]
     if clash and not force:  # checked again under the lock by atomic_dir
         raise FileExistsError(f"{out}: {', '.join(clash)} already exist(s)")
-    with atomic_dir(out, force, owned=COURSE_FILES) as tmp:
+    with atomic_dir(out, force, owned=owned) as tmp:
         written = write_course_files(course, tmp)
     return {k: str(out / p.name) for k, p in written.items()}
 

@@ -100,10 +100,12 @@ def _run_units() -> dict[str, str]:
     return out
 
 
-def truth_units() -> dict[str, str]:
+def truth_units(gps: bool = False) -> dict[str, str]:
     """The ``units`` of every ``truth.json`` (calibration, vehicle and course sets; a course
     set nests a calibration and a vehicle truth under ``calibration`` / ``vehicle``), the one
-    home of truth units (docs/units.md)."""
+    home of truth units (docs/units.md). ``gps``: the set has a receiver (a ``gps`` object,
+    :data:`bench.gnss.GPS_UNITS`); its units are added only then, so a set without fixes keeps
+    its bytes."""
     from calib.units import nest
 
     run = _run_units()
@@ -116,6 +118,10 @@ def truth_units() -> dict[str, str]:
         "course.scale_limit": "1", "course.noise_var": "(m/s²)²", "course.min_separation": "m",
         "course.raw_jitter": "m", "course.n_segments": "count",
     })
+    if gps:
+        from bench.gnss import GPS_UNITS
+
+        out.update(GPS_UNITS)
     return out
 
 
@@ -127,7 +133,7 @@ def truth_manifest(truth: dict, seed: int) -> dict:
     manifest = dict(truth)
     manifest["seed"] = int(seed)
     manifest["versions"] = versions()
-    return with_units(manifest, truth_units())
+    return with_units(manifest, truth_units(gps="gps" in truth))
 
 
 def write_truth(path: str | Path, truth: dict, seed: int, force: bool = False) -> Path:

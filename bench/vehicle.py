@@ -269,17 +269,26 @@ def make_vehicle_run(config: VehicleConfig | None = None, seed: int = 0,
 VEHICLE_FILES = ("acel.mat", "datos.txt", "truth.json")
 
 
-def write_vehicle(run: VehicleRun, out: str | Path, force: bool = False) -> dict[str, str]:
-    """Write ``acel.mat`` {t, Aerr}, ``datos.txt`` and ``truth.json`` into ``out``."""
+def write_vehicle(run: VehicleRun, out: str | Path, force: bool = False,
+                  gps=None) -> dict[str, str]:
+    """Write ``acel.mat`` {t, Aerr}, ``datos.txt`` and ``truth.json`` into ``out``; with
+    ``gps`` (:class:`bench.gnss.GnssFixes` of this run) also ``gps.mat`` and the receiver
+    under ``truth.json``'s ``gps`` key."""
     from bench.dataset import prepare_out_dir, save_mat, write_datos, write_truth
 
-    out = prepare_out_dir(out, list(VEHICLE_FILES), force)
+    names = list(VEHICLE_FILES) + ([] if gps is None else ["gps.mat"])
+    out = prepare_out_dir(out, names, force)
     nv = [run.config.sensor.x.noise_var, run.config.sensor.y.noise_var]
+    truth = run.truth_dict() if gps is None else {**run.truth_dict(), "gps": gps.truth_dict()}
     paths = {
         "acel": save_mat(out / "acel.mat", {"t": run.t, "Aerr": run.aerr}, force=True),
         "datos": write_datos(out / "datos.txt", run.config.p0, run.config.v0, nv, force=True),
-        "truth": write_truth(out / "truth.json", run.truth_dict(), run.seed, force=True),
+        "truth": write_truth(out / "truth.json", truth, run.seed, force=True),
     }
+    if gps is not None:
+        from bench.gnss import write_gps
+
+        paths["gps"] = write_gps(out / "gps.mat", gps, force=True)
     return {k: str(v) for k, v in paths.items()}
 
 

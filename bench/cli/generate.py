@@ -194,6 +194,60 @@ def course_config(args: argparse.Namespace):
                         min_separation=args.min_separation, g=args.g)
 
 
+GPS_MAGNITUDE_LIMITS = {"--gps-sigma": 1e7, "--gps-vel-sigma": 1e7, "--gps-latency": 1e9,
+                        "--gps-outage": 1e9}
+"""Largest magnitudes of the receiver options (m, m/s, s, s): results stay finite."""
+
+
+def _check_nonnegative(value: float, what: str) -> float:
+    """``value`` if finite, >= 0 and within :data:`GPS_MAGNITUDE_LIMITS`, else
+    :class:`OptionError` naming ``what`` (0: a noiseless receiver, no latency)."""
+    if not (math.isfinite(value) and value >= 0):
+        raise OptionError(f"{what} must be a finite number >= 0, got {value}")
+    if value > GPS_MAGNITUDE_LIMITS[what]:
+        raise OptionError(f"{what}: magnitude at most {GPS_MAGNITUDE_LIMITS[what]:g} (a sane "
+                          f"value keeps every result finite), got {value:g}")
+    return float(value)
+
+
+def gps_receiver(args: argparse.Namespace, t=None):
+    """:class:`bench.gnss.Receiver` from ``--gps`` / ``--gps-*``, or None when none is given
+    (no ``gps.mat``; every other output unchanged). With ``t`` (the IMU sample times) the fix
+    grid is checked too, before the run is simulated."""
+    given = (args.gps or args.gps_rate is not None or args.gps_sigma is not None
+             or args.gps_vel_sigma is not None or args.gps_latency is not None
+             or bool(args.gps_outage))
+    if not given:
+        return None
+    from bench.gnss import Receiver, fix_epochs
+
+    kw = {}
+    if args.gps_rate is not None:
+        kw["rate_hz"] = check_positive(args.gps_rate, "--gps-rate")
+    if args.gps_sigma is not None:
+        kw["pos_sigma_m"] = _check_nonnegative(args.gps_sigma, "--gps-sigma")
+    if args.gps_vel_sigma is not None:
+        kw["vel_sigma_mps"] = _check_nonnegative(args.gps_vel_sigma, "--gps-vel-sigma")
+    if args.gps_latency is not None:
+        kw["latency_s"] = _check_nonnegative(args.gps_latency, "--gps-latency")
+    outages = []
+    for text in args.gps_outage or ():
+        a, b = parse_pair(text, "--gps-outage")
+        for v in (a, b):
+            _check_nonnegative(float(v), "--gps-outage")
+        if a > b:
+            raise OptionError(f"--gps-outage: start must be <= end (s), got {text!r}")
+        outages.append((float(a), float(b)))
+    receiver = Receiver(outages=tuple(outages), **kw)
+    if t is not None:
+        try:
+            fix_epochs(receiver, t)
+        except ValueError as exc:
+            raise OptionError(f"--gps-rate/--gps-latency/--gps-outage with --rate "
+                              f"{args.rate:g}: {exc}") from None
+    return receiver
+
+
 # ---------------------------------------------------------------- handlers
 BIG_RUN_BYTES = 512 * 2**20
 """Runs estimated above this (seconds to minutes) say on stderr that they started."""
@@ -234,19 +288,26 @@ def _cmd_vehicle(args: argparse.Namespace) -> int:
 
     refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
     cfg = vehicle_config(args, sensor_model(args), parse_profile(args.profile))
+    receiver = gps_receiver(args, cfg.t)
     _announce("generate vehicle", _check_vehicle_size(cfg))
     run = make_vehicle_run(cfg, args.seed)
-    check_finite({"t": run.t, "Aerr": run.aerr, "truth": run.truth_dict()},
+    gps = _fixes(receiver, run.truth, args.seed)
+    check_finite({"t": run.t, "Aerr": run.aerr, "truth": run.truth_dict(),
+                  **({} if gps is None else {"gps.mat": gps.mat_variables()})},
                  f"{args.out}: the run")
-    paths = write_vehicle(run, args.out, force=args.force)
+    paths = write_vehicle(run, args.out, force=args.force, gps=gps)
     if args.rrd:
         from bench.record import record_vehicle_truth
 
         paths["rrd"] = str(record_vehicle_truth(run, args.rrd, force=args.force))
-    print_summary(args, f"generate vehicle: {run.t.shape[0]} samples, seed {args.seed}",
-                  {"n": int(run.t.shape[0]), "files": paths,
-                   "final_position": run.truth.final_position.tolist()},
-                  {"n": "count", "final_position": "m"})
+    summary = {"n": int(run.t.shape[0]), "files": paths,
+               "final_position": run.truth.final_position.tolist()}
+    if gps is not None:
+        summary["n_gps"] = gps.n
+    print_summary(args, f"generate vehicle: {run.t.shape[0]} samples, seed {args.seed}"
+                  + _gps_title(gps), summary,
+                  {"n": "count", "final_position": "m", "n_gps": "count"} if gps is not None
+                  else {"n": "count", "final_position": "m"})
     return 0
 
 
@@ -256,24 +317,34 @@ def _cmd_course(args: argparse.Namespace) -> int:
 
     refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
     config = course_config(args)
+    receiver = gps_receiver(args, config.vehicle.t)
     _announce("generate course", limits.vehicle_run_bytes(config.vehicle.n_samples)
               + limits.static_run_bytes(args.count))
     try:
         course = make_course_set(config, args.seed)
     except RuntimeError as exc:  # bench.course.place_candidates: no room for the decoys
         raise OptionError(f"--min-separation {args.min_separation:g}: {exc}") from None
+    if receiver is not None:
+        from dataclasses import replace
+
+        course = replace(course, gps=_fixes(receiver, course.vehicle.truth, args.seed))
     check_finite({"ensayo.mat": course.calibration.datos, "acel.mat": course.vehicle.aerr,
-                  "truth.json": course.truth()}, f"{args.out}: the course set")
+                  "truth.json": course.truth(),
+                  **({} if course.gps is None else {"gps.mat": course.gps.mat_variables()})},
+                 f"{args.out}: the course set")
     paths = write_course(course, args.out, force=args.force)
     if args.rrd:
         from bench.record import record_course_truth
 
         paths["rrd"] = str(record_course_truth(course, args.rrd, force=args.force))
+    summary = {"files": paths, "n_calibration": int(course.calibration.tita.shape[0]),
+               "n_vehicle": int(course.vehicle.t.shape[0])}
+    units = {"n_calibration": "count", "n_vehicle": "count"}
+    if course.gps is not None:
+        summary["n_gps"] = course.gps.n
+        units["n_gps"] = "count"
     print_summary(args, f"generate course: a course set, seed {args.seed} (the answer is in "
-                  "truth.json only)",
-                  {"files": paths, "n_calibration": int(course.calibration.tita.shape[0]),
-                   "n_vehicle": int(course.vehicle.t.shape[0])},
-                  {"n_calibration": "count", "n_vehicle": "count"})
+                  "truth.json only)" + _gps_title(course.gps), summary, units)
     return 0
 
 
@@ -310,7 +381,39 @@ def _cmd_class(args: argparse.Namespace) -> int:
     return 0
 
 
+def _fixes(receiver, truth, seed: int):
+    """The receiver's fixes on the run's MuJoCo truth (own seed stream), or None."""
+    if receiver is None:
+        return None
+    from bench.gnss import fixes_for_seed
+
+    return fixes_for_seed(receiver, truth, seed)
+
+
+def _gps_title(gps) -> str:
+    return "" if gps is None else f", {gps.n} GNSS fixes"
+
+
 # ---------------------------------------------------------------- options
+def _add_gps_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group(
+        "GNSS receiver (gps.mat: t_gps M×1 s, pos M×2 m, vel M×2 m/s; docs/gnss.md)",
+        "Any of these writes gps.mat and the receiver into truth.json; without them the "
+        "outputs are unchanged. Fixes fall on the IMU grid: --rate a whole multiple of "
+        "--gps-rate, --gps-latency whole IMU periods.")
+    g.add_argument("--gps", action="store_true",
+                   help="write gps.mat with the default receiver (1 Hz, 3 m, no velocity)")
+    g.add_argument("--gps-rate", type=float, metavar="HZ", help="fix rate, Hz (1 if not given)")
+    g.add_argument("--gps-sigma", type=float, metavar="M",
+                   help="position noise std per axis, m (3 if not given)")
+    g.add_argument("--gps-vel-sigma", type=float, metavar="MPS",
+                   help="also velocity fixes with this noise std per axis, m/s (thesis: 0.1)")
+    g.add_argument("--gps-latency", type=float, metavar="S",
+                   help="the fix at t reports the state at t - S, s (0 if not given)")
+    g.add_argument("--gps-outage", action="append", metavar="A,B",
+                   help="no fixes for A <= t <= B, s (repeatable)")
+
+
 def _add_vehicle_options(p: argparse.ArgumentParser, profile_default: str | None) -> None:
     p.add_argument("--duration", type=float, default=60.0, help="run length, s")
     p.add_argument("--rate", type=float, default=100.0, help="sample rate, Hz")
@@ -354,6 +457,7 @@ def _register_vehicle(kinds) -> None:
     add_sensor_options(p)
     _add_vehicle_options(p, profile_default="course")
     p.add_argument("--rrd", help="also record the run next to its truth to this rerun file")
+    _add_gps_options(p)
     p.set_defaults(handler=_cmd_vehicle)
 
 
@@ -371,6 +475,7 @@ def _register_course(kinds) -> None:
                    help="smallest distance between candidate points, m")
     add_gravity(p)
     p.add_argument("--rrd", help="also record the set next to its truth to this rerun file")
+    _add_gps_options(p)
     p.set_defaults(handler=_cmd_course)
 
 
