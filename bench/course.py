@@ -214,8 +214,7 @@ def write_course_files(course: CourseSet, folder: str | Path, truth: bool = True
     """Write the set's files into the existing, empty ``folder`` (no checks, no lock): the
     body of :func:`write_course`, also used inside a class set and the demo's output.
     ``truth=False`` leaves ``truth.json`` out (a student folder)."""
-    from bench.dataset import save_mat, write_datos, write_truth
-    from bench.gnss import write_gps
+    from bench.dataset import save_mat, write_datos, write_gps, write_truth
 
     folder = Path(folder)
     v = course.vehicle

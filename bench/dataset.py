@@ -69,6 +69,12 @@ def save_mat(path: str | Path, variables: dict[str, np.ndarray], force: bool = F
     return atomic_write_bytes(path, mat_bytes(variables), force=force)
 
 
+def write_gps(path: str | Path, fixes, force: bool = False) -> Path:
+    """Write ``gps.mat`` (course style, :func:`save_mat`) of :class:`bench.gnss.GnssFixes`:
+    ``t_gps`` M×1 s, ``pos`` M×2 m, and ``vel`` M×2 m/s when the receiver gives velocity."""
+    return save_mat(path, fixes.mat_variables(), force=force)
+
+
 def write_json(path: str | Path, obj: dict, force: bool = False) -> Path:
     """Write JSON with sorted keys (stable bytes) atomically."""
     return atomic_write_text(path, dumps(obj), force=force)

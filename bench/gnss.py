@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -238,13 +237,5 @@ def fixes_for_seed(receiver: Receiver, truth, seed: int) -> GnssFixes:
     return simulate_fixes(receiver, truth.t, truth.pos, truth.vel, gnss_rng(seed))
 
 
-def write_gps(path: str | Path, fixes: GnssFixes, force: bool = False) -> Path:
-    """Write ``gps.mat`` (course style, :func:`bench.dataset.save_mat`): ``t_gps`` M×1 s,
-    ``pos`` M×2 m, and ``vel`` M×2 m/s when the receiver gives velocity."""
-    from bench.dataset import save_mat
-
-    return save_mat(path, fixes.mat_variables(), force=force)
-
-
 __all__ = ["GNSS_STREAM", "GPS_FILE", "GPS_UNITS", "GnssFixes", "Receiver", "fix_epochs",
-           "fixes_for_seed", "gnss_rng", "simulate_fixes", "write_gps"]
+           "fixes_for_seed", "gnss_rng", "simulate_fixes"]

@@ -286,7 +286,7 @@ def write_vehicle(run: VehicleRun, out: str | Path, force: bool = False,
         "truth": write_truth(out / "truth.json", truth, run.seed, force=True),
     }
     if gps is not None:
-        from bench.gnss import write_gps
+        from bench.dataset import write_gps
 
         paths["gps"] = write_gps(out / "gps.mat", gps, force=True)
     return {k: str(v) for k, v in paths.items()}
