@@ -186,7 +186,8 @@ class FusionResult(ResultMixin):
                  dt=self.dt, final_position=self.final_position.tolist(),
                  final_position_cov=self.final_position_cov.tolist())
         d["units"] = {
-            "times": "s", "t_gps": "s", "dt": "s", "estimates": "[m, m, m/s, m/s, m/s², m/s², 1, 1]",
+            "times": "s", "t_gps": "s", "dt": "s",
+            "estimates": "[m, m, m/s, m/s, m/s², m/s², 1, 1]",
             "smoothed": "[m, m, m/s, m/s, m/s², m/s², 1, 1]",
             "covariances": "products of the state units", "smoothed_covariances":
             "products of the state units", "P0": "products of the state units",
