@@ -196,3 +196,34 @@ def test_estimate_scale_option_consistent():
     lo, hi = band(8, 200)
     nees = res.nees(truth)[:, -1].mean()
     assert lo <= nees <= hi, nees
+
+
+def test_velocity_fixes_nis_in_band():
+    rng = np.random.default_rng(SEED + 3)
+    data = generate(rng, R=200, t_end=30.0)
+    vel_truth = data["truth"][:, data["is_fix"], 2:4]
+    vel_fix = vel_truth + rng.normal(0, 0.1, vel_truth.shape)
+    res = fuse(data["t"], data["acc_m"], data["t_gps"], data["fixes"], bias=BIAS_HAT,
+               scale=SCALE_HAT, cal_cov=CAL_COV, noise_var=SIGMA_A2, sigma_pos=SIGMA_POS,
+               p0=P0_HAT, v0=V0_HAT, p0_cov=P0_COV, v0_cov=V0_COV, vel_gps=vel_fix,
+               sigma_vel=0.1, keep="fixes")
+    count = 200 * res.t_gps.size
+    lo, hi = band(4, count)
+    assert lo <= res.nis().mean() <= hi
+    lo, hi = band(6, 200)
+    assert lo <= res.nees(stored_truth(data, res))[:, -1].mean() <= hi
+
+
+def test_rejects_bad_inputs():
+    t = np.arange(11) * 0.1
+    acc = np.zeros((11, 2))
+    kw = dict(bias=BIAS_HAT, scale=SCALE_HAT, cal_cov=CAL_COV, noise_var=SIGMA_A2,
+              sigma_pos=SIGMA_POS, p0=P0_HAT, v0=V0_HAT, p0_cov=P0_COV, v0_cov=V0_COV)
+    bad = acc.copy()
+    bad[3, 0] = np.nan
+    with pytest.raises(ValueError, match="acc_m"):
+        fuse(t, bad, [0.5], [[0.0, 0.0]], **kw)
+    with pytest.raises(ValueError, match="t_gps"):
+        fuse(t, acc, [2.0], [[0.0, 0.0]], **kw)
+    with pytest.raises(ValueError, match="pos_gps"):
+        fuse(t, acc, [0.5, 0.7], [[0.0, 0.0]], **kw)
