@@ -337,9 +337,11 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
     Phi = np.broadcast_to(np.eye(n), (Rn, n, n)).copy()
     xs_f = np.empty((Rn, n_store, n))
     Ps_f = np.empty((Rn, n_store, n, n))
-    xs_p = np.empty_like(xs_f)
-    Ps_p = np.empty_like(Ps_f)
-    Phis = np.empty_like(Ps_f)  # Φ from the previous stored node to this one
+    # priors and Φ (from the previous stored node) are kept only for the smoother
+    n_prior = n_store if smoother else 1
+    xs_p = np.empty((Rn, n_prior, n))
+    Ps_p = np.empty((Rn, n_prior, n, n))
+    Phis = np.empty((Rn, n_prior, n, n))
     M = t_gps.shape[0]
     nu = np.empty((Rn, M, d))
     S_all = np.empty((Rn, M, d, d))
@@ -370,7 +372,8 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
             x[:, 0:2] += x[:, 2:4] * h + a * g1
             x[:, 2:4] += a * h
             P = F @ P @ F.transpose(0, 2, 1) + Qk
-            Phi = F @ Phi
+            if smoother:
+                Phi = F @ Phi
         xp, Pp = x.copy(), P.copy()
         m = fixi[k]
         if m >= 0:
@@ -384,7 +387,8 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
             P = 0.5 * (P + P.transpose(0, 2, 1))
             nu[:, m], S_all[:, m] = v, S
         if store[k]:
-            xs_p[:, j], Ps_p[:, j], Phis[:, j] = xp, Pp, Phi
+            if smoother:
+                xs_p[:, j], Ps_p[:, j], Phis[:, j] = xp, Pp, Phi
             xs_f[:, j], Ps_f[:, j] = x, P
             Phi = np.broadcast_to(np.eye(n), (Rn, n, n)).copy()
             j += 1
