@@ -1,0 +1,437 @@
+"""Linear Kalman fusion of the corrected accelerometers with position fixes (issue 13, part 3).
+
+Course vehicle: it moves in the horizontal plane without rotating, so the x and y
+accelerometers read ``d²x/dt²`` and ``d²y/dt²`` (world axes, m/s²), as in
+:mod:`calib.trajectory`. Positions m, velocities m/s, biases m/s², scale factors 1, time s.
+
+Model
+-----
+State ``x = [px, py, vx, vy, bx, by]`` (and ``[sx, sy]`` with ``estimate_scale=True``).
+Each reading ``A_m,k`` is held over its step ``[t_k, t_k+1)`` (zero-order hold, the same hold
+for its noise), the corrected acceleration is (course model, :func:`calib.correct.correct`)::
+
+    a_k = (A_m,k - b - v_k) / (1 + s),        v_k ~ N(0, σ_a²) per axis, white
+
+and over a step of length h the double integrator is discretised exactly::
+
+    p⁺ = p + v h + a h²/2,     v⁺ = v + a h,     b⁺ = b,     s⁺ = s
+
+* ``estimate_scale=False`` (default): s is fixed at the calibration estimate ŝ; the map is
+  linear in the state (``F`` constant, input ``G A_m/(1+ŝ)``). The scale uncertainty
+  ``σ_s²`` is folded into Q as a white term ``σ_s² â_k²/(1+ŝ)²`` (``∂a/∂s = -a/(1+s)``); it
+  is a constant in truth, so this is an approximation, good while ``σ_s·|a|·T²/2`` over the
+  longest gap between fixes stays far below the fix σ (mm against m on the course).
+* ``estimate_scale=True``: s is a state, the step is linearised about the current estimate
+  (``∂a/∂b = -1/(1+ŝ)``, ``∂a/∂s = -â/(1+ŝ)``): an extended filter with a linear
+  measurement.
+
+Process noise per step and axis, exact for the held noise sample (``g = [h²/2, h]``)::
+
+    Q_pv = σ_a²/(1+ŝ)² · g gᵀ      (+ the folded scale term, same shape)
+
+P0 is block-diagonal: the initial position and velocity covariances and the calibration
+covariance (bias block, and scale block when estimated, with their cross terms); the
+bias–scale cross terms are dropped when the scale is not estimated. R is ``σ_pos² I`` (and
+``σ_vel² I`` for velocity fixes). Nothing is tuned: Q from the accelerometer's stated
+variance, P0 from the stated initial uncertainty and the calibration, R from the receiver.
+
+Fixes come at their own times ``t_gps`` (asynchronous): the timeline is the union of the IMU
+times and the fix times; a fix inside ``(t_k, t_k+1)`` splits that step in two with the same
+held reading (the two parts are given independent noise: an approximation of order
+``σ_a² h⁴``, 1e-8 m² at 50 Hz). Update (Joseph form, symmetric for any gain)::
+
+    ν = z - H x⁻,   S = H P⁻ Hᵀ + R,   K = P⁻ Hᵀ S⁻¹,
+    x⁺ = x⁻ + K ν,  P⁺ = (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ
+
+Rauch–Tung–Striebel smoother, backwards over the stored nodes (``Φ_j`` the product of the
+step Jacobians between stored nodes j and j+1; exact on any subset of nodes that includes
+every fix, since no information enters between them)::
+
+    C_j = P⁺_j Φ_jᵀ (P⁻_j+1)⁻¹,  xˢ_j = x⁺_j + C_j (xˢ_j+1 - x⁻_j+1),
+    Pˢ_j = P⁺_j + C_j (Pˢ_j+1 - P⁻_j+1) C_jᵀ
+
+Why numpy and not filterpy
+--------------------------
+filterpy 2.0.0 (PyPI) has ``KalmanFilter`` and ``rts_smoother``, but (1) its smoother
+predicts ``x_k+1|k = F x_k`` without the control input (``rts_smoother`` in
+``filterpy/kalman/kalman_filter.py``), while this model is driven by the accelerations
+(``B u`` every step), so its smoothed means would be wrong; (2) it runs one run at a time, a
+Python call per step: 6000 steps × 500 Monte Carlo runs is 3·10⁶ predict calls (minutes),
+where this module steps all runs at once as (R, n, n) arrays (a Monte Carlo of 500 runs of
+3000 steps takes about a second).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from calib.results import ResultMixin, readonly
+
+STATE_NAMES = ("px", "py", "vx", "vy", "bx", "by")
+SCALE_NAMES = ("sx", "sy")
+CAL_ORDER = ("bias_x", "scale_x", "bias_y", "scale_y")
+"""Order of the calibration covariance (:class:`calib.calibration.Calibration.cov`)."""
+
+
+def _as_runs(a, width: int, name: str) -> tuple[np.ndarray, bool]:
+    a = np.asarray(a, dtype=float)
+    batched = a.ndim == 3
+    if a.ndim == 2:
+        a = a[None]
+    if a.ndim != 3 or a.shape[-1] != width:
+        raise ValueError(f"{name} must be (N, {width}) or (R, N, {width}), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} has NaN or Inf: remove or interpolate those samples")
+    return a, batched
+
+
+def _cov2(v, name: str) -> np.ndarray:
+    v = np.asarray(v, dtype=float)
+    if v.ndim == 0:
+        return np.eye(2) * v
+    if v.shape == (2,):
+        return np.diag(v)
+    if v.shape == (2, 2):
+        return v
+    raise ValueError(f"{name} must be a variance, two variances or a (2, 2) matrix, "
+                     f"got shape {v.shape}")
+
+
+@dataclass(frozen=True, eq=False)
+class FusionResult(ResultMixin):
+    """Kalman filter (and smoother) estimates of one run or of R runs at once.
+
+    Attributes (a leading run axis R when the inputs had one)
+    ----------
+    state_names : names of the n state components (``STATE_NAMES`` [+ ``SCALE_NAMES``]).
+    times : (K,) s, the stored nodes (all: IMU times merged with fix times; or the start,
+        every fix and the end).
+    estimates : (K, n) filtered state (after the update at a fix), m, m/s, m/s², 1.
+    covariances : (K, n, n) their covariances.
+    is_fix : (K,) bool, node carries a fix.
+    t_gps : (M,) s.  innovations : (M, d) ν, m (and m/s).  innovation_covs : (M, d, d) S.
+    smoothed, smoothed_covariances : RTS estimates at the nodes, or empty when not asked.
+    P0 : (n, n) initial covariance.  Q : (n, n) process noise of one nominal IMU step
+        (median step, without the data-dependent scale term).  R : (d, d) fix noise.
+    noise_var : (2,) accelerometer white-noise variance σ_a², (m/s²)².
+    estimate_scale : bool.  dt : nominal IMU step, s.
+    """
+
+    _TITLE = "Kalman fusion"
+    _UNITS = ("t s; px, py m; vx, vy m/s; bx, by m/s²; sx, sy 1; covariances in the products "
+              "of those units; innovations m (position) and m/s (velocity)")
+
+    state_names: tuple[str, ...]
+    times: np.ndarray
+    estimates: np.ndarray
+    covariances: np.ndarray
+    is_fix: np.ndarray
+    t_gps: np.ndarray
+    innovations: np.ndarray
+    innovation_covs: np.ndarray
+    smoothed: np.ndarray
+    smoothed_covariances: np.ndarray
+    P0: np.ndarray
+    Q: np.ndarray
+    R: np.ndarray
+    noise_var: np.ndarray
+    estimate_scale: bool
+    dt: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "state_names", tuple(self.state_names))
+        for name in ("times", "estimates", "covariances", "t_gps", "innovations",
+                     "innovation_covs", "smoothed", "smoothed_covariances", "P0", "Q", "R",
+                     "noise_var"):
+            object.__setattr__(self, name, readonly(getattr(self, name)))
+        object.__setattr__(self, "is_fix", readonly(self.is_fix, bool))
+        object.__setattr__(self, "dt", float(self.dt))
+        object.__setattr__(self, "estimate_scale", bool(self.estimate_scale))
+
+    @property
+    def n_runs(self) -> int:
+        """R, or 0 for a single run (no run axis)."""
+        return self.estimates.shape[0] if self.estimates.ndim == 3 else 0
+
+    @property
+    def final_position(self) -> np.ndarray:
+        """(2,) or (R, 2) filtered position at the last node, m."""
+        return self.estimates[..., -1, :2].copy()
+
+    @property
+    def final_position_cov(self) -> np.ndarray:
+        """(2, 2) or (R, 2, 2) its covariance, m²."""
+        return self.covariances[..., -1, :2, :2].copy()
+
+    def nis(self) -> np.ndarray:
+        """(M,) or (R, M) normalized innovation squared ``νᵀ S⁻¹ ν`` (χ²(d) if consistent)."""
+        sol = np.linalg.solve(self.innovation_covs, self.innovations[..., None])[..., 0]
+        return np.einsum("...i,...i->...", self.innovations, sol)
+
+    def nees(self, truth: np.ndarray, smoothed: bool = False) -> np.ndarray:
+        """(K,) or (R, K) ``eᵀ P⁻¹ e`` against the true states ``truth`` (same shape)."""
+        x = self.smoothed if smoothed else self.estimates
+        P = self.smoothed_covariances if smoothed else self.covariances
+        e = np.asarray(truth, dtype=float) - x
+        return np.einsum("...i,...i->...", e, np.linalg.solve(P, e[..., None])[..., 0])
+
+    def to_dict(self) -> dict:
+        d = {name: getattr(self, name).tolist() for name in (
+            "times", "estimates", "covariances", "is_fix", "t_gps", "innovations",
+            "innovation_covs", "smoothed", "smoothed_covariances", "P0", "Q", "R",
+            "noise_var")}
+        d.update(state_names=list(self.state_names), estimate_scale=self.estimate_scale,
+                 dt=self.dt, final_position=self.final_position.tolist(),
+                 final_position_cov=self.final_position_cov.tolist())
+        d["units"] = {
+            "times": "s", "t_gps": "s", "dt": "s",
+            "estimates": "[m, m, m/s, m/s, m/s², m/s², 1, 1]",
+            "smoothed": "[m, m, m/s, m/s, m/s², m/s², 1, 1]",
+            "covariances": "products of the state units", "smoothed_covariances":
+            "products of the state units", "P0": "products of the state units",
+            "Q": "products of the state units", "R": "[m², m², (m/s)², (m/s)²]",
+            "innovations": "[m, m, m/s, m/s]", "innovation_covs": "[m², m², (m/s)², (m/s)²]",
+            "noise_var": "(m/s²)²", "final_position": "m", "final_position_cov": "m²",
+        }
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> FusionResult:
+        return cls(tuple(d["state_names"]), d["times"], d["estimates"], d["covariances"],
+                   d["is_fix"], d["t_gps"], d["innovations"], d["innovation_covs"],
+                   d["smoothed"], d["smoothed_covariances"], d["P0"], d["Q"], d["R"],
+                   d["noise_var"], d["estimate_scale"], d["dt"])
+
+    def summary(self) -> str:
+        def mat(name: str, m: np.ndarray, unit: str) -> list[str]:
+            rows = ["  " + " ".join(f"{v:11.4g}" for v in row) for row in m]
+            return [f"{name} ({unit}; order {', '.join(self.state_names)}):"
+                    if m.shape[0] == len(self.state_names) else f"{name} ({unit}):", *rows]
+        nis = self.nis()
+        d = self.innovations.shape[-1]
+        lines = [
+            f"Kalman fusion: {self.times.shape[-1]} nodes over "
+            f"{self.times[-1] - self.times[0]:g} s, IMU step {self.dt:g} s, "
+            f"{self.t_gps.shape[0]} fixes ({'position+velocity' if d == 4 else 'position'}), "
+            f"scale {'estimated' if self.estimate_scale else 'fixed (folded into Q)'}"
+            + (f", {self.n_runs} runs" if self.n_runs else ""),
+            f"  accelerometer noise σ_a² = {self.noise_var.tolist()} (m/s²)²",
+        ]
+        lines += mat("P0", self.P0, "SI, products of state units")
+        lines += mat("Q per IMU step", self.Q, "SI, products of state units")
+        lines += mat("R", self.R, "m² / (m/s)²")
+        fp = self.final_position.reshape(-1, 2)[0]
+        fs = np.sqrt(np.diag(self.final_position_cov.reshape(-1, 2, 2)[0]))
+        lines.append(f"  final position ({fp[0]:.3f}, {fp[1]:.3f}) m, std "
+                     f"({fs[0]:.3f}, {fs[1]:.3f}) m")
+        if nis.size:
+            lines.append(f"  mean NIS {float(np.mean(nis)):.3f} (expected {d})")
+        return "\n".join(lines)
+
+
+def _timeline(t: np.ndarray, t_gps: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Merged nodes (K,), the IMU sample held from each node (K,), the fix index (K,) or -1."""
+    tol = 1e-9 * max(1.0, float(np.max(np.abs(t))))
+    k_imu = np.clip(np.searchsorted(t, t_gps, side="right") - 1, 0, t.shape[0] - 1)
+    on_grid = np.abs(t[k_imu] - t_gps) <= tol
+    extra = t_gps[~on_grid]
+    nodes = np.concatenate([t, extra])
+    order = np.argsort(nodes, kind="stable")
+    nodes = nodes[order]
+    hold = np.concatenate([np.arange(t.shape[0]), k_imu[~on_grid]])[order]
+    fix = np.full(nodes.shape[0], -1)
+    pos_imu = np.argsort(order)  # node position of each original entry
+    m_idx = np.arange(t_gps.shape[0])
+    fix[pos_imu[k_imu[on_grid]]] = m_idx[on_grid]
+    fix[pos_imu[t.shape[0] + np.arange(extra.shape[0])]] = m_idx[~on_grid]
+    return nodes, hold, fix
+
+
+def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos,
+         p0, v0, p0_cov, v0_cov, vel_gps=None, sigma_vel=None, estimate_scale=False,
+         smoother=False, keep="all") -> FusionResult:
+    """Kalman filter (and RTS smoother) of accelerometer readings with position fixes.
+
+    Parameters
+    ----------
+    t : (N,) IMU times, s, strictly increasing.
+    acc_m : (N, 2) measured accelerations ``A_m`` (uncorrected), m/s²; or (R, N, 2) for R
+        runs on the same times (Monte Carlo).
+    t_gps : (M,) fix times, s, strictly increasing, within ``[t_0, t_N-1]``.
+    pos_gps : (M, 2) or (R, M, 2) position fixes, m.
+    bias : (2,) m/s² and scale : (2,) dimensionless, the calibration estimate.
+    cal_cov : (4, 4) its covariance, order ``[bias_x, scale_x, bias_y, scale_y]``.
+    noise_var : σ_a², variance of each reading's white noise, (2,) (m/s²)² or a scalar.
+    sigma_pos : σ of each position fix coordinate, m.
+    p0 : (2,) m, v0 : (2,) m/s initial estimate; p0_cov, v0_cov : their covariances (scalar,
+        (2,) or (2, 2)), m², (m/s)².
+    vel_gps : optional (M, 2) or (R, M, 2) velocity fixes, m/s, with sigma_vel, m/s.
+    estimate_scale : add ``[sx, sy]`` to the state (linearised step), else fix at ``scale``.
+    smoother : also run the RTS smoother over the stored nodes.
+    keep : "all" stores every node (IMU times merged with fix times); "fixes" stores the
+        start, the fixes and the end only (Monte Carlo: the smoother is exact on them too).
+
+    Returns
+    -------
+    FusionResult
+    """
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or t.shape[0] < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
+        raise ValueError("t must be 1-D, finite, strictly increasing, with ≥ 2 samples")
+    acc, batched = _as_runs(acc_m, 2, "acc_m")
+    if acc.shape[1] != t.shape[0]:
+        raise ValueError(f"acc_m has {acc.shape[1]} samples for {t.shape[0]} times")
+    t_gps = np.asarray(t_gps, dtype=float).reshape(-1)
+    if np.any(np.diff(t_gps) <= 0) or (t_gps.size and (t_gps[0] < t[0] or t_gps[-1] > t[-1])):
+        raise ValueError("t_gps must be strictly increasing and inside [t[0], t[-1]]")
+    zp, _ = _as_runs(pos_gps, 2, "pos_gps")
+    if zp.shape[1] != t_gps.shape[0]:
+        raise ValueError(f"pos_gps has {zp.shape[1]} fixes for {t_gps.shape[0]} times")
+    Rn = acc.shape[0]
+    zs = [np.broadcast_to(zp, (Rn, *zp.shape[1:]))]
+    r_diag = [float(sigma_pos) ** 2] * 2
+    if vel_gps is not None:
+        zv, _ = _as_runs(vel_gps, 2, "vel_gps")
+        zs.append(np.broadcast_to(zv, (Rn, *zv.shape[1:])))
+        r_diag += [float(sigma_vel) ** 2] * 2
+    Z = np.concatenate(zs, axis=-1)  # (R, M, d)
+    d = Z.shape[-1]
+    Rm = np.diag(r_diag)
+
+    n = 8 if estimate_scale else 6
+    H = np.zeros((d, n))
+    H[:2, :2] = np.eye(2)
+    if d == 4:
+        H[2:4, 2:4] = np.eye(2)
+    bias = np.broadcast_to(np.asarray(bias, dtype=float), (2,))
+    scale = np.broadcast_to(np.asarray(scale, dtype=float), (2,))
+    cal_cov = np.asarray(cal_cov, dtype=float)
+    if cal_cov.shape != (4, 4):
+        raise ValueError(f"cal_cov must be (4, 4) in order {CAL_ORDER}, got {cal_cov.shape}")
+    sa2 = np.broadcast_to(np.asarray(noise_var, dtype=float), (2,)).copy()
+
+    # P0: position, velocity, then the calibration blocks (bias [0, 2], scale [1, 3]).
+    P0 = np.zeros((n, n))
+    P0[:2, :2] = _cov2(p0_cov, "p0_cov")
+    P0[2:4, 2:4] = _cov2(v0_cov, "v0_cov")
+    cal_idx = [0, 2, 1, 3] if estimate_scale else [0, 2]
+    P0[4:, 4:] = cal_cov[np.ix_(cal_idx, cal_idx)]
+    ss2 = np.zeros(2) if estimate_scale else np.diag(cal_cov)[[1, 3]]
+    x0 = np.concatenate([p0, v0, bias] + ([scale] if estimate_scale else []))
+
+    nodes, hold, fixi = _timeline(t, t_gps)
+    K_nodes = nodes.shape[0]
+    if keep == "all":
+        store = np.ones(K_nodes, bool)
+    elif keep == "fixes":
+        store = fixi >= 0
+        store[0] = store[-1] = True
+    else:
+        raise ValueError(f"keep must be 'all' or 'fixes', got {keep!r}")
+    n_store = int(store.sum())
+
+    x = np.broadcast_to(x0, (Rn, n)).copy()
+    P = np.broadcast_to(P0, (Rn, n, n)).copy()
+    Phi = np.broadcast_to(np.eye(n), (Rn, n, n)).copy()
+    xs_f = np.empty((Rn, n_store, n))
+    Ps_f = np.empty((Rn, n_store, n, n))
+    # priors and Φ (from the previous stored node) are kept only for the smoother
+    n_prior = n_store if smoother else 1
+    xs_p = np.empty((Rn, n_prior, n))
+    Ps_p = np.empty((Rn, n_prior, n, n))
+    Phis = np.empty((Rn, n_prior, n, n))
+    M = t_gps.shape[0]
+    nu = np.empty((Rn, M, d))
+    S_all = np.empty((Rn, M, d, d))
+    eye = np.eye(n)
+    F = np.broadcast_to(np.eye(n), (Rn, n, n)).copy()
+    Qk = np.zeros((Rn, n, n))
+    ax = np.arange(2)
+    j = 0
+    for k in range(K_nodes):
+        if k > 0:
+            h = nodes[k] - nodes[k - 1]
+            A = acc[:, hold[k - 1], :]
+            s_hat = x[:, 6:8] if estimate_scale else scale
+            c = 1.0 / (1.0 + s_hat)  # (R, 2) or (2,)
+            a = (A - x[:, 4:6]) * c
+            # Jacobian of the step (exact for b; linearised for s).
+            F[:, ax, ax + 2] = h
+            F[:, ax, ax + 4] = -0.5 * h * h * c
+            F[:, ax + 2, ax + 4] = -h * c
+            if estimate_scale:
+                F[:, ax, ax + 6] = -0.5 * h * h * a * c
+                F[:, ax + 2, ax + 6] = -h * a * c
+            q = (sa2 + ss2 * a * a) * c * c  # (R, 2): (σ_a² + σ_s² â²)/(1+ŝ)²
+            g1, g2 = 0.5 * h * h, h
+            Qk[:, ax, ax] = q * g1 * g1
+            Qk[:, ax, ax + 2] = Qk[:, ax + 2, ax] = q * g1 * g2
+            Qk[:, ax + 2, ax + 2] = q * g2 * g2
+            x[:, 0:2] += x[:, 2:4] * h + a * g1
+            x[:, 2:4] += a * h
+            P = F @ P @ F.transpose(0, 2, 1) + Qk
+            if smoother:
+                Phi = F @ Phi
+        xp, Pp = x.copy(), P.copy()
+        m = fixi[k]
+        if m >= 0:
+            v = Z[:, m, :] - x @ H.T
+            S = H @ P @ H.T + Rm
+            PHt = P @ H.T
+            Kg = np.linalg.solve(S, PHt.transpose(0, 2, 1)).transpose(0, 2, 1)
+            x = x + np.einsum("rij,rj->ri", Kg, v)
+            IKH = eye - Kg @ H
+            P = IKH @ P @ IKH.transpose(0, 2, 1) + Kg @ Rm @ Kg.transpose(0, 2, 1)
+            P = 0.5 * (P + P.transpose(0, 2, 1))
+            nu[:, m], S_all[:, m] = v, S
+        if store[k]:
+            if smoother:
+                xs_p[:, j], Ps_p[:, j], Phis[:, j] = xp, Pp, Phi
+            xs_f[:, j], Ps_f[:, j] = x, P
+            Phi = np.broadcast_to(np.eye(n), (Rn, n, n)).copy()
+            j += 1
+
+    if smoother:
+        xsm, Psm = rts(xs_f, Ps_f, xs_p, Ps_p, Phis)
+    else:
+        xsm, Psm = np.zeros((Rn, 0, n)), np.zeros((Rn, 0, n, n))
+
+    dt = float(np.median(np.diff(t)))
+    Qnom = np.zeros((n, n))
+    g = np.array([0.5 * dt * dt, dt])
+    for i in range(2):
+        Qnom[np.ix_([i, i + 2], [i, i + 2])] = sa2[i] / (1.0 + scale[i]) ** 2 * np.outer(g, g)
+    out = [xs_f, Ps_f, nu, S_all, xsm, Psm]
+    if not batched:
+        out = [o[0] for o in out]
+    names = STATE_NAMES + (SCALE_NAMES if estimate_scale else ())
+    return FusionResult(names, nodes[store], out[0], out[1], fixi[store] >= 0, t_gps, out[2],
+                        out[3], out[4], out[5], P0, Qnom, Rm, sa2, estimate_scale, dt)
+
+
+def rts(x_f, P_f, x_p, P_p, Phi):
+    """Rauch–Tung–Striebel smoother over stored nodes (module docstring).
+
+    Parameters
+    ----------
+    x_f, P_f : (R, K, n), (R, K, n, n) filtered (posterior) means and covariances.
+    x_p, P_p : the predicted (prior) ones at the same nodes.
+    Phi : (R, K, n, n), ``Phi[:, j]`` maps node j-1 to node j (``Phi[:, 0]`` unused).
+
+    Returns
+    -------
+    Smoothed means (R, K, n) and covariances (R, K, n, n).
+    """
+    xs, Ps = x_f.copy(), P_f.copy()
+    for j in range(x_f.shape[1] - 2, -1, -1):
+        # C = P⁺_j Φᵀ (P⁻_j+1)⁻¹, through a solve with the symmetric P⁻_j+1.
+        C = np.linalg.solve(P_p[:, j + 1], Phi[:, j + 1] @ P_f[:, j]).transpose(0, 2, 1)
+        xs[:, j] = x_f[:, j] + np.einsum("rij,rj->ri", C, xs[:, j + 1] - x_p[:, j + 1])
+        Pj = P_f[:, j] + C @ (Ps[:, j + 1] - P_p[:, j + 1]) @ C.transpose(0, 2, 1)
+        Ps[:, j] = 0.5 * (Pj + Pj.transpose(0, 2, 1))
+    return xs, Ps
+
+
+__all__ = ["CAL_ORDER", "FusionResult", "SCALE_NAMES", "STATE_NAMES", "fuse", "rts"]
