@@ -363,6 +363,43 @@ def read_ensayo(path: str | os.PathLike) -> Ensayo:
     return e
 
 
+@dataclass(frozen=True)
+class Fixes:
+    """Position fixes of a receiver: ``t_gps`` (M,) s increasing, ``pos`` (M, 2) m, ``vel``
+    (M, 2) m/s or None."""
+
+    t_gps: np.ndarray
+    pos: np.ndarray
+    vel: np.ndarray | None = None
+    source: str = "<memory>"
+
+
+def read_gps(path: str | os.PathLike) -> Fixes:
+    """Read ``gps.mat``: ``t_gps`` (M×1, s, increasing), ``pos`` (M×2, m) and optionally
+    ``vel`` (M×2, m/s) (``tiltbench generate vehicle|course --gps``, docs/gnss.md)."""
+    path = Path(path)
+    mat = _loadmat(path, "the gps .mat file (t_gps M×1 s, pos M×2 m, optional vel M×2 m/s)")
+    where = str(path)
+    _require(mat, ("t_gps", "pos"))
+    t = _column(_get(mat, path, "t_gps"), where, "t_gps")
+    pos = _two_columns(_get(mat, path, "pos"), where, "pos")
+    vel = _two_columns(_get(mat, path, "vel"), where, "vel") if "vel" in mat else None
+    for name, arr in (("pos", pos), ("vel", vel)):
+        if arr is not None and arr.shape[0] != t.shape[0]:
+            raise DataError(f"{where}: 't_gps' has {t.shape[0]} fixes but '{name}' has "
+                            f"{arr.shape[0]}")
+    check_finite(t, where, "t_gps")
+    check_finite(pos, where, "pos")
+    _check_magnitude(t, MAX_ABS_TIME, where, "t_gps", "s")
+    if vel is not None:
+        check_finite(vel, where, "vel")
+    if t.shape[0] < 1:
+        raise DataError(f"{where}: no fixes in 't_gps'")
+    check_time(t, where, "t_gps")
+    _note_extra(mat, ("t_gps", "pos", "vel"), "a receiver's fixes")
+    return Fixes(t_gps=t, pos=pos, vel=vel, source=where)
+
+
 def read_acel(path: str | os.PathLike) -> Acel:
     """Read a course ``acel.mat``: ``t`` (M×1, s, uniform), ``Aerr`` (M×2, m/s²).
 

@@ -215,8 +215,8 @@ def test_unwritable_output_names_the_requested_file(capsys, tmp_path, monkeypatc
 
 
 HELP_COMMANDS = [["generate", "calibration"], ["generate", "vehicle"], ["generate", "course"],
-                 ["generate", "class"], ["calibrate"], ["trajectory"], ["nmin"], ["validate"],
-                 ["gap"], ["record", "read"], ["demo"]]
+                 ["generate", "class"], ["calibrate"], ["trajectory"], ["nmin"], ["fuse"],
+                 ["validate"], ["gap"], ["record", "read"], ["demo"]]
 
 
 @pytest.mark.parametrize("command", HELP_COMMANDS, ids=" ".join)

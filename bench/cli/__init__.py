@@ -30,6 +30,7 @@ from bench.cli import (  # noqa: E402
     calibrate,
     demo,
     examples,
+    fuse,
     gap,
     generate,
     nmin,
@@ -39,7 +40,7 @@ from bench.cli import (  # noqa: E402
 )
 from bench.cli.options import Parser, resolve_deferred  # noqa: E402
 
-COMMANDS = (generate, calibrate, trajectory, nmin, record, validate, gap, demo, examples)
+COMMANDS = (generate, calibrate, trajectory, nmin, fuse, record, validate, gap, demo, examples)
 """Command modules, in the order of the help."""
 
 

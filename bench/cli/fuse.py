@@ -1,0 +1,89 @@
+"""``tiltbench fuse``: the vehicle's accelerometers fused with a receiver's position fixes.
+
+    tiltbench fuse --acel acel.mat --gps gps.mat --puntos puntos.mat
+                   (--calibration cal.json | --ensayo ensayo.mat) [--datos datos.txt]
+                   [--gps-sigma M] [--gps-vel-sigma MPS] [--smoother] [--level L] [--json]
+
+The calibration comes from ``--calibration`` or is fitted on ``--ensayo`` (as
+``trajectory``); P0, V0 and the noise variances come from ``--datos`` (else the course
+values, the noise estimated). The filter is :func:`calib.fusion.fuse` (docs/fusion.md): Q from
+the stated noise and the calibration covariance, R from the receiver's σ, P0 from the
+calibration covariance (P0 and V0 are known exactly in the course), no tuning. The arrival
+decision uses the fused final position and its covariance.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from bench.cli.inputs import add_course_inputs, read_calibration_file, read_course_inputs
+from bench.cli.options import check_initial_state, check_level, check_positive
+from bench.cli.output import check_finite, print_json
+
+
+def _cmd_fuse(args: argparse.Namespace) -> int:
+    # domain imports here, not at module level: start-up time of `tiltbench --help`
+    import numpy as np
+
+    from calib.calibration import calibrate
+    from calib.fusion import fuse
+    from calib.io import read_gps
+    from calib.region import decide
+
+    level = check_level(args.level)
+    check_initial_state(args)
+    sigma_pos = check_positive(args.gps_sigma, "--gps-sigma")
+    sigma_vel = (None if args.gps_vel_sigma is None
+                 else check_positive(args.gps_vel_sigma, "--gps-vel-sigma"))
+    fixes = read_gps(args.gps)
+    cal = read_calibration_file(args)  # None: fit on --ensayo
+    ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
+    if cal is None:
+        cal = calibrate(ensayo, nv, args.method, args.g)
+    noise_var = (np.asarray(nv, dtype=float) if nv is not None
+                 else np.array([cal.fits[a].sigma2.item() for a in ("x", "y")]))
+    t = acel.t
+    inside = (fixes.t_gps >= t[0]) & (fixes.t_gps <= t[-1])
+    if not np.any(inside):
+        raise ValueError(f"{fixes.source}: no fix falls within the vehicle run "
+                         f"[{t[0]:g}, {t[-1]:g}] s")
+    vel = None
+    if fixes.vel is not None and sigma_vel is not None:
+        vel = fixes.vel[inside]
+    res = fuse(t, acel.aerr, fixes.t_gps[inside], fixes.pos[inside],
+               bias=cal.bias, scale=cal.scale, cal_cov=cal.cov, noise_var=noise_var,
+               sigma_pos=sigma_pos, p0=p0, v0=v0, p0_cov=0.0, v0_cov=0.0,
+               vel_gps=vel, sigma_vel=sigma_vel if vel is not None else None,
+               smoother=args.smoother)
+    est = np.asarray(res.final_position, dtype=float).reshape(2)
+    cov = np.asarray(res.final_position_cov, dtype=float).reshape(2, 2)
+    d2 = {n: float((c - est) @ np.linalg.solve(cov, c - est)) for n, c in candidates.items()}
+    letter, inside_names, reason = decide(d2, level)
+    decision = {"decision": letter, "inside": list(inside_names), "reason": reason,
+                "level": level, "mahalanobis": {n: float(np.sqrt(v)) for n, v in d2.items()}}
+    out = {"fusion": res.to_dict(), "decision": decision,
+           "units": {"decision.level": "1", "decision.mahalanobis.*": "1"}}
+    check_finite(out, "the result")
+    if args.json:
+        print_json(out)
+        return 0
+    print(res.summary())
+    print(f"decision: {letter or 'undecided'} ({reason}); fixes used: "
+          f"{int(inside.sum())} of {inside.size}")
+    return 0
+
+
+def register(sub) -> None:
+    p = sub.add_parser("fuse", help="fuse the vehicle's accelerometers with position fixes "
+                                    "(Kalman filter, docs/fusion.md)")
+    add_course_inputs(p)
+    p.add_argument("--gps", required=True, help="gps.mat: t_gps M×1 s, pos M×2 m, "
+                                                "optional vel M×2 m/s (docs/gnss.md)")
+    p.add_argument("--gps-sigma", type=float, default=3.0,
+                   help="σ of each position fix coordinate, m (3 if not given)")
+    p.add_argument("--gps-vel-sigma", type=float,
+                   help="σ of each velocity fix coordinate, m/s (velocity fixes used only "
+                        "when given)")
+    p.add_argument("--smoother", action="store_true",
+                   help="also run the Rauch-Tung-Striebel smoother")
+    p.set_defaults(handler=_cmd_fuse)
