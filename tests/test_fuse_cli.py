@@ -64,3 +64,41 @@ def test_missing_gps_file_is_one_line(capsys, course, tmp_path):
                       tmp_path / "none.mat", "--puntos", course / "puntos.mat", "--ensayo",
                       course / "ensayo.mat", "--datos", course / "datos.txt")
     assert rc == 2 and len(err.strip().splitlines()) == 1 and "none.mat" in err
+
+
+def test_fuse_plot_shows_the_fused_region_smaller_than_dead_reckoning(capsys, course, tmp_path):
+    png = tmp_path / "fuse.png"
+    rc, out, _ = _run(capsys, "fuse", *_files(course), "--ensayo", course / "ensayo.mat",
+                      "--plot", png)
+    assert rc == 0 and png.stat().st_size > 0 and f"wrote: {png}" in out
+    rc, _, err = _run(capsys, "fuse", *_files(course), "--ensayo", course / "ensayo.mat",
+                      "--plot", png)
+    assert rc == 2 and "--force" in err  # never overwritten without --force
+
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Polygon
+
+    from bench.figures.fusion import fusion_figure
+    from calib.calibration import calibrate
+    from calib.fusion import fuse
+    from calib.io import read_acel, read_datos, read_ensayo, read_gps, read_puntos
+    from calib.region import arrival_region
+    from calib.trajectory import compute_trajectory
+
+    d = read_datos(course / "datos.txt")
+    acel, fixes = read_acel(course / "acel.mat"), read_gps(course / "gps.mat")
+    cal = calibrate(read_ensayo(course / "ensayo.mat"), d.noise_var, "ols")
+    traj = compute_trajectory(acel, cal, d.p0, d.v0)
+    region = arrival_region(traj, cal, read_puntos(course / "puntos.mat"), d.noise_var, 0.997)
+    res = fuse(acel.t, acel.aerr, fixes.t_gps, fixes.pos, bias=cal.bias, scale=cal.scale,
+               cal_cov=cal.cov, noise_var=d.noise_var, sigma_pos=3.0, p0=d.p0, v0=d.v0,
+               p0_cov=0.0, v0_cov=0.0)
+    fig = fusion_figure(traj, region, res, fixes.pos, 0.997, "D")
+    polys = [p for p in fig.axes[0].patches if isinstance(p, Polygon)]
+    areas = []
+    for p in polys:
+        x, y = p.get_xy().T
+        areas.append(0.5 * abs(np.dot(x, np.roll(y, 1)) - np.dot(y, np.roll(x, 1))))
+    assert len(areas) == 2 and areas[1] < areas[0] / 20  # fused ≪ dead reckoning
+    assert polys[1].get_zorder() > polys[0].get_zorder()  # drawn above, visible
+    plt.close(fig)

@@ -3,6 +3,7 @@
     tiltbench fuse --acel acel.mat --gps gps.mat --puntos puntos.mat
                    (--calibration cal.json | --ensayo ensayo.mat) [--datos datos.txt]
                    [--gps-sigma M] [--gps-vel-sigma MPS] [--smoother] [--level L] [--json]
+                   [--plot F.png] [--force]
 
 The calibration comes from ``--calibration`` or is fitted on ``--ensayo`` (as
 ``trajectory``); P0, V0 and the noise variances come from ``--datos`` (else the course
@@ -17,8 +18,8 @@ from __future__ import annotations
 import argparse
 
 from bench.cli.inputs import add_course_inputs, read_calibration_file, read_course_inputs
-from bench.cli.options import check_initial_state, check_level, check_positive
-from bench.cli.output import check_finite, print_json
+from bench.cli.options import add_force, check_initial_state, check_level, check_positive
+from bench.cli.output import check_finite, print_files, print_json, refuse_overwrite
 
 
 def _cmd_fuse(args: argparse.Namespace) -> int:
@@ -35,6 +36,7 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     sigma_pos = check_positive(args.gps_sigma, "--gps-sigma")
     sigma_vel = (None if args.gps_vel_sigma is None
                  else check_positive(args.gps_vel_sigma, "--gps-vel-sigma"))
+    refuse_overwrite([args.plot], args.force)
     fixes = read_gps(args.gps)
     cal = read_calibration_file(args)  # None: fit on --ensayo
     ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
@@ -64,12 +66,22 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     out = {"fusion": res.to_dict(), "decision": decision,
            "units": {"decision.level": "1", "decision.mahalanobis.*": "1"}}
     check_finite(out, "the result")
+    if args.plot:
+        from bench.figures.fusion import save_fusion_plot
+        from calib.region import arrival_region
+        from calib.trajectory import compute_trajectory
+
+        traj = compute_trajectory(acel, cal, p0, v0)
+        region = arrival_region(traj, cal, candidates, noise_var, level)
+        save_fusion_plot(args.plot, traj, region, res, fixes.pos[inside], level, letter,
+                         force=args.force)
     if args.json:
         print_json(out)
         return 0
     print(res.summary())
     print(f"decision: {letter or 'undecided'} ({reason}); fixes used: "
           f"{int(inside.sum())} of {inside.size}")
+    print_files([args.plot])
     return 0
 
 
@@ -86,4 +98,7 @@ def register(sub) -> None:
                         "when given)")
     p.add_argument("--smoother", action="store_true",
                    help="also run the Rauch-Tung-Striebel smoother")
+    p.add_argument("--plot", help="write a figure (.png or .svg): dead reckoning, fixes, "
+                                  "the fused path and both arrival regions")
+    add_force(p, "an existing --plot file")
     p.set_defaults(handler=_cmd_fuse)
