@@ -163,6 +163,17 @@ def course_decision(estimate, candidates: dict[str, np.ndarray], box: np.ndarray
     return (inside[0] if len(inside) == 1 else None), tuple(inside)
 
 
+def squared_distances(estimate, cov, candidates: dict[str, np.ndarray]) -> dict[str, float]:
+    """Squared Mahalanobis distance ``d² = (c - x̂)ᵀ Σ⁻¹ (c - x̂)`` of each candidate (m, m²)."""
+    est = np.asarray(estimate, dtype=float)
+    inv = np.linalg.inv(np.asarray(cov, dtype=float))
+    d2 = {}
+    for name, c in candidates.items():
+        diff = np.asarray(c, dtype=float) - est
+        d2[name] = float(diff @ inv @ diff)
+    return d2
+
+
 def decide(d2: dict[str, float], level: float) -> tuple[str | None, tuple[str, ...], str]:
     """Decision from squared Mahalanobis distances at ``level`` (module docstring).
 
@@ -497,11 +508,7 @@ def arrival_region(
     cov = 0.5 * ((cov_cal + cov_noise) + (cov_cal + cov_noise).T)
     est = traj.final_corrected
     ell = Ellipse.from_cov(est, cov, level)
-    inv = np.linalg.inv(cov)
-    d2 = {}
-    for name, c in candidates.items():
-        diff = np.asarray(c, dtype=float) - est
-        d2[name] = float(diff @ inv @ diff)
+    d2 = squared_distances(est, cov, candidates)
     decision, inside, reason = decide(d2, level)
     a_max = np.max(np.abs(traj.acc_corrected), axis=0)
     box = course_box_bound(traj.duration, calibration.cov, a_max)
@@ -519,5 +526,5 @@ def arrival_region(
 __all__ = [
     "COURSE_BOX_K", "ArrivalRegion", "Ellipse", "arrival_region", "box_k_for_level",
     "chi2_2dof", "course_box_bound", "course_decision", "decide", "noise_cov_matrix",
-    "noise_position_cov", "position_jacobian",
+    "noise_position_cov", "position_jacobian", "squared_distances",
 ]

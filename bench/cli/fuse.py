@@ -29,7 +29,7 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     from calib.calibration import calibrate
     from calib.fusion import fuse
     from calib.io import read_gps
-    from calib.region import decide
+    from calib.region import decide, squared_distances
 
     level = check_level(args.level)
     check_initial_state(args)
@@ -59,7 +59,7 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
                smoother=args.smoother)
     est = np.asarray(res.final_position, dtype=float).reshape(2)
     cov = np.asarray(res.final_position_cov, dtype=float).reshape(2, 2)
-    d2 = {n: float((c - est) @ np.linalg.solve(cov, c - est)) for n, c in candidates.items()}
+    d2 = squared_distances(est, cov, candidates)
     letter, inside_names, reason = decide(d2, level)
     decision = {"decision": letter, "inside": list(inside_names), "reason": reason,
                 "level": level, "mahalanobis": {n: float(np.sqrt(v)) for n, v in d2.items()}}
