@@ -80,6 +80,15 @@ def write_json(path: str | Path, obj: dict, force: bool = False) -> Path:
     return atomic_write_text(path, dumps(obj), force=force)
 
 
+MODEL_UNITS: dict[str, str] = {
+    "sensor.*.bias": "m/s²", "sensor.*.scale": "1", "sensor.*.noise_var": "(m/s²)²",
+    "table.g": "m/s²", "table.misalignment": "rad", "table.tilt_offset": "rad",
+    "table.lever_arm": "m", "table.cutoff": "m/s²",
+}
+"""Units of a bench model (sensor bias/scale/noise and the MjSpec table edits): a run's truth
+and the gap report's ``model_after`` share them."""
+
+
 def _run_units() -> dict[str, str]:
     """Units of one run's truth object (calibration or vehicle: the keys they have)."""
     from calib.units import effect_units
@@ -87,9 +96,7 @@ def _run_units() -> dict[str, str]:
     out = {f"sensor.*.terms.{k}": u for k, u in effect_units().items()}
     out.update({
         "g": "m/s²", "n": "count", "n_samples": "count", "seed": "—",
-        "sensor.*.bias": "m/s²", "sensor.*.scale": "1", "sensor.*.noise_var": "(m/s²)²",
-        "table.g": "m/s²", "table.misalignment": "rad", "table.tilt_offset": "rad",
-        "table.lever_arm": "m", "table.cutoff": "m/s²",
+        **MODEL_UNITS,
         "theta_design.start": "rad", "theta_design.stop": "rad",
         "theta_design.count": "count", "theta_design.per_position": "count",
         "theta_design.positions": "count",

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from bench.dataset import MODEL_UNITS
 from bench.effects import CATALOG, EffectSpec
 from bench.gap.replay import TRACKING_LIMIT, Replay
 from bench.model import TableEdits
@@ -394,11 +395,7 @@ def report_units() -> dict[str, str]:
         "replay.tracking_error_rad": "rad", "replay.tracking_limit_rad": "rad",
         "replay.holds": "count", "replay.jumps": "count",
         "nominal.*.bias": "m/s²", "nominal.*.scale": "1",
-        "model_after.table.g": "m/s²", "model_after.table.misalignment": "rad",
-        "model_after.table.tilt_offset": "rad", "model_after.table.lever_arm": "m",
-        "model_after.table.cutoff": "m/s²",
-        "model_after.sensor.*.bias": "m/s²", "model_after.sensor.*.scale": "1",
-        "model_after.sensor.*.noise_var": "(m/s²)²",
+        **nest("model_after", MODEL_UNITS),
     })
     out.update(nest("analysis", calib_units))
     return out
