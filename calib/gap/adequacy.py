@@ -310,10 +310,15 @@ def _step(z: np.ndarray, scale: float, run, axis: str) -> Check | None:
                  f"after {where}")
 
 
-def _trend(space: _AxisSpace, run, axis: str) -> Check | None:
+def _legendre_in_time(run, degrees: tuple[int, ...]) -> np.ndarray:
+    """(N, len(degrees)) Legendre polynomials ``P_d(x)`` of time mapped onto x ∈ [-1, 1]."""
     tc = run.tcol
     x = 2.0 * (tc - tc[0]) / max(float(tc[-1] - tc[0]), 1e-300) - 1.0
-    cols = np.column_stack([np.polynomial.legendre.Legendre.basis(d)(x) for d in (2, 3, 4)])
+    return np.column_stack([np.polynomial.legendre.Legendre.basis(d)(x) for d in degrees])
+
+
+def _trend(space: _AxisSpace, run, axis: str) -> Check | None:
+    cols = _legendre_in_time(run, (2, 3, 4))
     res = _chi2_check(space, cols, "trend", axis)
     if res is None:
         return None
@@ -394,8 +399,7 @@ def _timing(space: _AxisSpace, ext: Extensions, st, k: int, axis: str) -> Check 
     rate = np.gradient(a, run.t)  # dA/dt, m/s³: a delay δ changes the reading by -δ·dA/dt
     if np.ptp(rate) <= 1e-9:
         return None
-    x = 2.0 * run.tcol / max(float(run.tcol[-1]), 1e-300) - 1.0
-    cols = np.column_stack([rate * x, rate * (1.5 * x * x - 0.5)])
+    cols = rate[:, None] * _legendre_in_time(run, (1, 2))
     res = _chi2_check(space, cols, "timing", axis)
     if res is None:
         return None
@@ -457,9 +461,7 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
     cost = sum(walk_cost(ext, st) if n == "bias_random_walk" else float(effect(n).n_free)
                for n in named)
     space = _AxisSpace(ext, reduced, k)
-    x = 2.0 * (run.tcol - run.tcol[0]) / max(float(np.ptp(run.tcol)), 1e-300) - 1.0
-    poly_cols = np.column_stack([np.polynomial.legendre.Legendre.basis(d)(x)
-                                 for d in (1, 2, 3, 4)])
+    poly_cols = _legendre_in_time(run, (1, 2, 3, 4))
     shapes: list[tuple[float, str, float]] = []  # (log p, what, size)
 
     def add(fit, n_par: int, searched: int, what: str, size: float) -> None:
