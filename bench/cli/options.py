@@ -295,3 +295,24 @@ def noise_var_from_args(args: argparse.Namespace):
 
         return read_datos(args.datos).noise_var
     return None
+
+
+def add_sweep_options(p: argparse.ArgumentParser) -> None:
+    """``--workers K`` (local processes; default: every core) and ``--scheduler ADDR``
+    (a dask.distributed scheduler, e.g. ``tcp://10.0.0.5:8786``) for the long sweeps."""
+    p.add_argument("--workers", type=integer, default=None, metavar="K",
+                   help="local processes for the Monte Carlo runs (default: every core; 1 = "
+                        "this process); results do not depend on it")
+    p.add_argument("--scheduler", default=None, metavar="ADDR",
+                   help="run the Monte Carlo on a dask.distributed cluster whose scheduler "
+                        "is at ADDR (tcp://host:port); needs tiltbench[cluster]")
+
+
+def mapper_from_args(args: argparse.Namespace):
+    """The :class:`calib.runs.Mapper` chosen by :func:`add_sweep_options`."""
+    from bench.sweep import make_mapper
+
+    workers = getattr(args, "workers", None)
+    if workers is not None:
+        check_count(workers, "--workers")
+    return make_mapper(workers, getattr(args, "scheduler", None))

@@ -1,0 +1,86 @@
+"""Where the runs of a long sweep execute: this process, a local process pool, or a Dask cluster.
+
+Each returns a mapper with the signature of :class:`calib.runs.Mapper`
+(``mapper(fn, tasks, progress=None) -> [fn(t) for t in tasks]``, in task order), so the domain
+functions that take a ``mapper`` run unchanged on any of them. Results do not depend on where
+they ran: every run draws from its own ``SeedSequence`` stream (:mod:`calib.runs`).
+
+* ``workers=1`` — in this process (:func:`calib.runs.serial_map`).
+* ``workers=k > 1`` — a local ``concurrent.futures.ProcessPoolExecutor`` with k processes
+  (the default for long sweeps: ``os.cpu_count()``); BLAS is kept at one thread per process so
+  the processes do not fight over the cores.
+* ``scheduler="tcp://host:port"`` — a running ``dask.distributed`` scheduler (``pip install
+  "tiltbench[cluster]"``); tasks are submitted with ``Client.map`` and gathered in order.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from calib.runs import Mapper, serial_map
+
+
+def default_workers() -> int:
+    """The local pool's size when none is given: the machine's cores."""
+    return max(1, os.cpu_count() or 1)
+
+
+def _limit_blas_threads() -> None:
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[var] = "1"
+
+
+def process_map(workers: int) -> Mapper:
+    """A mapper over a local pool of ``workers`` processes (results in task order)."""
+    def run(fn: Callable[[Any], Any], tasks: Sequence[Any],
+            progress: Callable[[int, int], None] | None = None) -> list:
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+
+        tasks = list(tasks)
+        if workers <= 1 or len(tasks) <= 1:
+            return serial_map(fn, tasks, progress)
+        out: list[Any] = [None] * len(tasks)
+        with ProcessPoolExecutor(max_workers=min(workers, len(tasks)),
+                                 initializer=_limit_blas_threads) as pool:
+            futures = {pool.submit(fn, t): i for i, t in enumerate(tasks)}
+            for done, fut in enumerate(as_completed(futures), start=1):
+                out[futures[fut]] = fut.result()
+                if progress is not None:
+                    progress(done, len(tasks))
+        return out
+
+    return run
+
+
+def dask_map(scheduler: str) -> Mapper:
+    """A mapper over the ``dask.distributed`` cluster whose scheduler listens at ``scheduler``."""
+    try:
+        from dask.distributed import Client, as_completed
+    except ImportError as exc:  # the optional extra is missing
+        raise RuntimeError('--scheduler needs dask.distributed: pip install "tiltbench[cluster]"'
+                           ) from exc
+
+    def run(fn: Callable[[Any], Any], tasks: Sequence[Any],
+            progress: Callable[[int, int], None] | None = None) -> list:
+        tasks = list(tasks)
+        with Client(scheduler) as client:
+            futures = client.map(fn, tasks, pure=False)
+            index = {f.key: i for i, f in enumerate(futures)}
+            out: list[Any] = [None] * len(tasks)
+            for done, fut in enumerate(as_completed(futures), start=1):
+                out[index[fut.key]] = fut.result()
+                if progress is not None:
+                    progress(done, len(tasks))
+        return out
+
+    return run
+
+
+def make_mapper(workers: int | None = None, scheduler: str | None = None) -> Mapper:
+    """The mapper for ``--workers`` / ``--scheduler`` (module docstring)."""
+    if scheduler:
+        return dask_map(scheduler)
+    w = default_workers() if workers is None else int(workers)
+    return serial_map if w <= 1 else process_map(w)
