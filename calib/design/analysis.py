@@ -1,0 +1,213 @@
+""":func:`analyze_design`: power of the gap detection for candidate experiments."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+
+from calib.conventions import AXES, G, reference_accel
+from calib.design.experiments import Experiment
+from calib.design.montecarlo import Cell, fraction, run_cells
+from calib.design.pairs import PAIRS, pair_key, told_apart
+from calib.design.power import (
+    critical,
+    lambda_for_power,
+    noncentrality,
+    power_from_lambda,
+)
+from calib.design.result import DesignResult
+from calib.design.signals import LINEAR, SIMULATED, coefficients, size_of, size_unit
+from calib.effects import AxisState, Extensions, ModelState, RunData, effect
+from calib.gap.confusions import AMBIGUITY_LR
+from calib.gap.selection import LATTICE_TESTS, _first_step, candidate_list
+from calib.ls import fit_axis
+from calib.runs import Mapper
+
+DEFAULT_SIZES: dict[str, float] = {
+    "misalignment": 0.005, "tilt_offset": 0.005, "nonlinearity_k2": 1e-3, "cross_axis": 1e-3,
+    "bias_drift": 5e-3, "lever_arm": 0.05, "lowpass_lag": 0.05, "saturation": 9.6,
+    "bias_random_walk": 0.02, "noise_level": 0.30, "quantization": 0.05}
+"""Default size of each effect, in its unit (:func:`calib.design.signals.size_unit`)."""
+
+LEVELS = (0.80, 0.95)
+
+
+class _Design:
+    """One experiment prepared: whitened nominal basis, the gap's α_step, effect columns."""
+
+    def __init__(self, exp: Experiment, noise_var: np.ndarray, g: float, family_alpha: float):
+        self.exp = exp
+        th, t = exp.theta(), exp.times()
+        a_r = reference_accel(th, g)
+        self.sig = np.sqrt(noise_var)
+        rng = np.random.default_rng(0)  # placeholder readings: testability needs columns only
+        datos = a_r + rng.standard_normal(a_r.shape) * self.sig
+        self.run = RunData.build(th, datos, noise_var, g, t)
+        self.ext = Extensions(self.run, np.ones(2))
+        cands, _ = candidate_list(self.run)
+        state = ModelState((AxisState(sigma2=float(noise_var[0])),
+                            AxisState(sigma2=float(noise_var[1]))))
+        _, untestable = _first_step(self.ext, state, cands)
+        self.candidates = [c for c in cands if c not in untestable]
+        self.n_tests = len(self.candidates) + LATTICE_TESTS
+        self.alpha_step = family_alpha / self.n_tests
+        n = exp.n
+        self.basis = np.zeros((2 * n, 4))
+        for k in range(2):  # H = [1, A_r] per axis, whitened by σ
+            self.basis[k * n:(k + 1) * n, 2 * k] = 1.0 / self.sig[k]
+            self.basis[k * n:(k + 1) * n, 2 * k + 1] = a_r[:, k] / self.sig[k]
+        self.nominal = {}
+        for k, a in enumerate(AXES):
+            fit = fit_axis(th, a_r[:, k], a, float(noise_var[k]), g)
+            self.nominal[a] = {"bias": float(fit.std[0]), "scale": float(fit.std[1])}
+
+    def testable(self, name: str, axis: str) -> bool:
+        key = (name, "both" if name == "tilt_offset" else axis)
+        return key in self.candidates
+
+    def columns(self, name: str, axis: str) -> np.ndarray:
+        """Stacked whitened columns (2N, k) of a linear effect (zero on the other axis)."""
+        n = self.exp.n
+        if name == "tilt_offset":
+            out = np.zeros((2 * n, 1))
+            for k in range(2):
+                out[k * n:(k + 1) * n, 0] = self.ext.tilt_column(k, AxisState()) / self.sig[k]
+            return out
+        k = AXES.index(axis)
+        cols = effect(name).columns(self.ext, k, AxisState(linear=(name,)))
+        out = np.zeros((2 * n, len(cols)))
+        for j, c in enumerate(cols):
+            out[k * n:(k + 1) * n, j] = c / self.sig[k]
+        return out
+
+
+def _linear_row(d: _Design, name: str, size: float, axis: str) -> dict:
+    """Analytic power of one linear effect in one experiment (:mod:`calib.design.power`)."""
+    if not d.testable(name, axis):
+        return {"testable": False}
+    cols = d.columns(name, axis)
+    coef = coefficients(name, size, d.exp, axis)
+    c = float(np.linalg.norm(coef))
+    direction = coef / c if c > 0 else np.eye(coef.size)[-1]
+    lam1 = noncentrality(d.basis, cols @ direction)
+    df = cols.shape[1]
+    crit = critical(d.alpha_step, df)
+    lam = lam1 * c * c
+    row = {"testable": True, "power": float(power_from_lambda(lam, df, crit)),
+           "noncentrality": lam, "lambda_unit": lam1, "df": df, "critical": crit}
+    sign = -1.0 if size < 0 else 1.0
+    for p in LEVELS:
+        cp = np.sqrt(lambda_for_power(p, df, crit) / lam1) if lam1 > 0 else np.inf
+        s = size_of(name, float(cp), d.exp) if np.isfinite(cp) else None
+        row[f"size_{round(100 * p)}"] = None if s is None else sign * s
+    return row
+
+
+def _pair_linear(d: _Design, a: str, b: str, size: float, axis: str) -> dict:
+    """Analytic power to tell A (true, at ``size``) from B (:mod:`calib.design.pairs`)."""
+    if not (d.testable(a, axis) and d.testable(b, axis)):
+        return {"testable": False}
+    sa = d.columns(a, axis) @ coefficients(a, size, d.exp, axis)
+    basis = np.column_stack([d.basis, d.columns(b, axis)])
+    lam = noncentrality(basis, sa)
+    df = len(coefficients(a, size, d.exp, axis))
+    return {"testable": True, "power": float(power_from_lambda(lam, df, AMBIGUITY_LR)),
+            "noncentrality": lam}
+
+
+def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
+                   sizes: Mapping[str, float] | None = None, noise_var=(0.25, 0.64),
+                   family_alpha: float = 0.005, axis: str = "x", runs: int = 20,
+                   seed: int = 0, g: float = G, mapper: Mapper | None = None,
+                   progress: Callable[[str], None] | None = None) -> DesignResult:
+    """Power of the gap detection for each experiment and effect, and of the pairs.
+
+    Parameters
+    ----------
+    experiments : candidate :class:`Experiment` s.  effects : catalog names
+        (:data:`calib.design.signals.LINEAR` analytic, :data:`~calib.design.signals.SIMULATED`
+        Monte Carlo).  sizes : effect → size in its unit (defaults :data:`DEFAULT_SIZES`).
+    noise_var : (2,) stated σ², (m/s²)².  family_alpha : the gap's family α (its per-step α
+        is ``family_alpha / m`` for each experiment).  axis : the axis carrying per-axis
+        effects.  runs, seed : Monte Carlo runs per cell and seed (0 runs: analytic only).
+    mapper : :class:`calib.runs.Mapper` for the Monte Carlo.  progress : message callback.
+
+    Returns
+    -------
+    DesignResult
+    """
+    say = progress or (lambda _msg: None)
+    sizes = {**DEFAULT_SIZES, **dict(sizes or {})}
+    nv = np.asarray(noise_var, dtype=float)
+    if nv.shape != (2,) or np.any(~np.isfinite(nv)) or np.any(nv <= 0):
+        raise ValueError(f"noise_var must be two positive variances, got {noise_var!r}")
+    if not 0 < family_alpha < 1:
+        raise ValueError(f"family_alpha must be in (0, 1), got {family_alpha}")
+    if axis not in AXES:
+        raise ValueError(f"axis must be x or y, got {axis!r}")
+    unknown = [e for e in effects if e not in LINEAR + SIMULATED]
+    if unknown:
+        raise ValueError(f"no design power for {', '.join(unknown)}; choose from "
+                         f"{', '.join(LINEAR + SIMULATED)}")
+    say(f"{len(experiments)} experiment(s): nominal fits and the gap's α per design")
+    designs = [_Design(e, nv, g, family_alpha) for e in experiments]
+    table: dict[str, dict] = {}
+    for name in effects:
+        table[name] = {"axis": "both" if name == "tilt_offset" else axis,
+                       "size": float(sizes[name]), "unit": size_unit(name),
+                       "method": "analytic" if name in LINEAR else "monte_carlo",
+                       "per_experiment": [None] * len(designs)}
+    cells, where = [], []
+    for i, d in enumerate(designs):
+        for name in effects:
+            if name in LINEAR:
+                table[name]["per_experiment"][i] = _linear_row(d, name, sizes[name], axis)
+            elif name == "lowpass_lag" and not d.exp.timed:
+                table[name]["per_experiment"][i] = {"testable": False}
+            elif runs == 0:
+                table[name]["per_experiment"][i] = {"testable": True, "power": None}
+            else:
+                cells.append(Cell(d.exp, name, float(sizes[name]), axis, (nv[0], nv[1]), g,
+                                  family_alpha))
+                where.append((i, name))
+    outcomes: list = []
+    if cells:
+        say(f"Monte Carlo: {len(cells)} cell(s) × {runs} runs through the gap detection")
+        outcomes = run_cells(cells, runs, seed, mapper,
+                             lambda done, total: say(f"Monte Carlo chunks {done}/{total}"))
+    mc = {}
+    for (i, name), res in zip(where, outcomes, strict=True):
+        hits = sum(any(n == name and a in (axis, "both") for n, a in named)
+                   for named, _ in res)
+        p, sd = fraction(hits, runs)
+        table[name]["per_experiment"][i] = {"testable": True, "power": p, "power_std": sd,
+                                            "runs": runs}
+        mc[(i, name)] = res
+    pairs: dict[str, dict] = {}
+    for a, b in PAIRS:
+        if a not in effects or b not in effects:
+            continue
+        entry = {"names": [a, b], "size": float(sizes[a]), "unit": size_unit(a),
+                 "method": "analytic" if a in LINEAR and b in LINEAR else "monte_carlo",
+                 "per_experiment": []}
+        for i, d in enumerate(designs):
+            if entry["method"] == "analytic":
+                row = _pair_linear(d, a, b, sizes[a], axis)
+            elif (i, a) in mc:
+                ok = sum(told_apart(a, b, axis, named, conf) for named, conf in mc[(i, a)])
+                p, sd = fraction(ok, runs)
+                row = {"testable": True, "power": p, "power_std": sd, "runs": runs}
+            else:
+                row = {"testable": False}
+            entry["per_experiment"].append(row)
+        pairs[pair_key(a, b)] = entry
+    exps = []
+    for d in designs:
+        exps.append({**d.exp.to_dict(), "alpha_step": d.alpha_step, "n_tests": d.n_tests,
+                     "nominal_std": d.nominal})
+    settings = {"family_alpha": float(family_alpha), "noise_var": [float(v) for v in nv],
+                "axis": axis, "runs": int(runs), "seed": int(seed), "g": float(g),
+                "ambiguity_lr": float(AMBIGUITY_LR)}
+    return DesignResult(settings, tuple(exps), table, pairs)
+

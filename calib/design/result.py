@@ -1,0 +1,114 @@
+""":class:`DesignResult`: the powers of :func:`calib.design.analyze_design`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from calib.results import ResultMixin
+from calib.units import UNITS_KEY, with_units
+
+
+def _pct(p: float | None) -> str:
+    return "—" if p is None else f"{100 * p:5.1f} %"
+
+
+def _size(v: float | None, unit: str) -> str:
+    return "—" if v is None else f"{v:.3g} {unit}"
+
+
+@dataclass(frozen=True, eq=False)
+class DesignResult(ResultMixin):
+    """Power per experiment and effect (JSON: :meth:`to_dict`, units in ``"units"``).
+
+    settings : family α, stated σ², axis, Monte Carlo runs and seed, g, the ambiguity margin.
+    experiments : per experiment: design, N, mean sweep rate (rad/s), duration (s), timed,
+        the gap's per-step α and test count, ``nominal_std`` (axis → bias m/s², scale 1).
+    effects : name → axis, size, unit, method ("analytic" | "monte_carlo") and
+        ``per_experiment`` rows: testable, power (fraction), analytic: noncentrality λ,
+        lambda_unit (λ at unit coefficient), df, critical value, size_80 and size_95 (the
+        effect's unit); Monte Carlo: power_std (binomial), runs.
+    pairs : "A-vs-B" → names, size of A, unit, method, per_experiment power (to tell A,
+        true, from B).
+    """
+
+    settings: dict
+    experiments: tuple[dict, ...]
+    effects: dict
+    pairs: dict
+
+    _TITLE = "Experiment design: power of the gap detection"
+    _UNITS = "sizes in each effect's unit; powers as fractions; std in m/s² and 1"
+
+    def _units(self) -> dict[str, str]:
+        u = {"settings.family_alpha": "1", "settings.noise_var": "(m/s²)²",
+             "settings.runs": "count", "settings.seed": "—", "settings.g": "m/s²",
+             "settings.ambiguity_lr": "1",
+             "experiments.n": "count", "experiments.rate": "rad/s", "experiments.duration": "s",
+             "experiments.alpha_step": "1", "experiments.n_tests": "count",
+             "experiments.nominal_std.*.bias": "m/s²", "experiments.nominal_std.*.scale": "1"}
+        for name, e in self.effects.items():
+            for k in ("size", "per_experiment.size_80", "per_experiment.size_95"):
+                u[f"effects.{name}.{k}"] = e["unit"]
+        for key, e in self.pairs.items():
+            u[f"pairs.{key}.size"] = e["unit"]
+        u.update({"effects.*.per_experiment.power": "1",
+                  "effects.*.per_experiment.power_std": "1",
+                  "effects.*.per_experiment.noncentrality": "1",
+                  "effects.*.per_experiment.lambda_unit": "1",
+                  "effects.*.per_experiment.critical": "1",
+                  "effects.*.per_experiment.df": "count",
+                  "effects.*.per_experiment.runs": "count",
+                  "pairs.*.per_experiment.power": "1", "pairs.*.per_experiment.power_std": "1",
+                  "pairs.*.per_experiment.noncentrality": "1",
+                  "pairs.*.per_experiment.runs": "count"})
+        return u
+
+    def to_dict(self) -> dict:
+        return with_units({"settings": self.settings, "experiments": list(self.experiments),
+                           "effects": self.effects, "pairs": self.pairs}, self._units())
+
+    @classmethod
+    def from_dict(cls, d: dict) -> DesignResult:
+        d = {k: v for k, v in d.items() if k != UNITS_KEY}
+        return cls(dict(d["settings"]), tuple(d["experiments"]), dict(d["effects"]),
+                   dict(d["pairs"]))
+
+    def summary(self) -> str:
+        """A table: per effect and experiment the power, and the 80 % / 95 % sizes."""
+        s = self.settings
+        lines = [f"Experiment design: gap detection power (family α = {s['family_alpha']:g}, "
+                 f"stated σ² = {s['noise_var'][0]:g}, {s['noise_var'][1]:g} (m/s²)², "
+                 f"per-axis effects on {s['axis']}; Monte Carlo: {s['runs']} runs, "
+                 f"seed {s['seed']})", "", "Experiments (nominal fit std):"]
+        for i, e in enumerate(self.experiments):
+            ns = e["nominal_std"]
+            lines.append(
+                f"  [{i}] {e['design']:<8} N = {e['n']}, ω̄ = {e['rate']:g} rad/s, "
+                f"T = {e['duration']:.3g} s, α_step = {e['alpha_step']:.3g} "
+                f"({e['n_tests']} tests); std bias x {ns['x']['bias']:.3g} m/s², "
+                f"scale x {ns['x']['scale']:.3g}, bias y {ns['y']['bias']:.3g} m/s², "
+                f"scale y {ns['y']['scale']:.3g}")
+        lines += ["", f"{'effect (size)':<40} {'exp':>4} {'power':>18} "
+                      f"{'80 % power at':>16} {'95 % power at':>16}"]
+        for name, e in self.effects.items():
+            head = f"{name} {e['axis']} ({_size(e['size'], e['unit'])})"
+            for i, r in enumerate(e["per_experiment"]):
+                if not r["testable"]:
+                    pw = "not testable"
+                elif "power_std" in r:
+                    pw = f"{_pct(r['power'])} ± {100 * r['power_std']:.1f} MC"
+                else:
+                    pw = _pct(r.get("power"))
+                lines.append(f"{head if i == 0 else '':<40} [{i}] {pw:>18} "
+                             f"{_size(r.get('size_80'), e['unit']):>16} "
+                             f"{_size(r.get('size_95'), e['unit']):>16}")
+        if self.pairs:
+            lines += ["", "Telling apart (A true, B the look-alike; the gap's 2 ln 10 margin):"]
+            for e in self.pairs.values():
+                a, b = e["names"]
+                for i, r in enumerate(e["per_experiment"]):
+                    pw = ("not testable" if not r["testable"] else
+                          f"{_pct(r['power'])} ± {100 * r['power_std']:.1f} MC"
+                          if "power_std" in r else _pct(r["power"]))
+                    lines.append(f"  {a} ({_size(e['size'], e['unit'])}) vs {b}: [{i}] {pw}")
+        return "\n".join(lines)
