@@ -29,6 +29,7 @@ from bench import __version__  # noqa: E402
 from bench.cli import (  # noqa: E402
     calibrate,
     demo,
+    design,
     examples,
     fuse,
     gap,
@@ -40,7 +41,8 @@ from bench.cli import (  # noqa: E402
 )
 from bench.cli.options import Parser, resolve_deferred  # noqa: E402
 
-COMMANDS = (generate, calibrate, trajectory, nmin, fuse, record, validate, gap, demo, examples)
+COMMANDS = (generate, calibrate, trajectory, nmin, design, fuse, record, validate, gap, demo,
+            examples)
 """Command modules, in the order of the help."""
 
 

@@ -19,6 +19,7 @@ from bench.gap.replay import TRACKING_LIMIT, Replay
 from bench.model import TableEdits
 from bench.sensors import SensorErrorModel
 from calib.conventions import AXES
+from calib.gap.confusions import design_hint
 from calib.gap.results import gap_units
 from calib.units import effect_units, format_estimate, format_p, format_stat, nest, with_units
 
@@ -346,7 +347,8 @@ class GapReport:
                                for k, v in s["params"].items())
                 out.append(f"      mujoco.sysid re-simulation: {sp}")
         for item in d["not_identifiable"]:
-            out.append(f"not identifiable: {', '.join(item['names'])} — {item['reason']}")
+            hint = f" — {design_hint(item['names'])}" if len(item["names"]) == 2 else ""
+            out.append(f"not identifiable: {', '.join(item['names'])} — {item['reason']}{hint}")
         if d["needs_timing"]:
             out.append("not testable without timing (give t in the file or --rate): "
                        + ", ".join(d["needs_timing"])

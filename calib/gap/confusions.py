@@ -21,6 +21,12 @@ AMBIGUITY_LR = 2.0 * float(np.log(10.0))
 """Two explanations whose ``-2 log L`` differ by less than this (likelihood ratio < 10) are
 reported as not told apart."""
 
+def design_hint(names: list[str]) -> str:
+    """Where to compare experiments that would separate a confused pair (printed after the
+    reason in the text report; the JSON ``reason`` is unchanged)."""
+    return f"compare designs with `tiltbench design --effects {','.join(names)}`"
+
+
 REASONS: dict[str, str] = {e.name: e.confusion for e in CATALOG if e.confusion}
 """Effect → why it may not be told apart from another (``Effect.confusion``)."""
 
