@@ -105,7 +105,7 @@ def register(sub) -> None:
                    help="axis carrying the per-axis effects")
     q.add_argument("--alpha", type=float, default=0.005,
                    help="the gap's family false-alarm probability")
-    q.add_argument("--runs", type=integer, default=20,
+    q.add_argument("--runs", type=integer, default=10,
                    help="Monte Carlo runs per cell (0: analytic only)")
     q.add_argument("--seed", type=int, default=0, help="seed of the Monte Carlo runs")
     q.add_argument("--plot", default=None, metavar="F", help="power curves (.png or .svg)")
