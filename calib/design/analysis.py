@@ -180,9 +180,7 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
     for (i, name), res in zip(where, outcomes, strict=True):
         hits = sum(any(n == name and a in (axis, "both") for n, a in named)
                    for named, _ in res)
-        p, sd = fraction(hits, runs)
-        table[name]["per_experiment"][i] = {"testable": True, "power": p, "power_std": sd,
-                                            "runs": runs}
+        table[name]["per_experiment"][i] = {"testable": True, **fraction(hits, runs)}
         mc[(i, name)] = res
     pairs: dict[str, dict] = {}
     for a, b in PAIRS:
@@ -196,8 +194,7 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
                 row = _pair_linear(d, a, b, sizes[a], axis)
             elif (i, a) in mc:
                 ok = sum(told_apart(a, b, axis, named, conf) for named, conf in mc[(i, a)])
-                p, sd = fraction(ok, runs)
-                row = {"testable": True, "power": p, "power_std": sd, "runs": runs}
+                row = {"testable": True, **fraction(ok, runs)}
             else:
                 row = {"testable": False}
             entry["per_experiment"].append(row)

@@ -17,6 +17,7 @@ import numpy as np
 from calib.design.experiments import Experiment
 from calib.design.signals import readings
 from calib.io import Ensayo
+from calib.proportion import clopper_pearson
 from calib.runs import Mapper, chunk_ranges, run_seeds, serial_map
 
 CHUNK = 10
@@ -70,7 +71,11 @@ def run_cells(cells: list[Cell], runs: int, seed: int, mapper: Mapper | None = N
     return per_cell
 
 
-def fraction(hits: int, runs: int) -> tuple[float, float]:
-    """p̂ = hits/R and its binomial std ``sqrt(p̂(1 - p̂)/R)``."""
+def fraction(hits: int, runs: int) -> dict:
+    """The power row of a count: p̂ = hits/R, its binomial std ``sqrt(p̂(1 - p̂)/R)``, and
+    the exact 95 % interval (:func:`calib.proportion.clopper_pearson`; what R runs support,
+    also at p̂ = 0 or 1 where the std says nothing)."""
     p = hits / runs
-    return float(p), float(np.sqrt(p * (1.0 - p) / runs))
+    lo, hi = clopper_pearson(hits, runs)
+    return {"power": float(p), "power_std": float(np.sqrt(p * (1.0 - p) / runs)),
+            "power_ci95": [lo, hi], "runs": int(runs)}

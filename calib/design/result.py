@@ -12,6 +12,14 @@ def _pct(p: float | None) -> str:
     return "—" if p is None else f"{100 * p:5.1f} %"
 
 
+def _power(r: dict) -> str:
+    """An analytic power, or a Monte Carlo one with the exact 95 % interval its runs allow."""
+    if "power_ci95" not in r:
+        return _pct(r.get("power"))
+    lo, hi = r["power_ci95"]
+    return f"{100 * r['power']:.0f} % [{100 * lo:.0f}, {100 * hi:.0f}] MC"
+
+
 def _size(v: float | None, unit: str) -> str:
     return "—" if v is None else f"{v:.3g} {unit}"
 
@@ -53,12 +61,14 @@ class DesignResult(ResultMixin):
             u[f"pairs.{key}.size"] = e["unit"]
         u.update({"effects.*.per_experiment.power": "1",
                   "effects.*.per_experiment.power_std": "1",
+                  "effects.*.per_experiment.power_ci95": "1",
                   "effects.*.per_experiment.noncentrality": "1",
                   "effects.*.per_experiment.lambda_unit": "1",
                   "effects.*.per_experiment.critical": "1",
                   "effects.*.per_experiment.df": "count",
                   "effects.*.per_experiment.runs": "count",
                   "pairs.*.per_experiment.power": "1", "pairs.*.per_experiment.power_std": "1",
+                  "pairs.*.per_experiment.power_ci95": "1",
                   "pairs.*.per_experiment.noncentrality": "1",
                   "pairs.*.per_experiment.runs": "count"})
         return u
@@ -95,10 +105,8 @@ class DesignResult(ResultMixin):
             for i, r in enumerate(e["per_experiment"]):
                 if not r["testable"]:
                     pw = "not testable"
-                elif "power_std" in r:
-                    pw = f"{_pct(r['power'])} ± {100 * r['power_std']:.1f} MC"
                 else:
-                    pw = _pct(r.get("power"))
+                    pw = _power(r)
                 lines.append(f"{head if i == 0 else '':<40} [{i}] {pw:>18} "
                              f"{_size(r.get('size_80'), e['unit']):>16} "
                              f"{_size(r.get('size_95'), e['unit']):>16}")
@@ -107,8 +115,6 @@ class DesignResult(ResultMixin):
             for e in self.pairs.values():
                 a, b = e["names"]
                 for i, r in enumerate(e["per_experiment"]):
-                    pw = ("not testable" if not r["testable"] else
-                          f"{_pct(r['power'])} ± {100 * r['power_std']:.1f} MC"
-                          if "power_std" in r else _pct(r["power"]))
+                    pw = "not testable" if not r["testable"] else _power(r)
                     lines.append(f"  {a} ({_size(e['size'], e['unit'])}) vs {b}: [{i}] {pw}")
         return "\n".join(lines)
