@@ -39,8 +39,10 @@ def design_figure(res: DesignResult) -> Figure:
                 ax.plot(sizes, power_from_lambda(np.array(lam), r["df"], r["critical"]),
                         color=col, label=label)
             else:
-                ax.errorbar([e["size"]], [r["power"]], yerr=[2 * r["power_std"]], fmt="o",
-                            color=col, capsize=3, label=label + " (MC ±2σ)")
+                lo, hi = r["power_ci95"]
+                ax.errorbar([e["size"]], [r["power"]],
+                            yerr=[[r["power"] - lo], [hi - r["power"]]], fmt="o", color=col,
+                            capsize=3, label=label + f" (MC, {r['runs']} runs, exact 95 %)")
         for p in (0.8, 0.95):
             ax.axhline(p, color="0.5", ls=":", lw=1)
         ax.axvline(e["size"], color="k", lw=0.8, ls="--")
