@@ -13,6 +13,7 @@ from bench.gap.report import GapReport, shrink_word
 from bench.model import edit_tilt_table, load_spec
 from calib.atomic import atomic_dir, write_text
 from calib.conventions import AXES
+from calib.gap.confusions import design_hint
 from calib.units import format_p, format_stat
 
 PathLike = str | os.PathLike
@@ -88,7 +89,9 @@ def gap_markdown(report: GapReport) -> str:
                          f"{format_stat(e['statistic'])} | {p} | {e['timing']} |")
     if d["not_identifiable"]:
         lines += ["", "## Not identifiable", ""]
-        lines += [f"- {', '.join(i['names'])}: {i['reason']}" for i in d["not_identifiable"]]
+        lines += [f"- {', '.join(i['names'])}: {i['reason']}"
+                  + (f" — {design_hint(i['names'])}" if len(i["names"]) == 2 else "")
+                  for i in d["not_identifiable"]]
     if d["needs_timing"]:
         lines += ["", "## Needs timing", "",
                   "Not testable without sample times (`t` in the file or `--rate`): "
