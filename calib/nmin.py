@@ -512,10 +512,11 @@ def fixed_run_nmin(region: ArrivalRegion, truth: str, draws: int = 10**6, seed: 
     so the arrival point the given run yields with it is taken as ``region.estimate`` (the
     full calibration's), and the true arrival point as the candidate ``truth`` (the one the
     full analysis decides). ``P̂_N = P̂ + J (ĉ_N - c) = P̂ + U/√N`` (linear in the calibration;
-    the scale enters as ``1/(1 + s)``, ``|s| ~ 1e-2`` and its error ``~1e-3/√N``, so the
-    curvature is below 1e-6 of the step — checked against the exact map in the tests, and
-    the answer is confirmed by full regeneration, :func:`confirm_fixed_run`). The region is
-    the one the tool draws, ``Σ_P(N) = A/N + B``.
+    the scale enters as ``1/(1 + s)``, so the remainder is second order, about ``|step|·|Δs|``
+    with ``Δs ~ 0.07/√N``: centimetres at N ~ 10³ against a region tens of metres wide —
+    checked against the exact map in the tests, and the answer is confirmed by full
+    regeneration, :func:`confirm_fixed_run`). The region is the one the tool draws,
+    ``Σ_P(N) = A/N + B``.
 
     The probability is estimated from ``draws`` rows of :func:`calibration_draws` (common to
     every N). It need not be monotone in N: it is evaluated on a geometric grid of
