@@ -58,7 +58,8 @@ def _cmd_nmin(args: argparse.Namespace) -> int:
     if args.confirm_runs > 0:
         limits.check_memory(limits.synthetic_runs_bytes(CONFIRM_N_MAX, args.confirm_runs),
                             f"--confirm-runs {args.confirm_runs}")
-    if args.runs > 0 and mc_n:  # one synthetic run in memory at a time, all seeds up front
+    if mc_n:  # one synthetic run in memory at a time, all seeds up front (checked even
+        # with --runs 0, so an absurd --mc-n is refused whatever the run count)
         limits.check_memory(limits.synthetic_runs_bytes(max(mc_n), args.runs),
                             f"--mc-n {max(mc_n)} --runs {args.runs}")
     ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
