@@ -17,12 +17,25 @@ Propagated to the arrival point (:mod:`calib.region`)::
 ``d_i(N)² = δ_iᵀ Σ_P(N)⁻¹ δ_i`` grows monotonically with N; each candidate leaves the level-L
 region at one crossing ``N_i`` (found by bisection on integers) and never comes back.
 
-Two questions
--------------
-* **Design (before the run)** — the smallest N for which the level-L regions drawn around the
-  candidates are pairwise disjoint: ``|c_i - c_j|_Σ(N) > 2 r`` with ``r² = χ²₂(L)``. Then, by
-  the triangle inequality, when the truth's region contains the estimate (probability L) no
-  other candidate is inside: the decision is made *and* right with probability ≥ L.
+Three questions
+---------------
+* **The course question (this vehicle run given)** — the vehicle readings, hence their noise
+  realisation, are held fixed and only a NEW calibration of N samples is drawn: the smallest
+  N with P(decision made and right) ≥ L (:func:`fixed_run_nmin`). The calibration estimate
+  follows its sampling law ``ĉ_N ~ N(c, Σ_c1/N)``; the arrival point moves by
+  ``J (ĉ_N - c) = U/√N``; the region drawn is the tool's, ``Σ_P(N) = A/N + B``. Plug-in: on
+  real data c is unknown, so the full calibration is taken as the truth and the decided
+  candidate as the true arrival point. Estimated from ≥ 10⁵ draws of U (common to every N)
+  and confirmed by regenerating calibrations at the answer (:func:`confirm_fixed_run`). On
+  the course data: about 4,000 samples.
+* **Design (before the run, vehicle noise redrawn too)** — the smallest N for which the
+  level-L regions drawn around the candidates are pairwise disjoint:
+  ``|c_i - c_j|_Σ(N) > 2 r`` with ``r² = χ²₂(L)``. Then, by the triangle inequality, when the
+  truth's region contains the estimate (probability exactly L) no other candidate is inside:
+  the decision is made *and* right with probability L — never more, so this N is only where
+  the probability touches L. Its asymptote ``P_∞`` (N → ∞, ``Σ_P → B``) is below L when
+  the vehicle noise alone cannot separate the candidates: the level cannot be reached
+  (:func:`redrawn_design`).
 * **A posteriori (this estimate fixed)** — with the estimate ``P̂`` held fixed, exactly one
   candidate is inside for ``N`` in ``[N_(K-1), N_(K))`` (second-largest and largest crossings).
   Below it several candidates are inside; above ``N_(K)`` (if finite) none is.
@@ -41,8 +54,12 @@ Why no N can guarantee a decision in general
   rotation) is an assumption; an unmodelled effect does not average out with N.
 
 Monte Carlo checks: :func:`subsample_analysis` redoes the course reports' experiment (calibrate
-on every k-th sample of the course run) and :func:`simulate_decisions` draws fresh synthetic
-calibration and vehicle runs at a given N.
+on every k-th sample of the course run), :func:`confirm_fixed_run` regenerates calibrations
+with the vehicle run given, and :func:`simulate_decisions` draws fresh synthetic calibration
+and vehicle runs at a given N. Each says what its run count supports: a rate from R runs is
+known to ± 3√(p(1-p)/R), and R runs without a failure bound the failure rate only below
+≈ 3/R at 95 % (one-sided Clopper–Pearson, :func:`clopper_pearson_lower`): 100/100 supports
+P ≥ 0.970, not 0.997.
 """
 
 from __future__ import annotations
@@ -63,9 +80,12 @@ from calib.region import (
     arrival_region,
     chi2_2dof,
     course_decision,
+    decide,
     noise_cov_matrix,
+    squared_distances,
 )
 from calib.results import ResultMixin
+from calib.runs import Mapper, chunk_ranges, run_seeds, serial_map
 from calib.trajectory import Integrator, compute_trajectory, correct_and_integrate
 from calib.units import with_units
 
@@ -396,6 +416,336 @@ def simulate_decisions(
     return McRow(int(n), int(runs), right, wrong, undecided, inside, float(level))
 
 
+# ---------------------------------------------------------------------------------------------
+# The course question: the vehicle run given, how big must a NEW calibration be?
+# ---------------------------------------------------------------------------------------------
+
+FIXED_RUN_N_MAX = 10**7
+"""Largest N the fixed-run search looks at (beyond it: 'not reached')."""
+
+CONFIRM_N_MAX = 10**6
+"""Largest N at which the fixed-run answer is confirmed by regenerating calibrations."""
+
+BAND_SIGMAS = 3.0
+"""Half-width of the binomial bands, in binomial standard deviations."""
+
+
+def clopper_pearson_lower(k: int, runs: int, confidence: float = 0.95) -> float:
+    """One-sided Clopper–Pearson lower bound on a rate from ``k`` successes in ``runs``.
+
+    ``Beta⁻¹(1 - confidence; k, runs - k + 1)`` (0 when ``k = 0``): with probability
+    ``confidence`` the true rate is above it. E.g. ``runs`` successes out of ``runs`` bound the
+    rate above ``(1 - confidence)^(1/runs)`` — 100/100 only above 0.9705 at 95 %.
+    """
+    from scipy.stats import beta
+
+    if k <= 0:
+        return 0.0
+    return float(beta.ppf(1.0 - confidence, k, runs - k + 1))
+
+
+def _made_and_right(points: np.ndarray, cov: np.ndarray, cands: np.ndarray, truth: int,
+                    r2: float) -> int:
+    """How many rows of ``points`` (R, 2) the rule of :func:`calib.region.decide` decides
+    right: the truth's ``d² = (c - P̂)ᵀ Σ⁻¹ (c - P̂) ≤ r²`` and no other candidate's.
+
+    Vectorised form of :func:`calib.region.squared_distances` (whitened by the Cholesky factor
+    of ``cov``, no inverse); ``tests/test_nmin_fixed.py`` checks it against ``decide``.
+    """
+    chol = np.linalg.cholesky(np.asarray(cov, dtype=float))
+
+    def inside(c: np.ndarray, p: np.ndarray) -> np.ndarray:
+        dx, dy = c[0] - p[:, 0], c[1] - p[:, 1]
+        y1 = dx / chol[0, 0]
+        y2 = (dy - chol[1, 0] * y1) / chol[1, 1]
+        return y1 * y1 + y2 * y2 <= r2
+
+    sel = points[inside(cands[truth], points)]
+    alone = np.ones(sel.shape[0], dtype=bool)
+    for k in range(cands.shape[0]):
+        if k != truth:
+            alone &= ~inside(cands[k], sel)
+    return int(np.count_nonzero(alone))
+
+
+def calibration_draws(jacobian: np.ndarray, noise_var, draws: int, seed: int, g: float = G
+                      ) -> np.ndarray:
+    """(draws, 2) arrival-point errors of a calibration of N = 1: ``U = J Σ_c1^½ Z``, m.
+
+    ``Z ~ N(0, I₄)`` from ``default_rng(SeedSequence(seed))``; ``U ~ N(0, A)`` with
+    ``A = J Σ_c1 Jᵀ`` (module docstring). A calibration of N samples moves the arrival point by
+    ``U/√N`` (the sampling law of the estimator, linearised through the Jacobian): the same
+    ``U`` serve every N (common random numbers, so the N search compares like with like).
+    """
+    sd1 = np.sqrt(np.diag(uniform_design_cov(1, noise_var, g)))
+    z = np.random.default_rng(np.random.SeedSequence(int(seed))).standard_normal((int(draws), 4))
+    return z @ (np.asarray(jacobian, dtype=float) * sd1).T
+
+
+def fixed_run_probability(n: float, center, draws_u: np.ndarray, model: PositionCovModel,
+                          candidates: dict[str, np.ndarray], truth: str, level: float) -> float:
+    """P(decision made and right | this vehicle run) at calibration size ``n``, by draws.
+
+    ``P̂ = center + U/√n`` for each row of ``draws_u`` (:func:`calibration_draws`), the region
+    drawn with ``Σ_P(n) = A/n + B`` (what the tool draws: it includes the vehicle-noise term),
+    decided by the rule of :func:`calib.region.decide`. ``center`` (2,) m is the arrival point
+    the given run yields with the true calibration.
+    """
+    names = list(candidates)
+    cands = np.array([candidates[k] for k in names], dtype=float)
+    pts = np.asarray(center, dtype=float) + draws_u / np.sqrt(float(n))
+    k = _made_and_right(pts, model.cov(n), cands, names.index(truth), chi2_2dof(level))
+    return k / draws_u.shape[0]
+
+
+def _first_n(prob: Callable[[int], float], target: float, grid: np.ndarray,
+             values: np.ndarray) -> int | None:
+    """Smallest integer N with ``prob(N) ≥ target``: the first grid point that reaches it, then
+    bisection on integers between it and the grid point before (monotone within a bracket)."""
+    hit = np.nonzero(values >= target)[0]
+    if hit.size == 0:
+        return None
+    i = int(hit[0])
+    if i == 0:
+        return int(grid[0])
+    lo, hi = int(grid[i - 1]), int(grid[i])  # prob(lo) < target <= prob(hi)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if prob(mid) >= target:
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
+def fixed_run_nmin(region: ArrivalRegion, truth: str, draws: int = 10**6, seed: int = 0,
+                   g: float = G, n_max: int = FIXED_RUN_N_MAX, grid_points: int = 40) -> dict:
+    """The course question: with THIS vehicle run given, the smallest N of a new calibration
+    such that P(decision made and right) ≥ L.
+
+    Model (plug-in, stated): the vehicle readings — hence their noise realisation — are held
+    fixed; only a new calibration of N samples (θ uniform) is drawn, ``ĉ_N ~ N(c, Σ_c1/N)``
+    (exact for known σ², per-axis OLS). The true calibration ``c`` is unknown on real data,
+    so the arrival point the given run yields with it is taken as ``region.estimate`` (the
+    full calibration's), and the true arrival point as the candidate ``truth`` (the one the
+    full analysis decides). ``P̂_N = P̂ + J (ĉ_N - c) = P̂ + U/√N`` (linear in the calibration;
+    the scale enters as ``1/(1 + s)``, so the remainder is second order, about ``|step|·|Δs|``
+    with ``Δs ~ 0.07/√N``: centimetres at N ~ 10³ against a region tens of metres wide —
+    checked against the exact map in the tests, and the answer is confirmed by full
+    regeneration, :func:`confirm_fixed_run`). The region is the one the tool draws,
+    ``Σ_P(N) = A/N + B``.
+
+    The probability is estimated from ``draws`` rows of :func:`calibration_draws` (common to
+    every N). It need not be monotone in N: it is evaluated on a geometric grid of
+    ``grid_points`` N from 3 to ``n_max`` and refined by integer bisection inside the first
+    bracket that reaches L (``monotone_on_grid`` says whether the grid values never drop).
+
+    Returns a dict: ``n`` (None: L not reached up to ``n_max``), ``probability`` at n and
+    ``probability_below`` at n - 1; ``draws``, ``seed``, ``std_error`` = √(L(1-L)/draws);
+    ``n_band`` = the N at which the estimated curve reaches L ∓ 3·std_error (the draws'
+    binomial error propagated to N); ``p_infinity`` (N → ∞: ``P̂ → estimate``, ``Σ_P → B``, so
+    1 when ``truth`` alone is inside the B-region at the estimate, else 0); ``reachable``;
+    ``monotone_on_grid``; ``truth``; ``level``; ``grid_n`` / ``grid_p`` (the curve).
+    """
+    level = region.level
+    model = PositionCovModel.from_region(region, g)
+    u = calibration_draws(region.jacobian, region.noise_var, draws, seed, g)
+
+    memo: dict[int, float] = {}
+
+    def prob(n: int) -> float:
+        if n not in memo:
+            memo[n] = fixed_run_probability(n, region.estimate, u, model, region.candidates,
+                                            truth, level)
+        return memo[n]
+
+    grid = np.unique(np.round(np.geomspace(3, n_max, grid_points)).astype(np.int64))
+    values = np.array([prob(int(n)) for n in grid])
+    se = float(np.sqrt(level * (1.0 - level) / draws))
+    n = _first_n(prob, level, grid, values)
+    band = [_first_n(prob, min(level + s * BAND_SIGMAS * se, 1.0), grid, values)
+            for s in (-1.0, 1.0)]
+    if np.linalg.matrix_rank(model.B) == 2:
+        d2 = squared_distances(region.estimate, model.B, region.candidates)
+        p_inf = 1.0 if decide(d2, level)[0] == truth else 0.0
+    else:  # no vehicle noise: the region shrinks to a point that sits on no candidate
+        p_inf = 0.0
+    return {
+        "n": n, "probability": None if n is None else prob(n),
+        "probability_below": None if n is None or n <= 3 else prob(n - 1),
+        "draws": int(draws), "seed": int(seed), "std_error": se, "n_band": band,
+        "p_infinity": p_inf, "reachable": n is not None, "truth": truth, "level": level,
+        "best_probability": float(values.max()),
+        "monotone_on_grid": bool(np.all(np.diff(values) >= 0)),
+        "grid_n": grid.tolist(), "grid_p": values.tolist(),
+    }
+
+
+def redrawn_probability(n: float, model: PositionCovModel, candidates: dict[str, np.ndarray],
+                        truth: str, level: float, w: np.ndarray) -> float:
+    """P(decision made and right) with the vehicle noise redrawn too, by draws.
+
+    ``P̂ = c_truth + chol(Σ_P(n)) W`` for the rows of ``w`` (R, 2) standard normal: both the
+    calibration and the vehicle noise are new. The truth is inside with probability exactly L,
+    so this never exceeds L. ``n = inf`` gives the asymptote (``Σ_P = B``).
+    """
+    names = list(candidates)
+    cands = np.array([candidates[k] for k in names], dtype=float)
+    cov = model.B if np.isinf(n) else model.cov(n)
+    pts = cands[names.index(truth)] + w @ np.linalg.cholesky(cov).T
+    return _made_and_right(pts, cov, cands, names.index(truth), chi2_2dof(level)) / w.shape[0]
+
+
+def redrawn_design(candidates: dict[str, np.ndarray], model: PositionCovModel, truth: str,
+                   level: float, draws: int = 10**6, seed: int = 0) -> dict:
+    """The design question (vehicle noise redrawn as well), with its asymptote.
+
+    P(made and right) ≤ L for every N (the truth is inside with probability L); it equals L
+    once the truth's region is disjoint from every other candidate's, i.e. from
+    ``n = max_k crossing_n(c_truth - c_k, 4 r²)`` on (exact, :func:`crossing_n`). Its
+    asymptote ``p_infinity`` (N → ∞, ``Σ_P → B``) is L exactly when the B-regions are
+    disjoint, otherwise estimated from ``draws`` (``p_infinity_std_error``); when it is below
+    L, ``reachable`` is False and ``message`` says so plainly.
+    """
+    r2 = chi2_2dof(level)
+    c_t = np.asarray(candidates[truth], dtype=float)
+    ns = [crossing_n(c_t - np.asarray(c, float), model, 4.0 * r2)
+          for k, c in candidates.items() if k != truth]
+    n = None if any(x is None for x in ns) else max(ns, default=3)
+    if n is not None:
+        p_inf, se = float(level), 0.0
+    elif np.linalg.matrix_rank(model.B) < 2:
+        p_inf, se = 0.0, 0.0
+    else:
+        w = np.random.default_rng(np.random.SeedSequence(int(seed))).standard_normal(
+            (int(draws), 2))
+        p_inf = redrawn_probability(np.inf, model, candidates, truth, level, w)
+        se = float(np.sqrt(max(p_inf * (1.0 - p_inf), 0.25 / draws) / draws))
+    L = f"{100 * level:g}%"
+    msg = (f"P(made and right) ≤ {L} for every N; it reaches {L} at N = {n} and stays there"
+           if n is not None else
+           f"the level {L} cannot be reached: the best reachable is P_∞ = {p_inf:.5f} "
+           f"(± {se:.1g}, N → ∞)")
+    return {"n": n, "p_infinity": p_inf, "p_infinity_std_error": se, "reachable": n is not None,
+            "truth": truth, "level": level, "draws": int(draws) if n is None else 0,
+            "message": msg}
+
+
+@dataclass(frozen=True, eq=False)
+class ConfirmRow(ResultMixin):
+    """Full regeneration at one N with the vehicle run given (:func:`confirm_fixed_run`).
+
+    ``predicted`` : P(made and right) from the sampling-law draws at this N. ``band`` :
+    ``predicted ± 3 √(p(1-p)/runs)``. ``lower_95`` : one-sided 95 % Clopper–Pearson bound on
+    the rate of right decisions — the claim these runs support.
+    """
+
+    _TITLE = "Regenerated calibrations, vehicle run given"
+    _UNITS = "counts of runs; N samples; rates, bounds and level fractions (dimensionless)"
+
+    n: int
+    runs: int
+    right: int
+    wrong: int
+    undecided: int
+    level: float
+    predicted: float
+    seed: int
+
+    @property
+    def rate(self) -> float:
+        return self.right / self.runs
+
+    @property
+    def band(self) -> tuple[float, float]:
+        h = BAND_SIGMAS * np.sqrt(self.predicted * (1.0 - self.predicted) / self.runs)
+        return float(self.predicted - h), float(self.predicted + h)
+
+    @property
+    def consistent(self) -> bool:
+        lo, hi = self.band
+        return lo <= self.rate <= hi
+
+    @property
+    def lower_95(self) -> float:
+        return clopper_pearson_lower(self.right, self.runs, 0.95)
+
+    def to_dict(self) -> dict:
+        return {"n": self.n, "runs": self.runs, "right": self.right, "wrong": self.wrong,
+                "undecided": self.undecided, "level": self.level,
+                "predicted": self.predicted, "seed": self.seed, "rate": self.rate,
+                "band": list(self.band), "consistent": self.consistent,
+                "lower_95": self.lower_95}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> ConfirmRow:
+        """Rebuild from :meth:`to_dict` (exact; rate, band and bound are derived)."""
+        return cls(int(d["n"]), int(d["runs"]), int(d["right"]), int(d["wrong"]),
+                   int(d["undecided"]), float(d["level"]), float(d["predicted"]),
+                   int(d["seed"]))
+
+    def summary(self) -> str:
+        lo, hi = self.band
+        verdict = "consistent with" if self.consistent else "OUTSIDE"
+        return (f"N = {self.n}: {self.runs} regenerated calibrations, {self.right} right, "
+                f"{self.wrong} wrong, {self.undecided} undecided: rate {self.rate:.5f}, "
+                f"{verdict} the predicted {self.predicted:.5f} (3σ band [{lo:.5f}, "
+                f"{min(hi, 1.0):.5f}]); these runs support P(made and right) ≥ "
+                f"{self.lower_95:.5f} at 95 % (one-sided), no more")
+
+
+def _confirm_chunk(task: tuple) -> tuple[int, int, int]:
+    """Runs ``task[0]`` (a range) of :func:`confirm_fixed_run`: (right, wrong, undecided)."""
+    (runs, seed, n, t, a_m, candidates, truth, bias, scale, nv, p0, v0, level, method,
+     integrator, g) = task[1:]
+    seeds = run_seeds(seed, runs)
+    right = wrong = undecided = 0
+    for k in task[0]:
+        rng = np.random.default_rng(seeds[k])
+        ens = synthetic_calibration(n, bias, scale, nv, rng, g)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PoorlyIdentifiedWarning)
+            cal = calibrate(ens, nv, method, g)  # type: ignore[arg-type]
+        traj = correct_and_integrate(t, a_m, cal.bias, cal.scale, p0, v0, integrator)
+        dec = arrival_region(traj, cal, candidates, nv, level).decision
+        if dec is None:
+            undecided += 1
+        elif dec == truth:
+            right += 1
+        else:
+            wrong += 1
+    return right, wrong, undecided
+
+
+def confirm_fixed_run(
+    acel: Acel, candidates: dict[str, np.ndarray], truth: str, n: int, runs: int, seed: int,
+    bias, scale, noise_var, predicted: float, p0=(0.0, 0.0), v0=(1.0, 3.0),
+    level: float = 0.997, method: str = "ols", integrator: Integrator = "trapezoid",
+    g: float = G, mapper: Mapper | None = None,
+    progress: Callable[[int, int], None] | None = None, chunk: int = 250,
+) -> ConfirmRow:
+    """Check the fixed-run answer by full regeneration: ``runs`` new calibrations of ``n``.
+
+    Run k draws from ``run_seeds(seed, runs)[k]`` a calibration run (:func:`synthetic_calibration`
+    with the plug-in truth ``bias`` (2,) m/s², ``scale`` (2,)), calibrates it (known σ²),
+    corrects and integrates the GIVEN vehicle run ``acel`` with it (exact, no linearisation),
+    draws the region and decides (:func:`calib.region.arrival_region`). The counts do not
+    depend on ``mapper`` (:mod:`calib.runs`) or ``chunk``. ``progress(done, total)`` counts
+    chunks.
+    """
+    nv = np.diag(noise_cov_matrix(noise_var))
+    cands = {k: np.asarray(c, dtype=float) for k, c in candidates.items()}
+    common = (int(runs), int(seed), int(n), np.asarray(acel.t, float),
+              np.asarray(acel.aerr, float), cands, truth, np.asarray(bias, float),
+              np.asarray(scale, float), nv, tuple(p0), tuple(v0), float(level), method,
+              integrator, float(g))
+    tasks = [(r, *common) for r in chunk_ranges(int(runs), chunk)]
+    out = (mapper or serial_map)(_confirm_chunk, tasks, progress)
+    right, wrong, undecided = (int(sum(x[i] for x in out)) for i in range(3))
+    return ConfirmRow(int(n), int(runs), right, wrong, undecided, float(level),
+                      float(predicted), int(seed))
+
+
 @dataclass(frozen=True, eq=False)
 class NminResult(ResultMixin):
     """Result of the N analysis (see the module docstring for the definitions).
@@ -425,6 +775,9 @@ class NminResult(ResultMixin):
     monte_carlo: tuple = ()
     notes: tuple = field(default_factory=tuple)
     area_comparison: dict = field(default_factory=dict)
+    fixed_run: dict = field(default_factory=dict)
+    confirmation: tuple = ()
+    redrawn: dict = field(default_factory=dict)
 
     _JSON_UNITS = {  # the units of to_dict(), one home (docs/units.md)
         "level": "1", "n_data": "count", "estimate": "m",
@@ -442,6 +795,12 @@ class NminResult(ResultMixin):
         "area_comparison.ellipse_area": "m²", "area_comparison.calibration_only_area": "m²",
         "area_comparison.course_box_area": "m²", "area_comparison.course_ellipse_area": "m²",
         "area_comparison.*": "1",
+        "fixed_run.n": "count", "fixed_run.n_band": "count", "fixed_run.draws": "count",
+        "fixed_run.seed": "count", "fixed_run.grid_n": "count", "fixed_run.*": "1",
+        "confirmation.n": "count", "confirmation.runs": "count", "confirmation.right": "count",
+        "confirmation.wrong": "count", "confirmation.undecided": "count",
+        "confirmation.seed": "count", "confirmation.*": "1",
+        "redrawn.n": "count", "redrawn.draws": "count", "redrawn.*": "1",
     }
 
     def to_dict(self) -> dict:
@@ -455,6 +814,9 @@ class NminResult(ResultMixin):
             "subsample": [r.to_dict() for r in self.subsample],
             "monte_carlo": [r.to_dict() for r in self.monte_carlo],
             "notes": list(self.notes), "area_comparison": self.area_comparison,
+            "fixed_run": self.fixed_run,
+            "confirmation": [r.to_dict() for r in self.confirmation],
+            "redrawn": self.redrawn,
         }, self._JSON_UNITS)
 
     @classmethod
@@ -481,6 +843,9 @@ class NminResult(ResultMixin):
             subsample=tuple(SubsampleRow.from_dict(r) for r in d.get("subsample", ())),
             monte_carlo=tuple(McRow.from_dict(r) for r in d.get("monte_carlo", ())),
             notes=tuple(d.get("notes", ())), area_comparison=dict(d.get("area_comparison", {})),
+            fixed_run=dict(d.get("fixed_run", {})),
+            confirmation=tuple(ConfirmRow.from_dict(r) for r in d.get("confirmation", ())),
+            redrawn=dict(d.get("redrawn", {})),
         )
 
     def summary(self) -> str:
@@ -504,6 +869,29 @@ class NminResult(ResultMixin):
         out = [
             f"N analysis at {L} (θ uniform over [0, 2π); data: N = {self.n_data}, "
             f"decision {self.decision or 'undecided'})",
+        ]
+        if self.fixed_run:
+            f = self.fixed_run
+            out.append(f"  this vehicle run given (the course question): new calibration of "
+                       f"N samples, P(decision made and right = {f['truth']}) ≥ {L}:")
+            if f["n"] is None:
+                out.append(f"    the level {L} cannot be reached with this run: the best "
+                           f"reachable is P = {f['best_probability']:.5f} (N ≤ "
+                           f"{FIXED_RUN_N_MAX}; N → ∞: P = {f['p_infinity']:g})")
+            else:
+                lo, hi = f["n_band"]
+                out.append(
+                    f"    N ≥ {f['n']} (P = {f['probability']:.5f} there, "
+                    f"{f['probability_below']:.5f} at N - 1; {f['draws']} draws from the "
+                    f"estimator's sampling law, std error {f['std_error']:.1g}: N between "
+                    f"{lo} and {hi} at ±3σ; N → ∞: P = {f['p_infinity']:g})")
+            for c in self.confirmation:
+                out.append(f"    regeneration check: {c.summary()}")
+        if self.redrawn:
+            r = self.redrawn
+            out.append(f"  design, vehicle noise redrawn too (truth {r['truth']}): "
+                       f"{r['message']}; asymptote P_∞ = {r['p_infinity']:.5f}")
+        out += [
             f"  design, full region (decided and right with prob ≥ {L}): "
             f"{design_txt(self.design)}",
             f"  design, calibration part only (course assumption, no vehicle noise): "
@@ -532,12 +920,14 @@ class NminResult(ResultMixin):
                     f"{r.course_box[1]:>10.1f}{r.course_decision or '-':>8}"
                     f"{','.join(r.course_inside) or '-':>10}")
         if self.monte_carlo:
-            out.append("  fresh synthetic runs (truth at the decided candidate):")
+            out.append("  fresh synthetic runs, vehicle noise redrawn (truth at the decided "
+                       "candidate):")
             out.append(f"  {'N':>8}{'runs':>6}{'right':>7}{'wrong':>7}{'undecided':>10}"
                        f"{'truth inside':>14}")
             for m in self.monte_carlo:
                 out.append(f"  {m.n:>8}{m.runs:>6}{m.right:>7}{m.wrong:>7}{m.undecided:>10}"
-                           f"{m.truth_inside:>14}")
+                           f"{m.truth_inside:>14}   supports P(right) ≥ "
+                           f"{clopper_pearson_lower(m.right, m.runs):.4f} at 95 %")
         out.extend(f"  note: {n}" for n in self.notes)
         return "\n".join(out)
 
@@ -547,9 +937,11 @@ NOTES = (
     "covariance does not shrink with the calibration N, candidates may be arbitrarily close "
     "(or the estimate may fall between two), and at level L the truth is outside its region "
     "with probability 1 - L whatever N is",
-    "the design N makes the level-L regions around the candidates pairwise disjoint, so the "
-    "decision is made and right with probability ≥ L; the a-posteriori range holds only for "
-    "this estimate",
+    "the fixed-run N answers the course question (this vehicle run given, a new calibration "
+    "drawn; plug-in: the full calibration is the truth, the decided candidate the arrival "
+    "point); the design N redraws the vehicle noise as well, so there P(made and right) never "
+    "exceeds L: it makes the level-L regions pairwise disjoint and only touches L; the "
+    "a-posteriori range holds only for this estimate",
     "the course box bound leaves out the vehicle noise and uses worst-case |a|max: it is too "
     "wide in the calibration part and too narrow overall",
 )
@@ -560,7 +952,8 @@ def analyze_nmin(
     v0=(1.0, 3.0), noise_var=None, level: float = 0.997, method: str = "ols",
     integrator: Integrator = "trapezoid", g: float = G, steps: Sequence[int] = COURSE_STEPS,
     mc_n: Sequence[int] = (), runs: int = 0, seed: int = 0,
-    progress: Callable[[str], None] | None = None,
+    progress: Callable[[str], None] | None = None, draws: int = 0, confirm_runs: int = 0,
+    mapper: Mapper | None = None, count: Callable[[int, int], None] | None = None,
 ) -> NminResult:
     """The whole N analysis on one data set (e.g. the course files).
 
@@ -581,8 +974,13 @@ def analyze_nmin(
     level : confidence level L.  method : "ols" or "wls".  integrator : "trapezoid" or
         "simpson".  g : gravity, m/s².
     steps : subsampling steps of the course experiment (every k-th sample; () skips it).
-    mc_n : calibration sizes N for fresh synthetic runs.  runs : runs per N (0: none).
-    seed : seed of the synthetic runs.
+    mc_n : calibration sizes N for fresh synthetic runs (vehicle noise redrawn).
+    runs : runs per N (0: none).  seed : seed of the draws and of the synthetic runs.
+    draws : draws from the calibration's sampling law for the fixed-run N
+        (:func:`fixed_run_nmin`; 0: skipped).  confirm_runs : regenerated calibrations at the
+        fixed-run answer (:func:`confirm_fixed_run`, when N ≤ ``CONFIRM_N_MAX``; 0: none).
+    mapper : runs the regeneration (:mod:`calib.runs`; default in-process).
+    count : ``count(done, total)`` chunks of the regeneration done.
 
     Returns
     -------
@@ -611,12 +1009,25 @@ def analyze_nmin(
     rows = subsample_analysis(ensayo, acel, candidates, steps, p0, v0, noise_var, level,
                               method, integrator, g) if steps else []
     design = design_nmin(candidates, full, level)
+    truth = reg.decision or min(reg.mahalanobis, key=reg.mahalanobis.get)
+    fixed: dict = {}
+    confirm = []
+    if draws > 0:
+        say(f"fixed-run N: {draws} draws from the calibration's sampling law")
+        fixed = fixed_run_nmin(reg, truth, draws, seed, g)
+        if confirm_runs > 0 and fixed["n"] is not None and fixed["n"] <= CONFIRM_N_MAX:
+            say(f"regenerating {confirm_runs} calibrations of N = {fixed['n']} "
+                "(vehicle run given)")
+            confirm.append(confirm_fixed_run(
+                acel, candidates, truth, fixed["n"], confirm_runs, seed, cal.bias, cal.scale,
+                reg.noise_var, fixed["probability"], p0, v0, level, method, integrator, g,
+                mapper, count))
+    redrawn = redrawn_design(candidates, full, truth, level, max(draws, 10**5), seed)
     mc = []
     if runs > 0:
         ns = list(mc_n)
         if design["n"] is not None and design["n"] <= 10**6 and design["n"] not in ns:
             ns.append(int(design["n"]))
-        truth = reg.decision or min(reg.mahalanobis, key=reg.mahalanobis.get)
         shift = reg.estimate - np.asarray(candidates[truth], float)
         moved = {k: np.asarray(c, float) + shift for k, c in candidates.items()}
         for i, n in enumerate(ns):
@@ -632,12 +1043,16 @@ def analyze_nmin(
         posterior_calibration_only=posterior_nrange(reg.estimate, candidates, calonly, level),
         posterior_course_box=course_box_nrange(reg.estimate, candidates, box1),
         subsample=tuple(rows), monte_carlo=tuple(mc), notes=NOTES,
-        area_comparison=reg.area_comparison(),
+        area_comparison=reg.area_comparison(), fixed_run=fixed, confirmation=tuple(confirm),
+        redrawn=redrawn,
     )
 
 
 __all__ = [
-    "COURSE_STEPS", "McRow", "NminResult", "PositionCovModel", "SubsampleRow",
-    "analyze_nmin", "course_box_nrange", "crossing_n", "design_nmin", "posterior_nrange",
+    "CONFIRM_N_MAX", "COURSE_STEPS", "ConfirmRow", "FIXED_RUN_N_MAX", "McRow", "NminResult",
+    "PositionCovModel", "SubsampleRow", "analyze_nmin", "calibration_draws",
+    "clopper_pearson_lower", "confirm_fixed_run", "course_box_nrange", "crossing_n",
+    "design_nmin", "fixed_run_nmin", "fixed_run_probability", "posterior_nrange",
+    "redrawn_design", "redrawn_probability",
     "simulate_decisions", "subsample_analysis", "synthetic_calibration", "uniform_design_cov",
 ]

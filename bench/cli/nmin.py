@@ -16,10 +16,12 @@ from bench.cli.inputs import add_course_inputs, read_course_inputs
 from bench.cli.options import (
     Deferred,
     OptionError,
+    add_sweep_options,
     check_count,
     check_initial_state,
     check_level,
     integer,
+    mapper_from_args,
     parse_ints,
 )
 from bench.cli.output import check_finite, print_json
@@ -33,7 +35,7 @@ def _course_steps() -> str:
 
 
 def _cmd_nmin(args: argparse.Namespace) -> int:
-    from calib.nmin import analyze_nmin  # start-up time of `tiltbench --help`
+    from calib.nmin import CONFIRM_N_MAX, analyze_nmin  # start-up time of `tiltbench --help`
 
     if args.calibration:
         raise OptionError(f"--calibration {args.calibration}: nmin re-fits the calibration on "
@@ -47,13 +49,26 @@ def _cmd_nmin(args: argparse.Namespace) -> int:
     if any(s < 1 for s in steps) or any(n < 3 for n in mc_n):
         raise OptionError("--steps must be >= 1 and --mc-n values >= 3")
     check_count(args.runs, "--runs", 0)
-    if args.runs > 0 and mc_n:  # one synthetic run in memory at a time, all seeds up front
+    check_count(args.draws, "--draws", 0)
+    check_count(args.confirm_runs, "--confirm-runs", 0)
+    if 0 < args.draws < 10**5:
+        raise OptionError(f"--draws {args.draws}: the fixed-run N needs at least 100000 draws "
+                          "(0 skips it)")
+    limits.check_memory(args.draws * 16 * 8, f"--draws {args.draws}")  # ~16 floats a draw
+    if args.confirm_runs > 0:
+        limits.check_memory(limits.synthetic_runs_bytes(CONFIRM_N_MAX, args.confirm_runs),
+                            f"--confirm-runs {args.confirm_runs}")
+    if mc_n:  # one synthetic run in memory at a time, all seeds up front (checked even
+        # with --runs 0, so an absurd --mc-n is refused whatever the run count)
         limits.check_memory(limits.synthetic_runs_bytes(max(mc_n), args.runs),
                             f"--mc-n {max(mc_n)} --runs {args.runs}")
     ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
+    prog = Progress("nmin")
     res = analyze_nmin(ensayo, acel, candidates, p0, v0, nv, level, args.method,
                        args.integrator, args.g, steps, mc_n, args.runs, args.seed,
-                       progress=Progress("nmin"))
+                       progress=prog, draws=args.draws, confirm_runs=args.confirm_runs,
+                       mapper=mapper_from_args(args) if args.confirm_runs else None,
+                       count=lambda done, total: prog.count(done, total, "regeneration chunks"))
     if args.json:
         print_json(res.to_dict())
     else:
@@ -67,8 +82,17 @@ def register(sub) -> None:
     add_course_inputs(q)
     q.add_argument("--steps", default=Deferred(_course_steps),
                    help="subsampling steps of the course experiment (every k-th sample)")
+    q.add_argument("--draws", type=integer, default=100_000,
+                   help="draws from the calibration's sampling law for the fixed-run N "
+                        "(this vehicle run given; >= 100000, 0: skip)")
+    q.add_argument("--confirm-runs", type=integer, default=1000,
+                   help="regenerated calibrations at the fixed-run N (0: none); the output "
+                        "says what the count supports")
     q.add_argument("--mc-n", default="20001,1539,1429",
-                   help="calibration sizes N for fresh synthetic runs (the design N is added)")
-    q.add_argument("--runs", type=integer, default=100, help="synthetic runs per N (0: none)")
-    q.add_argument("--seed", type=int, default=0, help="seed of the synthetic runs")
+                   help="calibration sizes N for fresh synthetic runs with the vehicle noise "
+                        "redrawn (the design N is added)")
+    q.add_argument("--runs", type=integer, default=0,
+                   help="synthetic runs per --mc-n N, vehicle noise redrawn (0: none)")
+    q.add_argument("--seed", type=int, default=0, help="seed of the draws and synthetic runs")
+    add_sweep_options(q)
     q.set_defaults(handler=_cmd_nmin)

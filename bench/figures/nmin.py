@@ -1,4 +1,5 @@
-"""The N analysis: Mahalanobis distance of each candidate against the calibration size."""
+"""The N analysis: Mahalanobis distances and P(decision made and right) against the calibration
+size N."""
 
 from __future__ import annotations
 
@@ -9,7 +10,14 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from calib.conventions import G
-from calib.nmin import PositionCovModel, design_nmin, posterior_nrange
+from calib.nmin import (
+    PositionCovModel,
+    design_nmin,
+    fixed_run_nmin,
+    posterior_nrange,
+    redrawn_design,
+    redrawn_probability,
+)
 from calib.region import chi2_2dof
 
 if TYPE_CHECKING:
@@ -17,8 +25,17 @@ if TYPE_CHECKING:
 
 
 def nmin_figure(region: ArrivalRegion, n_data: int, g: float = G,
-                n_range: tuple[float, float] = (1e2, 1e6), title: str | None = None) -> Figure:
-    """Mahalanobis distance of each candidate against the calibration size N.
+                n_range: tuple[float, float] = (1e2, 1e6), title: str | None = None,
+                fixed_run: dict | None = None, draws: int = 10**5) -> Figure:
+    """Mahalanobis distance of each candidate against the calibration size N (top), and
+    P(decision made and right) against N (bottom).
+
+    Bottom: the course question (this vehicle run given, :func:`calib.nmin.fixed_run_nmin`;
+    ``fixed_run`` is its result, computed here with ``draws`` draws when None) and the design
+    question with the vehicle noise redrawn (:func:`calib.nmin.redrawn_probability`, which
+    never exceeds L), the level line and both answers marked.
+
+    Top:
 
     Uses :class:`calib.nmin.PositionCovModel` (``Σ_P(N) = A/N + B``, θ uniform) built from the
     region; a candidate is inside the level-L region while its distance is below
@@ -30,7 +47,8 @@ def nmin_figure(region: ArrivalRegion, n_data: int, g: float = G,
     cal_only = PositionCovModel.from_region(region, g, include_noise=False)
     r = float(np.sqrt(chi2_2dof(region.level)))
     ns = np.logspace(np.log10(n_range[0]), np.log10(n_range[1]), 300)
-    fig, ax = plt.subplots(figsize=(10, 5.5), constrained_layout=True)
+    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(10, 10), constrained_layout=True,
+                                  height_ratios=(1.2, 1.0))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     nearest = {}
     for i, (name, c) in enumerate(region.candidates.items()):
@@ -68,7 +86,45 @@ def nmin_figure(region: ArrivalRegion, n_data: int, g: float = G,
                  "inside the region while d < r.\nSolid: level off at the vehicle-noise floor "
                  "B.  Dashed (calibration only, as the course reports): rise as √N without "
                  "bound.", fontsize=9)
+    _probability_panel(ax2, region, model, n_range, fixed_run, draws)
     return fig
+
+
+def _probability_panel(ax, region: ArrivalRegion, model: PositionCovModel,
+                       n_range: tuple[float, float], fixed_run: dict | None, draws: int
+                       ) -> None:
+    """P(made and right) against N: fixed run (the course question) and noise redrawn."""
+    truth = region.decision or min(region.mahalanobis, key=region.mahalanobis.get)
+    fr = fixed_run if fixed_run is not None else fixed_run_nmin(region, truth, draws)
+    L = region.level
+    ax.plot(fr["grid_n"], fr["grid_p"], color="tab:blue", lw=2, marker=".",
+            label=f"this vehicle run given (course question; {fr['draws']} draws)")
+    ns = np.geomspace(max(n_range[0], 3), max(n_range[1], 10 * (fr["n"] or 1)), 40)
+    w = np.random.default_rng(np.random.SeedSequence(fr["seed"])).standard_normal((draws, 2))
+    red = [redrawn_probability(n, model, region.candidates, truth, L, w) for n in ns]
+    ax.plot(ns, red, color="tab:purple", lw=1.5, ls="--",
+            label="vehicle noise redrawn too (design; never above L)")
+    des = redrawn_design(region.candidates, model, truth, L, draws, fr["seed"])
+    ax.axhline(des["p_infinity"], color="tab:purple", lw=0.8, ls=":",
+               label=f"redrawn asymptote P_∞ = {des['p_infinity']:.4f}")
+    ax.axhline(L, color="k", lw=1.2, label=f"level L = {L:g}")
+    if fr["n"] is not None:
+        ax.axvline(fr["n"], color="tab:blue", ls="-.",
+                   label=f"fixed-run answer N = {fr['n']} (±3σ: {fr['n_band'][0]}–"
+                   f"{fr['n_band'][1]})")
+    if des["n"] is not None:
+        ax.axvline(des["n"], color="tab:purple", ls="-.",
+                   label=f"redrawn: reaches L (touches it) at N = {des['n']}")
+    ax.set_xscale("log")
+    ax.set_xlim(ns[0], ns[-1])
+    ax.set_ylim(max(0.0, min(0.9, L - 0.1)), 1.0005)
+    ax.set_xlabel("calibration samples N of a new calibration (θ uniform over [0, 2π))")
+    ax.set_ylabel(f"P(decision made and right = {truth})")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right")
+    ax.set_title("How big must a new calibration be?  With this vehicle run given the "
+                 "probability reaches L; with the vehicle noise redrawn it cannot exceed L",
+                 fontsize=9)
 
 
 def _explain_rise(ax, ns: np.ndarray, curves: dict, r: float) -> None:
