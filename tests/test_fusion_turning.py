@@ -26,12 +26,17 @@ for NEES), not more.
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
+import scipy.io
 from scipy.stats import chi2
 
+from bench.cli import main
 from bench.vehicle import VehicleConfig, simulate_vehicle
 from calib.fusion_turning import TurningFusionResult, fuse_turning
+from calib.units import missing_units
 
 SEED = 20261123
 R_RUNS = 500
@@ -183,3 +188,41 @@ def test_rejects_bad_inputs():
     bad[2] = np.inf
     with pytest.raises(ValueError, match="gyro"):
         fuse_turning(t, acc, bad, [0.5], [[0.0, 0.0]], **kw)
+
+
+def test_cli_generate_turning_then_fuse(capsys, tmp_path):
+    out = tmp_path / "cs"
+    assert main(["generate", "course", "--turning", "--gps", "--seed", "3", "--out", str(out),
+                 "--rate", "50", "--count", "201", "--json"]) == 0
+    capsys.readouterr()
+    truth = json.loads((out / "truth.json").read_text())
+    assert truth["vehicle"]["turning"] is True and missing_units(truth) == []
+    assert truth["units"]["vehicle.gyro_sigma"] == "rad/s"
+    mat = scipy.io.loadmat(out / "acel.mat")
+    assert mat["gyro"].shape == mat["t"].shape
+    # gyro noise: 3000 residuals against the true rate, variance in its χ² band
+    cfg = VehicleConfig(duration=60.0, rate=50.0, turning=True)
+    w_true = simulate_vehicle(cfg).yaw_rate
+    res = mat["gyro"][:, 0] - w_true
+    n = res.size
+    s2 = float(np.sum(res ** 2)) / cfg.gyro_sigma ** 2
+    assert chi2.ppf(0.001, n) <= s2 <= chi2.ppf(0.999, n), s2 / n
+    files = ["--acel", out / "acel.mat", "--gps", out / "gps.mat", "--puntos",
+             out / "puntos.mat", "--datos", out / "datos.txt", "--ensayo", out / "ensayo.mat"]
+    assert main(["fuse", *map(str, files), "--smoother", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert missing_units(d["fusion"]) == [], missing_units(d["fusion"])
+    fused = d["fusion"]
+    assert fused["state_names"][4] == "psi" and d["units"] is not None
+    est = np.array(fused["final_position"], dtype=float).reshape(2)
+    cov = np.array(fused["final_position_cov"], dtype=float).reshape(2, 2)
+    err = est - np.array(truth["true_final_position"])
+    assert float(err @ np.linalg.solve(cov, err)) < chi2.ppf(0.999, 2)
+    assert d["decision"]["decision"] == truth["answer"]
+    assert main(["fuse", *map(str, files)]) == 0
+    text = capsys.readouterr().out
+    for word in ("Extended Kalman fusion", "P0 (", "Q per IMU step", "R (m²", "(rad/s)²",
+                 "final heading"):
+        assert word in text, word
+    assert main(["fuse", *map(str, files), "--gps-vel-sigma", "0.1"]) == 2
+    assert "position fixes only" in capsys.readouterr().err
