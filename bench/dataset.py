@@ -113,6 +113,14 @@ def _run_units() -> dict[str, str]:
     return out
 
 
+TURN_UNITS = {
+    "turning": "—", "yaw_profile.alpha": "rad/s²", "yaw_profile.duration": "s",
+    "gyro_sigma": "rad/s", "gyro_seed_spawn_key": "—", "trajectory.final_heading": "rad",
+    "trajectory.samples.heading": "rad", "trajectory.samples.yaw_rate": "rad/s",
+}
+"""Units of the turning vehicle's extra keys in ``truth.json`` (:mod:`bench.vehicle`), added
+only for a turning run so that other sets keep their bytes."""
+
 def truth_units(gps: bool = False, turning: bool = False) -> dict[str, str]:
     """The ``units`` of every ``truth.json`` (calibration, vehicle and course sets; a course
     set nests a calibration and a vehicle truth under ``calibration`` / ``vehicle``), the one
@@ -135,9 +143,7 @@ def truth_units(gps: bool = False, turning: bool = False) -> dict[str, str]:
         from bench.gnss import GPS_UNITS
 
         out.update(GPS_UNITS)
-    if turning:  # the turning vehicle's keys, only then (bench.vehicle.TURN_UNITS)
-        from bench.vehicle import TURN_UNITS
-
+    if turning:  # the turning vehicle's keys, only then
         out.update(TURN_UNITS)
         out.update(nest("vehicle", TURN_UNITS))
     return out

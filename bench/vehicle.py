@@ -73,14 +73,6 @@ GYRO_STREAM = 7
 GYRO_SIGMA = 0.005
 """Default white gyro noise σ_g, rad/s."""
 
-TURN_UNITS = {
-    "turning": "—", "yaw_profile.alpha": "rad/s²", "yaw_profile.duration": "s",
-    "gyro_sigma": "rad/s", "gyro_seed_spawn_key": "—", "trajectory.final_heading": "rad",
-    "trajectory.samples.heading": "rad", "trajectory.samples.yaw_rate": "rad/s",
-}
-"""Units of the turning vehicle's extra keys in ``truth.json`` (added only for a turning run,
-so other sets keep their bytes)."""
-
 SENSITIVE_COMPONENT = 0
 """Component of each accelerometer (site frame) along its sensitive axis: local +x."""
 
