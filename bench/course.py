@@ -223,7 +223,9 @@ def write_course_files(course: CourseSet, folder: str | Path, truth: bool = True
         "ensayo": save_mat(folder / "ensayo.mat", {"tita": course.calibration.tita,
                                                    "datos": course.calibration.datos},
                            force=True),
-        "acel": save_mat(folder / "acel.mat", {"t": v.t, "Aerr": v.aerr}, force=True),
+        "acel": save_mat(folder / "acel.mat", {"t": v.t, "Aerr": v.aerr,
+                                               **({} if v.gyro is None else {"gyro": v.gyro})},
+                         force=True),
         "puntos": save_mat(folder / "puntos.mat",
                            {k: np.asarray(p, float).reshape(1, 2)
                             for k, p in course.candidates.items()}, force=True),

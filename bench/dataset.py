@@ -113,7 +113,15 @@ def _run_units() -> dict[str, str]:
     return out
 
 
-def truth_units(gps: bool = False) -> dict[str, str]:
+TURN_UNITS = {
+    "turning": "—", "yaw_profile.alpha": "rad/s²", "yaw_profile.duration": "s",
+    "gyro_sigma": "rad/s", "gyro_seed_spawn_key": "—", "trajectory.final_heading": "rad",
+    "trajectory.samples.heading": "rad", "trajectory.samples.yaw_rate": "rad/s",
+}
+"""Units of the turning vehicle's extra keys in ``truth.json`` (:mod:`bench.vehicle`), added
+only for a turning run so that other sets keep their bytes."""
+
+def truth_units(gps: bool = False, turning: bool = False) -> dict[str, str]:
     """The ``units`` of every ``truth.json`` (calibration, vehicle and course sets; a course
     set nests a calibration and a vehicle truth under ``calibration`` / ``vehicle``), the one
     home of truth units (docs/units.md). ``gps``: the set has a receiver (a ``gps`` object,
@@ -135,6 +143,9 @@ def truth_units(gps: bool = False) -> dict[str, str]:
         from bench.gnss import GPS_UNITS
 
         out.update(GPS_UNITS)
+    if turning:  # the turning vehicle's keys, only then
+        out.update(TURN_UNITS)
+        out.update(nest("vehicle", TURN_UNITS))
     return out
 
 
@@ -146,7 +157,9 @@ def truth_manifest(truth: dict, seed: int) -> dict:
     manifest = dict(truth)
     manifest["seed"] = int(seed)
     manifest["versions"] = versions()
-    return with_units(manifest, truth_units(gps="gps" in truth))
+    turning = bool(truth.get("turning") or (isinstance(truth.get("vehicle"), dict)
+                                            and truth["vehicle"].get("turning")))
+    return with_units(manifest, truth_units(gps="gps" in truth, turning=turning))
 
 
 def write_truth(path: str | Path, truth: dict, seed: int, force: bool = False) -> Path:

@@ -345,7 +345,6 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
     M = t_gps.shape[0]
     nu = np.empty((Rn, M, d))
     S_all = np.empty((Rn, M, d, d))
-    eye = np.eye(n)
     F = np.broadcast_to(np.eye(n), (Rn, n, n)).copy()
     Qk = np.zeros((Rn, n, n))
     ax = np.arange(2)
@@ -377,15 +376,7 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
         xp, Pp = x.copy(), P.copy()
         m = fixi[k]
         if m >= 0:
-            v = Z[:, m, :] - x @ H.T
-            S = H @ P @ H.T + Rm
-            PHt = P @ H.T
-            Kg = np.linalg.solve(S, PHt.transpose(0, 2, 1)).transpose(0, 2, 1)
-            x = x + np.einsum("rij,rj->ri", Kg, v)
-            IKH = eye - Kg @ H
-            P = IKH @ P @ IKH.transpose(0, 2, 1) + Kg @ Rm @ Kg.transpose(0, 2, 1)
-            P = 0.5 * (P + P.transpose(0, 2, 1))
-            nu[:, m], S_all[:, m] = v, S
+            x, P, nu[:, m], S_all[:, m] = kalman_update(x, P, Z[:, m, :], H, Rm)
         if store[k]:
             if smoother:
                 xs_p[:, j], Ps_p[:, j], Phis[:, j] = xp, Pp, Phi
@@ -411,6 +402,26 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
                         out[3], out[4], out[5], P0, Qnom, Rm, sa2, estimate_scale, dt)
 
 
+def kalman_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, H: np.ndarray,
+                  Rm: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Joseph-form update of R runs with a linear measurement (module docstring).
+
+    x : (R, n) prior means, P : (R, n, n) their covariances, z : (R, d) measurements,
+    H : (d, n), Rm : (d, d) measurement noise. Returns the posterior ``x⁺`` (R, n), ``P⁺``
+    (R, n, n, symmetrised), the innovations ``ν`` (R, d) and their covariances ``S``
+    (R, d, d). The gain comes from a solve with S, never an inverse.
+    """
+    v = z - x @ H.T
+    S = H @ P @ H.T + Rm
+    PHt = P @ H.T
+    Kg = np.linalg.solve(S, PHt.transpose(0, 2, 1)).transpose(0, 2, 1)
+    x = x + np.einsum("rij,rj->ri", Kg, v)
+    IKH = np.eye(P.shape[-1]) - Kg @ H
+    P = IKH @ P @ IKH.transpose(0, 2, 1) + Kg @ Rm @ Kg.transpose(0, 2, 1)
+    P = 0.5 * (P + P.transpose(0, 2, 1))
+    return x, P, v, S
+
+
 def rts(x_f, P_f, x_p, P_p, Phi):
     """Rauch–Tung–Striebel smoother over stored nodes (module docstring).
 
@@ -434,4 +445,5 @@ def rts(x_f, P_f, x_p, P_p, Phi):
     return xs, Ps
 
 
-__all__ = ["CAL_ORDER", "FusionResult", "SCALE_NAMES", "STATE_NAMES", "fuse", "rts"]
+__all__ = ["CAL_ORDER", "FusionResult", "SCALE_NAMES", "STATE_NAMES", "fuse", "kalman_update",
+           "rts"]

@@ -67,14 +67,19 @@ class Ensayo:
 
 @dataclass(frozen=True)
 class Acel:
-    """A vehicle run: ``t`` (M,) s, uniformly sampled; ``aerr`` (M, 2) m/s², uncorrected."""
+    """A vehicle run: ``t`` (M,) s, uniformly sampled; ``aerr`` (M, 2) m/s², uncorrected;
+    ``gyro`` (M,) measured yaw rate, rad/s, of a turning vehicle (body-frame ``aerr``), or
+    None."""
 
     t: np.ndarray
     aerr: np.ndarray
     source: str = "<memory>"
+    gyro: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        for name in ("t", "aerr"):
+        for name in ("t", "aerr", "gyro"):
+            if getattr(self, name) is None:
+                continue
             arr = np.array(getattr(self, name), dtype=float)
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
@@ -438,8 +443,15 @@ def read_acel(path: str | os.PathLike) -> Acel:
     d = np.diff(t)
     if d.size and np.max(np.abs(d - d.mean())) > 1e-6 * max(d.mean(), 1e-12) + 1e-9:
         raise DataError(f"{where}: 't' is not uniformly sampled; resample before integrating")
-    _note_extra(mat, ("t", "Aerr"), "a vehicle run")
-    return Acel(t=t, aerr=aerr, source=where)
+    gyro = None
+    if "gyro" in mat:  # turning vehicle: yaw rate M×1, rad/s (docs/fusion.md)
+        gyro = _column(_get(mat, path, "gyro"), where, "gyro")
+        if gyro.shape[0] != t.shape[0]:
+            raise DataError(f"{where}: 't' has {t.shape[0]} samples but 'gyro' has "
+                            f"{gyro.shape[0]}")
+        check_finite(gyro, where, "gyro")
+    _note_extra(mat, ("t", "Aerr", "gyro"), "a vehicle run")
+    return Acel(t=t, aerr=aerr, source=where, gyro=gyro)
 
 
 def read_puntos(path: str | os.PathLike,

@@ -7,7 +7,10 @@
 
 The calibration comes from ``--calibration`` or is fitted on ``--ensayo`` (as
 ``trajectory``); P0, V0 and the noise variances come from ``--datos`` (else the course
-values, the noise estimated). The filter is :func:`calib.fusion.fuse` (docs/fusion.md): Q from
+values, the noise estimated). With a ``gyro`` variable in acel.mat (``generate vehicle
+--turning``) the extended filter :func:`calib.fusion_turning.fuse_turning` runs instead
+(``--gyro-sigma``, ``--psi0``, ``--psi0-sigma``). The filter is :func:`calib.fusion.fuse`
+(docs/fusion.md): Q from
 the stated noise and the calibration covariance, R from the receiver's σ, P0 from the
 calibration covariance (P0 and V0 are known exactly in the course), no tuning. The arrival
 decision uses the fused final position and its covariance.
@@ -18,7 +21,13 @@ from __future__ import annotations
 import argparse
 
 from bench.cli.inputs import add_course_inputs, read_calibration_file, read_course_inputs
-from bench.cli.options import add_force, check_initial_state, check_level, check_positive
+from bench.cli.options import (
+    OptionError,
+    add_force,
+    check_initial_state,
+    check_level,
+    check_positive,
+)
 from bench.cli.output import check_finite, print_files, print_json, refuse_overwrite
 
 
@@ -52,11 +61,14 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     vel = None
     if fixes.vel is not None and sigma_vel is not None:
         vel = fixes.vel[inside]
-    res = fuse(t, acel.aerr, fixes.t_gps[inside], fixes.pos[inside],
-               bias=cal.bias, scale=cal.scale, cal_cov=cal.cov, noise_var=noise_var,
-               sigma_pos=sigma_pos, p0=p0, v0=v0, p0_cov=0.0, v0_cov=0.0,
-               vel_gps=vel, sigma_vel=sigma_vel if vel is not None else None,
-               smoother=args.smoother)
+    if acel.gyro is not None:  # a turning vehicle: the extended filter
+        res = _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos)
+    else:
+        res = fuse(t, acel.aerr, fixes.t_gps[inside], fixes.pos[inside],
+                   bias=cal.bias, scale=cal.scale, cal_cov=cal.cov, noise_var=noise_var,
+                   sigma_pos=sigma_pos, p0=p0, v0=v0, p0_cov=0.0, v0_cov=0.0,
+                   vel_gps=vel, sigma_vel=sigma_vel if vel is not None else None,
+                   smoother=args.smoother)
     est = np.asarray(res.final_position, dtype=float).reshape(2)
     cov = np.asarray(res.final_position_cov, dtype=float).reshape(2, 2)
     d2 = squared_distances(est, cov, candidates)
@@ -85,6 +97,28 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     return 0
 
 
+def _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos):
+    """The turning vehicle (acel.mat has ``gyro``): :func:`calib.fusion_turning.fuse_turning`
+    with σ_g from ``--gyro-sigma`` and the initial heading ``--psi0`` ± ``--psi0-sigma``."""
+    from calib.fusion_turning import fuse_turning
+
+    if args.gps_vel_sigma is not None:
+        raise OptionError("--gps-vel-sigma: the turning filter (acel.mat with 'gyro') uses "
+                          "position fixes only")
+    if args.plot:
+        raise OptionError("--plot: the figure's dead reckoning is the non-rotating one; not "
+                          "available for a turning run (acel.mat with 'gyro')")
+    gyro_sigma = check_positive(args.gyro_sigma, "--gyro-sigma")
+    psi0_sigma = float(args.psi0_sigma)
+    if not psi0_sigma >= 0.0:
+        raise OptionError(f"--psi0-sigma must be >= 0 rad, got {args.psi0_sigma}")
+    return fuse_turning(acel.t, acel.aerr, acel.gyro, fixes.t_gps[inside], fixes.pos[inside],
+                        bias=cal.bias, scale=cal.scale, cal_cov=cal.cov, noise_var=noise_var,
+                        gyro_var=gyro_sigma ** 2, sigma_pos=sigma_pos, p0=p0, v0=v0,
+                        psi0=float(args.psi0), p0_cov=0.0, v0_cov=0.0,
+                        psi0_var=psi0_sigma ** 2, smoother=args.smoother)
+
+
 def register(sub) -> None:
     p = sub.add_parser("fuse", help="fuse the vehicle's accelerometers with position fixes "
                                     "(Kalman filter, docs/fusion.md)")
@@ -96,6 +130,13 @@ def register(sub) -> None:
     p.add_argument("--gps-vel-sigma", type=float,
                    help="σ of each velocity fix coordinate, m/s (velocity fixes used only "
                         "when given)")
+    p.add_argument("--gyro-sigma", type=float, default=0.005, metavar="RADPS",
+                   help="turning run (acel.mat with 'gyro'): white gyro noise std, rad/s "
+                        "(0.005, the bench's, if not given)")
+    p.add_argument("--psi0", type=float, default=0.0, metavar="RAD",
+                   help="turning run: initial heading, rad from world +x (0 if not given)")
+    p.add_argument("--psi0-sigma", type=float, default=0.0, metavar="RAD",
+                   help="turning run: std of the initial heading, rad (0: known)")
     p.add_argument("--smoother", action="store_true",
                    help="also run the Rauch-Tung-Striebel smoother")
     p.add_argument("--plot", help="write a figure (.png or .svg): dead reckoning, fixes, "

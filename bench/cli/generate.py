@@ -163,10 +163,22 @@ def vehicle_config(args: argparse.Namespace, sensor, profile, extra: float = 0.0
     cfg = VehicleConfig(duration=args.duration, rate=args.rate,
                         p0=tuple(parse_pair(args.p0, "--p0")),
                         v0=tuple(parse_pair(args.v0, "--v0")), profile=profile,
-                        sensor=sensor, g=args.g)
+                        sensor=sensor, g=args.g, **_turning_options(args))
     _check_vehicle_size(cfg, extra, extra_what)  # before the grid is built
     cfg.command()  # validate the grid now, with a clear message
     return cfg
+
+
+def _turning_options(args: argparse.Namespace) -> dict:
+    """``--turning`` / ``--gyro-sigma`` → VehicleConfig keywords (empty: the default vehicle)."""
+    if not getattr(args, "turning", False):
+        if getattr(args, "gyro_sigma", None) is not None:
+            raise OptionError("--gyro-sigma needs --turning")
+        return {}
+    kw = {"turning": True}
+    if args.gyro_sigma is not None:
+        kw["gyro_sigma"] = _check_nonnegative(args.gyro_sigma, "--gyro-sigma")
+    return kw
 
 
 def course_config(args: argparse.Namespace):
@@ -293,6 +305,7 @@ def _cmd_vehicle(args: argparse.Namespace) -> int:
     run = make_vehicle_run(cfg, args.seed)
     gps = _fixes(receiver, run.truth, args.seed)
     check_finite({"t": run.t, "Aerr": run.aerr, "truth": run.truth_dict(),
+                  **({} if run.gyro is None else {"gyro": run.gyro}),
                   **({} if gps is None else {"gps.mat": gps.mat_variables()})},
                  f"{args.out}: the run")
     paths = write_vehicle(run, args.out, force=args.force, gps=gps)
@@ -424,6 +437,15 @@ def _add_vehicle_options(p: argparse.ArgumentParser, profile_default: str | None
                         + ("" if profile_default else "; omitted: drawn from the seed"))
 
 
+def _add_turning_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--turning", action="store_true",
+                   help="free yaw hinge driven by the default yaw profile (heading turns "
+                        "143°): body-frame readings and acel.mat 'gyro' M×1, the yaw rate in "
+                        "rad/s (docs/fusion.md)")
+    p.add_argument("--gyro-sigma", type=float, metavar="RADPS",
+                   help="with --turning: white gyro noise std, rad/s (0.005 if not given)")
+
+
 def _register_calibration(kinds) -> None:
     p = kinds.add_parser("calibration", help="a tilt-table calibration run (ensayo.mat)")
     add_generate_common(p)
@@ -456,6 +478,7 @@ def _register_vehicle(kinds) -> None:
     add_generate_common(p)
     add_sensor_options(p)
     _add_vehicle_options(p, profile_default="course")
+    _add_turning_options(p)
     p.add_argument("--rrd", help="also record the run next to its truth to this rerun file")
     _add_gps_options(p)
     p.set_defaults(handler=_cmd_vehicle)
@@ -467,6 +490,7 @@ def _register_course(kinds) -> None:
                          "seed (--profile course gives the course's).")
     add_generate_common(p)
     _add_vehicle_options(p, profile_default=None)
+    _add_turning_options(p)
     p.add_argument("--noise-var", default=DEFAULT_NOISE, help="noise variances x,y (m/s²)²")
     p.add_argument("--bias", help="true bias x,y in m/s²; omitted: drawn from the seed")
     p.add_argument("--scale", help="true scale-factor error x,y; omitted: drawn from the seed")

@@ -1,0 +1,285 @@
+"""Extended Kalman fusion for a vehicle that turns (issue 13, parts 2–4): body-frame
+accelerometers, a gyro for the yaw rate, position fixes.
+
+Frames, units, signs
+--------------------
+World axes x, y (horizontal), z up. Heading ψ (rad) is the angle from world +x to the body's
++x axis, counter-clockwise seen from +z; the gyro reads ``ω = dψ/dt`` (rad/s). The two
+accelerometers read the specific force along the body +x and +y axes (m/s²);
+``R(ψ) = [[cos ψ, -sin ψ], [sin ψ, cos ψ]]`` maps body to world. Positions m, velocities
+m/s, biases m/s² (body axes), scale factors 1, time s.
+
+Model
+-----
+State ``x = [px, py, vx, vy, ψ, bx, by]``. Each accelerometer reading ``A_m,k`` (body) is
+held over ``[t_k, t_k+1)`` and corrected as in :mod:`calib.fusion`, then rotated::
+
+    a_b,k = (A_m,k - b - v_k) / (1 + ŝ),     a_w,k = R(ψ_k) a_b,k
+
+and over a step of length ``h = t_k+1 - t_k`` (trapezoid for the heading: exact while the
+yaw acceleration is constant over the step, as on the bench)::
+
+    p⁺ = p + v h + a_w h²/2,   v⁺ = v + a_w h,   ψ⁺ = ψ + h (ω_m,k + ω_m,k+1)/2,   b⁺ = b
+
+Jacobian of the step (``g1 = h²/2``, ``g2 = h``, ``R' = dR/dψ``, ``C = diag(1/(1+ŝ))``)::
+
+    ∂p⁺/∂v = h I,  ∂(p⁺, v⁺)/∂ψ = (g1, g2) · R'(ψ) a_b,  ∂(p⁺, v⁺)/∂b = -(g1, g2) · R(ψ) C
+
+Process noise per step, from stated quantities only (nothing tuned)::
+
+    W = R(ψ) diag((σ_a² + σ_s² a_b²)/(1+ŝ)²) R(ψ)ᵀ        (m/s²)², world axes
+    Q_pp = g1² W,  Q_pv = g1 g2 W,  Q_vv = g2² W,  Q_ψψ = σ_g² h²
+
+σ_a² is the accelerometer's stated white-noise variance, σ_s² the scale-factor variance of the
+calibration covariance (folded as a white term, as :mod:`calib.fusion` does with a fixed
+scale), σ_g the gyro's stated white noise (rad/s). The trapezoid makes consecutive heading
+increments share one gyro sample: their noise sums to ``σ_g² h² (N - 1/2)`` after N steps
+where Q gives ``σ_g² h² N`` — conservative by half a step. No gyro bias is modelled (the
+bench's gyro has none; a real one would add ``bg`` to the state).
+
+P0 = blockdiag(P_p0, P_v0, σ_ψ0², the bias block of the calibration covariance); R = σ_pos² I
+from the receiver. The update is :func:`calib.fusion.kalman_update` (Joseph form) with
+``H = [I₂ 0]``, the smoother :func:`calib.fusion.rts` on the products ``Φ`` of the step
+Jacobians evaluated at the filtered estimates (an extended RTS smoother).
+
+Fixes must fall on IMU sample times (the bench's receiver puts them there): the heading's
+trapezoid needs the gyro at both ends of every step.
+
+Why numpy and not filterpy
+--------------------------
+filterpy 2.0.0's ``ExtendedKalmanFilter`` and ``UnscentedKalmanFilter`` run one run at a
+time, a Python call per step (3000 steps × 500 Monte Carlo runs = 1.5·10⁶ predict calls, plus
+an ``sigma_points`` loop for the UKF), and its ``rts_smoother`` is for the linear filter
+without a control input (see :mod:`calib.fusion`). This module steps R runs at once as
+(R, n, n) arrays, like :func:`calib.fusion.fuse`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from calib.fusion import CAL_ORDER, FusionResult, _as_runs, _cov2, kalman_update, rts
+
+TURN_STATE_NAMES = ("px", "py", "vx", "vy", "psi", "bx", "by")
+_STATE_UNITS = "[m, m, m/s, m/s, rad, m/s², m/s²]"
+
+
+def rotation(psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``R(ψ)`` and ``dR/dψ``, shape ``psi.shape + (2, 2)`` (body → world)."""
+    c, s = np.cos(psi), np.sin(psi)
+    Rm = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+    dR = np.stack([np.stack([-s, -c], -1), np.stack([c, -s], -1)], -2)
+    return Rm, dR
+
+
+def body_to_world(psi: np.ndarray, acc_body: np.ndarray) -> np.ndarray:
+    """``R(ψ) a_b``: (…,) headings rad and (…, 2) body vectors → (…, 2) world vectors."""
+    return np.einsum("...ij,...j->...i", rotation(np.asarray(psi, dtype=float))[0],
+                     np.asarray(acc_body, dtype=float))
+
+
+@dataclass(frozen=True, eq=False)
+class TurningFusionResult(FusionResult):
+    """Extended Kalman filter (and smoother) of the turning vehicle: the fields of
+    :class:`calib.fusion.FusionResult` with the state ``TURN_STATE_NAMES`` (ψ in rad) and
+
+    gyro_var : σ_g², the gyro's white-noise variance, (rad/s)².
+    Q : (7, 7) process noise of one nominal IMU step at ψ = 0 without the data-dependent
+        scale term.
+    """
+
+    _TITLE = "Extended Kalman fusion (turning vehicle)"
+    _UNITS = ("t s; px, py m; vx, vy m/s; psi rad; bx, by m/s² (body axes); covariances in "
+              "the products of those units; innovations m")
+
+    gyro_var: float = 0.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        object.__setattr__(self, "gyro_var", float(self.gyro_var))
+
+    @property
+    def heading(self) -> np.ndarray:
+        """(K,) or (R, K) filtered heading ψ, rad."""
+        return self.estimates[..., 4].copy()
+
+    def to_dict(self) -> dict:
+        d = super().to_dict()
+        d["gyro_var"] = self.gyro_var
+        d["final_heading"] = self.estimates[..., -1, 4].tolist()
+        d["units"] = {**d["units"], "estimates": _STATE_UNITS, "smoothed": _STATE_UNITS,
+                      "gyro_var": "(rad/s)²", "final_heading": "rad", "R": "[m², m²]",
+                      "innovations": "[m, m]", "innovation_covs": "[m², m²]"}
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> TurningFusionResult:
+        return cls(tuple(d["state_names"]), d["times"], d["estimates"], d["covariances"],
+                   d["is_fix"], d["t_gps"], d["innovations"], d["innovation_covs"],
+                   d["smoothed"], d["smoothed_covariances"], d["P0"], d["Q"], d["R"],
+                   d["noise_var"], d["estimate_scale"], d["dt"], d["gyro_var"])
+
+    def summary(self) -> str:
+        lines = super().summary().splitlines()
+        lines[0] = lines[0].replace("Kalman fusion", "Extended Kalman fusion (turning)", 1)
+        lines.insert(2, f"  gyro noise σ_g² = {self.gyro_var:.4g} (rad/s)²; psi in rad, "
+                        f"bx, by in body axes")
+        fh = float(np.asarray(self.estimates)[..., -1, 4].reshape(-1)[0])
+        fs = float(np.sqrt(np.asarray(self.covariances)[..., -1, 4, 4].reshape(-1)[0]))
+        lines.insert(-1 if self.innovations.size else len(lines),
+                     f"  final heading {fh:.4f} rad, std {fs:.4f} rad")
+        return "\n".join(lines)
+
+
+def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var,
+                 gyro_var, sigma_pos, p0, v0, psi0=0.0, p0_cov=0.0, v0_cov=0.0,
+                 psi0_var=0.0, smoother=False, keep="all") -> TurningFusionResult:
+    """Extended Kalman filter (and RTS smoother) of a turning vehicle (module docstring).
+
+    Parameters
+    ----------
+    t : (N,) IMU times, s, strictly increasing.
+    acc_m : (N, 2) or (R, N, 2) measured body-frame accelerations (uncorrected), m/s².
+    gyro : (N,) or (R, N) measured yaw rate ω_m, rad/s.
+    t_gps : (M,) fix times, s, strictly increasing, each equal to an IMU time.
+    pos_gps : (M, 2) or (R, M, 2) position fixes, world axes, m.
+    bias : (2,) m/s², scale : (2,) 1, cal_cov : (4, 4) order ``CAL_ORDER`` — the calibration.
+    noise_var : σ_a², (m/s²)², scalar or (2,).  gyro_var : σ_g², (rad/s)².
+    sigma_pos : σ of each fix coordinate, m.
+    p0 (m), v0 (m/s), psi0 (rad): initial estimate; p0_cov, v0_cov (scalar, (2,) or (2, 2)),
+        m², (m/s)², and psi0_var, rad²: its covariance.
+    smoother : also run the extended RTS smoother.  keep : "all" or "fixes" (start, fixes,
+        end), as :func:`calib.fusion.fuse`.
+
+    Returns
+    -------
+    TurningFusionResult
+    """
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or t.shape[0] < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
+        raise ValueError("t must be 1-D, finite, strictly increasing, with ≥ 2 samples")
+    acc, batched = _as_runs(acc_m, 2, "acc_m")
+    Rn, N = acc.shape[0], t.shape[0]
+    if acc.shape[1] != N:
+        raise ValueError(f"acc_m has {acc.shape[1]} samples for {N} times")
+    w = np.asarray(gyro, dtype=float)
+    w = w[None] if w.ndim == 1 else w
+    if w.ndim != 2 or w.shape[1] != N or w.shape[0] not in (1, Rn):
+        raise ValueError(f"gyro must be (N,) or (R, N) with N = {N}, got {np.shape(gyro)}")
+    if not np.all(np.isfinite(w)):
+        raise ValueError("gyro has NaN or Inf: remove or interpolate those samples")
+    w = np.broadcast_to(w, (Rn, N))
+    t_gps = np.asarray(t_gps, dtype=float).reshape(-1)
+    tol = 1e-9 * max(1.0, float(np.max(np.abs(t))))
+    k_fix = np.clip(np.searchsorted(t, t_gps - tol), 0, N - 1)
+    if (np.any(np.diff(t_gps) <= 0) or np.any(np.abs(t[k_fix] - t_gps) > tol)):
+        raise ValueError("t_gps must be strictly increasing and each fix on an IMU sample time "
+                         "(the heading's trapezoid needs the gyro at both ends of a step)")
+    zp, _ = _as_runs(pos_gps, 2, "pos_gps")
+    if zp.shape[1] != t_gps.shape[0]:
+        raise ValueError(f"pos_gps has {zp.shape[1]} fixes for {t_gps.shape[0]} times")
+    Z = np.broadcast_to(zp, (Rn, *zp.shape[1:]))
+    Rm = np.eye(2) * float(sigma_pos) ** 2
+    n = 7
+    H = np.zeros((2, n))
+    H[:, :2] = np.eye(2)
+    bias = np.broadcast_to(np.asarray(bias, dtype=float), (2,))
+    scale = np.broadcast_to(np.asarray(scale, dtype=float), (2,))
+    cal_cov = np.asarray(cal_cov, dtype=float)
+    if cal_cov.shape != (4, 4):
+        raise ValueError(f"cal_cov must be (4, 4) in order {CAL_ORDER}, got {cal_cov.shape}")
+    sa2 = np.broadcast_to(np.asarray(noise_var, dtype=float), (2,)).copy()
+    sg2 = float(gyro_var)
+    ss2 = np.diag(cal_cov)[[1, 3]]
+    c = 1.0 / (1.0 + scale)
+
+    P0 = np.zeros((n, n))
+    P0[:2, :2] = _cov2(p0_cov, "p0_cov")
+    P0[2:4, 2:4] = _cov2(v0_cov, "v0_cov")
+    P0[4, 4] = float(psi0_var)
+    P0[5:, 5:] = cal_cov[np.ix_([0, 2], [0, 2])]
+    x0 = np.concatenate([np.asarray(p0, float), np.asarray(v0, float), [float(psi0)], bias])
+
+    fixi = np.full(N, -1)
+    fixi[k_fix] = np.arange(t_gps.shape[0])
+    if keep == "all":
+        store = np.ones(N, bool)
+    elif keep == "fixes":
+        store = fixi >= 0
+        store[0] = store[-1] = True
+    else:
+        raise ValueError(f"keep must be 'all' or 'fixes', got {keep!r}")
+    n_store = int(store.sum())
+
+    x = np.broadcast_to(x0, (Rn, n)).copy()
+    P = np.broadcast_to(P0, (Rn, n, n)).copy()
+    eye = np.broadcast_to(np.eye(n), (Rn, n, n))
+    Phi = eye.copy()
+    n_prior = n_store if smoother else 1
+    xs_f, Ps_f = np.empty((Rn, n_store, n)), np.empty((Rn, n_store, n, n))
+    xs_p, Ps_p = np.empty((Rn, n_prior, n)), np.empty((Rn, n_prior, n, n))
+    Phis = np.empty((Rn, n_prior, n, n))
+    M = t_gps.shape[0]
+    nu, S_all = np.empty((Rn, M, 2)), np.empty((Rn, M, 2, 2))
+    F = eye.copy()
+    Qk = np.zeros((Rn, n, n))
+    j = 0
+    for k in range(N):
+        if k > 0:
+            h = t[k] - t[k - 1]
+            g1, g2 = 0.5 * h * h, h
+            a_b = (acc[:, k - 1, :] - x[:, 5:7]) * c          # (R, 2) body
+            Rot, dRot = rotation(x[:, 4])
+            a_w = np.einsum("rij,rj->ri", Rot, a_b)
+            da_dpsi = np.einsum("rij,rj->ri", dRot, a_b)      # (R, 2)
+            da_db = -Rot * c                                    # (R, 2, 2): -R(ψ) C
+            F[:, 0:2, 2:4] = np.eye(2) * h
+            F[:, 0:2, 4] = g1 * da_dpsi
+            F[:, 2:4, 4] = g2 * da_dpsi
+            F[:, 0:2, 5:7] = g1 * da_db
+            F[:, 2:4, 5:7] = g2 * da_db
+            q = (sa2 + ss2 * a_b * a_b) * c * c                 # (R, 2) body variances
+            W = np.einsum("rij,rj,rkj->rik", Rot, q, Rot)       # R diag(q) Rᵀ
+            Qk[:, 0:2, 0:2] = g1 * g1 * W
+            Qk[:, 0:2, 2:4] = Qk[:, 2:4, 0:2] = g1 * g2 * W
+            Qk[:, 2:4, 2:4] = g2 * g2 * W
+            Qk[:, 4, 4] = sg2 * h * h
+            x[:, 0:2] += x[:, 2:4] * h + a_w * g1
+            x[:, 2:4] += a_w * h
+            x[:, 4] += 0.5 * h * (w[:, k - 1] + w[:, k])
+            P = F @ P @ F.transpose(0, 2, 1) + Qk
+            if smoother:
+                Phi = F @ Phi
+        xp, Pp = x.copy(), P.copy()
+        m = fixi[k]
+        if m >= 0:
+            x, P, nu[:, m], S_all[:, m] = kalman_update(x, P, Z[:, m, :], H, Rm)
+        if store[k]:
+            if smoother:
+                xs_p[:, j], Ps_p[:, j], Phis[:, j] = xp, Pp, Phi
+            xs_f[:, j], Ps_f[:, j] = x, P
+            Phi = eye.copy()
+            j += 1
+
+    if smoother:
+        xsm, Psm = rts(xs_f, Ps_f, xs_p, Ps_p, Phis)
+    else:
+        xsm, Psm = np.zeros((Rn, 0, n)), np.zeros((Rn, 0, n, n))
+    dt = float(np.median(np.diff(t)))
+    Qnom = np.zeros((n, n))
+    g = np.array([0.5 * dt * dt, dt])
+    for i in range(2):
+        Qnom[np.ix_([i, i + 2], [i, i + 2])] = sa2[i] * c[i] ** 2 * np.outer(g, g)
+    Qnom[4, 4] = sg2 * dt * dt
+    out = [xs_f, Ps_f, nu, S_all, xsm, Psm]
+    if not batched:
+        out = [o[0] for o in out]
+    return TurningFusionResult(TURN_STATE_NAMES, t[store], out[0], out[1], fixi[store] >= 0,
+                               t_gps, out[2], out[3], out[4], out[5], P0, Qnom, Rm, sa2,
+                               False, dt, sg2)
+
+
+__all__ = ["TURN_STATE_NAMES", "TurningFusionResult", "body_to_world", "fuse_turning",
+           "rotation"]
