@@ -75,6 +75,7 @@ from calib.conventions import G, reference_accel
 from calib.correct import apply_errors
 from calib.io import Acel, Ensayo, validate_ensayo
 from calib.ls import PoorlyIdentifiedWarning
+from calib.proportion import lower_bound
 from calib.region import (
     ArrivalRegion,
     arrival_region,
@@ -431,17 +432,10 @@ BAND_SIGMAS = 3.0
 
 
 def clopper_pearson_lower(k: int, runs: int, confidence: float = 0.95) -> float:
-    """One-sided Clopper–Pearson lower bound on a rate from ``k`` successes in ``runs``.
-
-    ``Beta⁻¹(1 - confidence; k, runs - k + 1)`` (0 when ``k = 0``): with probability
-    ``confidence`` the true rate is above it. E.g. ``runs`` successes out of ``runs`` bound the
-    rate above ``(1 - confidence)^(1/runs)`` — 100/100 only above 0.9705 at 95 %.
-    """
-    from scipy.stats import beta
-
-    if k <= 0:
-        return 0.0
-    return float(beta.ppf(1.0 - confidence, k, runs - k + 1))
+    """One-sided Clopper–Pearson lower bound on a rate from ``k`` successes in ``runs``
+    (:func:`calib.proportion.lower_bound`): ``runs`` of ``runs`` bound the rate above
+    ``(1 - confidence)^(1/runs)`` — 100/100 only above 0.9705 at 95 %."""
+    return lower_bound(k, runs, confidence)
 
 
 def _made_and_right(points: np.ndarray, cov: np.ndarray, cands: np.ndarray, truth: int,
