@@ -2,14 +2,16 @@
 
     tiltbench fuse --acel acel.mat --gps gps.mat --puntos puntos.mat
                    (--calibration cal.json | --ensayo ensayo.mat) [--datos datos.txt]
-                   [--gps-sigma M] [--gps-vel-sigma MPS] [--smoother] [--level L] [--json]
-                   [--plot F.png] [--force]
+                   [--gps-sigma M] [--gps-vel-sigma MPS] [--p0-std M] [--v0-std MPS]
+                   [--smoother] [--level L] [--json] [--plot F.png] [--rrd F.rrd]
+                   [--truth truth.json] [--force]
 
 The calibration comes from ``--calibration`` or is fitted on ``--ensayo`` (as
 ``trajectory``); P0, V0 and the noise variances come from ``--datos`` (else the course
 values, the noise estimated). The filter is :func:`calib.fusion.fuse` (docs/fusion.md): Q from
 the stated noise and the calibration covariance, R from the receiver's σ, P0 from the
-calibration covariance (P0 and V0 are known exactly in the course), no tuning. The arrival
+calibration covariance and the initial position/velocity σ of ``--p0-std`` / ``--v0-std``
+(default 0: the course gives P0 and V0 exactly; datos.txt states no uncertainty), no tuning. The arrival
 decision uses the fused final position and its covariance.
 """
 
@@ -18,8 +20,22 @@ from __future__ import annotations
 import argparse
 
 from bench.cli.inputs import add_course_inputs, read_calibration_file, read_course_inputs
-from bench.cli.options import add_force, check_initial_state, check_level, check_positive
+from bench.cli.options import (
+    OptionError,
+    add_force,
+    check_initial_state,
+    check_level,
+    check_positive,
+)
 from bench.cli.output import check_finite, print_files, print_json, refuse_overwrite
+
+
+def _check_nonnegative(value: float, name: str) -> float:
+    import math
+
+    if not math.isfinite(value) or value < 0:
+        raise OptionError(f"{name} must be a finite number >= 0, got {value:g}")
+    return float(value)
 
 
 def _cmd_fuse(args: argparse.Namespace) -> int:
@@ -34,6 +50,8 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     level = check_level(args.level)
     check_initial_state(args)
     sigma_pos = check_positive(args.gps_sigma, "--gps-sigma")
+    p0_std = _check_nonnegative(args.p0_std, "--p0-std")
+    v0_std = _check_nonnegative(args.v0_std, "--v0-std")
     sigma_vel = (None if args.gps_vel_sigma is None
                  else check_positive(args.gps_vel_sigma, "--gps-vel-sigma"))
     refuse_overwrite([args.plot], args.force)
@@ -54,7 +72,7 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
         vel = fixes.vel[inside]
     res = fuse(t, acel.aerr, fixes.t_gps[inside], fixes.pos[inside],
                bias=cal.bias, scale=cal.scale, cal_cov=cal.cov, noise_var=noise_var,
-               sigma_pos=sigma_pos, p0=p0, v0=v0, p0_cov=0.0, v0_cov=0.0,
+               sigma_pos=sigma_pos, p0=p0, v0=v0, p0_cov=p0_std ** 2, v0_cov=v0_std ** 2,
                vel_gps=vel, sigma_vel=sigma_vel if vel is not None else None,
                smoother=args.smoother)
     est = np.asarray(res.final_position, dtype=float).reshape(2)
@@ -79,6 +97,8 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
         print_json(out)
         return 0
     print(res.summary())
+    print(f"initial uncertainty: σ_p0 = {p0_std:g} m, σ_v0 = {v0_std:g} m/s per axis "
+          "(--p0-std/--v0-std; datos.txt states P0 and V0 without uncertainty)")
     print(f"decision: {letter or 'undecided'} ({reason}); fixes used: "
           f"{int(inside.sum())} of {inside.size}")
     print_files([args.plot])
@@ -96,6 +116,11 @@ def register(sub) -> None:
     p.add_argument("--gps-vel-sigma", type=float,
                    help="σ of each velocity fix coordinate, m/s (velocity fixes used only "
                         "when given)")
+    p.add_argument("--p0-std", type=float, default=0.0, metavar="M",
+                   help="σ of the initial position per axis, m (default 0: the course gives "
+                        "P0 exactly in datos.txt, which states no uncertainty)")
+    p.add_argument("--v0-std", type=float, default=0.0, metavar="MPS",
+                   help="σ of the initial velocity per axis, m/s (default 0, as --p0-std)")
     p.add_argument("--smoother", action="store_true",
                    help="also run the Rauch-Tung-Striebel smoother")
     p.add_argument("--plot", help="write a figure (.png or .svg): dead reckoning, fixes, "
