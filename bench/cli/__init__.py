@@ -31,6 +31,7 @@ from bench.cli import (  # noqa: E402
     demo,
     examples,
     fuse,
+    fusion_study,
     gap,
     generate,
     nmin,
@@ -40,7 +41,8 @@ from bench.cli import (  # noqa: E402
 )
 from bench.cli.options import Parser, resolve_deferred  # noqa: E402
 
-COMMANDS = (generate, calibrate, trajectory, nmin, fuse, record, validate, gap, demo, examples)
+COMMANDS = (generate, calibrate, trajectory, nmin, fuse, fusion_study, record, validate, gap,
+            demo, examples)
 """Command modules, in the order of the help."""
 
 

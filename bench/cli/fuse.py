@@ -11,8 +11,8 @@ The calibration comes from ``--calibration`` or is fitted on ``--ensayo`` (as
 values, the noise estimated). The filter is :func:`calib.fusion.fuse` (docs/fusion.md): Q from
 the stated noise and the calibration covariance, R from the receiver's σ, P0 from the
 calibration covariance and the initial position/velocity σ of ``--p0-std`` / ``--v0-std``
-(default 0: the course gives P0 and V0 exactly; datos.txt states no uncertainty), no tuning. The arrival
-decision uses the fused final position and its covariance.
+(default 0: the course gives P0 and V0 exactly; datos.txt states no uncertainty), no
+tuning. The arrival decision uses the fused final position and its covariance.
 """
 
 from __future__ import annotations
@@ -117,10 +117,10 @@ def register(sub) -> None:
                    help="σ of each velocity fix coordinate, m/s (velocity fixes used only "
                         "when given)")
     p.add_argument("--p0-std", type=float, default=0.0, metavar="M",
-                   help="σ of the initial position per axis, m (default 0: the course gives "
-                        "P0 exactly in datos.txt, which states no uncertainty)")
+                   help="σ of the initial position per axis, m; 0: the course gives P0 "
+                        "exactly in datos.txt, which states no uncertainty")
     p.add_argument("--v0-std", type=float, default=0.0, metavar="MPS",
-                   help="σ of the initial velocity per axis, m/s (default 0, as --p0-std)")
+                   help="σ of the initial velocity per axis, m/s; 0 as --p0-std")
     p.add_argument("--smoother", action="store_true",
                    help="also run the Rauch-Tung-Striebel smoother")
     p.add_argument("--plot", help="write a figure (.png or .svg): dead reckoning, fixes, "
