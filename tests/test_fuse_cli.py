@@ -129,3 +129,32 @@ def test_regenerating_without_gps_refuses_a_stale_gps_file(capsys, tmp_path):
         assert (d / "gps.mat").read_bytes() == before and (d / "truth.json").read_bytes() == truth
         assert main(["generate", kind, "--out", str(d), "--force", "--seed", "5", "--gps"]) == 0
         assert (d / "gps.mat").read_bytes() != before
+
+
+def test_fuse_rrd_holds_truth_fixes_fused_path_and_innovations(capsys, course, tmp_path):
+    from bench.record import read_recording, recording_entities
+    from bench.record.schema import documented
+
+    rrd = tmp_path / "f.rrd"
+    rc, out, _ = _run(capsys, "fuse", *_files(course), "--ensayo", course / "ensayo.mat",
+                      "--rrd", rrd, "--json")
+    assert rc == 0
+    fused = json.loads(out)
+    back = read_recording(rrd)
+    assert back["truth"] == json.loads((course / "truth.json").read_text())
+    rep = back["fusion_report"]
+    assert rep["final_position"] == fused["fusion"]["final_position"]
+    assert rep["decision"]["decision"] == fused["decision"]["decision"]
+    assert max(rep["final_std"]) < min(rep["dead_reckoning_std"]) / 3
+    ents = {str(e).lstrip("/") for e in recording_entities(rrd)}
+    for e in ("vehicle/plane/path/true", "vehicle/plane/path/corrected", "vehicle/plane/fixes",
+              "vehicle/plane/fused/path", "vehicle/plane/fused/ellipses",
+              "fusion/innovation/x", "fusion/innovation_band/y/minus"):
+        assert e in ents, e
+    undocumented = [e for e in ents if documented(e) is None
+                    or "fusion" not in documented(e).kinds]
+    assert undocumented == []
+    # refuses to overwrite the recording without --force
+    rc, _, err = _run(capsys, "fuse", *_files(course), "--ensayo", course / "ensayo.mat",
+                      "--rrd", rrd)
+    assert rc == 2 and "--force" in err

@@ -54,7 +54,7 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     v0_std = _check_nonnegative(args.v0_std, "--v0-std")
     sigma_vel = (None if args.gps_vel_sigma is None
                  else check_positive(args.gps_vel_sigma, "--gps-vel-sigma"))
-    refuse_overwrite([args.plot], args.force)
+    refuse_overwrite([args.plot, args.rrd], args.force)
     fixes = read_gps(args.gps)
     cal = read_calibration_file(args)  # None: fit on --ensayo
     ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
@@ -84,15 +84,23 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     out = {"fusion": res.to_dict(), "decision": decision,
            "units": {"decision.level": "1", "decision.mahalanobis.*": "1"}}
     check_finite(out, "the result")
-    if args.plot:
-        from bench.figures.fusion import save_fusion_plot
+    if args.plot or args.rrd:
         from calib.region import arrival_region
         from calib.trajectory import compute_trajectory
 
         traj = compute_trajectory(acel, cal, p0, v0)
         region = arrival_region(traj, cal, candidates, noise_var, level)
+    if args.plot:
+        from bench.figures.fusion import save_fusion_plot
+
         save_fusion_plot(args.plot, traj, region, res, fixes.pos[inside], level, letter,
                          force=args.force)
+    if args.rrd:
+        from bench.record.fusion import record_fusion
+
+        truth, true_path = _truth(args)
+        record_fusion(args.rrd, traj, region, res, fixes.pos[inside], decision, level,
+                      force=args.force, truth=truth, true_path=true_path)
     if args.json:
         print_json(out)
         return 0
@@ -101,8 +109,28 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
           "(--p0-std/--v0-std; datos.txt states P0 and V0 without uncertainty)")
     print(f"decision: {letter or 'undecided'} ({reason}); fixes used: "
           f"{int(inside.sum())} of {inside.size}")
-    print_files([args.plot])
+    print_files([args.plot, args.rrd])
     return 0
+
+
+def _truth(args: argparse.Namespace):
+    """``--truth``, else ``truth.json`` beside ``--acel`` (None if absent): the manifest and
+    its true path (the samples every second, m), for the recording."""
+    from pathlib import Path
+
+    import numpy as np
+
+    from bench.validate import load_json
+
+    path = Path(args.truth) if args.truth else Path(args.acel).parent / "truth.json"
+    if not path.exists():
+        if args.truth:
+            raise OptionError(f"--truth {args.truth}: file not found")
+        return None, None
+    manifest = load_json(path, "truth")
+    samples = manifest.get("vehicle", {}).get("trajectory", {}).get("samples", {})
+    pos = samples.get("pos")
+    return manifest, None if pos is None else np.asarray(pos, dtype=float)
 
 
 def register(sub) -> None:
@@ -125,5 +153,10 @@ def register(sub) -> None:
                    help="also run the Rauch-Tung-Striebel smoother")
     p.add_argument("--plot", help="write a figure (.png or .svg): dead reckoning, fixes, "
                                   "the fused path and both arrival regions")
-    add_force(p, "an existing --plot file")
+    p.add_argument("--rrd", help="write a rerun recording: truth (if known), dead reckoning, "
+                                 "fixes, the fused path with its ellipses, the innovations "
+                                 "(docs/recordings.md)")
+    p.add_argument("--truth", help="truth.json for the recording (default: truth.json beside "
+                                   "--acel, if there is one)")
+    add_force(p, "an existing --plot / --rrd file")
     p.set_defaults(handler=_cmd_fuse)
