@@ -145,8 +145,8 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
               "filtered confidence ellipses at the stated level at every k-th fix (≤ 20), m",
               ("fusion",)),
     EntityDoc("vehicle/plane/fused/arrival", "LineStrips2D", "static",
-              "fused arrival ellipse at the stated level, labelled with its semi-axes and the "
-              "decision, m", ("fusion",)),
+              "fused arrival ellipse at the stated level (unlabelled: the decision view gives "
+              "its size), m", ("fusion",)),
     EntityDoc("fusion/innovation/{axis}", "Scalars + SeriesPoints", "time",
               "innovation ν = fix − predicted position at each fix, m", ("fusion",)),
     EntityDoc("fusion/innovation_band/{axis}/{k}", "Scalars + SeriesLines", "time",
