@@ -11,7 +11,12 @@ Steps (each timed; its start and end go to the optional progress callback):
 4. validate the estimates against ``truth.json`` (:mod:`bench.validate`) and check the
    honesty of the intervals on fresh synthetic calibrations with the same design (Monte
    Carlo pass rate of the joint test against its level);
-5. figures (:mod:`bench.figures`), a rerun recording (:mod:`bench.record`, read back to check
+5. fusion with position fixes (:func:`calib.fusion.fuse`): on a generated set, fixes of the
+   default receiver (:class:`bench.gnss.Receiver`: 1 Hz, σ = 3 m) simulated on the same MuJoCo
+   run with the seed's receiver stream (the fixes ``tiltbench generate course --seed S --gps``
+   writes); on course files, their ``gps.mat`` if there is one (else the step says it is
+   skipped and why); the fused final-position std against dead reckoning's;
+6. figures (:mod:`bench.figures`), a rerun recording (:mod:`bench.record`, read back to check
    that truth and estimates are recoverable) and a Markdown report.
 
 Outputs in ``OUT``: ``data/`` (the student's files + ``truth.json``), ``estimates.json``,
@@ -175,6 +180,69 @@ def coverage_check(truth: dict, runs: int = COVERAGE_RUNS, level: float = COVERA
             "n": int(theta.size), "seed": seed}
 
 
+FUSION_UNITS = {"fusion.n_fixes": "count", "fusion.sigma_pos": "m", "fusion.rate_hz": "Hz",
+                "fusion.final_position": "m", "fusion.final_std": "m",
+                "fusion.dead_reckoning_std": "m", "fusion.std_ratio": "1"}
+"""Units of the demo's ``fusion`` object (``demo --json``)."""
+
+
+def fusion_step(ana: CourseAnalysis, fixes, data_dir: Path, seed: int | None) -> dict:
+    """Fuse the vehicle run with position fixes; the fused final-position std against dead
+    reckoning's (``ana.region``), per axis, m.
+
+    ``fixes``: simulated :class:`bench.gnss.GnssFixes` (generated set), else ``gps.mat`` in
+    ``data_dir`` is read; without either the step is skipped and ``skipped`` says why. P0 and
+    V0 exact (course), Q from σ² of datos.txt and the calibration covariance, R = σ² I of the
+    receiver (σ = 3 m for a gps.mat, the default receiver's).
+    """
+    from bench.gnss import Receiver
+    from calib.fusion import fuse
+
+    if fixes is not None:
+        t_gps, pos, sigma, rate = fixes.t_gps, fixes.pos, fixes.receiver.pos_sigma_m, \
+            fixes.receiver.rate_hz
+        source = (f"simulated on the generated run (default receiver, seed {seed}; "
+                  f"`tiltbench generate course --seed {seed} --gps` writes the same fixes)")
+    elif (data_dir / "gps.mat").exists():
+        from calib.io import read_gps
+
+        g = read_gps(data_dir / "gps.mat")
+        t = ana.acel.t
+        inside = (g.t_gps >= t[0]) & (g.t_gps <= t[-1])
+        if not np.any(inside):
+            return {"skipped": f"{data_dir / 'gps.mat'}: no fix within the vehicle run"}
+        t_gps, pos, sigma = g.t_gps[inside], g.pos[inside], Receiver().pos_sigma_m
+        rate = float(1.0 / np.median(np.diff(t_gps))) if t_gps.size > 1 else float("nan")
+        source = f"{data_dir / 'gps.mat'} (σ = {sigma:g} m assumed, the default receiver's)"
+    else:
+        return {"skipped": f"no position fixes: {data_dir} has no gps.mat and the course "
+                           "files are not generated here (nothing to fuse)"}
+    nv = (ana.noise_var if ana.noise_var is not None
+          else np.array([ana.cal.fits[a].sigma2.item() for a in AXES]))
+    res = fuse(ana.acel.t, ana.acel.aerr, t_gps, pos, bias=ana.cal.bias, scale=ana.cal.scale,
+               cal_cov=ana.cal.cov, noise_var=nv, sigma_pos=sigma, p0=ana.p0, v0=ana.v0,
+               p0_cov=0.0, v0_cov=0.0, keep="fixes")
+    std = np.sqrt(np.diag(res.final_position_cov))
+    dr = ana.region.std
+    return {"skipped": None, "source": source, "n_fixes": int(t_gps.size), "rate_hz": rate,
+            "sigma_pos": float(sigma), "final_position": res.final_position.tolist(),
+            "final_std": std.tolist(), "dead_reckoning_std": np.asarray(dr).tolist(),
+            "std_ratio": float(np.sqrt(np.sum(np.square(dr)) / np.sum(np.square(std))))}
+
+
+def _fusion_lines(f: dict | None) -> list[str]:
+    """The fusion step in words (summary and report)."""
+    if f is None:
+        return []
+    if f["skipped"]:
+        return [f"Fusion with position fixes: skipped — {f['skipped']}."]
+    s, d = f["final_std"], f["dead_reckoning_std"]
+    return [f"Fusion with position fixes ({f['n_fixes']} fixes at {f['rate_hz']:g} Hz, "
+            f"σ = {f['sigma_pos']:g} m; {f['source']}):",
+            f"  final-position std ({s[0]:.2f}, {s[1]:.2f}) m fused against ({d[0]:.2f}, "
+            f"{d[1]:.2f}) m by dead reckoning: {f['std_ratio']:.1f}× smaller"]
+
+
 @dataclass
 class DemoResult:
     """What :func:`run_demo` produced: paths written and the numbers of the summary."""
@@ -190,6 +258,8 @@ class DemoResult:
     times: dict[str, float]
     elapsed: float
     source: str
+    fusion: dict | None = None
+    """:func:`fusion_step`'s numbers (or why it was skipped)."""
 
     def summary(self) -> str:
         return demo_summary(self)
@@ -223,6 +293,7 @@ def _step_labels(generate: bool, has_truth: bool, coverage: bool, seed: int,
         labels.append("validating the estimates against truth.json")
     if coverage:
         labels.append(f"coverage check: {coverage_runs} fresh calibrations, same design")
+    labels.append("fusion with position fixes (Kalman filter)")
     labels += [f"figures ({', '.join(formats)})", "rerun recording (written, then read back)",
                "report"]
     return labels
@@ -235,6 +306,8 @@ class _Truth:
     manifest: dict | None = None
     path: np.ndarray | None = None
     acc: np.ndarray | None = None
+    fixes: Any = None
+    """:class:`bench.gnss.GnssFixes` simulated on the generated run (fusion step), or None."""
 
     @property
     def final(self) -> np.ndarray | None:
@@ -246,12 +319,14 @@ class _Truth:
 def _generate(out: Path, seed: int, files: dict[str, Path]) -> _Truth:
     """Generate and write the course set into ``out/data``; return its true path."""
     from bench.course import make_course_set, write_course_files
+    from bench.gnss import Receiver, fixes_for_seed
 
     course = make_course_set(None, seed)
     (out / "data").mkdir()
     written = write_course_files(course, out / "data")
     files.update({f"data/{Path(p).name}": Path(p) for p in written.values()})
-    return _Truth(path=course.vehicle.truth.pos, acc=course.vehicle.truth.acc)
+    return _Truth(path=course.vehicle.truth.pos, acc=course.vehicle.truth.acc,
+                  fixes=fixes_for_seed(Receiver(), course.vehicle.truth, seed))
 
 
 def _read_truth(data_dir: Path, truth: _Truth) -> _Truth:
@@ -267,7 +342,7 @@ def _read_truth(data_dir: Path, truth: _Truth) -> _Truth:
         samples = manifest.get("vehicle", {}).get("trajectory", {}).get("samples", {})
         if "pos" in samples:
             true_path = np.asarray(samples["pos"], dtype=float)
-    return _Truth(manifest, true_path, truth.acc)
+    return _Truth(manifest, true_path, truth.acc, truth.fixes)
 
 
 def _write_json(out: Path, name: str, obj: Any, files: dict[str, Path]) -> None:
@@ -367,11 +442,13 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
                 with steps.step():
                     cov = coverage_check(truth.manifest, coverage_runs, COVERAGE_LEVEL, seed)
         with steps.step():
+            fusion = fusion_step(ana, truth.fixes, data_dir, seed if generate else None)
+        with steps.step():
             _figures(work, ana, truth, formats, files)
         with steps.step():
             recovered = _recording(work, ana, truth, est, tj, files)
         result = DemoResult(out, files, ana, truth.manifest, val, cov, nmin, recovered,
-                            steps.times, 0.0, source)
+                            steps.times, 0.0, source, fusion)
         with steps.step():
             files["report.md"] = write_text(work / "report.md", report_markdown(result), True)
     result.files = {k: out / p.relative_to(work) for k, p in files.items()}
@@ -457,6 +534,9 @@ def demo_summary(res: DemoResult) -> str:
                 else "estimates and trajectory (no truth to record)")
         lines.append(f"Recording read back: {what} "
                      f"{'come back exactly' if res.recovered else 'DIFFER from what was written'}")
+    fl = _fusion_lines(res.fusion)
+    if fl:
+        lines += ["", *fl]
     lines += ["", "Reproduce the estimates:",
               f"  tiltbench calibrate {res.analysis.ensayo.source} --datos "
               f"{Path(res.analysis.ensayo.source).parent / 'datos.txt'} --json", "",
@@ -511,6 +591,8 @@ def report_markdown(res: DemoResult) -> str:
     md += ["![trajectory](figures/trajectory.png)", "",
            "![acceleration](figures/acceleration.png)", "",
            "![uncertainty growth](figures/uncertainty_growth.png)", "",
+           *(["## Fusion with position fixes", "", *_fusion_lines(res.fusion), ""]
+             if res.fusion is not None else []),
            "## How many calibration samples?", ""]
     d, dc, p = res.nmin["design"], res.nmin["design_calibration_only"], res.nmin["posterior"]
     md += [f"* design N making the {L} regions of the candidates disjoint: "

@@ -22,7 +22,10 @@ the loader checks that they agree. Floats are written with ``repr`` (shortest ro
 ``load_calibration(path) == cal`` exactly.
 
 The ``.mat`` export (:func:`save_calibration_mat`) holds the same numbers as plain double
-variables and the text fields as char, for MATLAB/Octave; it is written, never read back.
+variables and the text fields as char, for MATLAB/Octave, plus the whole JSON object as one
+char variable ``document``: :func:`load_calibration` reads a ``.mat`` back from it exactly as
+the ``.json`` (same checks, same ``format_version`` refusal) and checks that the plain
+variables agree with it.
 """
 
 from __future__ import annotations
@@ -143,10 +146,7 @@ def save_calibration(path: str | os.PathLike, cal: Calibration,
     doc = calibration_document(cal, source, sigma2_source, noise_file, tool_version)
     if Path(path).suffix.lower() == ".mat":
         return save_calibration_mat(path, doc, force=force)
-    from calib.io import to_jsonable
-
-    # keys in the order above (not sorted): the header is read first, the bulky state last
-    return write_text(path, json.dumps(to_jsonable(doc), indent=2) + "\n", force=force)
+    return write_text(path, _document_json(doc), force=force)
 
 
 def mat_variables(doc: dict) -> dict[str, Any]:
@@ -170,8 +170,16 @@ def mat_variables(doc: dict) -> dict[str, Any]:
         "noise_file_sha256": (doc["noise_file"] or {}).get("sha256", ""),
         "units": "g m/s^2; sigma2 (m/s^2)^2; params [m/s^2, 1, m/s^2, 1]; "
                  "cov products of the params' units; chi2_dof 1",
+        "document": _document_json(doc),
     }
     return out
+
+
+def _document_json(doc: dict) -> str:
+    from calib.io import to_jsonable
+
+    # keys in the order of calibration_document (not sorted): the header is read first
+    return json.dumps(to_jsonable(doc), indent=2) + "\n"
 
 
 def save_calibration_mat(path: str | os.PathLike, doc: dict, force: bool = False) -> Path:
@@ -275,8 +283,7 @@ def read_calibration_document(path: str | os.PathLike) -> dict:
     if path.is_dir():
         raise DataError(f"{path}: is a directory; expected a calibration file (cal.json)")
     if path.suffix.lower() == ".mat":
-        raise DataError(f"{path}: a .mat export is for MATLAB/Octave; give the .json "
-                        "calibration file (calibrate --save cal.json)")
+        return _read_mat_document(path)
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, ValueError, RecursionError) as exc:
@@ -285,13 +292,59 @@ def read_calibration_document(path: str | os.PathLike) -> dict:
     return doc
 
 
+def _mat_text(mat: dict, key: str, path) -> str:
+    v = mat.get(key)
+    if v is None:
+        raise _fail(path, key, "missing (not a tiltbench calibration .mat: write one with "
+                    "calibrate --save cal.mat)")
+    arr = np.asarray(v)
+    if arr.dtype.kind != "U" or arr.size != 1:
+        raise _fail(path, key, "must be a char row")
+    return str(arr.reshape(-1)[0])
+
+
+def _read_mat_document(path: Path) -> dict:
+    """The calibration-file object stored in a ``.mat`` export, checked like the JSON file;
+    the plain variables (``format_version``, ``params``, ``cov``) must agree with it."""
+    import scipy.io
+
+    try:
+        mat = scipy.io.loadmat(path)
+    except (ValueError, TypeError, OSError, NotImplementedError) as exc:
+        raise DataError(f"{path}: not a MATLAB .mat calibration file ({exc})") from None
+    fmt = _mat_text(mat, "format", path)
+    if fmt != FORMAT:
+        raise _fail(path, "format", f"is {fmt!r}, expected {FORMAT!r}")
+    if "format_version" not in mat:
+        raise _fail(path, "format_version", "missing")
+    fv = np.asarray(mat["format_version"], dtype=float).reshape(-1)
+    version = int(fv[0]) if fv.size == 1 and float(fv[0]).is_integer() else fv.tolist()
+    if version != FORMAT_VERSION:
+        raise _fail(path, "format_version", f"is {version!r}; this tiltbench reads version "
+                    f"{FORMAT_VERSION} only (written by a newer tiltbench? upgrade, or "
+                    "re-run calibrate --save)")
+    try:
+        doc = json.loads(_mat_text(mat, "document", path))
+    except (ValueError, RecursionError) as exc:
+        raise _fail(path, "document", f"is not the JSON calibration object ({exc})") from None
+    calibration_from_document(doc, path)
+    for key, shape in (("params", (1, 4)), ("cov", (4, 4))):
+        arr = np.asarray(mat.get(key, np.empty(0)), dtype=float)
+        if arr.shape != shape or not np.array_equal(arr.reshape(-1),
+                                                    np.asarray(doc[key]).reshape(-1)):
+            raise _fail(path, key, "differs from the 'document' variable (the file was "
+                        "edited? edit neither, re-run calibrate --save)")
+    return doc
+
+
 def load_calibration(path: str | os.PathLike) -> Calibration:
     """Read a calibration file written by :func:`save_calibration` (exact rebuild).
 
     Raises
     ------
-    DataError : file missing, not JSON, another format, an unknown ``format_version``, a
-        missing or malformed field (one line: the file and the field).
+    DataError : file missing, not JSON (or a ``.mat`` export), another format, an unknown
+        ``format_version``, a missing or malformed field (one line: the file and the field).
+        A ``.mat`` export (:func:`save_calibration_mat`) loads exactly as the ``.json``.
     """
     return calibration_from_document(read_calibration_document(path), path)
 

@@ -212,3 +212,40 @@ def test_validate_reads_the_calibration_file(tmp_path, capsys):
     msg = _error(capsys, *base, "--calibration", tmp_path / "c.json", "--ensayo",
                  other / "ensayo.mat")
     assert "SHA-256" in msg
+
+
+def test_mat_export_loads_back_exactly(saved, course_dir):
+    """``.mat`` → :func:`load_calibration` gives the same Calibration as the ``.json`` (exact)."""
+    assert load_calibration(saved / "cal.mat") == load_calibration(saved / "cal.json")
+    assert load_calibration(saved / "cal.mat") == _course_cal(course_dir)
+
+
+def _edited_mat(tmp_path, saved, **changes) -> str:
+    m = scipy.io.loadmat(str(saved / "cal.mat"))
+    m = {k: v for k, v in m.items() if not k.startswith("__")}
+    m.update(changes)
+    path = tmp_path / "bad.mat"
+    scipy.io.savemat(str(path), m, format="5", oned_as="row")
+    return str(path)
+
+
+@pytest.mark.parametrize("changes, field", [
+    ({"format_version": 2.0}, "format_version"),
+    ({"format": "something-else"}, "format"),
+    ({"params": np.zeros((1, 4))}, "params"),
+])
+def test_bad_mat_files_name_file_and_field(tmp_path, saved, course_dir, capsys, changes,
+                                           field):
+    path = _edited_mat(tmp_path, saved, **changes)
+    msg = _error(capsys, "trajectory", "--calibration", path, "--acel",
+                 course_dir / "acel.mat", "--puntos", course_dir / "puntos.mat")
+    assert "bad.mat" in msg and f"'{field}'" in msg
+
+
+def test_commands_take_a_mat_calibration(saved, course_dir, capsys):
+    """trajectory gives the same JSON with cal.mat as with cal.json."""
+    base = ["--acel", course_dir / "acel.mat", "--puntos", course_dir / "puntos.mat",
+            "--datos", course_dir / "datos.txt", "--json"]
+    outs = [_run(capsys, "trajectory", "--calibration", saved / n, *base) for n in
+            ("cal.json", "cal.mat")]
+    assert outs[0][0] == outs[1][0] == 0 and outs[0][1] == outs[1][1]

@@ -44,7 +44,7 @@ def test_demo_from_a_fresh_directory(tmp_path, capsys):
     """The README's first command (`make demo` = `tiltbench demo --out demo-out --force`)."""
     res = run_cli(["demo", "--out", "demo-out", "--force"], tmp_path)
     assert res.returncode == 0, res.stderr[-2000:]
-    assert "[1/7]" in res.stderr and "done (" in res.stderr  # progress with elapsed time
+    assert "[1/8]" in res.stderr and "done (" in res.stderr  # progress with elapsed time
     files = listed_files(res.stdout, tmp_path)
     names = {p.name for p in files}
     assert {"ensayo.mat", "acel.mat", "puntos.mat", "datos.txt", "truth.json", "demo.rrd",
@@ -86,6 +86,12 @@ def test_demo_library_truth_beside_estimates(tmp_path):
     assert res.truth is not None and res.validation is not None
     assert f"true arrival point: {res.truth['answer']}" in text
     assert "Coverage at 95%:" in text and res.coverage["runs"] == 20
+    # the fusion step: fixes of the default receiver on the same run, metres against tens
+    f = res.fusion
+    assert f["skipped"] is None and f["n_fixes"] == 60
+    assert max(f["final_std"]) < 3.0 < 10.0 < min(f["dead_reckoning_std"])
+    assert "smaller" in text and "## Fusion with position fixes" in (
+        res.files["report.md"].read_text(encoding="utf-8"))
     for p in res.files.values():
         assert p.exists() and p.stat().st_size > 0
 
@@ -122,4 +128,6 @@ def test_demo_json_is_one_object_and_steps_count_right(tmp_path, course_dir, cap
     assert all(Path(p).exists() for p in obj["files"].values())
     # no truth.json, no generation: calibrate, figures, recording, report
     done = re.findall(r"\[(\d+)/(\d+)\] [^\n]*: done \(", cap.err)
-    assert done == [(str(k), "4") for k in range(1, 5)]
+    assert done == [(str(k), "5") for k in range(1, 6)]
+    # no truth and no gps.mat: the fusion step says plainly it was skipped, and why
+    assert "no gps.mat" in obj["fusion"]["skipped"]

@@ -102,3 +102,59 @@ def test_fuse_plot_shows_the_fused_region_smaller_than_dead_reckoning(capsys, co
     assert len(areas) == 2 and areas[1] < areas[0] / 20  # fused ≪ dead reckoning
     assert polys[1].get_zorder() > polys[0].get_zorder()  # drawn above, visible
     plt.close(fig)
+
+
+def test_initial_uncertainty_options_widen_p0_and_are_printed(capsys, course):
+    base = ["fuse", *_files(course), "--ensayo", course / "ensayo.mat"]
+    rc, out, _ = _run(capsys, *base, "--p0-std", "2", "--v0-std", "0.5", "--json")
+    assert rc == 0
+    P0 = np.array(json.loads(out)["fusion"]["P0"])
+    assert np.allclose(np.diag(P0)[:4], [4.0, 4.0, 0.25, 0.25])
+    rc, out, _ = _run(capsys, *base)
+    assert rc == 0 and "σ_p0 = 0 m" in out and "σ_v0 = 0 m/s" in out
+    rc, _, err = _run(capsys, *base, "--p0-std", "-1")
+    assert rc == 2 and "--p0-std" in err
+
+
+def test_regenerating_without_gps_refuses_a_stale_gps_file(capsys, tmp_path):
+    """A gps.mat of an earlier run must not stay beside a new set written without --gps."""
+    out = tmp_path / "set"
+    for kind in ("vehicle", "course"):
+        d = out / kind
+        assert main(["generate", kind, "--out", str(d), "--gps"]) == 0
+        before = (d / "gps.mat").read_bytes()
+        truth = (d / "truth.json").read_bytes()
+        rc, _, err = _run(capsys, "generate", kind, "--out", d, "--force", "--seed", "5")
+        assert rc == 2 and "gps.mat" in err and "--gps" in err
+        assert (d / "gps.mat").read_bytes() == before and (d / "truth.json").read_bytes() == truth
+        assert main(["generate", kind, "--out", str(d), "--force", "--seed", "5", "--gps"]) == 0
+        assert (d / "gps.mat").read_bytes() != before
+
+
+def test_fuse_rrd_holds_truth_fixes_fused_path_and_innovations(capsys, course, tmp_path):
+    from bench.record import read_recording, recording_entities
+    from bench.record.schema import documented
+
+    rrd = tmp_path / "f.rrd"
+    rc, out, _ = _run(capsys, "fuse", *_files(course), "--ensayo", course / "ensayo.mat",
+                      "--rrd", rrd, "--json")
+    assert rc == 0
+    fused = json.loads(out)
+    back = read_recording(rrd)
+    assert back["truth"] == json.loads((course / "truth.json").read_text())
+    rep = back["fusion_report"]
+    assert rep["final_position"] == fused["fusion"]["final_position"]
+    assert rep["decision"]["decision"] == fused["decision"]["decision"]
+    assert max(rep["final_std"]) < min(rep["dead_reckoning_std"]) / 3
+    ents = {str(e).lstrip("/") for e in recording_entities(rrd)}
+    for e in ("vehicle/plane/path/true", "vehicle/plane/path/corrected", "vehicle/plane/fixes",
+              "vehicle/plane/fused/path", "vehicle/plane/fused/ellipses",
+              "fusion/innovation/x", "fusion/innovation_band/y/minus"):
+        assert e in ents, e
+    undocumented = [e for e in ents if documented(e) is None
+                    or "fusion" not in documented(e).kinds]
+    assert undocumented == []
+    # refuses to overwrite the recording without --force
+    rc, _, err = _run(capsys, "fuse", *_files(course), "--ensayo", course / "ensayo.mat",
+                      "--rrd", rrd)
+    assert rc == 2 and "--force" in err

@@ -32,6 +32,7 @@ from bench.cli import (  # noqa: E402
     design,
     examples,
     fuse,
+    fusion_study,
     gap,
     generate,
     nmin,
@@ -41,8 +42,8 @@ from bench.cli import (  # noqa: E402
 )
 from bench.cli.options import Parser, resolve_deferred  # noqa: E402
 
-COMMANDS = (generate, calibrate, trajectory, nmin, design, fuse, record, validate, gap, demo,
-            examples)
+COMMANDS = (generate, calibrate, trajectory, nmin, design, fuse, fusion_study, record, validate,
+            gap, demo, examples)
 """Command modules, in the order of the help."""
 
 

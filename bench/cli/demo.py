@@ -43,6 +43,9 @@ def _demo_units() -> dict[str, str]:
                   "validation.std_check.ratio.*": "1", "validation.*": "1",
                   "coverage.runs": "count", "coverage.n": "count", "coverage.seed": "—",
                   "coverage.pass_rate_each.*": "1", "coverage.*": "1", "elapsed_s": "s"})
+    from bench.demo import FUSION_UNITS
+
+    units.update(FUSION_UNITS)
     return units
 
 
@@ -57,7 +60,7 @@ def _result_json(res, ok: bool) -> dict:
             "estimates": res.analysis.cal.to_dict(),
             "decision": r.decision, "answer": (res.truth or {}).get("answer"),
             "validation": None if res.validation is None else res.validation.to_dict(),
-            "coverage": res.coverage, "recovered": res.recovered,
+            "coverage": res.coverage, "recovered": res.recovered, "fusion": res.fusion,
             "elapsed_s": res.elapsed}, _demo_units())
 
 

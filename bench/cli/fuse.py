@@ -2,8 +2,9 @@
 
     tiltbench fuse --acel acel.mat --gps gps.mat --puntos puntos.mat
                    (--calibration cal.json | --ensayo ensayo.mat) [--datos datos.txt]
-                   [--gps-sigma M] [--gps-vel-sigma MPS] [--smoother] [--level L] [--json]
-                   [--plot F.png] [--force]
+                   [--gps-sigma M] [--gps-vel-sigma MPS] [--p0-std M] [--v0-std MPS]
+                   [--smoother] [--level L] [--json] [--plot F.png] [--rrd F.rrd]
+                   [--truth truth.json] [--force]
 
 The calibration comes from ``--calibration`` or is fitted on ``--ensayo`` (as
 ``trajectory``); P0, V0 and the noise variances come from ``--datos`` (else the course
@@ -12,8 +13,9 @@ values, the noise estimated). With a ``gyro`` variable in acel.mat (``generate v
 (``--gyro-sigma``, ``--psi0``, ``--psi0-sigma``). The filter is :func:`calib.fusion.fuse`
 (docs/fusion.md): Q from
 the stated noise and the calibration covariance, R from the receiver's σ, P0 from the
-calibration covariance (P0 and V0 are known exactly in the course), no tuning. The arrival
-decision uses the fused final position and its covariance.
+calibration covariance and the initial position/velocity σ of ``--p0-std`` / ``--v0-std``
+(default 0: the course gives P0 and V0 exactly; datos.txt states no uncertainty), no
+tuning. The arrival decision uses the fused final position and its covariance.
 """
 
 from __future__ import annotations
@@ -31,6 +33,14 @@ from bench.cli.options import (
 from bench.cli.output import check_finite, print_files, print_json, refuse_overwrite
 
 
+def _check_nonnegative(value: float, name: str) -> float:
+    import math
+
+    if not math.isfinite(value) or value < 0:
+        raise OptionError(f"{name} must be a finite number >= 0, got {value:g}")
+    return float(value)
+
+
 def _cmd_fuse(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
     import numpy as np
@@ -43,9 +53,11 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     level = check_level(args.level)
     check_initial_state(args)
     sigma_pos = check_positive(args.gps_sigma, "--gps-sigma")
+    p0_std = _check_nonnegative(args.p0_std, "--p0-std")
+    v0_std = _check_nonnegative(args.v0_std, "--v0-std")
     sigma_vel = (None if args.gps_vel_sigma is None
                  else check_positive(args.gps_vel_sigma, "--gps-vel-sigma"))
-    refuse_overwrite([args.plot], args.force)
+    refuse_overwrite([args.plot, args.rrd], args.force)
     fixes = read_gps(args.gps)
     cal = read_calibration_file(args)  # None: fit on --ensayo
     ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
@@ -62,11 +74,12 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     if fixes.vel is not None and sigma_vel is not None:
         vel = fixes.vel[inside]
     if acel.gyro is not None:  # a turning vehicle: the extended filter
-        res = _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos)
+        res = _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos,
+                            p0_std, v0_std)
     else:
         res = fuse(t, acel.aerr, fixes.t_gps[inside], fixes.pos[inside],
                    bias=cal.bias, scale=cal.scale, cal_cov=cal.cov, noise_var=noise_var,
-                   sigma_pos=sigma_pos, p0=p0, v0=v0, p0_cov=0.0, v0_cov=0.0,
+                   sigma_pos=sigma_pos, p0=p0, v0=v0, p0_cov=p0_std ** 2, v0_cov=v0_std ** 2,
                    vel_gps=vel, sigma_vel=sigma_vel if vel is not None else None,
                    smoother=args.smoother)
     est = np.asarray(res.final_position, dtype=float).reshape(2)
@@ -78,26 +91,37 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     out = {"fusion": res.to_dict(), "decision": decision,
            "units": {"decision.level": "1", "decision.mahalanobis.*": "1"}}
     check_finite(out, "the result")
-    if args.plot:
-        from bench.figures.fusion import save_fusion_plot
+    if args.plot or args.rrd:
         from calib.region import arrival_region
         from calib.trajectory import compute_trajectory
 
         traj = compute_trajectory(acel, cal, p0, v0)
         region = arrival_region(traj, cal, candidates, noise_var, level)
+    if args.plot:
+        from bench.figures.fusion import save_fusion_plot
+
         save_fusion_plot(args.plot, traj, region, res, fixes.pos[inside], level, letter,
                          force=args.force)
+    if args.rrd:
+        from bench.record.fusion import record_fusion
+
+        truth, true_path = _truth(args)
+        record_fusion(args.rrd, traj, region, res, fixes.pos[inside], decision, level,
+                      force=args.force, truth=truth, true_path=true_path)
     if args.json:
         print_json(out)
         return 0
     print(res.summary())
+    print(f"initial uncertainty: σ_p0 = {p0_std:g} m, σ_v0 = {v0_std:g} m/s per axis "
+          "(--p0-std/--v0-std; datos.txt states P0 and V0 without uncertainty)")
     print(f"decision: {letter or 'undecided'} ({reason}); fixes used: "
           f"{int(inside.sum())} of {inside.size}")
-    print_files([args.plot])
+    print_files([args.plot, args.rrd])
     return 0
 
 
-def _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos):
+def _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos, p0_std,
+                  v0_std):
     """The turning vehicle (acel.mat has ``gyro``): :func:`calib.fusion_turning.fuse_turning`
     with σ_g from ``--gyro-sigma`` and the initial heading ``--psi0`` ± ``--psi0-sigma``."""
     from calib.fusion_turning import fuse_turning
@@ -105,9 +129,10 @@ def _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos):
     if args.gps_vel_sigma is not None:
         raise OptionError("--gps-vel-sigma: the turning filter (acel.mat with 'gyro') uses "
                           "position fixes only")
-    if args.plot:
-        raise OptionError("--plot: the figure's dead reckoning is the non-rotating one; not "
-                          "available for a turning run (acel.mat with 'gyro')")
+    for opt, value in (("--plot", args.plot), ("--rrd", args.rrd)):
+        if value:
+            raise OptionError(f"{opt}: the picture's dead reckoning is the non-rotating one; "
+                              "not available for a turning run (acel.mat with 'gyro')")
     gyro_sigma = check_positive(args.gyro_sigma, "--gyro-sigma")
     psi0_sigma = float(args.psi0_sigma)
     if not psi0_sigma >= 0.0:
@@ -115,8 +140,28 @@ def _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos):
     return fuse_turning(acel.t, acel.aerr, acel.gyro, fixes.t_gps[inside], fixes.pos[inside],
                         bias=cal.bias, scale=cal.scale, cal_cov=cal.cov, noise_var=noise_var,
                         gyro_var=gyro_sigma ** 2, sigma_pos=sigma_pos, p0=p0, v0=v0,
-                        psi0=float(args.psi0), p0_cov=0.0, v0_cov=0.0,
+                        psi0=float(args.psi0), p0_cov=p0_std ** 2, v0_cov=v0_std ** 2,
                         psi0_var=psi0_sigma ** 2, smoother=args.smoother)
+
+
+def _truth(args: argparse.Namespace):
+    """``--truth``, else ``truth.json`` beside ``--acel`` (None if absent): the manifest and
+    its true path (the samples every second, m), for the recording."""
+    from pathlib import Path
+
+    import numpy as np
+
+    from bench.validate import load_json
+
+    path = Path(args.truth) if args.truth else Path(args.acel).parent / "truth.json"
+    if not path.exists():
+        if args.truth:
+            raise OptionError(f"--truth {args.truth}: file not found")
+        return None, None
+    manifest = load_json(path, "truth")
+    samples = manifest.get("vehicle", {}).get("trajectory", {}).get("samples", {})
+    pos = samples.get("pos")
+    return manifest, None if pos is None else np.asarray(pos, dtype=float)
 
 
 def register(sub) -> None:
@@ -137,9 +182,19 @@ def register(sub) -> None:
                    help="turning run: initial heading, rad from world +x (0 if not given)")
     p.add_argument("--psi0-sigma", type=float, default=0.0, metavar="RAD",
                    help="turning run: std of the initial heading, rad (0: known)")
+    p.add_argument("--p0-std", type=float, default=0.0, metavar="M",
+                   help="σ of the initial position per axis, m; 0: the course gives P0 "
+                        "exactly in datos.txt, which states no uncertainty")
+    p.add_argument("--v0-std", type=float, default=0.0, metavar="MPS",
+                   help="σ of the initial velocity per axis, m/s; 0 as --p0-std")
     p.add_argument("--smoother", action="store_true",
                    help="also run the Rauch-Tung-Striebel smoother")
     p.add_argument("--plot", help="write a figure (.png or .svg): dead reckoning, fixes, "
                                   "the fused path and both arrival regions")
-    add_force(p, "an existing --plot file")
+    p.add_argument("--rrd", help="write a rerun recording: truth (if known), dead reckoning, "
+                                 "fixes, the fused path with its ellipses, the innovations "
+                                 "(docs/recordings.md)")
+    p.add_argument("--truth", help="truth.json for the recording (default: truth.json beside "
+                                   "--acel, if there is one)")
+    add_force(p, "an existing --plot / --rrd file")
     p.set_defaults(handler=_cmd_fuse)

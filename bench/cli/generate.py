@@ -295,12 +295,26 @@ def _cmd_calibration(args: argparse.Namespace) -> int:
     return 0
 
 
+def _refuse_stale_gps(args: argparse.Namespace, receiver) -> None:
+    """Without ``--gps``, a ``gps.mat`` already in ``--out`` belongs to an earlier run: the new
+    set would sit beside fixes of another path. Refused (OptionError, before anything is
+    written) instead of deleted behind the user's back."""
+    from pathlib import Path
+
+    stale = Path(args.out) / "gps.mat"
+    if receiver is None and stale.exists():
+        raise OptionError(f"--out {args.out}: gps.mat there holds the fixes of an earlier run "
+                          "and would no longer match the new files; pass --gps to write new "
+                          "fixes, or remove gps.mat")
+
+
 def _cmd_vehicle(args: argparse.Namespace) -> int:
     from bench.vehicle import make_vehicle_run, write_vehicle
 
     refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
     cfg = vehicle_config(args, sensor_model(args), parse_profile(args.profile))
     receiver = gps_receiver(args, cfg.t)
+    _refuse_stale_gps(args, receiver)
     _announce("generate vehicle", _check_vehicle_size(cfg))
     run = make_vehicle_run(cfg, args.seed)
     gps = _fixes(receiver, run.truth, args.seed)
@@ -331,6 +345,7 @@ def _cmd_course(args: argparse.Namespace) -> int:
     refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
     config = course_config(args)
     receiver = gps_receiver(args, config.vehicle.t)
+    _refuse_stale_gps(args, receiver)
     _announce("generate course", limits.vehicle_run_bytes(config.vehicle.n_samples)
               + limits.static_run_bytes(args.count))
     try:

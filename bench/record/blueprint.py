@@ -127,3 +127,30 @@ def vehicle_blueprint(bounds: Any, *, estimated: bool, acc: tuple[str, ...],
                                    name="calibration"))
     return rrb.Blueprint(rrb.Tabs(*tabs) if len(tabs) > 1 else vehicle,
                          time_panel(TIME_TIMELINE, "following"), collapse_panels=True)
+
+
+def fusion_blueprint(bounds: Any, *, level: float, truth: bool, every_s: float | None) -> Any:
+    """The ``fuse --rrd`` layout: the plane (dead reckoning, fixes, fused path and ellipses,
+    truth) beside the innovations of each axis with their ±σ bounds, the fused position std
+    and the decision. The view names are the legend."""
+    import rerun.blueprint as rrb
+
+    pct = f"{100 * level:g}%"
+    every = f" every {every_s:.0f} s" if every_s else ""
+    parts = ["dead reckoning blue", "fixes light grey", f"fused purple ({pct} ellipses{every})",
+             f"{pct} arrival: fused purple, dead reckoning red", "candidates magenta"]
+    if truth:
+        parts.insert(0, "true green")
+    plane = rrb.Spatial2DView(origin="vehicle", contents=["+ vehicle/plane/**"],
+                              name="plane (m) — " + "; ".join(parts), visual_bounds=bounds)
+    side = [rrb.TimeSeriesView(origin="fusion", contents=[f"+ fusion/innovation/{a}",
+                                                          f"+ fusion/innovation_band/{a}/**"],
+                               name=f"innovation {a} (m): ν = fix − prediction, ±σ = "
+                                    "±sqrt(S) orange", axis_x=full_time_axis())
+            for a in AXES]
+    side.append(rrb.TimeSeriesView(origin="fusion/position_std", axis_x=full_time_axis(),
+                                   name="std of the fused position (m)"))
+    side.append(rrb.TextDocumentView(origin="summary/decision", name="decision"))
+    layout = rrb.Horizontal(plane, rrb.Vertical(*side, row_shares=[2, 2, 2, 3]),
+                            column_shares=[3, 2], name="fusion")
+    return rrb.Blueprint(layout, time_panel(TIME_TIMELINE, "following"), collapse_panels=True)

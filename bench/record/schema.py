@@ -24,7 +24,8 @@ class EntityDoc:
     pattern : entity path; ``{axis}`` ∈ {x, y}, ``{k}`` a letter / name, ``**`` any subtree.
     archetype : rerun archetype(s) logged there.  index : timelines ("static" if none).
     content : what it holds, with units.  kinds : recordings that contain it
-    ("calibration", "truth-run", "vehicle", "gap").  optional : present only when the data exist
+    ("calibration", "truth-run", "vehicle", "gap", "fusion").  optional : present only when
+    the data exist
     (e.g. the truth of a generated set).
     """
 
@@ -101,24 +102,26 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
     EntityDoc("vehicle/position_std/{axis}", "Scalars + SeriesLines", "time",
               "standard deviation of the corrected position (calibration + noise), m",
               ("vehicle",)),
-    EntityDoc("vehicle/plane", "Transform3D", "static", "2-D frame with +y up", _VEH),
+    EntityDoc("vehicle/plane", "Transform3D", "static", "2-D frame with +y up",
+              _VEH + ("fusion",)),
     EntityDoc("vehicle/plane/grid", "LineStrips2D", "static",
               "the plane's scale: frame and grid lines at round metres (one step for x and "
-              "y), drawn under everything", _VEH),
+              "y), drawn under everything", _VEH + ("fusion",)),
     EntityDoc("vehicle/plane/grid/labels", "Points2D (labels)", "static",
               "grid values in m under the bottom and left of the frame, and the axis names "
-              "`x (m)`, `y (m)`", _VEH),
+              "`x (m)`, `y (m)`", _VEH + ("fusion",)),
     EntityDoc("vehicle/plane/path/{k}", "LineStrips2D", "static",
-              "trajectory, k = raw (uncorrected), corrected or true, m", _VEH),
+              "trajectory, k = raw (uncorrected), corrected or true, m", _VEH + ("fusion",)),
     EntityDoc("vehicle/plane/position/{k}", "Points2D", "time",
               "position at the current time, k = raw, corrected or true, m (static colour and "
               "radius: those of the path)", _VEH),
     EntityDoc("vehicle/plane/candidates", "Points2D (labels)", "static",
-              "candidate arrival points (puntos.mat), m", _VEH),
+              "candidate arrival points (puntos.mat), m", _VEH + ("fusion",)),
     EntityDoc("vehicle/plane/arrival/estimate", "Points2D", "static",
-              "corrected arrival point, m", ("vehicle",)),
+              "corrected arrival point, m", ("vehicle", "fusion")),
     EntityDoc("vehicle/plane/arrival/ellipse", "LineStrips2D", "static",
-              "confidence ellipse of the arrival point at the stated level, m", ("vehicle",)),
+              "confidence ellipse of the arrival point at the stated level, m",
+              ("vehicle", "fusion")),
     EntityDoc("vehicle/plane/uncertainty/ellipse", "LineStrips2D", "time",
               "ellipse at the same level around the corrected position at each time (error "
               "propagation over time), m", ("vehicle",)),
@@ -130,7 +133,29 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
               "(truth-run: the true values)",
               ("calibration", "truth-run", "vehicle")),
     EntityDoc("summary/decision", "TextDocument (Markdown)", "static",
-              "arrival decision, distances to the candidates", ("vehicle",)),
+              "arrival decision, distances to the candidates (fusion: fused and dead "
+              "reckoning)", ("vehicle", "fusion")),
+    EntityDoc("vehicle/plane/fixes", "Points2D", "static", "position fixes used by `fuse`, m",
+              ("fusion",)),
+    EntityDoc("vehicle/plane/fused/path", "LineStrips2D", "static",
+              "Kalman-filtered path (every node), m", ("fusion",)),
+    EntityDoc("vehicle/plane/fused/position", "Points2D", "time",
+              "filtered position at the current time, m", ("fusion",)),
+    EntityDoc("vehicle/plane/fused/ellipses", "LineStrips2D", "static",
+              "filtered confidence ellipses at the stated level at every k-th fix (≤ 20), m",
+              ("fusion",)),
+    EntityDoc("vehicle/plane/fused/arrival", "LineStrips2D", "static",
+              "fused arrival ellipse at the stated level (unlabelled: the decision view gives "
+              "its size), m", ("fusion",)),
+    EntityDoc("fusion/innovation/{axis}", "Scalars + SeriesPoints", "time",
+              "innovation ν = fix − predicted position at each fix, m", ("fusion",)),
+    EntityDoc("fusion/innovation_band/{axis}/{k}", "Scalars + SeriesLines", "time",
+              "±sqrt(S_ii) of the innovation (k = plus, minus), m", ("fusion",)),
+    EntityDoc("fusion/position_std/{axis}", "Scalars + SeriesLines", "time",
+              "std of the filtered position, m", ("fusion",)),
+    EntityDoc("fusion_report/**", "Scalars | TextDocument, + json_type, json_path", "static",
+              "final fused position, covariance and std, dead reckoning's std, fixes, mean "
+              "NIS, P0/Q/R, decision (read back under \"fusion_report\")", ("fusion",)),
     EntityDoc("gap/{axis}/residual_{k}", "Scalars + SeriesPoints", "sample, theta_urad",
               "discrepancy workflow: residual before / after adding the named effects, m/s² "
               "(bench/gap/recording.py)", ("gap",)),
@@ -159,7 +184,7 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
               ("gap",)),
     EntityDoc("truth/**", "Scalars | TextDocument, + json_type, json_path", "static",
               "every node of truth.json (path = JSON keys, list items by index)",
-              ("calibration", "truth-run", "vehicle"), optional=True),
+              ("calibration", "truth-run", "vehicle", "fusion"), optional=True),
     EntityDoc("estimate/**", "Scalars | TextDocument, + json_type, json_path", "static",
               "every node of the `calibrate --json` object", ("calibration", "vehicle")),
     EntityDoc("trajectory/**", "Scalars | TextDocument, + json_type, json_path", "static",
