@@ -261,6 +261,117 @@ def _raise_rank(Hs: np.ndarray, names: tuple[str, ...], M: np.ndarray) -> None:
     )
 
 
+def centre_design(
+    H: np.ndarray, names: tuple[str, ...], intercept: int | None = 0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Centre the regressors on the intercept: ``H = Hc M⁻¹``, i.e. ``p = M p_c``.
+
+    Column ``intercept`` (all ones) stays; every other column ``j`` becomes
+    ``H[:, j] - mean_j`` and ``M[intercept, j] = -mean_j`` (``p_intercept = p_c,intercept -
+    Σ mean_j p_j``), an exact reparametrisation that keeps the digits of a regressor with a
+    large constant offset (``A_ry ≈ -g`` for small θ).
+
+    Raises
+    ------
+    ValueError : column ``intercept`` is not all ones.
+    NotIdentifiableError : a regressor is constant over the run (collinear with the intercept).
+    """
+    H = np.asarray(H, dtype=float, order="F")
+    p = H.shape[1]
+    M = np.eye(p)
+    Hc = H.copy(order="F")
+    if intercept is not None:
+        if not np.all(H[:, intercept] == 1.0):
+            raise ValueError(f"column {intercept} is not an intercept (all ones)")
+        means = H.mean(axis=0)
+        for j in range(p):
+            if j != intercept:
+                Hc[:, j] = H[:, j] - means[j]
+                M[intercept, j] = -means[j]  # p_intercept = p_c,intercept - Σ mean_j p_j
+    # A regressor that is constant over the run is exactly collinear with the intercept.
+    for j in range(p):
+        if intercept is not None and j != intercept and np.ptp(H[:, j]) == 0.0:
+            raise NotIdentifiableError(
+                f"cannot identify '{names[j]}': its regressor is constant over the run, so it "
+                f"is confounded with '{names[intercept]}' (all θ equal?); use at least two "
+                "distinct θ"
+            )
+    return Hc, M
+
+
+@dataclass(frozen=True, eq=False)
+class DesignFactor:
+    """The part of an OLS fit that depends on the design only (for many ``y`` at once).
+
+    With the centred (:func:`centre_design`), column-equilibrated design
+    ``Hs = Hc D⁻¹ = Q R`` (reduced Householder QR, ``Q`` (n, p) orthonormal columns):
+
+    * solution ``p̂ = A Qᵀy`` with ``A = M D⁻¹ R⁻¹`` (``solve_map``),
+    * unit covariance ``cov1 = A Aᵀ`` (multiply by σ²), never ``(HᵀH)⁻¹``,
+    * residual sum of squares ``RSS = ‖y‖² − ‖Qᵀy‖²`` (Pythagoras: ``y − Q Qᵀy ⊥ Q``).
+
+    These are the equations of :func:`fit_linear` (same centring, scaling and rank rule);
+    there the QR is of the augmented ``[Hs | y]``, so the two agree to rounding (≈ 1e-15
+    relative), not bit for bit.
+    """
+
+    q: np.ndarray
+    solve_map: np.ndarray
+    cov1: np.ndarray
+    rank: int
+    cond: float
+
+    def __post_init__(self) -> None:
+        for name in ("q", "solve_map", "cov1"):
+            object.__setattr__(self, name, _readonly(getattr(self, name)))
+
+
+def factor_design(
+    H: np.ndarray, names: tuple[str, ...], intercept: int | None = 0
+) -> DesignFactor:
+    """Factor the design ``H`` (n, p) once (:class:`DesignFactor`); the rank and
+    identifiability checks of :func:`fit_linear` apply (``NotIdentifiableError``)."""
+    H = np.asarray(H, dtype=float, order="F")
+    n, p = H.shape
+    if n <= p:
+        raise NotIdentifiableError(
+            f"{n} samples cannot identify {p} parameters ({', '.join(names)})")
+    Hc, M = centre_design(H, names, intercept)
+    norms = np.linalg.norm(Hc, axis=0)
+    scale = np.where(norms > 0, norms, 1.0)
+    Hs = Hc / scale
+    Q, R = np.linalg.qr(Hs)
+    sv = np.linalg.svd(R, compute_uv=False)
+    rank = int(np.sum(sv > sv[0] * max(n, p) * np.finfo(float).eps)) if sv[0] > 0 else 0
+    if rank < p or np.any(norms == 0):
+        _raise_rank(Hs, names, M)
+    A = (M / scale) @ sla.solve_triangular(R, np.eye(p))
+    cov1 = A @ A.T
+    return DesignFactor(q=Q, solve_map=A, cov1=0.5 * (cov1 + cov1.T), rank=rank,
+                        cond=_equilibrated_cond(H))
+
+
+def axis_factor(tita: np.ndarray, axis: str = "x", g: float = G
+                ) -> tuple[np.ndarray, DesignFactor]:
+    """``(A_r, factor)`` of the per-axis course design ``H = [1, A_r]`` (:func:`fit_axis`).
+
+    ``A_r`` (N,) m/s² is ``-g sin θ`` (x) or ``-g cos θ`` (y). Raises
+    :class:`NotIdentifiableError` as :func:`fit_axis` does when every θ gives the same A_r.
+    """
+    tita = np.asarray(tita, dtype=float)
+    a_r = reference_accel(tita, g)[:, AXES.index(axis)]
+    try:
+        if _blind(a_r, g):
+            raise NotIdentifiableError(f"A_r{axis} constant to rounding")
+        fac = factor_design(np.column_stack([np.ones_like(a_r), a_r]), PARAM_NAMES)
+    except NotIdentifiableError as exc:
+        raise NotIdentifiableError(
+            f"axis {axis}: cannot identify scale_{axis} (bias_{axis} and scale_{axis} are "
+            f"confounded): every θ gives the same A_r{axis}; use at least two θ with "
+            f"different A_r{axis}. [{exc}]") from None
+    return a_r, fac
+
+
 def fit_linear(
     H: np.ndarray,
     y: np.ndarray,
@@ -292,24 +403,7 @@ def fit_linear(
     if n <= p:
         raise NotIdentifiableError(
             f"{n} samples cannot identify {p} parameters ({', '.join(names)})")
-    M = np.eye(p)
-    Hc = H.copy(order="F")
-    if intercept is not None:
-        if not np.all(H[:, intercept] == 1.0):
-            raise ValueError(f"column {intercept} is not an intercept (all ones)")
-        means = H.mean(axis=0)
-        for j in range(p):
-            if j != intercept:
-                Hc[:, j] = H[:, j] - means[j]
-                M[intercept, j] = -means[j]  # p_intercept = p_c,intercept - Σ mean_j p_j
-    # A regressor that is constant over the run is exactly collinear with the intercept.
-    for j in range(p):
-        if intercept is not None and j != intercept and np.ptp(H[:, j]) == 0.0:
-            raise NotIdentifiableError(
-                f"cannot identify '{names[j]}': its regressor is constant over the run, so it "
-                f"is confounded with '{names[intercept]}' (all θ equal?); use at least two "
-                "distinct θ"
-            )
+    Hc, M = centre_design(H, names, intercept)
     params, cov1, resid, rank = _solve_centred(Hc, y, M, names)
     rss = float(resid @ resid)
     dof = n - p

@@ -1,0 +1,136 @@
+"""calib.montecarlo: the batched engine equals calibrate() run by run, its results do not
+depend on the chunk size, the process pool or a Dask cluster, and its intervals cover."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from bench.sweep import dask_map, process_map
+from calib import Ensayo, calibrate
+from calib.montecarlo import (
+    MonteCarloResult,
+    draw_noise,
+    simulate_calibrations,
+    synthetic_readings,
+)
+from calib.runs import run_seeds
+
+THETA = np.linspace(0.0, 2 * np.pi, 2001)
+BIAS, SCALE, NV = [0.0767, -0.0175], [-0.0301, 0.0100], [0.25, 0.64]
+
+
+def _sim(runs=23, seed=5, **kw):
+    return simulate_calibrations(THETA, BIAS, SCALE, NV, runs, seed, **kw)
+
+
+@pytest.mark.parametrize("mode", ["given", "estimated"])
+def test_equals_calibrate_run_by_run(mode):
+    """Estimates, std, σ² and χ² of runs 0, 7, 22 equal calibrate() on the same readings."""
+    res = _sim(sigma2=mode, chunk=5)
+    for k in (0, 7, 22):
+        datos = synthetic_readings(THETA, BIAS, SCALE, NV, 5, k)
+        cal = calibrate(Ensayo(THETA, datos), NV if mode == "given" else None, "ols")
+        np.testing.assert_allclose(res.params[k], cal.params, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(res.std[k], cal.std, rtol=1e-12, atol=0)
+        for i, a in enumerate("xy"):
+            f = cal.fits[a]
+            assert f.sigma2_source == res.sigma2_source == mode
+            np.testing.assert_allclose(res.sigma2[k, i], f.sigma2.item(), rtol=1e-12)
+            np.testing.assert_allclose(res.chi2[k, i], f.chi2, rtol=1e-12)
+            np.testing.assert_allclose(res.sigma2[k, i] * res.cov1[i], f.cov, rtol=1e-12,
+                                       atol=1e-20)
+
+
+def test_stream_of_run_k_is_the_kth_spawned_child():
+    """The seed contract of calib.runs: run k draws from run_seeds(seed, runs, key)[k]."""
+    ss = run_seeds(5, 23, (7,))[11]
+    want = np.random.default_rng(ss).standard_normal((THETA.size, 2))
+    np.testing.assert_array_equal(draw_noise(5, range(11, 12), THETA.size, (7,))[0], want)
+    readings = synthetic_readings(THETA, BIAS, SCALE, NV, 5, 11, spawn_key=(7,))
+    np.testing.assert_allclose(readings, synthetic_readings(THETA, BIAS, SCALE, NV, 5, 11,
+                                                            spawn_key=(7,)), rtol=0, atol=0)
+    assert not np.array_equal(readings, synthetic_readings(THETA, BIAS, SCALE, NV, 5, 12,
+                                                           spawn_key=(7,)))
+
+
+def test_independent_of_chunk_size_and_processes():
+    ref = _sim(chunk=1)
+    for other in (_sim(chunk=7), _sim(chunk=23), _sim(chunk=4, mapper=process_map(2))):
+        np.testing.assert_array_equal(other.params, ref.params)
+        np.testing.assert_array_equal(other.chi2, ref.chi2)
+    assert _sim(seed=6).params[0, 0] != ref.params[0, 0]
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    from dask.distributed import LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as c:
+        yield c
+
+
+def test_dask_cluster_equals_serial(cluster):
+    ref = _sim(chunk=3)
+    seen = []
+    got = _sim(chunk=3, mapper=dask_map(cluster.scheduler_address),
+               progress=lambda d, t: seen.append((d, t)))
+    np.testing.assert_array_equal(got.params, ref.params)
+    np.testing.assert_array_equal(got.sigma2, ref.sigma2)
+    assert seen[-1] == (8, 8) and len(seen) == 8
+
+
+def test_cli_demo_coverage_on_cluster_equals_one_process(cluster, tmp_path, capsys):
+    """`demo --coverage-runs` gives the same coverage with --workers 1 and --scheduler."""
+    from bench.cli import main
+
+    out = {}
+    for name, extra in (("one", ["--workers", "1"]),
+                        ("dask", ["--scheduler", cluster.scheduler_address])):
+        code = main(["demo", "--out", str(tmp_path / name), "--coverage-runs", "40",
+                     "--figures", "png", "--json", "--quiet", *extra])
+        assert code == 0
+        out[name] = json.loads(capsys.readouterr().out)["coverage"]
+    assert out["one"] == out["dask"]
+    assert out["one"]["runs"] == 40
+
+
+def test_interval_coverage_and_nees_in_binomial_band():
+    """R = 2000 runs, known σ²: each 95 % interval covers with probability 0.95, so the hit
+    count is Binomial(R, 0.95) and |hits/R − 0.95| ≤ 4·sqrt(0.95·0.05/R) = 0.0195 fails by
+    chance with probability < 1e-4; the mean NEES of the 4 parameters is χ²₄/R-averaged:
+    mean 4, sd sqrt(2·4/R) = 0.063, band ±4 sd. (R = 2000 supports only claims at this
+    resolution: coverage to ±0.02.)"""
+    R = 2000
+    res = simulate_calibrations(THETA, BIAS, SCALE, NV, R, 2026, chunk=250)
+    hits = res.interval_hits(0.95).mean(axis=0)
+    tol = 4 * np.sqrt(0.95 * 0.05 / R)
+    assert np.all(np.abs(hits - 0.95) <= tol), hits
+    assert abs(res.nees().mean() - 4) <= 4 * np.sqrt(8 / R)
+    # estimated σ²: chi2 is N − 2 by construction, σ² is unbiased within its χ² spread
+    est = simulate_calibrations(THETA, BIAS, SCALE, NV, 400, 9, sigma2="estimated")
+    np.testing.assert_allclose(est.chi2, THETA.size - 2, rtol=1e-12)
+    rel = est.sigma2.mean(axis=0) / np.array(NV) - 1
+    assert np.all(np.abs(rel) <= 4 * np.sqrt(2 / (THETA.size - 2) / 400))
+
+
+def test_result_round_trip_and_summary():
+    res = _sim(runs=4)
+    back = MonteCarloResult.from_dict(json.loads(json.dumps(res.to_dict())))
+    assert back == res
+    assert "bias_x" in res.summary() and "m/s²" in res.summary()
+    est = res.estimates(2)
+    assert est["axes"]["y"]["scale"] == res.params[2, 3]
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="noise variances"):
+        simulate_calibrations(THETA, BIAS, SCALE, [0.25, -1], 3, 0)
+    with pytest.raises(ValueError, match="runs"):
+        simulate_calibrations(THETA, BIAS, SCALE, NV, 0, 0)
+    from calib.ls import NotIdentifiableError
+    with pytest.raises(NotIdentifiableError, match="scale_x"):
+        simulate_calibrations(np.zeros(10), BIAS, SCALE, NV, 3, 0)
