@@ -12,7 +12,8 @@ the data, so with the design factored once (:func:`calib.ls.axis_factor`,
     RSS_a,k = σ_a² · (‖v_a,k‖² − ‖Q_aᵀ v_a,k‖²)
 
 A run's draws go into one reused (N, 2) buffer and are reduced at once (while in cache) to
-``Qᵀv`` and ``‖v‖²`` per axis; the chunk's estimates are then small matrix products. Known σ² (``sigma2="given"``): covariance
+``Qᵀv`` and ``‖v‖²`` per axis; the chunk's estimates are then small matrix products.
+Known σ² (``sigma2="given"``): covariance
 ``σ_a² A_a A_aᵀ``, the same for every run; estimated σ²: ``s_a² = RSS_a/(N − 2)`` per run and
 covariance ``s_a² A_a A_aᵀ``. ``χ²_a = RSS_a / σ²_used``.
 
