@@ -101,11 +101,15 @@ def _chunk(task: tuple[_Plan, range]) -> tuple[np.ndarray, np.ndarray]:
         ss[j, 0], ss[j, 1] = vx @ vx, vy @ vy
     params = np.empty((r, 4))
     rss = np.empty((r, 2))
+    # Element-wise (not a GEMM over the chunk): a run's numbers must not depend on how many
+    # runs share its chunk, and BLAS kernels may round differently by matrix size.
     for a in range(2):
-        za = z[:, 2 * a:2 * a + 2]
-        params[:, 2 * a:2 * a + 2] = plan.truth[2 * a:2 * a + 2] + plan.sd[a] * (
-            za @ plan.maps[a].T)
-        rss[:, a] = plan.sd[a] ** 2 * (ss[:, a] - np.einsum("ri,ri->r", za, za))
+        z0, z1 = z[:, 2 * a], z[:, 2 * a + 1]
+        A = plan.maps[a]
+        for i in range(2):
+            params[:, 2 * a + i] = plan.truth[2 * a + i] + plan.sd[a] * (A[i, 0] * z0
+                                                                         + A[i, 1] * z1)
+        rss[:, a] = plan.sd[a] ** 2 * (ss[:, a] - (z0 * z0 + z1 * z1))
     return params, rss
 
 

@@ -83,19 +83,45 @@ def test_dask_cluster_equals_serial(cluster):
     assert seen[-1] == (8, 8) and len(seen) == 8
 
 
-def test_cli_demo_coverage_on_cluster_equals_one_process(cluster, tmp_path, capsys):
-    """`demo --coverage-runs` gives the same coverage with --workers 1 and --scheduler."""
+def test_cli_generate_class_on_cluster_equals_one_process(cluster, tmp_path, capsys):
+    """`generate class` writes the same bytes with --workers 1 and --scheduler ADDR."""
     from bench.cli import main
 
-    out = {}
+    outs = {}
     for name, extra in (("one", ["--workers", "1"]),
                         ("dask", ["--scheduler", cluster.scheduler_address])):
-        code = main(["demo", "--out", str(tmp_path / name), "--coverage-runs", "40",
-                     "--figures", "png", "--json", "--quiet", *extra])
-        assert code == 0
-        out[name] = json.loads(capsys.readouterr().out)["coverage"]
-    assert out["one"] == out["dask"]
-    assert out["one"]["runs"] == 40
+        outs[name] = tmp_path / name
+        assert main(["generate", "class", "--students", "2", "--seed", "4", "--out",
+                     str(outs[name]), "--json", *extra]) == 0
+        capsys.readouterr()
+    files = sorted(p.relative_to(outs["one"]) for p in outs["one"].rglob("*") if p.is_file())
+    assert len(files) == 2 + 2 * 4
+    for f in files:
+        assert (outs["one"] / f).read_bytes() == (outs["dask"] / f).read_bytes(), f
+
+
+def test_demo_coverage_check_mapper_independent(cluster):
+    """The demo's coverage check (batched engine) gives the same dict serially and on the
+    cluster, and matches a plain loop of calibrate() + validate() on the same streams."""
+    from bench.demo import coverage_check
+    from bench.validate import validate
+
+    truth = {"sensor": {"x": {"bias": 0.0767, "scale": -0.0301, "noise_var": 0.25},
+                        "y": {"bias": -0.0175, "scale": 0.0100, "noise_var": 0.64}},
+             "theta_design": {"kind": "range", "start": 0.0, "stop": 6.283185307179586,
+                              "count": 2001}}
+    one = coverage_check(truth, 60, 0.95, seed=3)
+    assert coverage_check(truth, 60, 0.95, seed=3,
+                          mapper=dask_map(cluster.scheduler_address)) == one
+    from bench.validate import design_theta
+    th = design_theta(truth)
+    passed = 0
+    for k in range(60):
+        datos = synthetic_readings(th, [0.0767, -0.0175], [-0.0301, 0.0100], [0.25, 0.64], 3,
+                                   k, spawn_key=(7,))
+        passed += validate(truth, calibrate(Ensayo(th, datos), [0.25, 0.64]).to_dict(),
+                           0.95).passed
+    assert one["pass_rate"] == passed / 60
 
 
 def test_interval_coverage_and_nees_in_binomial_band():
