@@ -19,6 +19,8 @@ identified one warns with the condition number and the resulting standard deviat
 from __future__ import annotations
 
 import warnings
+import zlib
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -216,8 +218,17 @@ def _equilibrated_cond(H: np.ndarray) -> float:
     return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
 
 
+def _equilibrate(Hc: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(norms, scale, Hs)``: column norms of ``Hc``, the divisors (1 for a zero column) and
+    the equilibrated ``Hs = Hc / scale`` (unit-norm columns)."""
+    norms = np.linalg.norm(Hc, axis=0)
+    scale = np.where(norms > 0, norms, 1.0)
+    return norms, scale, Hc / scale
+
+
 def _solve_centred(
-    Hc: np.ndarray, y: np.ndarray, M: np.ndarray, names: tuple[str, ...]
+    Hc: np.ndarray, y: np.ndarray, M: np.ndarray, names: tuple[str, ...],
+    equilibrated: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """Solve ``y ≈ Hc p_c`` (rows already whitened), return ``p = M p_c``, unit covariance.
 
@@ -227,9 +238,7 @@ def _solve_centred(
     cut-off (singular values below ``eps·max(n, p)·s_max``).
     """
     n, p = Hc.shape
-    norms = np.linalg.norm(Hc, axis=0)
-    scale = np.where(norms > 0, norms, 1.0)
-    Hs = Hc / scale
+    norms, scale, Hs = _equilibrate(Hc) if equilibrated is None else equilibrated
     aug = np.empty((n, p + 1), order="F")
     aug[:, :p], aug[:, p] = Hs, y
     Ra = _r_factor(aug)
@@ -337,9 +346,7 @@ def factor_design(
         raise NotIdentifiableError(
             f"{n} samples cannot identify {p} parameters ({', '.join(names)})")
     Hc, M = centre_design(H, names, intercept)
-    norms = np.linalg.norm(Hc, axis=0)
-    scale = np.where(norms > 0, norms, 1.0)
-    Hs = Hc / scale
+    norms, scale, Hs = _equilibrate(Hc)
     Q, R = np.linalg.qr(Hs)
     sv = np.linalg.svd(R, compute_uv=False)
     rank = int(np.sum(sv > sv[0] * max(n, p) * np.finfo(float).eps)) if sv[0] > 0 else 0
@@ -404,7 +411,16 @@ def fit_linear(
         raise NotIdentifiableError(
             f"{n} samples cannot identify {p} parameters ({', '.join(names)})")
     Hc, M = centre_design(H, names, intercept)
-    params, cov1, resid, rank = _solve_centred(Hc, y, M, names)
+    return _fit_centred(Hc, M, y, names, sigma2, lambda: _equilibrated_cond(H))
+
+
+def _fit_centred(Hc: np.ndarray, M: np.ndarray, y: np.ndarray, names: tuple[str, ...],
+                 sigma2: float | None, cond, equilibrated=None) -> FitResult:
+    """The data-dependent half of :func:`fit_linear` (``Hc``, ``M`` from
+    :func:`centre_design`; ``cond()`` gives the design's condition number; ``equilibrated``
+    :func:`_equilibrate` of ``Hc`` if already known)."""
+    n, p = Hc.shape
+    params, cov1, resid, rank = _solve_centred(Hc, y, M, names, equilibrated)
     rss = float(resid @ resid)
     dof = n - p
     if sigma2 is None:
@@ -416,8 +432,55 @@ def fit_linear(
     return FitResult(
         param_names=tuple(names), params=params, cov=s2 * cov1, residuals=resid,
         sigma2=np.array(s2), sigma2_source=source, dof=dof, rank=rank,
-        cond=_equilibrated_cond(H), chi2=rss / s2,
+        cond=cond(), chi2=rss / s2,
     )
+
+
+@dataclass(frozen=True, eq=False)
+class _AxisDesign:
+    """Everything :func:`fit_axis` computes from θ alone (reference, centred design, its
+    condition number, the span of ``A_r``): cached so a refit of the same design does only the
+    data-dependent work, with the same operations (bit-identical results)."""
+
+    tita: np.ndarray
+    a_r: np.ndarray
+    Hc: np.ndarray
+    M: np.ndarray
+    equilibrated: tuple[np.ndarray, np.ndarray, np.ndarray]
+    cond: float
+    span: float
+
+
+DESIGN_CACHE_SIZE = 8
+"""Designs (θ, g, axis) kept by :func:`fit_axis`: ≈ 0.8 MB each at N = 20001."""
+_DESIGN_CACHE: OrderedDict = OrderedDict()
+
+
+def _axis_design(tita: np.ndarray, axis: str, g: float) -> _AxisDesign:
+    """The cached :class:`_AxisDesign` of ``(θ, axis, g)``; the key is a CRC of θ's bytes and
+    a hit is confirmed by comparing θ itself (exact, no collision can return another design).
+    Raises :class:`NotIdentifiableError` (unwrapped; :func:`fit_axis` words it)."""
+    key = (tita.shape, zlib.crc32(np.ascontiguousarray(tita).data), float(g), axis)
+    hit = _DESIGN_CACHE.get(key)
+    if hit is not None and np.array_equal(hit.tita, tita):
+        _DESIGN_CACHE.move_to_end(key)
+        return hit
+    a_r = reference_accel(tita, g)[:, AXES.index(axis)]
+    H = np.column_stack([np.ones_like(a_r), a_r])
+    if _blind(a_r, g):
+        raise NotIdentifiableError(f"A_r{axis} constant to rounding")
+    H = np.asarray(H, dtype=float, order="F")
+    n, p = H.shape
+    if n <= p:
+        raise NotIdentifiableError(
+            f"{n} samples cannot identify {p} parameters ({', '.join(PARAM_NAMES)})")
+    Hc, M = centre_design(H, PARAM_NAMES)
+    d = _AxisDesign(_readonly(tita), a_r, Hc, M, _equilibrate(Hc), _equilibrated_cond(H),
+                    float(np.ptp(a_r)))
+    _DESIGN_CACHE[key] = d
+    while len(_DESIGN_CACHE) > DESIGN_CACHE_SIZE:
+        _DESIGN_CACHE.popitem(last=False)
+    return d
 
 
 def _blind(a_r: np.ndarray, g: float) -> bool:
@@ -426,8 +489,9 @@ def _blind(a_r: np.ndarray, g: float) -> bool:
     return float(np.ptp(a_r)) <= 1e-12 * abs(g)
 
 
-def _check_poor(a_r: np.ndarray, g: float, axis: str, fit: FitResult) -> None:
-    span = float(np.ptp(a_r))
+def _check_poor(a_r: np.ndarray, g: float, axis: str, fit: FitResult,
+                span: float | None = None) -> None:
+    span = float(np.ptp(a_r)) if span is None else span
     if span < POOR_SPAN_FRACTION * g or fit.cond > COND_WARN:
         warnings.warn(
             f"axis {axis}: the reference acceleration spans only {span:.3g} m/s² over the run "
@@ -472,12 +536,14 @@ def fit_axis(
     [0.1, 0.02]
     """
     tita = np.asarray(tita, dtype=float)
-    a_r = reference_accel(tita, g)[:, AXES.index(axis)]
-    H = np.column_stack([np.ones_like(a_r), a_r])
     try:
-        if _blind(a_r, g):
-            raise NotIdentifiableError(f"A_r{axis} constant to rounding")
-        fit = fit_linear(H, np.asarray(a_m, dtype=float) - a_r, PARAM_NAMES, sigma2)
+        d = _axis_design(tita, axis, g)
+        a_r = d.a_r
+        y = np.asarray(a_m, dtype=float) - a_r
+        if y.shape != a_r.shape:
+            raise ValueError(f"y must have shape {a_r.shape}, got {y.shape}")
+        fit = _fit_centred(d.Hc, d.M, y, PARAM_NAMES, sigma2, lambda: d.cond,
+                           d.equilibrated)
     except NotIdentifiableError as exc:
         raise NotIdentifiableError(
             f"axis {axis}: cannot identify scale_{axis} (bias_{axis} and scale_{axis} are "
@@ -485,7 +551,7 @@ def fit_axis(
             f"({'-g sin θ' if axis == 'x' else '-g cos θ'}); use at least two θ with "
             f"different A_r{axis}. [{exc}]"
         ) from None
-    _check_poor(a_r, g, axis, fit)
+    _check_poor(a_r, g, axis, fit, d.span)
     return fit
 
 
