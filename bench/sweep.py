@@ -21,6 +21,9 @@ from typing import Any
 
 from calib.runs import Mapper, serial_map
 
+CONNECT_TIMEOUT = "10s"
+"""How long a sweep waits for the dask scheduler before it gives up with an OSError."""
+
 
 def default_workers() -> int:
     """The local pool's size when none is given: the machine's cores."""
@@ -59,13 +62,19 @@ def dask_map(scheduler: str) -> Mapper:
     try:
         from dask.distributed import Client, as_completed
     except ImportError as exc:  # the optional extra is missing
-        raise RuntimeError('--scheduler needs dask.distributed: pip install "tiltbench[cluster]"'
-                           ) from exc
+        raise ModuleNotFoundError('--scheduler needs dask.distributed: pip install '
+                                  '"tiltbench[cluster]"') from exc
 
     def run(fn: Callable[[Any], Any], tasks: Sequence[Any],
             progress: Callable[[int, int], None] | None = None) -> list:
         tasks = list(tasks)
-        with Client(scheduler) as client:
+        try:
+            client = Client(scheduler, timeout=CONNECT_TIMEOUT)
+        except OSError as exc:  # nothing listening, wrong host, a firewall
+            raise OSError(f"cannot reach the dask scheduler at {scheduler} within "
+                          f"{CONNECT_TIMEOUT} ({exc}); start it with `dask scheduler` and "
+                          "check the address") from None
+        with client:
             futures = client.map(fn, tasks, pure=False)
             index = {f.key: i for i, f in enumerate(futures)}
             out: list[Any] = [None] * len(tasks)
