@@ -51,20 +51,74 @@ def _ro(a) -> np.ndarray:
     return arr
 
 
-@dataclass(frozen=True)
-class _Plan:
-    """What a chunk task needs (picklable): the Q factors, the solution maps, σ, truth."""
+@dataclass(frozen=True, eq=False)
+class BatchDesign:
+    """A calibration design factored once, for many runs (module docstring for the equations).
 
-    q: np.ndarray         # (2, N, 2): Q_x, Q_y (orthonormal columns)
-    maps: np.ndarray      # (2, 2, 2): A_x, A_y
-    sd: np.ndarray        # (2,) σ_x, σ_y (m/s²)
-    truth: np.ndarray     # (4,) [bias_x, scale_x, bias_y, scale_y]
+    Use it directly to calibrate runs whose noise is drawn elsewhere (e.g. a run that also
+    draws vehicle readings from the same stream): per run ``z, ss = design.reduce(v)`` on the
+    (N, 2) standard-normal draws, then ``design.estimates(Z, SS, truth, sd)`` for a batch.
+
+    Attributes
+    ----------
+    q : (2, N, 2) ``Q_x``, ``Q_y`` (orthonormal columns of each axis' design).
+    maps : (2, 2, 2) ``A_x``, ``A_y`` (``p̂ = A Qᵀy``).  cov1 : (2, 2, 2) ``A Aᵀ`` (σ² = 1).
+    n : samples N.  g : m/s².
+    """
+
+    q: np.ndarray
+    maps: np.ndarray
+    cov1: np.ndarray
     n: int
-    seed: int
-    spawn_key: tuple[int, ...]
+    g: float
+
+    def reduce(self, v: np.ndarray, z: np.ndarray | None = None,
+               ss: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(Qᵀv per axis (4,), ‖v_a‖² (2,))`` of one run's (N, 2) draws (into z, ss)."""
+        z = np.empty(4) if z is None else z
+        ss = np.empty(2) if ss is None else ss
+        vx, vy = v[:, 0], v[:, 1]
+        z[0:2], z[2:4] = vx @ self.q[0], vy @ self.q[1]
+        ss[0], ss[1] = vx @ vx, vy @ vy
+        return z, ss
+
+    def estimates(self, z: np.ndarray, ss: np.ndarray, truth, sd
+                  ) -> tuple[np.ndarray, np.ndarray]:
+        """``(p̂ (r, 4), RSS (r, 2))`` from the reduced draws of r runs.
+
+        ``truth`` (4,) ``[bias_x, scale_x, bias_y, scale_y]``; ``sd`` (2,) σ (m/s²).
+        Element-wise (not a GEMM over the runs): a run's numbers must not depend on how many
+        runs are computed with it, and BLAS kernels may round differently by matrix size.
+        """
+        z = np.atleast_2d(z)
+        ss = np.atleast_2d(ss)
+        truth = np.asarray(truth, dtype=float)
+        sd = np.asarray(sd, dtype=float)
+        params = np.empty((z.shape[0], 4))
+        rss = np.empty((z.shape[0], 2))
+        for a in range(2):
+            z0, z1 = z[:, 2 * a], z[:, 2 * a + 1]
+            A = self.maps[a]
+            for i in range(2):
+                params[:, 2 * a + i] = truth[2 * a + i] + sd[a] * (A[i, 0] * z0 + A[i, 1] * z1)
+            rss[:, a] = sd[a] ** 2 * (ss[:, a] - (z0 * z0 + z1 * z1))
+        return params, rss
 
 
-def _generator(seed: int, spawn_key: tuple[int, ...], k: int) -> np.random.Generator:
+def batch_design(theta: np.ndarray, g: float = G) -> BatchDesign:
+    """Factor the per-axis course designs of ``theta`` (rad) once (:func:`calib.ls.axis_factor`;
+    raises :class:`calib.ls.NotIdentifiableError` like ``calibrate``)."""
+    theta = np.asarray(theta, dtype=float).ravel()
+    q = np.empty((2, theta.size, 2))
+    maps = np.empty((2, 2, 2))
+    cov1 = np.empty((2, 2, 2))
+    for a, ax in enumerate(AXES):
+        _, fac = axis_factor(theta, ax, g)
+        q[a], maps[a], cov1[a] = fac.q, fac.solve_map, fac.cov1
+    return BatchDesign(q, maps, cov1, int(theta.size), float(g))
+
+
+def run_generator(seed: int, k: int, spawn_key: tuple[int, ...] = ()) -> np.random.Generator:
     """Run k's generator: the k-th child of ``run_seeds(seed, ·, spawn_key)`` (a child's
     state depends on ``(seed, spawn_key + (k,))`` only, so it is built directly)."""
     ss = np.random.SeedSequence(int(seed), spawn_key=(*spawn_key, int(k)))
@@ -76,41 +130,25 @@ def draw_noise(seed: int, runs: range, n: int, spawn_key: tuple[int, ...] = ()) 
     buf = np.empty((len(runs), n, 2))
     key = tuple(int(k) for k in spawn_key)
     for j, k in enumerate(runs):
-        _generator(seed, key, k).standard_normal(out=buf[j])
+        run_generator(seed, k, key).standard_normal(out=buf[j])
     return buf
 
 
-def _chunk(task: tuple[_Plan, range]) -> tuple[np.ndarray, np.ndarray]:
+def _chunk(task: tuple) -> tuple[np.ndarray, np.ndarray]:
     """One chunk: ``(p̂ (r, 4), RSS (r, 2))`` of the runs in the range.
 
-    Each run is drawn into one reused (N, 2) buffer (hot in cache) and reduced at once to
-    ``Qᵀv`` (two matrix-vector products) and ``‖v‖²`` per axis; the estimates of the whole
-    chunk are then one small product per axis (module docstring).
+    Each run is drawn into one reused (N, 2) buffer and reduced at once, while in cache, to
+    ``Qᵀv`` and ``‖v‖²`` per axis (:meth:`BatchDesign.reduce`); the estimates of the chunk
+    follow element-wise (:meth:`BatchDesign.estimates`).
     """
-    plan, runs = task
-    key = tuple(plan.spawn_key)
-    r = len(runs)
-    v = np.empty((plan.n, 2))
-    vx, vy = v[:, 0], v[:, 1]
-    qx, qy = plan.q
-    z = np.empty((r, 4))
-    ss = np.empty((r, 2))
+    design, truth, sd, seed, key, runs = task
+    v = np.empty((design.n, 2))
+    z = np.empty((len(runs), 4))
+    ss = np.empty((len(runs), 2))
     for j, k in enumerate(runs):
-        _generator(plan.seed, key, k).standard_normal(out=v)
-        z[j, 0:2], z[j, 2:4] = vx @ qx, vy @ qy
-        ss[j, 0], ss[j, 1] = vx @ vx, vy @ vy
-    params = np.empty((r, 4))
-    rss = np.empty((r, 2))
-    # Element-wise (not a GEMM over the chunk): a run's numbers must not depend on how many
-    # runs share its chunk, and BLAS kernels may round differently by matrix size.
-    for a in range(2):
-        z0, z1 = z[:, 2 * a], z[:, 2 * a + 1]
-        A = plan.maps[a]
-        for i in range(2):
-            params[:, 2 * a + i] = plan.truth[2 * a + i] + plan.sd[a] * (A[i, 0] * z0
-                                                                         + A[i, 1] * z1)
-        rss[:, a] = plan.sd[a] ** 2 * (ss[:, a] - (z0 * z0 + z1 * z1))
-    return params, rss
+        run_generator(seed, k, key).standard_normal(out=v)
+        design.reduce(v, z[j], ss[j])
+    return design.estimates(z, ss, truth, sd)
 
 
 @dataclass(frozen=True, eq=False)
@@ -279,23 +317,18 @@ def simulate_calibrations(
     bias = np.asarray(bias, dtype=float).reshape(2)
     scale = np.asarray(scale, dtype=float).reshape(2)
     n = theta.size
-    q = np.empty((2, n, 2))
-    maps = np.empty((2, 2, 2))
-    cov1 = np.empty((2, 2, 2))
-    for a, ax in enumerate(AXES):
-        _, fac = axis_factor(theta, ax, g)
-        q[a] = fac.q
-        maps[a], cov1[a] = fac.solve_map, fac.cov1
+    design = batch_design(theta, g)
     truth = np.array([bias[0], scale[0], bias[1], scale[1]])
-    plan = _Plan(q, maps, np.sqrt(nv), truth, n, int(seed), tuple(spawn_key))
-    parts = mapper(_chunk, [(plan, r) for r in chunk_ranges(int(runs), int(chunk))], progress)
+    tasks = [(design, truth, np.sqrt(nv), int(seed), tuple(int(k) for k in spawn_key), r)
+             for r in chunk_ranges(int(runs), int(chunk))]
+    parts = mapper(_chunk, tasks, progress)
     params = np.concatenate([p for p, _ in parts])
     rss = np.concatenate([r for _, r in parts])
     if sigma2 == "given":
         s2 = np.broadcast_to(nv, rss.shape).copy()
     else:
         s2 = rss / (n - 2)
-    return MonteCarloResult(params, s2, rss / s2, cov1, truth, n, sigma2, int(seed),
+    return MonteCarloResult(params, s2, rss / s2, design.cov1, truth, n, sigma2, int(seed),
                             tuple(spawn_key), float(g))
 
 
@@ -311,4 +344,5 @@ def synthetic_readings(theta: np.ndarray, bias, scale, noise_var, seed: int, k: 
     return clean + np.sqrt(np.asarray(noise_var, dtype=float)) * v
 
 
-__all__ = ["MonteCarloResult", "draw_noise", "simulate_calibrations", "synthetic_readings"]
+__all__ = ["BatchDesign", "MonteCarloResult", "batch_design", "draw_noise", "run_generator",
+           "simulate_calibrations", "synthetic_readings"]

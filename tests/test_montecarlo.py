@@ -160,3 +160,22 @@ def test_bad_input():
     from calib.ls import NotIdentifiableError
     with pytest.raises(NotIdentifiableError, match="scale_x"):
         simulate_calibrations(np.zeros(10), BIAS, SCALE, NV, 3, 0)
+
+
+def test_batch_design_on_noise_drawn_elsewhere():
+    """The engine's pieces on draws made by the caller (e.g. a run that also draws vehicle
+    readings from the same generator, as calib.nmin does) equal calibrate()."""
+    from calib.conventions import reference_accel
+    from calib.correct import apply_errors
+    from calib.montecarlo import batch_design
+
+    design = batch_design(THETA)
+    v = np.random.default_rng(4).standard_normal((THETA.size, 2))
+    z, ss = design.reduce(v)
+    truth = [BIAS[0], SCALE[0], BIAS[1], SCALE[1]]
+    params, rss = design.estimates(z, ss, truth, np.sqrt(NV))
+    datos = apply_errors(reference_accel(THETA), BIAS, SCALE) + np.sqrt(NV) * v
+    cal = calibrate(Ensayo(THETA, datos), NV)
+    np.testing.assert_allclose(params[0], cal.params, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(rss[0] / np.array(NV), [cal.fits[a].chi2 for a in "xy"],
+                               rtol=1e-12)
