@@ -61,12 +61,13 @@ class BatchDesign:
 
     Attributes
     ----------
-    q : (2, N, 2) ``Q_x``, ``Q_y`` (orthonormal columns of each axis' design).
+    qt : (2, 2, N) ``Q_xᵀ``, ``Q_yᵀ`` (Q: orthonormal columns of each axis' design; stored
+        transposed and contiguous: ``Qᵀv`` is then the fastest matrix-vector product).
     maps : (2, 2, 2) ``A_x``, ``A_y`` (``p̂ = A Qᵀy``).  cov1 : (2, 2, 2) ``A Aᵀ`` (σ² = 1).
     n : samples N.  g : m/s².
     """
 
-    q: np.ndarray
+    qt: np.ndarray
     maps: np.ndarray
     cov1: np.ndarray
     n: int
@@ -78,7 +79,7 @@ class BatchDesign:
         z = np.empty(4) if z is None else z
         ss = np.empty(2) if ss is None else ss
         vx, vy = v[:, 0], v[:, 1]
-        z[0:2], z[2:4] = vx @ self.q[0], vy @ self.q[1]
+        z[0:2], z[2:4] = self.qt[0] @ vx, self.qt[1] @ vy
         ss[0], ss[1] = vx @ vx, vy @ vy
         return z, ss
 
@@ -109,13 +110,13 @@ def batch_design(theta: np.ndarray, g: float = G) -> BatchDesign:
     """Factor the per-axis course designs of ``theta`` (rad) once (:func:`calib.ls.axis_factor`;
     raises :class:`calib.ls.NotIdentifiableError` like ``calibrate``)."""
     theta = np.asarray(theta, dtype=float).ravel()
-    q = np.empty((2, theta.size, 2))
+    qt = np.empty((2, 2, theta.size))
     maps = np.empty((2, 2, 2))
     cov1 = np.empty((2, 2, 2))
     for a, ax in enumerate(AXES):
         _, fac = axis_factor(theta, ax, g)
-        q[a], maps[a], cov1[a] = fac.q, fac.solve_map, fac.cov1
-    return BatchDesign(q, maps, cov1, int(theta.size), float(g))
+        qt[a], maps[a], cov1[a] = fac.q.T, fac.solve_map, fac.cov1
+    return BatchDesign(qt, maps, cov1, int(theta.size), float(g))
 
 
 def run_generator(seed: int, k: int, spawn_key: tuple[int, ...] = ()) -> np.random.Generator:
