@@ -179,3 +179,25 @@ def test_batch_design_on_noise_drawn_elsewhere():
     np.testing.assert_allclose(params[0], cal.params, rtol=0, atol=1e-12)
     np.testing.assert_allclose(rss[0] / np.array(NV), [cal.fits[a].chi2 for a in "xy"],
                                rtol=1e-12)
+
+
+def test_single_fit_design_cache_is_exact():
+    """calibrate()/fit_axis cache what depends on θ alone: a warm fit is bit-identical to a
+    cold one, and a θ with the same fingerprint (first, middle, last sample) but another
+    value elsewhere is not served the cached design."""
+    from calib.ls import _DESIGN_CACHE, fit_axis
+
+    y = synthetic_readings(THETA, BIAS, SCALE, NV, 1, 0)[:, 0]
+    _DESIGN_CACHE.clear()
+    cold = fit_axis(THETA, y, "x", 0.25)
+    warm = fit_axis(THETA, y, "x", 0.25)
+    for name in ("params", "cov", "residuals"):
+        assert np.array_equal(getattr(cold, name), getattr(warm, name))
+    assert cold.cond == warm.cond and cold.chi2 == warm.chi2
+    other = THETA.copy()
+    other[5] += 1e-3
+    served = fit_axis(other, y, "x", 0.25)
+    _DESIGN_CACHE.clear()
+    fresh = fit_axis(other, y, "x", 0.25)
+    assert np.array_equal(served.params, fresh.params)
+    assert not np.array_equal(served.params, cold.params)
