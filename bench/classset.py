@@ -117,9 +117,9 @@ def _student_set(task: tuple) -> tuple[dict[str, bytes], dict]:
     return files, course.truth()
 
 
-CLASS_BLOCK = 32
-"""Students generated per mapper call: bounds the files held in memory (≈ 0.7 MB each) while
-the pool stays busy."""
+CLASS_BLOCK = 64
+"""Students generated per mapper call: bounds the files held in memory (≈ 0.7 MB each, so
+≈ 45 MB) while the pool stays busy (one pool start per block)."""
 
 
 def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = False,
