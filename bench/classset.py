@@ -36,6 +36,7 @@ import numpy as np
 
 from calib.atomic import atomic_dir, write_text
 from calib.io import DataError, dumps
+from calib.runs import Mapper, serial_map
 from calib.units import nest, with_units
 
 STUDENT_FILES = ("ensayo.mat", "acel.mat", "puntos.mat", "datos.txt")
@@ -97,9 +98,34 @@ def key_csv_text(rows: list[dict]) -> str:
     return buf.getvalue()
 
 
+def _student_set(task: tuple) -> tuple[dict[str, bytes], dict]:
+    """One student's course set, made in memory: ``({file name: bytes}, truth)``.
+
+    A sweep task (module level, picklable in and out): the files are written to a private
+    temporary folder of the worker and read back, so the task runs the same in this
+    process, a local pool or on a Dask worker of another machine; the caller writes them.
+    """
+    import tempfile
+
+    from bench.course import make_course_set, write_course_files
+
+    config, seed = task
+    course = make_course_set(config, seed)
+    with tempfile.TemporaryDirectory(prefix="tiltbench-student-") as tmp:
+        write_course_files(course, tmp, truth=False)
+        files = {f: (Path(tmp) / f).read_bytes() for f in STUDENT_FILES}
+    return files, course.truth()
+
+
+CLASS_BLOCK = 64
+"""Students generated per mapper call: bounds the files held in memory (≈ 0.7 MB each, so
+≈ 45 MB) while the pool stays busy (one pool start per block)."""
+
+
 def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = False,
                    config=None, prefix: str = "student",
-                   progress: Callable[[int, int], None] | None = None) -> ClassSet:
+                   progress: Callable[[int, int], None] | None = None,
+                   mapper: Mapper = serial_map) -> ClassSet:
     """Write ``count`` unique course sets and the private answer key into ``out``.
 
     Parameters
@@ -108,9 +134,10 @@ def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = Fal
     force : replace existing files (checked for every target before anything is written).
         The class directory is written as one set: see the comment in the body.
     config : :class:`bench.course.CourseConfig` shared by all sets (default: the course's).
-    prefix : folder prefix.  progress : called as ``progress(done, count)``.
+    prefix : folder prefix.  progress : called as ``progress(done, count)`` (students).
+    mapper : where the students' sets are made (:mod:`calib.runs`; a local process pool or a
+        Dask cluster from :mod:`bench.sweep`); the files do not depend on it.
     """
-    from bench.course import make_course_set, write_course_files
     from bench.dataset import truth_units, versions
 
     out = Path(out)
@@ -128,26 +155,29 @@ def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = Fal
     # is never written inside a student folder, not even for a moment. Student folders are
     # replaced whole (nothing of an old folder is carried into the new one).
     with atomic_dir(out, force, owned=owned, exclusive=names) as tmp:
-        for i, (name, s) in enumerate(zip(names, seeds, strict=True)):
-            folder = tmp / name
-            folder.mkdir()
-            course = make_course_set(config, s)
-            write_course_files(course, folder, truth=False)
-            # exactly what truth.json of `generate course --seed s` holds, read back
-            truth = json.loads(dumps({**course.truth(), "seed": int(s),
-                                      "versions": versions()}))
-            h = hashlib.sha256()
-            for f in STUDENT_FILES:
-                h.update((folder / f).read_bytes())
-            digest = h.hexdigest()
-            if digest in digests:
-                raise RuntimeError(f"{name} and {digests[digest]} got identical files")
-            digests[digest] = name
-            folders[name] = out / name
-            truths[name] = truth
-            rows.append(_row(name, s, truth))
-            if progress:
-                progress(i + 1, count)
+        for start in range(0, count, CLASS_BLOCK):
+            block = list(range(start, min(start + CLASS_BLOCK, count)))
+            report = None if progress is None else (
+                lambda done, _total, s=start: progress(s + done, count))
+            made = mapper(_student_set, [(config, seeds[i]) for i in block], report)
+            for i, (files, course_truth) in zip(block, made, strict=True):
+                name, s = names[i], seeds[i]
+                folder = tmp / name
+                folder.mkdir()
+                h = hashlib.sha256()
+                for f in STUDENT_FILES:
+                    (folder / f).write_bytes(files[f])
+                    h.update(files[f])
+                # exactly what truth.json of `generate course --seed s` holds, read back
+                truth = json.loads(dumps({**course_truth, "seed": int(s),
+                                          "versions": versions()}))
+                digest = h.hexdigest()
+                if digest in digests:
+                    raise RuntimeError(f"{name} and {digests[digest]} got identical files")
+                digests[digest] = name
+                folders[name] = out / name
+                truths[name] = truth
+                rows.append(_row(name, s, truth))
         write_text(tmp / KEY_CSV, key_csv_text(rows), force=True)
         key = {"kind": "class", "class_seed": int(seed), "count": int(count),
                "seed_derivation": "SeedSequence(class_seed).spawn(count)[i]"

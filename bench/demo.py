@@ -39,7 +39,6 @@ import numpy as np
 from calib.atomic import atomic_dir, write_text
 from calib.calibration import Calibration, calibrate
 from calib.conventions import AXES, G
-from calib.correct import apply_errors
 from calib.io import (
     Acel,
     Ensayo,
@@ -50,6 +49,7 @@ from calib.io import (
     read_puntos,
 )
 from calib.region import ArrivalRegion, arrival_region
+from calib.runs import Mapper, serial_map
 from calib.trajectory import Trajectory, compute_trajectory
 from calib.trajectory_report import trajectory_tree
 
@@ -138,45 +138,56 @@ def analyze_course_dir(course_dir: str | Path, level: float = DEFAULT_LEVEL,
                           traj, region, method, [str(w.message) for w in caught])
 
 
+def _count_progress(progress, what: str) -> Callable[[int, int], None] | None:
+    """``progress(done, total)`` for a sweep: a :class:`bench.cli.progress.Progress` counter
+    when the caller passed one, else a line per update, else None."""
+    if progress is None:
+        return None
+    if hasattr(progress, "count"):
+        return lambda done, total: progress.count(done, total, what)
+    return lambda done, total: progress(f"{what} {done}/{total}")
+
+
 def coverage_check(truth: dict, runs: int = COVERAGE_RUNS, level: float = COVERAGE_LEVEL,
-                   seed: int = 0) -> dict:
+                   seed: int = 0, mapper: Mapper = serial_map,
+                   progress: Callable[[int, int], None] | None = None) -> dict:
     """Pass rate of :func:`bench.validate.validate` on fresh synthetic calibrations.
 
     Each run redraws the readings of the truth's design (θ rebuilt from ``truth.json``) with
     the course model and the true parameters (numpy, no MuJoCo: the static table reproduces
     ``[-g sin θ, -g cos θ]`` to 1e-15), calibrates with known σ² and applies the joint test.
+    The runs are the batched engine :func:`calib.montecarlo.simulate_calibrations` (run k's
+    stream: ``SeedSequence(seed, spawn_key=(7, k))``, the same draws as a loop of
+    ``calibrate()``; ``mapper`` and the chunking do not change the numbers). The joint test
+    ``d² = eᵀΣ⁻¹e ≤ χ²₄(level)`` and the per-parameter ``|z| ≤ q`` are evaluated for all runs
+    at once; the constants of the test (quantiles, the std check, which is the same for
+    every run since σ² is known) come from :func:`bench.validate.validate` on run 0.
     An honest estimator passes with probability ``level``; the binomial tolerance is
     ``4·sqrt(level(1 − level)/runs)``.
     """
     from bench.validate import design_theta, true_sensor_params, validate
-    from calib.conventions import reference_accel
+    from calib.montecarlo import simulate_calibrations
 
     tp = true_sensor_params(truth)
     if tp is None:
         raise ValueError("truth has no sensor parameters")
     theta = design_theta(truth)
     g = float(truth.get("course", {}).get("g", truth.get("g", G)))
-    a_r = reference_accel(theta, g)
     scale = np.array([tp["scale_x"], tp["scale_y"]])
     bias = np.array([tp["bias_x"], tp["bias_y"]])
     nv = np.array([tp["noise_var_x"], tp["noise_var_y"]])
-    clean = apply_errors(a_r, bias, scale)
-    passed = 0
-    each = np.zeros(4)
     # spawn_key (7,): a stream family of its own, independent of the course set's streams
-    for ss in np.random.SeedSequence(seed, spawn_key=(7,)).spawn(runs):
-        rng = np.random.default_rng(ss)
-        datos = clean + np.sqrt(nv) * rng.standard_normal(clean.shape)
-        cal = calibrate(Ensayo(theta, datos), nv, "ols", g)
-        v = validate(truth, cal.to_dict(), level)
-        passed += v.passed
-        each += v.passed_each
+    mc = simulate_calibrations(theta, bias, scale, nv, runs, seed, "given", g, spawn_key=(7,),
+                               mapper=mapper, progress=progress)
+    v0 = validate(truth, mc.estimates(0), level)
+    each = np.abs(mc.errors() / v0.std) <= v0.quantile
+    passed = (mc.nees() <= v0.chi2_limit) & (v0.std_passed is not False)
     tol = 4.0 * np.sqrt(level * (1 - level) / runs)
-    rate = passed / runs
+    rate = int(passed.sum()) / runs
     return {"runs": runs, "level": level, "pass_rate": rate, "tolerance": tol,
             "consistent": bool(abs(rate - level) <= tol),
             "pass_rate_each": dict(zip(("bias_x", "scale_x", "bias_y", "scale_y"),
-                                       (each / runs).tolist(), strict=True)),
+                                       (each.sum(axis=0) / runs).tolist(), strict=True)),
             "n": int(theta.size), "seed": seed}
 
 
@@ -382,7 +393,8 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
              course_data: str | Path | None = None, level: float = DEFAULT_LEVEL,
              coverage_runs: int = COVERAGE_RUNS,
              progress: Callable[[str], None] | None = None,
-             formats: tuple[str, ...] = FIGURE_FORMATS) -> DemoResult:
+             formats: tuple[str, ...] = FIGURE_FORMATS,
+             mapper: Mapper = serial_map) -> DemoResult:
     """Run the demo (module docstring); return what was written and computed.
 
     Parameters
@@ -397,6 +409,7 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
     progress : called with one line of text at the start and at the end of each step (None:
         silent); the command line passes :class:`bench.cli.progress.Progress`.
     formats : figure formats written side by side ("png", "svg").
+    mapper : where the coverage check's runs execute (:mod:`calib.runs`; same numbers).
     """
     from bench.validate import validate
 
@@ -440,7 +453,8 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
                 _write_json(work, "validation.json", val.to_dict(), files)
             if generate and coverage_runs > 0:
                 with steps.step():
-                    cov = coverage_check(truth.manifest, coverage_runs, COVERAGE_LEVEL, seed)
+                    cov = coverage_check(truth.manifest, coverage_runs, COVERAGE_LEVEL, seed,
+                                         mapper, _count_progress(progress, "coverage chunks"))
         with steps.step():
             fusion = fusion_step(ana, truth.fixes, data_dir, seed if generate else None)
         with steps.step():

@@ -10,6 +10,10 @@
 3. Calibration fit (N = 20001): ``calib.ls.fit_axis`` (centred design, one Householder QR of
    the augmented design for solution, rank and covariance, plus the condition number) against
    the MATLAB-style normal equations ``inv(HᵀH)Hᵀy`` — the price of the safe numerics.
+
+``make bench`` also runs ``benchmarks/mc_speed.py``: the batched Monte Carlo and a single
+``calibrate()`` against the cost of drawing their random numbers (targets printed with
+PASS/FAIL).
 """
 
 from __future__ import annotations

@@ -19,6 +19,7 @@ identified one warns with the condition number and the resulting standard deviat
 from __future__ import annotations
 
 import warnings
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -216,8 +217,17 @@ def _equilibrated_cond(H: np.ndarray) -> float:
     return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
 
 
+def _equilibrate(Hc: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(norms, scale, Hs)``: column norms of ``Hc``, the divisors (1 for a zero column) and
+    the equilibrated ``Hs = Hc / scale`` (unit-norm columns)."""
+    norms = np.linalg.norm(Hc, axis=0)
+    scale = np.where(norms > 0, norms, 1.0)
+    return norms, scale, Hc / scale
+
+
 def _solve_centred(
-    Hc: np.ndarray, y: np.ndarray, M: np.ndarray, names: tuple[str, ...]
+    Hc: np.ndarray, y: np.ndarray, M: np.ndarray, names: tuple[str, ...],
+    equilibrated: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """Solve ``y ≈ Hc p_c`` (rows already whitened), return ``p = M p_c``, unit covariance.
 
@@ -227,9 +237,7 @@ def _solve_centred(
     cut-off (singular values below ``eps·max(n, p)·s_max``).
     """
     n, p = Hc.shape
-    norms = np.linalg.norm(Hc, axis=0)
-    scale = np.where(norms > 0, norms, 1.0)
-    Hs = Hc / scale
+    norms, scale, Hs = _equilibrate(Hc) if equilibrated is None else equilibrated
     aug = np.empty((n, p + 1), order="F")
     aug[:, :p], aug[:, p] = Hs, y
     Ra = _r_factor(aug)
@@ -259,6 +267,115 @@ def _raise_rank(Hs: np.ndarray, names: tuple[str, ...], M: np.ndarray) -> None:
         + " / ".join(involved)
         + " (they are confounded in this experiment; the design needs more distinct θ)"
     )
+
+
+def centre_design(
+    H: np.ndarray, names: tuple[str, ...], intercept: int | None = 0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Centre the regressors on the intercept: ``H = Hc M⁻¹``, i.e. ``p = M p_c``.
+
+    Column ``intercept`` (all ones) stays; every other column ``j`` becomes
+    ``H[:, j] - mean_j`` and ``M[intercept, j] = -mean_j`` (``p_intercept = p_c,intercept -
+    Σ mean_j p_j``), an exact reparametrisation that keeps the digits of a regressor with a
+    large constant offset (``A_ry ≈ -g`` for small θ).
+
+    Raises
+    ------
+    ValueError : column ``intercept`` is not all ones.
+    NotIdentifiableError : a regressor is constant over the run (collinear with the intercept).
+    """
+    H = np.asarray(H, dtype=float, order="F")
+    p = H.shape[1]
+    M = np.eye(p)
+    Hc = H.copy(order="F")
+    if intercept is not None:
+        if not np.all(H[:, intercept] == 1.0):
+            raise ValueError(f"column {intercept} is not an intercept (all ones)")
+        means = H.mean(axis=0)
+        for j in range(p):
+            if j != intercept:
+                Hc[:, j] = H[:, j] - means[j]
+                M[intercept, j] = -means[j]  # p_intercept = p_c,intercept - Σ mean_j p_j
+    # A regressor that is constant over the run is exactly collinear with the intercept.
+    for j in range(p):
+        if intercept is not None and j != intercept and np.ptp(H[:, j]) == 0.0:
+            raise NotIdentifiableError(
+                f"cannot identify '{names[j]}': its regressor is constant over the run, so it "
+                f"is confounded with '{names[intercept]}' (all θ equal?); use at least two "
+                "distinct θ"
+            )
+    return Hc, M
+
+
+@dataclass(frozen=True, eq=False)
+class DesignFactor:
+    """The part of an OLS fit that depends on the design only (for many ``y`` at once).
+
+    With the centred (:func:`centre_design`), column-equilibrated design
+    ``Hs = Hc D⁻¹ = Q R`` (reduced Householder QR, ``Q`` (n, p) orthonormal columns):
+
+    * solution ``p̂ = A Qᵀy`` with ``A = M D⁻¹ R⁻¹`` (``solve_map``),
+    * unit covariance ``cov1 = A Aᵀ`` (multiply by σ²), never ``(HᵀH)⁻¹``,
+    * residual sum of squares ``RSS = ‖y‖² − ‖Qᵀy‖²`` (Pythagoras: ``y − Q Qᵀy ⊥ Q``).
+
+    These are the equations of :func:`fit_linear` (same centring, scaling and rank rule);
+    there the QR is of the augmented ``[Hs | y]``, so the two agree to rounding (≈ 1e-15
+    relative), not bit for bit.
+    """
+
+    q: np.ndarray
+    solve_map: np.ndarray
+    cov1: np.ndarray
+    rank: int
+    cond: float
+
+    def __post_init__(self) -> None:
+        for name in ("q", "solve_map", "cov1"):
+            object.__setattr__(self, name, _readonly(getattr(self, name)))
+
+
+def factor_design(
+    H: np.ndarray, names: tuple[str, ...], intercept: int | None = 0
+) -> DesignFactor:
+    """Factor the design ``H`` (n, p) once (:class:`DesignFactor`); the rank and
+    identifiability checks of :func:`fit_linear` apply (``NotIdentifiableError``)."""
+    H = np.asarray(H, dtype=float, order="F")
+    n, p = H.shape
+    if n <= p:
+        raise NotIdentifiableError(
+            f"{n} samples cannot identify {p} parameters ({', '.join(names)})")
+    Hc, M = centre_design(H, names, intercept)
+    norms, scale, Hs = _equilibrate(Hc)
+    Q, R = np.linalg.qr(Hs)
+    sv = np.linalg.svd(R, compute_uv=False)
+    rank = int(np.sum(sv > sv[0] * max(n, p) * np.finfo(float).eps)) if sv[0] > 0 else 0
+    if rank < p or np.any(norms == 0):
+        _raise_rank(Hs, names, M)
+    A = (M / scale) @ sla.solve_triangular(R, np.eye(p))
+    cov1 = A @ A.T
+    return DesignFactor(q=Q, solve_map=A, cov1=0.5 * (cov1 + cov1.T), rank=rank,
+                        cond=_equilibrated_cond(H))
+
+
+def axis_factor(tita: np.ndarray, axis: str = "x", g: float = G
+                ) -> tuple[np.ndarray, DesignFactor]:
+    """``(A_r, factor)`` of the per-axis course design ``H = [1, A_r]`` (:func:`fit_axis`).
+
+    ``A_r`` (N,) m/s² is ``-g sin θ`` (x) or ``-g cos θ`` (y). Raises
+    :class:`NotIdentifiableError` as :func:`fit_axis` does when every θ gives the same A_r.
+    """
+    tita = np.asarray(tita, dtype=float)
+    a_r = reference_accel(tita, g)[:, AXES.index(axis)]
+    try:
+        if _blind(a_r, g):
+            raise NotIdentifiableError(f"A_r{axis} constant to rounding")
+        fac = factor_design(np.column_stack([np.ones_like(a_r), a_r]), PARAM_NAMES)
+    except NotIdentifiableError as exc:
+        raise NotIdentifiableError(
+            f"axis {axis}: cannot identify scale_{axis} (bias_{axis} and scale_{axis} are "
+            f"confounded): every θ gives the same A_r{axis}; use at least two θ with "
+            f"different A_r{axis}. [{exc}]") from None
+    return a_r, fac
 
 
 def fit_linear(
@@ -292,25 +409,17 @@ def fit_linear(
     if n <= p:
         raise NotIdentifiableError(
             f"{n} samples cannot identify {p} parameters ({', '.join(names)})")
-    M = np.eye(p)
-    Hc = H.copy(order="F")
-    if intercept is not None:
-        if not np.all(H[:, intercept] == 1.0):
-            raise ValueError(f"column {intercept} is not an intercept (all ones)")
-        means = H.mean(axis=0)
-        for j in range(p):
-            if j != intercept:
-                Hc[:, j] = H[:, j] - means[j]
-                M[intercept, j] = -means[j]  # p_intercept = p_c,intercept - Σ mean_j p_j
-    # A regressor that is constant over the run is exactly collinear with the intercept.
-    for j in range(p):
-        if intercept is not None and j != intercept and np.ptp(H[:, j]) == 0.0:
-            raise NotIdentifiableError(
-                f"cannot identify '{names[j]}': its regressor is constant over the run, so it "
-                f"is confounded with '{names[intercept]}' (all θ equal?); use at least two "
-                "distinct θ"
-            )
-    params, cov1, resid, rank = _solve_centred(Hc, y, M, names)
+    Hc, M = centre_design(H, names, intercept)
+    return _fit_centred(Hc, M, y, names, sigma2, lambda: _equilibrated_cond(H))
+
+
+def _fit_centred(Hc: np.ndarray, M: np.ndarray, y: np.ndarray, names: tuple[str, ...],
+                 sigma2: float | None, cond, equilibrated=None) -> FitResult:
+    """The data-dependent half of :func:`fit_linear` (``Hc``, ``M`` from
+    :func:`centre_design`; ``cond()`` gives the design's condition number; ``equilibrated``
+    :func:`_equilibrate` of ``Hc`` if already known)."""
+    n, p = Hc.shape
+    params, cov1, resid, rank = _solve_centred(Hc, y, M, names, equilibrated)
     rss = float(resid @ resid)
     dof = n - p
     if sigma2 is None:
@@ -322,8 +431,58 @@ def fit_linear(
     return FitResult(
         param_names=tuple(names), params=params, cov=s2 * cov1, residuals=resid,
         sigma2=np.array(s2), sigma2_source=source, dof=dof, rank=rank,
-        cond=_equilibrated_cond(H), chi2=rss / s2,
+        cond=cond(), chi2=rss / s2,
     )
+
+
+@dataclass(frozen=True, eq=False)
+class _AxisDesign:
+    """Everything :func:`fit_axis` computes from θ alone (reference, centred design, its
+    condition number, the span of ``A_r``): cached so a refit of the same design does only the
+    data-dependent work, with the same operations (bit-identical results)."""
+
+    tita: np.ndarray
+    a_r: np.ndarray
+    Hc: np.ndarray
+    M: np.ndarray
+    equilibrated: tuple[np.ndarray, np.ndarray, np.ndarray]
+    cond: float
+    span: float
+
+
+DESIGN_CACHE_SIZE = 8
+"""Designs (θ, g, axis) kept by :func:`fit_axis`: ≈ 1 MB each at N = 20001."""
+_DESIGN_CACHE: OrderedDict = OrderedDict()
+
+
+def _axis_design(tita: np.ndarray, axis: str, g: float) -> _AxisDesign:
+    """The cached :class:`_AxisDesign` of ``(θ, axis, g)``; the key is a cheap fingerprint
+    of θ (size, three samples) and a hit is confirmed by comparing θ itself (exact: no
+    collision can return another design). Raises :class:`NotIdentifiableError` (unwrapped;
+    :func:`fit_axis` words it)."""
+    n = tita.shape[0] if tita.ndim == 1 else -1
+    probe = (float(tita[0]), float(tita[n // 2]), float(tita[-1])) if n > 0 else ()
+    key = (tita.shape, probe, float(g), axis)
+    hit = _DESIGN_CACHE.get(key)
+    if hit is not None and np.array_equal(hit.tita, tita):
+        _DESIGN_CACHE.move_to_end(key)
+        return hit
+    a_r = reference_accel(tita, g)[:, AXES.index(axis)]
+    H = np.column_stack([np.ones_like(a_r), a_r])
+    if _blind(a_r, g):
+        raise NotIdentifiableError(f"A_r{axis} constant to rounding")
+    H = np.asarray(H, dtype=float, order="F")
+    n, p = H.shape
+    if n <= p:
+        raise NotIdentifiableError(
+            f"{n} samples cannot identify {p} parameters ({', '.join(PARAM_NAMES)})")
+    Hc, M = centre_design(H, PARAM_NAMES)
+    d = _AxisDesign(_readonly(tita), a_r, Hc, M, _equilibrate(Hc), _equilibrated_cond(H),
+                    float(np.ptp(a_r)))
+    _DESIGN_CACHE[key] = d
+    while len(_DESIGN_CACHE) > DESIGN_CACHE_SIZE:
+        _DESIGN_CACHE.popitem(last=False)
+    return d
 
 
 def _blind(a_r: np.ndarray, g: float) -> bool:
@@ -332,8 +491,9 @@ def _blind(a_r: np.ndarray, g: float) -> bool:
     return float(np.ptp(a_r)) <= 1e-12 * abs(g)
 
 
-def _check_poor(a_r: np.ndarray, g: float, axis: str, fit: FitResult) -> None:
-    span = float(np.ptp(a_r))
+def _check_poor(a_r: np.ndarray, g: float, axis: str, fit: FitResult,
+                span: float | None = None) -> None:
+    span = float(np.ptp(a_r)) if span is None else span
     if span < POOR_SPAN_FRACTION * g or fit.cond > COND_WARN:
         warnings.warn(
             f"axis {axis}: the reference acceleration spans only {span:.3g} m/s² over the run "
@@ -378,12 +538,14 @@ def fit_axis(
     [0.1, 0.02]
     """
     tita = np.asarray(tita, dtype=float)
-    a_r = reference_accel(tita, g)[:, AXES.index(axis)]
-    H = np.column_stack([np.ones_like(a_r), a_r])
     try:
-        if _blind(a_r, g):
-            raise NotIdentifiableError(f"A_r{axis} constant to rounding")
-        fit = fit_linear(H, np.asarray(a_m, dtype=float) - a_r, PARAM_NAMES, sigma2)
+        d = _axis_design(tita, axis, g)
+        a_r = d.a_r
+        y = np.asarray(a_m, dtype=float) - a_r
+        if y.shape != a_r.shape:
+            raise ValueError(f"y must have shape {a_r.shape}, got {y.shape}")
+        fit = _fit_centred(d.Hc, d.M, y, PARAM_NAMES, sigma2, lambda: d.cond,
+                           d.equilibrated)
     except NotIdentifiableError as exc:
         raise NotIdentifiableError(
             f"axis {axis}: cannot identify scale_{axis} (bias_{axis} and scale_{axis} are "
@@ -391,7 +553,7 @@ def fit_axis(
             f"({'-g sin θ' if axis == 'x' else '-g cos θ'}); use at least two θ with "
             f"different A_r{axis}. [{exc}]"
         ) from None
-    _check_poor(a_r, g, axis, fit)
+    _check_poor(a_r, g, axis, fit, d.span)
     return fit
 
 

@@ -4,7 +4,16 @@ from __future__ import annotations
 
 import argparse
 
-from bench.cli.options import Deferred, add_force, add_json, check_count, check_level, integer
+from bench.cli.options import (
+    Deferred,
+    add_force,
+    add_json,
+    add_sweep_options,
+    check_count,
+    check_level,
+    integer,
+    mapper_from_args,
+)
 from bench.cli.output import print_json
 from bench.cli.progress import Progress
 
@@ -78,7 +87,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     formats = ("png", "svg") if args.figures == "both" else (args.figures,)
     res = run_demo(args.out, args.seed, args.force, args.course_data, args.level,
                    args.coverage_runs, None if args.quiet else Progress("demo"),
-                   formats=formats)
+                   formats=formats, mapper=mapper_from_args(args))
     ok = res.recovered is not False and (res.validation is None or res.validation.passed)
     if args.json:
         print_json(_result_json(res, ok))
@@ -108,6 +117,7 @@ def register(sub) -> None:
                    help="fresh synthetic calibrations in the coverage check (0: skip)")
     p.add_argument("--figures", choices=["png", "svg", "both"], default="both",
                    help="figure format(s) written to OUT/figures")
+    add_sweep_options(p)
     add_json(p)
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(handler=_cmd_demo)

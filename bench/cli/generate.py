@@ -19,9 +19,11 @@ from bench.cli.options import (
     add_generate_common,
     add_gravity,
     add_sensor_options,
+    add_sweep_options,
     check_count,
     check_positive,
     integer,
+    mapper_from_args,
     parse_floats,
     parse_pair,
     parse_variances,
@@ -394,7 +396,8 @@ def _cmd_class(args: argparse.Namespace) -> int:
     progress = Progress("generate class")
     res = generate_class(args.out, args.students, args.seed, args.force,
                          CourseConfig(noise_var=(float(nv[0]), float(nv[1]))), args.prefix,
-                         lambda done, total: progress.count(done, total, "course sets"))
+                         lambda done, total: progress.count(done, total, "course sets"),
+                         mapper=mapper_from_args(args))
     files = {f"{name}/{p.name}": str(p) for name, folder in res.folders.items()
              for p in sorted(folder.iterdir())}
     summary = {"count": len(res.folders),
@@ -529,6 +532,7 @@ def _register_class(kinds) -> None:
     p.add_argument("--prefix", default="student", help="folder prefix (student_001, …)")
     p.add_argument("--noise-var", default=DEFAULT_NOISE,
                    help="noise variances x,y (m/s²)² of every set")
+    add_sweep_options(p)
     p.set_defaults(handler=_cmd_class)
 
 

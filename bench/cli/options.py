@@ -315,4 +315,9 @@ def mapper_from_args(args: argparse.Namespace):
     workers = getattr(args, "workers", None)
     if workers is not None:
         check_count(workers, "--workers")
-    return make_mapper(workers, getattr(args, "scheduler", None))
+    scheduler = getattr(args, "scheduler", None)
+    if scheduler is not None and not re.fullmatch(
+            r"(tcp|tls|ucx)://(\[[0-9A-Fa-f:.]+\]|[^\s/:\[\]]+):\d{1,5}", scheduler):
+        raise OptionError(f"--scheduler must be a scheduler address like "
+                          f"tcp://10.0.0.5:8786, got {scheduler!r}")
+    return make_mapper(workers, scheduler)
