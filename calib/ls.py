@@ -26,7 +26,7 @@ from typing import Literal
 import numpy as np
 from scipy import linalg as sla
 from scipy import stats
-from scipy.linalg import lapack
+from scipy.linalg import blas, lapack
 
 from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G, reference_accel
 from calib.results import ResultMixin
@@ -50,6 +50,10 @@ class PoorlyIdentifiedWarning(UserWarning):
 
 
 def _readonly(a) -> np.ndarray:
+    """A read-only float array of ``a``: a copy, unless ``a`` already is one (nobody can
+    change it then; the fast refit hands over its fresh residuals that way)."""
+    if isinstance(a, np.ndarray) and a.dtype == float and not a.flags.writeable:
+        return a
     arr = np.array(a, dtype=float)
     arr.setflags(write=False)
     return arr
@@ -437,16 +441,15 @@ def _fit_centred(Hc: np.ndarray, M: np.ndarray, y: np.ndarray, names: tuple[str,
 
 @dataclass(frozen=True, eq=False)
 class _AxisDesign:
-    """Everything :func:`fit_axis` computes from θ alone (reference, centred design, its
-    condition number, the span of ``A_r``): cached so a refit of the same design does only the
-    data-dependent work, with the same operations (bit-identical results)."""
+    """Everything :func:`fit_axis` computes from θ alone: the reference ``A_r``, the design's
+    :class:`DesignFactor` (``Q`` stored transposed, the solution map, the unit covariance, the
+    condition number) and the span of ``A_r``. Cached, so a refit of the same design does only
+    the data-dependent work (:func:`_refit`)."""
 
     tita: np.ndarray
     a_r: np.ndarray
-    Hc: np.ndarray
-    M: np.ndarray
-    equilibrated: tuple[np.ndarray, np.ndarray, np.ndarray]
-    cond: float
+    qt: np.ndarray
+    factor: DesignFactor
     span: float
 
 
@@ -476,13 +479,43 @@ def _axis_design(tita: np.ndarray, axis: str, g: float) -> _AxisDesign:
     if n <= p:
         raise NotIdentifiableError(
             f"{n} samples cannot identify {p} parameters ({', '.join(PARAM_NAMES)})")
-    Hc, M = centre_design(H, PARAM_NAMES)
-    d = _AxisDesign(_readonly(tita), a_r, Hc, M, _equilibrate(Hc), _equilibrated_cond(H),
+    fac = factor_design(H, PARAM_NAMES)
+    d = _AxisDesign(_readonly(tita), a_r, np.ascontiguousarray(fac.q.T), fac,
                     float(np.ptp(a_r)))
     _DESIGN_CACHE[key] = d
     while len(_DESIGN_CACHE) > DESIGN_CACHE_SIZE:
         _DESIGN_CACHE.popitem(last=False)
     return d
+
+
+def _refit(d: _AxisDesign, y: np.ndarray, sigma2: float | None) -> FitResult:
+    """The per-axis OLS of ``y = A_m - A_r`` (N,) on the factored design ``d``.
+
+    The equations of :class:`DesignFactor`: ``z = Qᵀy``, ``p̂ = A z``, residuals
+    ``r = y - Q z`` (the projection's complement, computed, not ``‖y‖² - ‖z‖²``, so small
+    residuals keep their digits), ``RSS = rᵀr``, covariance ``σ² A Aᵀ``; the same solution as
+    :func:`fit_linear` to rounding (≈ 1e-15 relative). ``y`` must be a fresh array: it
+    becomes the residuals. Cost: two passes over the data per axis (BLAS level 1–2).
+    """
+    fac = d.factor
+    n, p = y.shape[0], fac.solve_map.shape[0]
+    z = d.qt @ y
+    # y ← y - Q z in place (BLAS dgemv on Qᵀ's Fortran view, no temporary): the residuals
+    y = blas.dgemv(-1.0, d.qt.T, z, beta=1.0, y=y, overwrite_y=True)
+    y.setflags(write=False)
+    rss = float(y @ y)
+    dof = n - p
+    if sigma2 is None:
+        s2, source = rss / dof, "estimated"
+    else:
+        s2, source = float(sigma2), "given"
+        if not np.isfinite(s2) or s2 <= 0:
+            raise ValueError(f"noise variance must be positive and finite, got {sigma2}")
+    return FitResult(
+        param_names=PARAM_NAMES, params=fac.solve_map @ z, cov=s2 * fac.cov1, residuals=y,
+        sigma2=np.array(s2), sigma2_source=source, dof=dof, rank=fac.rank, cond=fac.cond,
+        chi2=rss / s2,
+    )
 
 
 def _blind(a_r: np.ndarray, g: float) -> bool:
@@ -544,8 +577,7 @@ def fit_axis(
         y = np.asarray(a_m, dtype=float) - a_r
         if y.shape != a_r.shape:
             raise ValueError(f"y must have shape {a_r.shape}, got {y.shape}")
-        fit = _fit_centred(d.Hc, d.M, y, PARAM_NAMES, sigma2, lambda: d.cond,
-                           d.equilibrated)
+        fit = _refit(d, y, sigma2)
     except NotIdentifiableError as exc:
         raise NotIdentifiableError(
             f"axis {axis}: cannot identify scale_{axis} (bias_{axis} and scale_{axis} are "
