@@ -948,8 +948,15 @@ def analyze_nmin(
     mc_n: Sequence[int] = (), runs: int = 0, seed: int = 0,
     progress: Callable[[str], None] | None = None, draws: int = 0, confirm_runs: int = 0,
     mapper: Mapper | None = None, count: Callable[[int, int], None] | None = None,
+    calibration: Calibration | None = None,
 ) -> NminResult:
     """The whole N analysis on one data set (e.g. the course files).
+
+    With ``calibration`` (a :class:`calib.Calibration`, e.g. loaded from a calibration file)
+    the estimates, σ² and N come from it and ``ensayo`` may be None: every part of the
+    analysis but the course's subsampling experiment needs only them (the sampling law and
+    the regenerated runs assume θ uniform over a turn, as everywhere here); the subsampling
+    re-fits every k-th sample of the ensayo, so it is skipped without one.
 
     Analytic design and a-posteriori N (module docstring), the course's subsampling
     experiment, and — when ``runs > 0`` — fresh synthetic runs at each N of ``mc_n`` (plus
@@ -960,7 +967,8 @@ def analyze_nmin(
 
     Parameters
     ----------
-    ensayo : the calibration run (``tita`` (N,) rad, ``datos`` (N, 2) m/s²).
+    ensayo : the calibration run (``tita`` (N,) rad, ``datos`` (N, 2) m/s²); None with
+        ``calibration``.
     acel : the vehicle run (``t`` (M,) s, ``aerr`` (M, 2) m/s²).
     candidates : name → (2,) candidate arrival point, m.
     p0 : (2,) initial position, m.  v0 : (2,) initial velocity, m/s.
@@ -975,6 +983,7 @@ def analyze_nmin(
         fixed-run answer (:func:`confirm_fixed_run`, when N ≤ ``CONFIRM_N_MAX``; 0: none).
     mapper : runs the regeneration (:mod:`calib.runs`; default in-process).
     count : ``count(done, total)`` chunks of the regeneration done.
+    calibration : use this calibration instead of fitting ``ensayo`` (see above).
 
     Returns
     -------
@@ -993,15 +1002,23 @@ def analyze_nmin(
     ('A', True)
     """
     say = progress or (lambda _msg: None)
-    cal = calibrate(ensayo, noise_var, method, g)  # type: ignore[arg-type]
+    if calibration is None:
+        if ensayo is None:
+            raise ValueError("analyze_nmin needs an ensayo or a calibration")
+        cal = calibrate(ensayo, noise_var, method, g)  # type: ignore[arg-type]
+    else:
+        cal = calibration
+        method, g = cal.method, cal.g
     traj = compute_trajectory(acel, cal, p0, v0, integrator)
     reg = arrival_region(traj, cal, candidates, noise_var, level)
     full = PositionCovModel.from_region(reg, g)
     calonly = PositionCovModel.from_region(reg, g, include_noise=False)
-    box1 = reg.course_box_bound * np.sqrt(ensayo.n)  # box ∝ 1/√N for uniform θ
-    say(f"subsampling the calibration (steps {list(steps)})")
-    rows = subsample_analysis(ensayo, acel, candidates, steps, p0, v0, noise_var, level,
-                              method, integrator, g) if steps else []
+    box1 = reg.course_box_bound * np.sqrt(cal.n)  # box ∝ 1/√N for uniform θ
+    rows = []
+    if steps and ensayo is not None:
+        say(f"subsampling the calibration (steps {list(steps)})")
+        rows = subsample_analysis(ensayo, acel, candidates, steps, p0, v0, noise_var, level,
+                                  method, integrator, g)
     design = design_nmin(candidates, full, level)
     truth = reg.decision or min(reg.mahalanobis, key=reg.mahalanobis.get)
     fixed: dict = {}
@@ -1030,7 +1047,7 @@ def analyze_nmin(
                                          seed + i, cal.bias, cal.scale, reg.noise_var, p0, v0,
                                          level, method, integrator, g))
     return NminResult(
-        level=level, n_data=ensayo.n, estimate=reg.estimate, decision=reg.decision,
+        level=level, n_data=cal.n, estimate=reg.estimate, decision=reg.decision,
         design=design,
         design_calibration_only=design_nmin(candidates, calonly, level),
         posterior=posterior_nrange(reg.estimate, candidates, full, level),

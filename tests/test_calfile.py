@@ -121,10 +121,23 @@ def test_trajectory_refuses_ensayo_and_calibration_together(saved, course_dir, c
     assert "not allowed with" in capsys.readouterr().err
 
 
-def test_nmin_refuses_a_calibration_file(saved, course_dir, capsys):
-    msg = _error(capsys, "nmin", "--calibration", saved / "cal.json",
-                 "--acel", course_dir / "acel.mat", "--puntos", course_dir / "puntos.mat")
-    assert "--ensayo" in msg and "θ design" in msg
+@pytest.mark.parametrize("name", ["cal.json", "cal.mat"])
+def test_nmin_takes_a_calibration_file(saved, course_dir, capsys, name):
+    """nmin --calibration gives the --ensayo answers but the subsampling, which needs the run
+    (skipped, and said on stderr)."""
+    common = ["--acel", course_dir / "acel.mat", "--puntos", course_dir / "puntos.mat",
+              "--datos", course_dir / "datos.txt", "--json", "--workers", "1",
+              "--confirm-runs", "200"]
+    rc, out, err = _run(capsys, "nmin", "--calibration", saved / name, *common)
+    assert rc == 0, err
+    assert "subsampling" in err and "skipped" in err
+    got = json.loads(out)
+    rc, out, _ = _run(capsys, "nmin", "--ensayo", course_dir / "ensayo.mat", "--steps", "1",
+                      *common)
+    want = json.loads(out)
+    assert got["subsample"] == [] and len(want["subsample"]) == 1
+    for key in set(want) - {"subsample"}:
+        assert got[key] == want[key], key
 
 
 def _edited(tmp_path, saved, edit) -> str:

@@ -2,9 +2,9 @@
 (:mod:`calib.nmin`). ``--json`` prints exactly one JSON object on stdout; progress goes to
 stderr.
 
-``--calibration cal.json`` is refused (exit 2, one line): every part of the analysis re-fits
-the calibration — on subsamples of the ensayo's θ design, and on fresh runs of that design —
-and a calibration file holds the estimates, not the design. Give ``--ensayo``.
+``--calibration cal.json|cal.mat`` replaces ``--ensayo``: the estimates, σ² and N come from
+the file. The course subsampling (``--steps``) re-fits every k-th sample of the calibration
+run, which a calibration file does not hold: it is skipped, and a progress line says so.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 
 from bench import limits
-from bench.cli.inputs import add_course_inputs, read_course_inputs
+from bench.cli.inputs import add_course_inputs, read_calibration_file, read_course_inputs
 from bench.cli.options import (
     Deferred,
     OptionError,
@@ -37,10 +37,6 @@ def _course_steps() -> str:
 def _cmd_nmin(args: argparse.Namespace) -> int:
     from calib.nmin import CONFIRM_N_MAX, analyze_nmin  # start-up time of `tiltbench --help`
 
-    if args.calibration:
-        raise OptionError(f"--calibration {args.calibration}: nmin re-fits the calibration on "
-                          "subsamples of the ensayo's θ design, which a calibration file does "
-                          "not hold; give --ensayo E.mat (and --datos) instead")
 
     level = check_level(args.level)
     check_initial_state(args)
@@ -62,13 +58,18 @@ def _cmd_nmin(args: argparse.Namespace) -> int:
         # with --runs 0, so an absurd --mc-n is refused whatever the run count)
         limits.check_memory(limits.synthetic_runs_bytes(max(mc_n), args.runs),
                             f"--mc-n {max(mc_n)} --runs {args.runs}")
+    cal = read_calibration_file(args)  # None: fit on --ensayo
     ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
     prog = Progress("nmin")
+    if cal is not None and ensayo is None and steps:
+        prog(f"no --ensayo: the course subsampling (--steps) re-fits the calibration run's "
+             f"samples, which {args.calibration} does not hold; skipped")
     res = analyze_nmin(ensayo, acel, candidates, p0, v0, nv, level, args.method,
                        args.integrator, args.g, steps, mc_n, args.runs, args.seed,
                        progress=prog, draws=args.draws, confirm_runs=args.confirm_runs,
                        mapper=mapper_from_args(args) if args.confirm_runs else None,
-                       count=lambda done, total: prog.count(done, total, "regeneration chunks"))
+                       count=lambda done, total: prog.count(done, total, "regeneration chunks"),
+                       calibration=cal)
     if args.json:
         print_json(res.to_dict())
     else:
