@@ -271,6 +271,9 @@ class DemoResult:
     source: str
     fusion: dict | None = None
     """:func:`fusion_step`'s numbers (or why it was skipped)."""
+    data_dir: Path | None = None
+    """Where the course files are once the demo is done (``OUT/data`` when generated: the
+    files are written in a staging directory first, whose name must not reach the user)."""
 
     def summary(self) -> str:
         return demo_summary(self)
@@ -462,7 +465,8 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
         with steps.step():
             recovered = _recording(work, ana, truth, est, tj, files)
         result = DemoResult(out, files, ana, truth.manifest, val, cov, nmin, recovered,
-                            steps.times, 0.0, source, fusion)
+                            steps.times, 0.0, source, fusion,
+                            out / "data" if generate else Path(course_data))
         with steps.step():
             files["report.md"] = write_text(work / "report.md", report_markdown(result), True)
     result.files = {k: out / p.relative_to(work) for k, p in files.items()}
@@ -551,9 +555,10 @@ def demo_summary(res: DemoResult) -> str:
     fl = _fusion_lines(res.fusion)
     if fl:
         lines += ["", *fl]
+    data = res.data_dir or Path(res.analysis.ensayo.source).parent
     lines += ["", "Reproduce the estimates:",
-              f"  tiltbench calibrate {res.analysis.ensayo.source} --datos "
-              f"{Path(res.analysis.ensayo.source).parent / 'datos.txt'} --json", "",
+              f"  tiltbench calibrate {data / 'ensayo.mat'} --datos {data / 'datos.txt'} --json",
+              "",
               "Files written:"]
     for k in sorted(res.files):
         p = res.files[k]

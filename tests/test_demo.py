@@ -55,6 +55,10 @@ def test_demo_from_a_fresh_directory(tmp_path, capsys):
     for p in files:
         assert p.exists() and p.stat().st_size > 0, p
     out = tmp_path / "demo-out"
+    # the printed reproduce command names the final files, not the staging directory's
+    assert f"tiltbench calibrate {Path('demo-out') / 'data' / 'ensayo.mat'} --datos" \
+        in res.stdout
+    assert ".tmp" not in res.stdout
     capsys.readouterr()
     assert main(["calibrate", str(out / "data" / "ensayo.mat"), "--datos",
                  str(out / "data" / "datos.txt"), "--json"]) == 0
