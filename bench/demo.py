@@ -364,7 +364,7 @@ def _write_json(out: Path, name: str, obj: Any, files: dict[str, Path]) -> None:
 
 
 def _figures(out: Path, ana: CourseAnalysis, truth: _Truth, formats: tuple[str, ...],
-             files: dict[str, Path]) -> None:
+             files: dict[str, Path], nmin: dict) -> None:
     from bench import figures
 
     fdir = out / "figures"
@@ -373,7 +373,7 @@ def _figures(out: Path, ana: CourseAnalysis, truth: _Truth, formats: tuple[str, 
             fdir, ana.cal, ana.ensayo, truth.manifest, 0.95, fmt, True).values()})
         files.update({f"figures/{p.name}": p for p in figures.write_vehicle_figures(
             fdir, ana.traj, ana.region, ana.cal, ana.ensayo.n, truth.final, truth.path,
-            truth.acc, fmt, True).values()})
+            truth.acc, fmt, True, nmin.get("fixed_run")).values()})
 
 
 def _recording(out: Path, ana: CourseAnalysis, truth: _Truth, est: dict, tj: dict,
@@ -461,7 +461,7 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
         with steps.step():
             fusion = fusion_step(ana, truth.fixes, data_dir, seed if generate else None)
         with steps.step():
-            _figures(work, ana, truth, formats, files)
+            _figures(work, ana, truth, formats, files, nmin)
         with steps.step():
             recovered = _recording(work, ana, truth, est, tj, files)
         result = DemoResult(out, files, ana, truth.manifest, val, cov, nmin, recovered,
@@ -481,15 +481,20 @@ def _jsonable(obj: Any) -> Any:
 
 
 def _nmin(ana: CourseAnalysis) -> dict:
-    from calib.nmin import PositionCovModel, design_nmin, posterior_nrange
+    """Design and a-posteriori N, and the course question's fixed-run N
+    (:func:`calib.nmin.fixed_run_nmin`, 10⁵ draws, seed 0; shared with the nmin figure)."""
+    from calib.nmin import PositionCovModel, design_nmin, fixed_run_nmin, posterior_nrange
 
+    reg = ana.region
+    truth = reg.decision or min(reg.mahalanobis, key=reg.mahalanobis.get)
     model = PositionCovModel.from_region(ana.region, ana.cal.g)
     cal_only = PositionCovModel.from_region(ana.region, ana.cal.g, include_noise=False)
     return {"design": design_nmin(ana.region.candidates, model, ana.region.level),
             "design_calibration_only": design_nmin(ana.region.candidates, cal_only,
                                                    ana.region.level),
             "posterior": posterior_nrange(ana.region.estimate, ana.region.candidates, model,
-                                          ana.region.level)}
+                                          ana.region.level),
+            "fixed_run": fixed_run_nmin(reg, truth, 10**5, 0, ana.cal.g)}
 
 
 def _param_rows(res: DemoResult) -> list[tuple[str, float | None, float, float, float | None]]:
@@ -528,7 +533,12 @@ def demo_summary(res: DemoResult) -> str:
     d = res.nmin["design"]
     dn = (str(d["n"]) if d["n"] is not None else
           "none suffices (the vehicle-noise part does not shrink with N)")
-    lines.append(f"  N analysis: design N = {dn}; calibration part only: "
+    fr = res.nmin["fixed_run"]
+    frn = (f"N ≥ {fr['n']}" if fr["n"] is not None else "no N up to "
+           f"{fr['grid_n'][-1]:.0f} reaches it")
+    lines.append(f"  N analysis: this vehicle run given, a new calibration needs {frn} for "
+                 f"P(decision made and right) ≥ {100 * r.level:g}% ({fr['draws']} draws); "
+                 f"design N (regions disjoint) = {dn}; calibration part only: "
                  f"{res.nmin['design_calibration_only']['n']}")
     if res.validation is not None:
         v = res.validation
@@ -614,7 +624,13 @@ def report_markdown(res: DemoResult) -> str:
              if res.fusion is not None else []),
            "## How many calibration samples?", ""]
     d, dc, p = res.nmin["design"], res.nmin["design_calibration_only"], res.nmin["posterior"]
-    md += [f"* design N making the {L} regions of the candidates disjoint: "
+    fr = res.nmin["fixed_run"]
+    md += ["* this vehicle run given (the course question), a new calibration needs "
+           + (f"N ≥ {fr['n']}" if fr["n"] is not None else "more samples than searched")
+           + f" for P(decision made and right) ≥ {L} ({fr['draws']} draws from the "
+           f"estimator's sampling law; `tiltbench nmin` confirms it by regenerating "
+           f"calibrations);",
+           f"* design N making the {L} regions of the candidates disjoint: "
            f"{d['n'] if d['n'] is not None else 'none suffices'} "
            f"(calibration part only: {dc['n'] if dc['n'] is not None else 'none'});",
            f"* with this estimate fixed, exactly one candidate ({p['letter']}) is inside for "

@@ -43,9 +43,11 @@ def write_vehicle_figures(out: str | Path, traj: Trajectory, region: ArrivalRegi
                           cal: Calibration, n_data: int, true_final: np.ndarray | None = None,
                           true_path: np.ndarray | None = None,
                           true_acc: np.ndarray | None = None, fmt: str = "png",
-                          force: bool = False) -> dict[str, Path]:
+                          force: bool = False, fixed_run: dict | None = None
+                          ) -> dict[str, Path]:
     """``trajectory`` (helper figure of ``trajectory --plot``), ``acceleration``,
-    ``uncertainty_growth`` and ``nmin`` figures in ``out``."""
+    ``uncertainty_growth`` and ``nmin`` figures in ``out``; ``fixed_run``: the
+    :func:`calib.nmin.fixed_run_nmin` result if already computed (else the figure draws it)."""
     out = Path(out)
     paths = {"trajectory": save_figure(trajectory_figure(traj, region, truth=true_final),
                                        out / f"trajectory.{fmt}", force),
@@ -54,6 +56,6 @@ def write_vehicle_figures(out: str | Path, traj: Trajectory, region: ArrivalRegi
              "uncertainty_growth": save_figure(
                  uncertainty_growth_figure(traj, region, cal, true_path=true_path),
                  out / f"uncertainty_growth.{fmt}", force),
-             "nmin": save_figure(nmin_figure(region, n_data, cal.g), out / f"nmin.{fmt}",
-                                 force)}
+             "nmin": save_figure(nmin_figure(region, n_data, cal.g, fixed_run=fixed_run),
+                                 out / f"nmin.{fmt}", force)}
     return paths
