@@ -34,6 +34,7 @@ import argparse  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+from timing import best_of  # noqa: E402  (benchmarks/timing.py, beside this script)
 
 from bench.sweep import process_map  # noqa: E402
 from calib import Ensayo, calibrate  # noqa: E402
@@ -45,15 +46,6 @@ from calib.runs import chunk_ranges, serial_map  # noqa: E402
 N = 20001
 BIAS, SCALE, NV = (0.0767, -0.0175), (-0.0301, 0.0100), (0.25, 0.64)
 TARGETS = {"engine_1": 0.85, "engine_2": 1.6, "fit": 0.1}
-
-
-def best_of(fn, repeat: int) -> float:
-    best = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def normals_only(runs: int, seed: int = 1) -> None:

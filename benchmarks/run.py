@@ -22,24 +22,15 @@ import os
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # as the CLI does (bench/cli/__init__.py)
 
-import time  # noqa: E402
 
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
+from timing import best_of  # noqa: E402  (benchmarks/timing.py, beside this script)
 
 from bench.model import ACC_SENSORS, tilt_table  # noqa: E402
 from bench.tilt import ThetaDesign, static_readings  # noqa: E402
 from calib.conventions import reference_accel  # noqa: E402
 from calib.ls import fit_axis  # noqa: E402
-
-
-def best_of(fn, repeat: int = 5) -> float:
-    best = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def loop_forward(theta: np.ndarray) -> np.ndarray:

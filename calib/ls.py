@@ -417,6 +417,16 @@ def fit_linear(
     return _fit_centred(Hc, M, y, names, sigma2, lambda: _equilibrated_cond(H))
 
 
+def _sigma2_used(rss: float, dof: int, sigma2: float | None) -> tuple[float, Sigma2Source]:
+    """The noise variance a fit uses, (m/s²)²: the given one, else ``RSS/dof``."""
+    if sigma2 is None:
+        return rss / dof, "estimated"
+    s2 = float(sigma2)
+    if not np.isfinite(s2) or s2 <= 0:
+        raise ValueError(f"noise variance must be positive and finite, got {sigma2}")
+    return s2, "given"
+
+
 def _fit_centred(Hc: np.ndarray, M: np.ndarray, y: np.ndarray, names: tuple[str, ...],
                  sigma2: float | None, cond, equilibrated=None) -> FitResult:
     """The data-dependent half of :func:`fit_linear` (``Hc``, ``M`` from
@@ -426,12 +436,7 @@ def _fit_centred(Hc: np.ndarray, M: np.ndarray, y: np.ndarray, names: tuple[str,
     params, cov1, resid, rank = _solve_centred(Hc, y, M, names, equilibrated)
     rss = float(resid @ resid)
     dof = n - p
-    if sigma2 is None:
-        s2, source = rss / dof, "estimated"
-    else:
-        s2, source = float(sigma2), "given"
-        if not np.isfinite(s2) or s2 <= 0:
-            raise ValueError(f"noise variance must be positive and finite, got {sigma2}")
+    s2, source = _sigma2_used(rss, dof, sigma2)
     return FitResult(
         param_names=tuple(names), params=params, cov=s2 * cov1, residuals=resid,
         sigma2=np.array(s2), sigma2_source=source, dof=dof, rank=rank,
@@ -505,12 +510,7 @@ def _refit(d: _AxisDesign, y: np.ndarray, sigma2: float | None) -> FitResult:
     y.setflags(write=False)
     rss = float(y @ y)
     dof = n - p
-    if sigma2 is None:
-        s2, source = rss / dof, "estimated"
-    else:
-        s2, source = float(sigma2), "given"
-        if not np.isfinite(s2) or s2 <= 0:
-            raise ValueError(f"noise variance must be positive and finite, got {sigma2}")
+    s2, source = _sigma2_used(rss, dof, sigma2)
     return FitResult(
         param_names=PARAM_NAMES, params=fac.solve_map @ z, cov=s2 * fac.cov1, residuals=y,
         sigma2=np.array(s2), sigma2_source=source, dof=dof, rank=fac.rank, cond=fac.cond,
