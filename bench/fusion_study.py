@@ -31,6 +31,10 @@ Methods (all four see the same run)
 Scenarios (:data:`SCENARIOS`): IMU 100 / 50 Hz × fixes 1 / 10 Hz; no fix in the last 20 s;
 and the filter's P0, Q or R mis-set by ×10 and ÷10 (the *variances* handed to the filter;
 the data stay the same). Dead reckoning uses the same mis-set σ_a² (Q) and P0 as the filter.
+"P0" is the initial position and velocity block, ``diag(σ_p0², σ_p0², σ_v0², σ_v0²)`` with
+σ_p0 = 1 m, σ_v0 = 0.1 m/s, the σ the true initial error is drawn with (it is not zero, so
+×10 and ÷10 change what the filter believes); the calibration block of P0 (``C_cal``'s
+biases) is not scaled.
 
 Numbers per method and scenario (:class:`StudyRow`)
 ---------------------------------------------------
@@ -45,6 +49,23 @@ Numbers per method and scenario (:class:`StudyRow`)
   the level-L ellipse, with the exact Binomial(R, L) band at the same α. The smoother's last
   node is the filter's (no later data), so its NEES and coverage repeat the filter's; it
   differs along the path (RMS).
+
+* NEES **along the path** (filter, smoother, fixes; not computed for dead reckoning, whose
+  stated covariance comes at the end point only): at every fix epoch t_j (j = 1..M; the
+  filter after the update, the smoother's stored covariance at that node), the mean over the
+  R runs of the position NEES (2 dof) and, for the filter and smoother, of the
+  position+velocity NEES (4 dof). If the stated covariance is right, ``R·mean ~ χ²(dof·R)``
+  at each epoch. Each epoch is judged against the two-sided quantiles at ``NEES_ALPHA/T``,
+  T = 2M tests (M epochs × the two NEES; T = M for fixes): by the union bound (Bonferroni)
+  a consistent filter has every test inside with probability ≥ 1 − NEES_ALPHA. The epochs
+  are strongly correlated in time (the same run's errors), which the union bound does not
+  need: it stays valid, and conservative, under any dependence. Per row:
+  ``path_out_frac`` (share of the M epochs whose position NEES is out), ``path_out_ranges`` /
+  ``path_where`` (where, e.g. "t ≤ 10 s"), ``path4_out_frac`` / ``path4_where`` (the same for
+  4 dof), and ``path_ok`` ("consistent along the path": no test out, either NEES). The
+  curves are in :attr:`StudyResult.paths` (:class:`PathNees`). This sees what the final
+  NEES cannot: a mis-set P0 is out early and forgotten after the first fixes; Q×10 is
+  mostly inside in position but out in velocity.
 
 A Monte Carlo of R runs supports only claims at the resolution of those bands: with R = 200 a
 NEES of 2.3 is not distinguishable from 2, and coverage 0.99 not from 0.997.
