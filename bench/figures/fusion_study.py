@@ -105,10 +105,11 @@ def path_nees_panel(ax, result, dof: int = 2) -> None:
             ax.plot(p.t, curve(p), color=color, lw=1.4, ls="--" if f > 1 else "-",
                     label=f"{label} {'×' if f > 1 else '÷'}{max(f, 1 / f):g}")
     ax.set_yscale("log")
-    from matplotlib.ticker import FormatStrFormatter
+    from matplotlib.ticker import FormatStrFormatter, FuncFormatter
 
     ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
-    ax.yaxis.set_minor_formatter(FormatStrFormatter("%g"))
+    ax.yaxis.set_minor_formatter(FuncFormatter(
+        lambda v, _: f"{v:g}" if f"{v:.0e}"[0] in "235" else ""))
     ax.tick_params(axis="y", which="minor", labelsize=7)
     ax.set_xlabel("t (s)")
     ax.set_ylabel(f"mean NEES over the runs ({dof} dof)")
