@@ -79,6 +79,8 @@ def path_nees_panel(ax, result, dof: int = 2) -> None:
     (dashed) and ÷10 (solid); the nominal's per-epoch Bonferroni band shaded (the mis-set
     scenarios have the same fix epochs and run count, hence the same band), its expected
     value ``dof`` dotted."""
+    from bench.fusion_study import NEES_ALPHA
+
     scns = result.config["scenarios"]
     names = {p.scenario for p in result.paths if p.method == "filter"}
     if not scns or scns[0]["name"] not in names:
@@ -121,14 +123,8 @@ def path_nees_panel(ax, result, dof: int = 2) -> None:
               frameon=False)
     if dof == 2:
         ax.text(0.01, 0.02, f"band: all epochs of a consistent filter inside with "
-                f"probability ≥ 1 − {result_alpha():g} (Bonferroni)", fontsize=7.5,
+                f"probability ≥ 1 − {NEES_ALPHA:g} (Bonferroni)", fontsize=7.5,
                 transform=ax.transAxes)
-
-
-def result_alpha() -> float:
-    from bench.fusion_study import NEES_ALPHA
-
-    return NEES_ALPHA
 
 
 def save_fusion_study_plot(path: str | Path, result, force: bool = False) -> Path:
