@@ -31,6 +31,10 @@ Methods (all four see the same run)
 Scenarios (:data:`SCENARIOS`): IMU 100 / 50 Hz × fixes 1 / 10 Hz; no fix in the last 20 s;
 and the filter's P0, Q or R mis-set by ×10 and ÷10 (the *variances* handed to the filter;
 the data stay the same). Dead reckoning uses the same mis-set σ_a² (Q) and P0 as the filter.
+"P0" is the initial position and velocity block, ``diag(σ_p0², σ_p0², σ_v0², σ_v0²)`` with
+σ_p0 = 1 m, σ_v0 = 0.1 m/s, the σ the true initial error is drawn with (it is not zero, so
+×10 and ÷10 change what the filter believes); the calibration block of P0 (``C_cal``'s
+biases) is not scaled.
 
 Numbers per method and scenario (:class:`StudyRow`)
 ---------------------------------------------------
@@ -45,6 +49,23 @@ Numbers per method and scenario (:class:`StudyRow`)
   the level-L ellipse, with the exact Binomial(R, L) band at the same α. The smoother's last
   node is the filter's (no later data), so its NEES and coverage repeat the filter's; it
   differs along the path (RMS).
+
+* NEES **along the path** (filter, smoother, fixes; not computed for dead reckoning, whose
+  stated covariance comes at the end point only): at every fix epoch t_j (j = 1..M; the
+  filter after the update, the smoother's stored covariance at that node), the mean over the
+  R runs of the position NEES (2 dof) and, for the filter and smoother, of the
+  position+velocity NEES (4 dof). If the stated covariance is right, ``R·mean ~ χ²(dof·R)``
+  at each epoch. Each epoch is judged against the two-sided quantiles at ``NEES_ALPHA/T``,
+  T = 2M tests (M epochs × the two NEES; T = M for fixes): by the union bound (Bonferroni)
+  a consistent filter has every test inside with probability ≥ 1 − NEES_ALPHA. The epochs
+  are strongly correlated in time (the same run's errors), which the union bound does not
+  need: it stays valid, and conservative, under any dependence. Per row:
+  ``path_out_frac`` (share of the M epochs whose position NEES is out), ``path_out_ranges`` /
+  ``path_where`` (where, e.g. "t ≤ 10 s"), ``path4_out_frac`` / ``path4_where`` (the same for
+  4 dof), and ``path_ok`` ("consistent along the path": no test out, either NEES). The
+  curves are in :attr:`StudyResult.paths` (:class:`PathNees`). This sees what the final
+  NEES cannot: a mis-set P0 is out early and forgotten after the first fixes; Q×10 is
+  mostly inside in position but out in velocity.
 
 A Monte Carlo of R runs supports only claims at the resolution of those bands: with R = 200 a
 NEES of 2.3 is not distinguishable from 2, and coverage 0.99 not from 0.997.
@@ -154,25 +175,89 @@ class StudyRow:
     coverage: float
     coverage_band: tuple[float, float]
     coverage_ok: bool
+    path_band: tuple[float, float] | None = None
+    path_out_frac: float | None = None
+    path_out_ranges: tuple[tuple[float, float], ...] = ()
+    path_ok: bool | None = None
+    path4_band: tuple[float, float] | None = None
+    path4_out_frac: float | None = None
+    path_where: str = ""
+    path4_where: str = ""
 
     def to_dict(self) -> dict:
+        def opt(v):
+            return None if v is None else list(v)
+
         return {"scenario": self.scenario, "method": self.method, "rms_m": self.rms_m,
                 "final_std_m": self.final_std_m, "area_m2": self.area_m2, "nees": self.nees,
                 "nees_band": list(self.nees_band), "nees_ok": self.nees_ok,
                 "coverage": self.coverage, "coverage_band": list(self.coverage_band),
-                "coverage_ok": self.coverage_ok}
+                "coverage_ok": self.coverage_ok, "path_band": opt(self.path_band),
+                "path_out_frac": self.path_out_frac,
+                "path_out_ranges": [list(r) for r in self.path_out_ranges],
+                "path_ok": self.path_ok, "path4_band": opt(self.path4_band),
+                "path4_out_frac": self.path4_out_frac, "path_where": self.path_where,
+                "path4_where": self.path4_where}
 
     @classmethod
     def from_dict(cls, d: dict) -> StudyRow:
+        def opt(v):
+            return None if v is None else tuple(float(x) for x in v)
+
         return cls(d["scenario"], d["method"], float(d["rms_m"]), float(d["final_std_m"]),
                    float(d["area_m2"]), float(d["nees"]), tuple(d["nees_band"]),
                    bool(d["nees_ok"]), float(d["coverage"]), tuple(d["coverage_band"]),
-                   bool(d["coverage_ok"]))
+                   bool(d["coverage_ok"]), opt(d.get("path_band")), d.get("path_out_frac"),
+                   tuple(tuple(float(x) for x in r) for r in d.get("path_out_ranges", ())),
+                   d.get("path_ok"), opt(d.get("path4_band")), d.get("path4_out_frac"),
+                   d.get("path_where", ""), d.get("path4_where", ""))
 
+
+PATH_NOTE = ("Path NEES: the mean over the runs of the NEES at every fix epoch (position, "
+             "2 dof; 4-dof: position+velocity), each epoch against χ²(dof·R)/R at "
+             f"α = {NEES_ALPHA:g}/(2M) (Bonferroni over the M epochs and the two NEES; α/M "
+             "for fixes, position only); share of epochs outside (position) and where; "
+             "consistent along the path = no epoch outside, position nor position+velocity. "
+             "Dead reckoning: not computed (n/a).")
 
 ROW_UNITS = {"rows.rms_m": "m", "rows.final_std_m": "m", "rows.area_m2": "m²",
              "rows.nees": "1", "rows.nees_band": "1", "rows.coverage": "1",
-             "rows.coverage_band": "1"}
+             "rows.coverage_band": "1", "rows.path_band": "1", "rows.path_out_frac": "1",
+             "rows.path_out_ranges": "s", "rows.path4_band": "1", "rows.path4_out_frac": "1"}
+
+
+@dataclass(frozen=True)
+class PathNees:
+    """Mean NEES over the runs at every fix epoch of one scenario and method (module
+    docstring): ``t`` s, ``nees`` position (2 dof), ``nees4`` position+velocity (4 dof, empty
+    when the method states no velocity covariance), each with its per-epoch Bonferroni band
+    (:func:`path_band`)."""
+
+    scenario: str
+    method: str
+    t: tuple[float, ...]
+    nees: tuple[float, ...]
+    band: tuple[float, float]
+    nees4: tuple[float, ...] = ()
+    band4: tuple[float, float] | None = None
+
+    def out(self, dof: int = 2) -> np.ndarray:
+        """(M,) bool, epochs whose mean NEES is outside its band."""
+        v, b = (self.nees, self.band) if dof == 2 else (self.nees4, self.band4)
+        v = np.asarray(v, float)
+        return (v < b[0]) | (v > b[1])
+
+    def to_dict(self) -> dict:
+        return {"scenario": self.scenario, "method": self.method, "t": list(self.t),
+                "nees": list(self.nees), "band": list(self.band), "nees4": list(self.nees4),
+                "band4": None if self.band4 is None else list(self.band4)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> PathNees:
+        b4 = d.get("band4")
+        return cls(d["scenario"], d["method"], tuple(d["t"]), tuple(d["nees"]),
+                   tuple(d["band"]), tuple(d.get("nees4", ())),
+                   None if b4 is None else tuple(b4))
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,6 +275,13 @@ class StudyResult(ResultMixin):
     outage_std: np.ndarray = field(default_factory=lambda: np.zeros(0))
     outage_rms: np.ndarray = field(default_factory=lambda: np.zeros(0))
     outage_start: float = float("nan")
+    paths: tuple[PathNees, ...] = ()
+
+    def path(self, scenario: str, method: str = "filter") -> PathNees:
+        for p in self.paths:
+            if p.scenario == scenario and p.method == method:
+                return p
+        raise KeyError(f"no path NEES for {scenario!r}, {method!r}")
 
     def row(self, scenario: str, method: str) -> StudyRow:
         for r in self.rows:
@@ -208,12 +300,15 @@ class StudyResult(ResultMixin):
                  "config.scenarios.fix_hz": "Hz", "config.scenarios.outage_s": "s",
                  "config.scenarios.p0_factor": "1", "config.scenarios.q_factor": "1",
                  "config.scenarios.r_factor": "1", **ROW_UNITS,
-                 "outage.t": "s", "outage.std": "m", "outage.rms": "m", "outage.start": "s"}
+                 "outage.t": "s", "outage.std": "m", "outage.rms": "m", "outage.start": "s",
+                 "paths.t": "s", "paths.nees": "1", "paths.band": "1", "paths.nees4": "1",
+                 "paths.band4": "1"}
         return {"config": self.config, "rows": [r.to_dict() for r in self.rows],
                 "outage": {"t": self.outage_t.tolist(), "std": self.outage_std.tolist(),
                            "rms": self.outage_rms.tolist(),
                            "start": None if np.isnan(self.outage_start)
                            else self.outage_start},
+                "paths": [p.to_dict() for p in self.paths],
                 "units": units}
 
     @classmethod
@@ -223,13 +318,16 @@ class StudyResult(ResultMixin):
         return cls(d["config"], tuple(StudyRow.from_dict(r) for r in d["rows"]),
                    np.asarray(o.get("t", []), float), np.asarray(o.get("std", []), float),
                    np.asarray(o.get("rms", []), float),
-                   float("nan") if start is None else float(start))
+                   float("nan") if start is None else float(start),
+                   tuple(PathNees.from_dict(p) for p in d.get("paths", ())))
 
     def table(self) -> list[list[str]]:
         """Header and one line per row, as text (units in the header)."""
         head = ["scenario", "method", "RMS error (m)", "final std (m)",
                 f"area {100 * self.config['level']:g} % (m²)", "mean NEES (band)",
-                f"coverage {100 * self.config['level']:g} % (band)"]
+                f"coverage {100 * self.config['level']:g} % (band)",
+                "path NEES out: share (where)", "path NEES 4-dof out: share (where)",
+                "consistent along the path"]
         lines = [head]
         for r in self.rows:
             lines.append([
@@ -238,7 +336,12 @@ class StudyResult(ResultMixin):
                 f"{r.nees:.2f} ({r.nees_band[0]:.2f}–{r.nees_band[1]:.2f})"
                 + ("" if r.nees_ok else " OUT"),
                 f"{r.coverage:.3f} ({r.coverage_band[0]:.3f}–{min(r.coverage_band[1], 1):.3f})"
-                + ("" if r.coverage_ok else " OUT")])
+                + ("" if r.coverage_ok else " OUT"),
+                "n/a" if r.path_ok is None
+                else f"{100 * r.path_out_frac:.0f} % ({r.path_where})",
+                "n/a" if r.path4_out_frac is None
+                else f"{100 * r.path4_out_frac:.0f} % ({r.path4_where})",
+                "n/a" if r.path_ok is None else ("yes" if r.path_ok else "no")])
         return lines
 
     def summary(self) -> str:
@@ -252,6 +355,7 @@ class StudyResult(ResultMixin):
             out.append("  ".join(c.ljust(w) for c, w in zip(line, widths, strict=True)))
         out.append("NEES: final-position, 2 dof; OUT = outside the band (stated covariance "
                    "inconsistent with the errors)")
+        out.append(PATH_NOTE)
         return "\n".join(out)
 
     def markdown(self) -> str:
@@ -265,6 +369,7 @@ class StudyResult(ResultMixin):
               "| " + " | ".join(lines[0]) + " |",
               "|" + "|".join("---" for _ in lines[0]) + "|"]
         md += ["| " + " | ".join(line) + " |" for line in lines[1:]]
+        md += ["", PATH_NOTE]
         return "\n".join(md) + "\n"
 
 
@@ -330,6 +435,7 @@ def _run_chunk(task: dict) -> dict:
         fx["n"] += ef.shape[0]
         fx["e"].append(ef[-1])
         fx["P"].append(np.eye(2) * task["gps_sigma"] ** 2)
+        fx["path2"] = fx.get("path2", 0.0) + np.sum(ef * ef, axis=-1) / task["gps_sigma"] ** 2
     A = np.stack(accs)
     Z = np.stack(zs)
     P0s, V0s = np.stack(p0s), np.stack(v0s)
@@ -347,18 +453,33 @@ def _run_chunk(task: dict) -> dict:
     node_k = np.searchsorted(t, out.times - 1e-9 * max(1.0, T))
     truth_p = pos[node_k]
     result = {"dead_reckoning": _final(dr, truth_len=t.shape[0], runs=len(task["seeds"])),
-              "fixes": _final(fx, n=fx["n"])}
+              "fixes": {**_final(fx, n=fx["n"]), "path": {"t": t_gps, "sum2": fx["path2"]}}}
+    fix_nodes = np.flatnonzero(out.is_fix)
+    truth_v = vel[node_k[fix_nodes]]
     for name, x, P in (("filter", out.estimates, out.covariances),
                        ("smoother", out.smoothed, out.smoothed_covariances)):
         p_est = x[..., :2] + shift
         e = p_est - truth_p[None]
+        # along the path: position (2 dof) and position+velocity (4 dof) at the fix epochs
+        # (the estimates shift by f(t) = Δp + Δv (t − t0), the velocities by Δv)
+        e4 = np.concatenate([e[:, fix_nodes], x[:, fix_nodes, 2:4] + dv[:, None, :]
+                             - truth_v[None]], axis=-1)
+        P4 = P[:, fix_nodes, :4, :4]
         result[name] = {"sq": float(np.sum(e * e)), "n": int(e.shape[0] * e.shape[1]),
-                        "e": e[:, -1], "P": P[:, -1, :2, :2]}
+                        "e": e[:, -1], "P": P[:, -1, :2, :2],
+                        "path": {"t": out.times[fix_nodes],
+                                 "sum2": np.sum(_nees(e4[..., :2], P4[..., :2, :2]), axis=0),
+                                 "sum4": np.sum(_nees(e4, P4), axis=0)}}
         if name == "filter" and scn.outage_s > 0:
             result["curve"] = {"t": out.times, "sq_axis": np.sum(e * e, axis=(0, 2)) / 2.0,
                                "var": np.mean(np.trace(P[..., :2, :2], axis1=-2,
                                                        axis2=-1), axis=0) / 2.0}
     return result
+
+
+def _nees(e: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """``eᵀ P⁻¹ e`` over the leading axes (solve, no inverse)."""
+    return np.einsum("...i,...i->...", e, np.linalg.solve(P, e[..., None])[..., 0])
 
 
 def _final(acc: dict, truth_len: int | None = None, runs: int = 0, n: int | None = None
@@ -383,7 +504,65 @@ def _band_coverage(level: float, runs: int) -> tuple[float, float]:
     return float(lo / runs), float(hi / runs)
 
 
-def _row(scenario: str, method: str, parts: list[dict], level: float) -> StudyRow:
+def path_band(dof: int, runs: int, tests: int, alpha: float = NEES_ALPHA
+               ) -> tuple[float, float]:
+    """Per-epoch band of the mean NEES over ``runs`` runs, one of ``tests`` tests (M epochs,
+    × 2 when the position and the position+velocity NEES are both tested): ``R·mean ~
+    χ²(dof·R)`` if the stated covariance is right; two-sided quantiles at ``alpha/tests``
+    (Bonferroni), so that a consistent filter has every test inside with probability
+    ≥ 1 − alpha whatever the dependence between the epochs (the union bound needs no
+    independence; with the strong correlation in time it is conservative)."""
+    from scipy.stats import chi2
+
+    a = alpha / max(int(tests), 1)
+    lo, hi = chi2.ppf([a / 2, 1 - a / 2], dof * runs)
+    return float(lo / runs), float(hi / runs)
+
+
+def out_ranges(t: np.ndarray, out: np.ndarray) -> list[tuple[float, float]]:
+    """The runs of consecutive epochs with ``out`` true, as ``(first t, last t)``, s."""
+    t, out = np.asarray(t, float), np.asarray(out, bool)
+    edges = np.diff(np.concatenate([[0], out.astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+    return [(float(t[a]), float(t[b])) for a, b in zip(starts, ends, strict=True)]
+
+
+def describe_ranges(ranges, t_first: float, t_last: float) -> str:
+    """``out_ranges`` as text: "—" (none), "all t", "t ≤ 8 s", "t ≥ 40 s", "3–9 s", joined
+    by ", " (at most three, then "+k more")."""
+    if not ranges:
+        return "—"
+    words = []
+    for a, b in ranges:
+        if a <= t_first and b >= t_last:
+            words.append("all t")
+        elif a == b:
+            words.append(f"t = {a:g} s")
+        elif a <= t_first:
+            words.append(f"t ≤ {b:g} s")
+        elif b >= t_last:
+            words.append(f"t ≥ {a:g} s")
+        else:
+            words.append(f"{a:g}–{b:g} s")
+    more = len(words) - 3
+    return ", ".join(words[:3]) + (f", +{more} more" if more > 0 else "")
+
+
+def _path(scenario: str, method: str, parts: list[dict], runs: int) -> PathNees | None:
+    if "path" not in parts[0]:
+        return None
+    t = np.asarray(parts[0]["path"]["t"], float)
+    m2 = sum(p["path"]["sum2"] for p in parts) / runs
+    has4 = "sum4" in parts[0]["path"]
+    m4 = sum(p["path"]["sum4"] for p in parts) / runs if has4 else np.zeros(0)
+    tests = t.shape[0] * (2 if has4 else 1)  # Bonferroni over every epoch and both NEES
+    band4 = path_band(4, runs, tests) if has4 else None
+    return PathNees(scenario, method, tuple(t.tolist()), tuple(np.asarray(m2).tolist()),
+                    path_band(2, runs, tests), tuple(np.asarray(m4).tolist()), band4)
+
+
+def _row(scenario: str, method: str, parts: list[dict], level: float,
+         path: PathNees | None = None) -> StudyRow:
     sq = sum(p["sq"] for p in parts)
     n = sum(p["n"] for p in parts)
     e = np.concatenate([p["e"] for p in parts])
@@ -398,8 +577,22 @@ def _row(scenario: str, method: str, parts: list[dict], level: float) -> StudyRo
     cov = float(np.mean(nees <= chi2_2dof(level)))
     cband = _band_coverage(level, runs)
     m = float(np.mean(nees))
+    extra = {}
+    if path is not None:
+        t = np.asarray(path.t)
+        out2 = path.out(2)
+        extra = {"path_band": path.band, "path_out_frac": float(np.mean(out2)),
+                 "path_out_ranges": tuple(out_ranges(t, out2)),
+                 "path_ok": bool(not out2.any()
+                                 and (path.band4 is None or not path.out(4).any())),
+                 "path_where": describe_ranges(out_ranges(t, out2), t[0], t[-1])}
+        if path.band4 is not None:
+            extra["path4_band"] = path.band4
+            extra["path4_out_frac"] = float(np.mean(path.out(4)))
+            extra["path4_where"] = describe_ranges(out_ranges(t, path.out(4)), t[0], t[-1])
     return StudyRow(scenario, method, float(np.sqrt(sq / n)), std, area, m, (lo, hi),
-                    bool(lo <= m <= hi), cov, cband, bool(cband[0] <= cov <= cband[1]))
+                    bool(lo <= m <= hi), cov, cband, bool(cband[0] <= cov <= cband[1]),
+                    **extra)
 
 
 def study_inputs(config: StudyConfig) -> dict:
@@ -444,11 +637,14 @@ def run_study(config: StudyConfig | None = None, mapper: Mapper = serial_map,
     if progress:
         progress(f"{len(config.scenarios)} scenarios × {config.runs} runs in {len(tasks)} tasks")
     outs = mapper(_run_chunk, tasks, count)
-    rows, curve = [], None
+    rows, curve, paths = [], None, []
     for i, scn in enumerate(config.scenarios):
         parts = [o for o, j in zip(outs, owner, strict=True) if j == i]
         for m in METHODS:
-            rows.append(_row(scn.name, m, [p[m] for p in parts], config.level))
+            path = _path(scn.name, m, [p[m] for p in parts], config.runs)
+            if path is not None and m != "fixes":
+                paths.append(path)
+            rows.append(_row(scn.name, m, [p[m] for p in parts], config.level, path))
         if curve is None and "curve" in parts[0]:
             t = parts[0]["curve"]["t"]
             sq = sum(p["curve"]["sq_axis"] for p in parts) / config.runs
@@ -456,11 +652,12 @@ def run_study(config: StudyConfig | None = None, mapper: Mapper = serial_map,
                 parts, chunk_ranges(config.runs, config.chunk), strict=True)) / config.runs
             curve = (t, np.sqrt(var), np.sqrt(sq), float(t[-1]) - scn.outage_s)
     if curve is None:
-        return StudyResult(config.to_dict(), tuple(rows))
+        return StudyResult(config.to_dict(), tuple(rows), paths=tuple(paths))
     step = max(1, curve[0].shape[0] // 600)
     return StudyResult(config.to_dict(), tuple(rows), curve[0][::step], curve[1][::step],
-                       curve[2][::step], curve[3])
+                       curve[2][::step], curve[3], tuple(paths))
 
 
-__all__ = ["METHODS", "SCENARIOS", "STUDY_STREAM", "Scenario", "StudyConfig", "StudyResult",
-           "StudyRow", "run_study", "study_inputs"]
+__all__ = ["METHODS", "NEES_ALPHA", "SCENARIOS", "STUDY_STREAM", "PathNees", "Scenario",
+           "StudyConfig", "StudyResult", "StudyRow", "describe_ranges", "out_ranges",
+           "path_band", "run_study", "study_inputs"]

@@ -5,8 +5,10 @@
 
 Dead reckoning, fixes alone, Kalman filter and RTS smoother, per scenario (IMU 100/50 Hz,
 fixes 1/10 Hz, 20 s outage at the end, P0/Q/R mis-set ×10 and ÷10): RMS error along the path
-(m), stated final std (m), 99.7 % region area (m²), mean NEES with its χ² band and the region's
-coverage (:mod:`bench.fusion_study`, docs/fusion.md). Prints the table (or ``--json``) and
+(m), stated final std (m), 99.7 % region area (m²), mean final NEES with its χ² band, the
+region's coverage, and the NEES along the path (share of fix epochs out of the per-epoch
+Bonferroni band, where, and "consistent along the path" yes/no) (:mod:`bench.fusion_study`,
+docs/fusion.md). Prints the table (or ``--json``) and
 writes ``fusion-study.md`` and ``fusion-study.png`` into ``--out`` (default
 ``fusion-study``), refusing to overwrite without ``--force``.
 """

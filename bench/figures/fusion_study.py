@@ -1,6 +1,8 @@
 """Figure of the fusion comparison (:mod:`bench.fusion_study`): RMS error and stated final
-std per method and scenario (log scale), and the outage panel — the filter's stated per-axis
-std against time with the empirical RMS error of the runs."""
+std per method and scenario (log scale), the outage panel — the filter's stated per-axis
+std against time with the empirical RMS error of the runs — and the filter's mean position
+NEES along the path in the nominal and the mis-set scenarios, with the per-epoch Bonferroni
+band."""
 
 from __future__ import annotations
 
@@ -21,9 +23,11 @@ def fusion_study_figure(result) -> plt.Figure:
     from bench.fusion_study import METHODS
 
     scen = result.scenarios
-    fig = plt.figure(figsize=(13, 9), constrained_layout=True)
-    gs = fig.add_gridspec(2, 2)
+    fig = plt.figure(figsize=(13, 13.5), constrained_layout=True)
+    gs = fig.add_gridspec(3, 2, height_ratios=[1, 1, 1.1])
     axes = [fig.add_subplot(gs[0, :]), fig.add_subplot(gs[1, 0]), fig.add_subplot(gs[1, 1])]
+    path_nees_panel(fig.add_subplot(gs[2, 0]), result, 2)
+    path_nees_panel(fig.add_subplot(gs[2, 1]), result, 4)
     x = np.arange(len(scen))
     w = 0.8 / len(METHODS)
     for ax, key, title in ((axes[0], "rms_m", "RMS position error along the path (m)"),
@@ -63,6 +67,64 @@ def fusion_study_figure(result) -> plt.Figure:
     fig.suptitle(f"Fusion comparison on the course geometry ({result.config['runs']} runs per "
                  "scenario)")
     return fig
+
+
+MIS_SET = (("p0_factor", "P0", "tab:blue"), ("q_factor", "Q", "tab:orange"),
+           ("r_factor", "R", "tab:red"))
+
+
+def path_nees_panel(ax, result, dof: int = 2) -> None:
+    """The filter's mean NEES at every fix epoch against t (log y), position (``dof`` 2) or
+    position+velocity (4): the first scenario (nominal) in black, P0, Q, R mis-set ×10
+    (dashed) and ÷10 (solid); the nominal's per-epoch Bonferroni band shaded (the mis-set
+    scenarios have the same fix epochs and run count, hence the same band), its expected
+    value ``dof`` dotted."""
+    from bench.fusion_study import NEES_ALPHA
+
+    scns = result.config["scenarios"]
+    names = {p.scenario for p in result.paths if p.method == "filter"}
+    if not scns or scns[0]["name"] not in names:
+        ax.set_axis_off()
+        return
+
+    def curve(p):
+        return p.nees if dof == 2 else p.nees4
+
+    nominal = result.path(scns[0]["name"])
+    lo, hi = nominal.band if dof == 2 else nominal.band4
+    ax.axhspan(lo, hi, color="0.85", zorder=0,
+               label=f"per-epoch band ({lo:.2f}–{hi:.2f})")
+    ax.axhline(float(dof), color="0.4", lw=0.8, ls=":")
+    ax.plot(nominal.t, curve(nominal), color="k", lw=1.8, label="nominal")
+    for key, label, color in MIS_SET:
+        for s in scns[1:]:
+            f = s[key]
+            others = [s[k] for k, _, _ in MIS_SET if k != key]
+            if f == 1.0 or s["name"] not in names or any(o != 1.0 for o in others) or \
+                    s["outage_s"] or s["fix_hz"] != scns[0]["fix_hz"]:
+                continue
+            p = result.path(s["name"])
+            ax.plot(p.t, curve(p), color=color, lw=1.4, ls="--" if f > 1 else "-",
+                    label=f"{label} {'×' if f > 1 else '÷'}{max(f, 1 / f):g}")
+    ax.set_yscale("log")
+    from matplotlib.ticker import FormatStrFormatter, FuncFormatter
+
+    ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.yaxis.set_minor_formatter(FuncFormatter(
+        lambda v, _: f"{v:g}" if f"{v:.0e}"[0] in "235" else ""))
+    ax.tick_params(axis="y", which="minor", labelsize=7)
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel(f"mean NEES over the runs ({dof} dof)")
+    what = "position" if dof == 2 else "position + velocity"
+    ax.set_title(f"filter: mean {what} NEES at each fix ({result.config['runs']} runs)",
+                 fontsize=11)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7.5, ncol=4, loc="lower center", bbox_to_anchor=(0.5, 1.07),
+              frameon=False)
+    if dof == 2:
+        ax.text(0.01, 0.02, f"band: all epochs of a consistent filter inside with "
+                f"probability ≥ 1 − {NEES_ALPHA:g} (Bonferroni)", fontsize=7.5,
+                transform=ax.transAxes)
 
 
 def save_fusion_study_plot(path: str | Path, result, force: bool = False) -> Path:
