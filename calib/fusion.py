@@ -323,32 +323,15 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
 
     nodes, hold, fixi = _timeline(t, t_gps)
     K_nodes = nodes.shape[0]
-    if keep == "all":
-        store = np.ones(K_nodes, bool)
-    elif keep == "fixes":
-        store = fixi >= 0
-        store[0] = store[-1] = True
-    else:
-        raise ValueError(f"keep must be 'all' or 'fixes', got {keep!r}")
-    n_store = int(store.sum())
-
+    kept = NodeStore(fixi, keep, Rn, n, smoother)
     x = np.broadcast_to(x0, (Rn, n)).copy()
     P = np.broadcast_to(P0, (Rn, n, n)).copy()
-    Phi = np.broadcast_to(np.eye(n), (Rn, n, n)).copy()
-    xs_f = np.empty((Rn, n_store, n))
-    Ps_f = np.empty((Rn, n_store, n, n))
-    # priors and Φ (from the previous stored node) are kept only for the smoother
-    n_prior = n_store if smoother else 1
-    xs_p = np.empty((Rn, n_prior, n))
-    Ps_p = np.empty((Rn, n_prior, n, n))
-    Phis = np.empty((Rn, n_prior, n, n))
     M = t_gps.shape[0]
     nu = np.empty((Rn, M, d))
     S_all = np.empty((Rn, M, d, d))
     F = np.broadcast_to(np.eye(n), (Rn, n, n)).copy()
     Qk = np.zeros((Rn, n, n))
     ax = np.arange(2)
-    j = 0
     for k in range(K_nodes):
         if k > 0:
             h = nodes[k] - nodes[k - 1]
@@ -371,35 +354,88 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
             x[:, 0:2] += x[:, 2:4] * h + a * g1
             x[:, 2:4] += a * h
             P = F @ P @ F.transpose(0, 2, 1) + Qk
-            if smoother:
-                Phi = F @ Phi
+            kept.step(F)
         xp, Pp = x.copy(), P.copy()
         m = fixi[k]
         if m >= 0:
             x, P, nu[:, m], S_all[:, m] = kalman_update(x, P, Z[:, m, :], H, Rm)
-        if store[k]:
-            if smoother:
-                xs_p[:, j], Ps_p[:, j], Phis[:, j] = xp, Pp, Phi
-            xs_f[:, j], Ps_f[:, j] = x, P
-            Phi = np.broadcast_to(np.eye(n), (Rn, n, n)).copy()
-            j += 1
+        kept.keep(k, x, P, xp, Pp)
 
-    if smoother:
-        xsm, Psm = rts(xs_f, Ps_f, xs_p, Ps_p, Phis)
-    else:
-        xsm, Psm = np.zeros((Rn, 0, n)), np.zeros((Rn, 0, n, n))
-
+    xsm, Psm = kept.smoothed()
     dt = float(np.median(np.diff(t)))
-    Qnom = np.zeros((n, n))
-    g = np.array([0.5 * dt * dt, dt])
-    for i in range(2):
-        Qnom[np.ix_([i, i + 2], [i, i + 2])] = sa2[i] / (1.0 + scale[i]) ** 2 * np.outer(g, g)
-    out = [xs_f, Ps_f, nu, S_all, xsm, Psm]
+    Qnom = nominal_q(n, sa2, 1.0 / (1.0 + scale), dt)
+    out = [kept.x_f, kept.P_f, nu, S_all, xsm, Psm]
     if not batched:
         out = [o[0] for o in out]
     names = STATE_NAMES + (SCALE_NAMES if estimate_scale else ())
-    return FusionResult(names, nodes[store], out[0], out[1], fixi[store] >= 0, t_gps, out[2],
+    st = kept.store
+    return FusionResult(names, nodes[st], out[0], out[1], fixi[st] >= 0, t_gps, out[2],
                         out[3], out[4], out[5], P0, Qnom, Rm, sa2, estimate_scale, dt)
+
+
+class NodeStore:
+    """What a forward pass keeps at its stored nodes, for the result and the RTS smoother.
+
+    ``keep="all"``: every node; ``"fixes"``: the fix nodes and the first and last. Kept per
+    stored node j: the filtered ``x⁺_j, P⁺_j``; with ``smoother``, also the prior
+    ``x⁻_j, P⁻_j`` and ``Φ_j``, the product of the step Jacobians since the previous stored
+    node (module docstring), reset after each stored node.
+    """
+
+    def __init__(self, fixi: np.ndarray, keep: str, runs: int, n: int, smoother: bool) -> None:
+        if keep == "all":
+            store = np.ones(fixi.shape[0], bool)
+        elif keep == "fixes":
+            store = fixi >= 0
+            store[0] = store[-1] = True
+        else:
+            raise ValueError(f"keep must be 'all' or 'fixes', got {keep!r}")
+        self.store, self.smoother, self.runs, self.n = store, smoother, runs, n
+        n_store = int(store.sum())
+        n_prior = n_store if smoother else 1  # priors and Φ only for the smoother
+        self.x_f, self.P_f = np.empty((runs, n_store, n)), np.empty((runs, n_store, n, n))
+        self.x_p, self.P_p = np.empty((runs, n_prior, n)), np.empty((runs, n_prior, n, n))
+        self.Phis = np.empty((runs, n_prior, n, n))
+        self.Phi = self.identity()
+        self.j = 0
+
+    def identity(self) -> np.ndarray:
+        """A fresh (R, n, n) stack of identities."""
+        return np.broadcast_to(np.eye(self.n), (self.runs, self.n, self.n)).copy()
+
+    def step(self, F: np.ndarray) -> None:
+        """Accumulate a step Jacobian into Φ (smoother only)."""
+        if self.smoother:
+            self.Phi = F @ self.Phi
+
+    def keep(self, k: int, x: np.ndarray, P: np.ndarray, xp: np.ndarray, Pp: np.ndarray
+             ) -> None:
+        """Node k's posterior (and prior): stored if node k is kept."""
+        if not self.store[k]:
+            return
+        j = self.j
+        if self.smoother:
+            self.x_p[:, j], self.P_p[:, j], self.Phis[:, j] = xp, Pp, self.Phi
+        self.x_f[:, j], self.P_f[:, j] = x, P
+        self.Phi = self.identity()
+        self.j += 1
+
+    def smoothed(self) -> tuple[np.ndarray, np.ndarray]:
+        """The RTS means and covariances at the stored nodes (empty without ``smoother``)."""
+        if not self.smoother:
+            return np.zeros((self.runs, 0, self.n)), np.zeros((self.runs, 0, self.n, self.n))
+        return rts(self.x_f, self.P_f, self.x_p, self.P_p, self.Phis)
+
+
+def nominal_q(n: int, noise_var: np.ndarray, gain: np.ndarray, dt: float) -> np.ndarray:
+    """The Q of one step ``dt`` held at the stated accelerometer noise, printed by the
+    reports: per axis i, ``σ_a,i² · gain_i² · g gᵀ`` on (p_i, v_i) with ``g = [dt²/2, dt]``
+    (states ordered px, py, vx, vy, …; ``gain = 1/(1 + ŝ)``), zero elsewhere."""
+    Q = np.zeros((n, n))
+    g = np.array([0.5 * dt * dt, dt])
+    for i in range(2):
+        Q[np.ix_([i, i + 2], [i, i + 2])] = noise_var[i] * gain[i] ** 2 * np.outer(g, g)
+    return Q
 
 
 def kalman_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, H: np.ndarray,

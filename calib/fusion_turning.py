@@ -60,7 +60,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from calib.fusion import CAL_ORDER, FusionResult, _as_runs, _cov2, kalman_update, rts
+from calib.fusion import (
+    CAL_ORDER,
+    FusionResult,
+    NodeStore,
+    _as_runs,
+    _cov2,
+    kalman_update,
+    nominal_q,
+)
 
 TURN_STATE_NAMES = ("px", "py", "vx", "vy", "psi", "bx", "by")
 _STATE_UNITS = "[m, m, m/s, m/s, rad, m/s², m/s²]"
@@ -204,28 +212,13 @@ def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, bias, scale, cal_cov, noise_
 
     fixi = np.full(N, -1)
     fixi[k_fix] = np.arange(t_gps.shape[0])
-    if keep == "all":
-        store = np.ones(N, bool)
-    elif keep == "fixes":
-        store = fixi >= 0
-        store[0] = store[-1] = True
-    else:
-        raise ValueError(f"keep must be 'all' or 'fixes', got {keep!r}")
-    n_store = int(store.sum())
-
+    kept = NodeStore(fixi, keep, Rn, n, smoother)
     x = np.broadcast_to(x0, (Rn, n)).copy()
     P = np.broadcast_to(P0, (Rn, n, n)).copy()
-    eye = np.broadcast_to(np.eye(n), (Rn, n, n))
-    Phi = eye.copy()
-    n_prior = n_store if smoother else 1
-    xs_f, Ps_f = np.empty((Rn, n_store, n)), np.empty((Rn, n_store, n, n))
-    xs_p, Ps_p = np.empty((Rn, n_prior, n)), np.empty((Rn, n_prior, n, n))
-    Phis = np.empty((Rn, n_prior, n, n))
     M = t_gps.shape[0]
     nu, S_all = np.empty((Rn, M, 2)), np.empty((Rn, M, 2, 2))
-    F = eye.copy()
+    F = kept.identity()
     Qk = np.zeros((Rn, n, n))
-    j = 0
     for k in range(N):
         if k > 0:
             h = t[k] - t[k - 1]
@@ -250,35 +243,24 @@ def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, bias, scale, cal_cov, noise_
             x[:, 2:4] += a_w * h
             x[:, 4] += 0.5 * h * (w[:, k - 1] + w[:, k])
             P = F @ P @ F.transpose(0, 2, 1) + Qk
-            if smoother:
-                Phi = F @ Phi
+            kept.step(F)
         xp, Pp = x.copy(), P.copy()
         m = fixi[k]
         if m >= 0:
             x, P, nu[:, m], S_all[:, m] = kalman_update(x, P, Z[:, m, :], H, Rm)
-        if store[k]:
-            if smoother:
-                xs_p[:, j], Ps_p[:, j], Phis[:, j] = xp, Pp, Phi
-            xs_f[:, j], Ps_f[:, j] = x, P
-            Phi = eye.copy()
-            j += 1
+        kept.keep(k, x, P, xp, Pp)
 
-    if smoother:
-        xsm, Psm = rts(xs_f, Ps_f, xs_p, Ps_p, Phis)
-    else:
-        xsm, Psm = np.zeros((Rn, 0, n)), np.zeros((Rn, 0, n, n))
+    xsm, Psm = kept.smoothed()
     dt = float(np.median(np.diff(t)))
-    Qnom = np.zeros((n, n))
-    g = np.array([0.5 * dt * dt, dt])
-    for i in range(2):
-        Qnom[np.ix_([i, i + 2], [i, i + 2])] = sa2[i] * c[i] ** 2 * np.outer(g, g)
+    Qnom = nominal_q(n, sa2, c, dt)
     Qnom[4, 4] = sg2 * dt * dt
-    out = [xs_f, Ps_f, nu, S_all, xsm, Psm]
+    out = [kept.x_f, kept.P_f, nu, S_all, xsm, Psm]
     if not batched:
         out = [o[0] for o in out]
-    return TurningFusionResult(TURN_STATE_NAMES, t[store], out[0], out[1], fixi[store] >= 0,
-                               t_gps, out[2], out[3], out[4], out[5], P0, Qnom, Rm, sa2,
-                               False, dt, sg2)
+    st = kept.store
+    return TurningFusionResult(TURN_STATE_NAMES, t[st], out[0], out[1], fixi[st] >= 0, t_gps,
+                               out[2], out[3], out[4], out[5], P0, Qnom, Rm, sa2, False, dt,
+                               sg2)
 
 
 __all__ = ["TURN_STATE_NAMES", "TurningFusionResult", "body_to_world", "fuse_turning",
