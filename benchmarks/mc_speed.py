@@ -8,7 +8,7 @@ At N = 20001 (the course design, θ a full turn; course σ² = 0.25, 0.64 (m/s²
 
 (a) bound: runs/s of drawing the 2N normals of each run alone, with the engine's stream setup
     (``Generator(PCG64(SeedSequence(seed, spawn_key=(k,))))``, ``standard_normal`` into one
-    reused (N, 2) buffer — faster than a fresh array per run, so the stricter bound);
+    reused (2, N) buffer — faster than a fresh array per run, so the stricter bound);
 (b) the engine, generate + calibrate, in this process (``--workers 1``): target ≥ 0.85 (a);
 (c) the engine on a local pool of two processes (``bench.sweep.process_map(2)``, pool
     start-up included): target ≥ 1.6 (a);
@@ -50,15 +50,15 @@ TARGETS = {"engine_1": 0.85, "engine_2": 1.6, "fit": 0.1}
 
 def normals_only(runs: int, seed: int = 1) -> None:
     """The bound: each run's stream and its 2N normals, drawn into one reused buffer (the
-    fastest way to draw them: a fresh (N, 2) array per run costs page faults on top)."""
-    buf = np.empty((N, 2))
+    fastest way to draw them: a fresh (2, N) array per run costs page faults on top)."""
+    buf = np.empty((2, N))
     for k in range(runs):
         ss = np.random.SeedSequence(seed, spawn_key=(k,))
         np.random.Generator(np.random.PCG64(ss)).standard_normal(out=buf)
 
 
 def _normals_chunk(runs: range) -> int:
-    buf = np.empty((N, 2))
+    buf = np.empty((2, N))
     for k in runs:
         ss = np.random.SeedSequence(1, spawn_key=(k,))
         np.random.Generator(np.random.PCG64(ss)).standard_normal(out=buf)
@@ -132,10 +132,11 @@ def report(m: dict[str, float]) -> list[str]:
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer runs and repeats")
-    ap.add_argument("--runs", type=int, default=None, help="runs per timing (default 2000)")
+    ap.add_argument("--runs", type=int, default=None,
+                    help="runs per timing (default 5000; twice that for two processes)")
     ap.add_argument("--repeat", type=int, default=None, help="timings per figure (3)")
     a = ap.parse_args(argv)
-    runs = a.runs or (400 if a.quick else 2000)
+    runs = a.runs or (400 if a.quick else 5000)
     repeat = a.repeat or (2 if a.quick else 3)
     print("\n".join(report(measure(runs, repeat))))
 

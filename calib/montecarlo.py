@@ -11,13 +11,14 @@ the data, so with the design factored once (:func:`calib.ls.axis_factor`,
     p̂_a,k  = p_a + σ_a · A_a (Q_aᵀ v_a,k)             (exact: A Qᵀ H = I)
     RSS_a,k = σ_a² · (‖v_a,k‖² − ‖Q_aᵀ v_a,k‖²)
 
-A run's draws go into one reused (N, 2) buffer and are reduced at once (while in cache) to
+A run's draws go into one reused (2, N) buffer and are reduced at once (while in cache) to
 ``Qᵀv`` and ``‖v‖²`` per axis; the chunk's estimates are then small matrix products.
 Known σ² (``sigma2="given"``): covariance
 ``σ_a² A_a A_aᵀ``, the same for every run; estimated σ²: ``s_a² = RSS_a/(N − 2)`` per run and
 covariance ``s_a² A_a A_aᵀ``. ``χ²_a = RSS_a / σ²_used``.
 
-Seeds (:mod:`calib.runs`): run k draws ``standard_normal`` of shape (N, 2) (column x, then y)
+Seeds (:mod:`calib.runs`): run k draws ``standard_normal`` of shape (2, N) (row x, then row y:
+each axis' noise contiguous, so its reduction reads memory in order)
 from ``Generator(PCG64(SeedSequence(seed, spawn_key=spawn_key + (k,))))`` — the k-th child of
 ``run_seeds(seed, runs, spawn_key)`` — so results depend on ``(seed, runs, spawn_key)`` only,
 never on the chunk size, the mapper or the number of processes. ``calibrate()`` on the same
@@ -44,7 +45,7 @@ DEFAULT_CHUNK = 256
 """Runs per task. A task carries the factored design (≈ 0.64 MB at N = 20001), which costs
 ≈ 2 ms to ship to a local process (measured here), against ≈ 0.45 ms of work per run: 256 runs
 keep that under 2 %, and still give a progress count every ≈ 0.1 s of a core. Memory per task
-is one (N, 2) buffer whatever the chunk."""
+is one (2, N) buffer whatever the chunk."""
 
 
 def _ro(a) -> np.ndarray:
@@ -59,7 +60,7 @@ class BatchDesign:
 
     Use it directly to calibrate runs whose noise is drawn elsewhere (e.g. a run that also
     draws vehicle readings from the same stream): per run ``z, ss = design.reduce(v)`` on the
-    (N, 2) standard-normal draws, then ``design.estimates(Z, SS, truth, sd)`` for a batch.
+    (2, N) standard-normal draws, then ``design.estimates(Z, SS, truth, sd)`` for a batch.
 
     Attributes
     ----------
@@ -77,10 +78,10 @@ class BatchDesign:
 
     def reduce(self, v: np.ndarray, z: np.ndarray | None = None,
                ss: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """``(Qᵀv per axis (4,), ‖v_a‖² (2,))`` of one run's (N, 2) draws (into z, ss)."""
+        """``(Qᵀv per axis (4,), ‖v_a‖² (2,))`` of one run's (2, N) draws (into z, ss)."""
         z = np.empty(4) if z is None else z
         ss = np.empty(2) if ss is None else ss
-        vx, vy = v[:, 0], v[:, 1]
+        vx, vy = v[0], v[1]
         z[0:2], z[2:4] = self.qt[0] @ vx, self.qt[1] @ vy
         ss[0], ss[1] = vx @ vx, vy @ vy
         return z, ss
@@ -129,8 +130,8 @@ def run_generator(seed: int, k: int, spawn_key: tuple[int, ...] = ()) -> np.rand
 
 
 def draw_noise(seed: int, runs: range, n: int, spawn_key: tuple[int, ...] = ()) -> np.ndarray:
-    """Standard normal draws (len(runs), n, 2) of the runs in ``runs`` (module docstring)."""
-    buf = np.empty((len(runs), n, 2))
+    """Standard normal draws (len(runs), 2, n) of the runs in ``runs`` (module docstring)."""
+    buf = np.empty((len(runs), 2, n))
     key = tuple(int(k) for k in spawn_key)
     for j, k in enumerate(runs):
         run_generator(seed, k, key).standard_normal(out=buf[j])
@@ -140,12 +141,12 @@ def draw_noise(seed: int, runs: range, n: int, spawn_key: tuple[int, ...] = ()) 
 def _chunk(task: tuple) -> tuple[np.ndarray, np.ndarray]:
     """One chunk: ``(p̂ (r, 4), RSS (r, 2))`` of the runs in the range.
 
-    Each run is drawn into one reused (N, 2) buffer and reduced at once, while in cache, to
+    Each run is drawn into one reused (2, N) buffer and reduced at once, while in cache, to
     ``Qᵀv`` and ``‖v‖²`` per axis (:meth:`BatchDesign.reduce`); the estimates of the chunk
     follow element-wise (:meth:`BatchDesign.estimates`).
     """
     design, truth, sd, seed, key, runs = task
-    v = np.empty((design.n, 2))
+    v = np.empty((2, design.n))
     z = np.empty((len(runs), 4))
     ss = np.empty((len(runs), 2))
     for j, k in enumerate(runs):
@@ -344,7 +345,7 @@ def synthetic_readings(theta: np.ndarray, bias, scale, noise_var, seed: int, k: 
     theta = np.asarray(theta, dtype=float).ravel()
     v = draw_noise(seed, range(k, k + 1), theta.size, spawn_key)[0]
     clean = apply_errors(reference_accel(theta, g), bias, scale)
-    return clean + np.sqrt(np.asarray(noise_var, dtype=float)) * v
+    return clean + np.sqrt(np.asarray(noise_var, dtype=float)) * v.T
 
 
 __all__ = ["BatchDesign", "MonteCarloResult", "batch_design", "draw_noise", "run_generator",

@@ -47,7 +47,7 @@ def test_equals_calibrate_run_by_run(mode):
 def test_stream_of_run_k_is_the_kth_spawned_child():
     """The seed contract of calib.runs: run k draws from run_seeds(seed, runs, key)[k]."""
     ss = run_seeds(5, 23, (7,))[11]
-    want = np.random.default_rng(ss).standard_normal((THETA.size, 2))
+    want = np.random.default_rng(ss).standard_normal((2, THETA.size))
     np.testing.assert_array_equal(draw_noise(5, range(11, 12), THETA.size, (7,))[0], want)
     readings = synthetic_readings(THETA, BIAS, SCALE, NV, 5, 11, spawn_key=(7,))
     np.testing.assert_allclose(readings, synthetic_readings(THETA, BIAS, SCALE, NV, 5, 11,
@@ -170,11 +170,11 @@ def test_batch_design_on_noise_drawn_elsewhere():
     from calib.montecarlo import batch_design
 
     design = batch_design(THETA)
-    v = np.random.default_rng(4).standard_normal((THETA.size, 2))
+    v = np.random.default_rng(4).standard_normal((2, THETA.size))
     z, ss = design.reduce(v)
     truth = [BIAS[0], SCALE[0], BIAS[1], SCALE[1]]
     params, rss = design.estimates(z, ss, truth, np.sqrt(NV))
-    datos = apply_errors(reference_accel(THETA), BIAS, SCALE) + np.sqrt(NV) * v
+    datos = apply_errors(reference_accel(THETA), BIAS, SCALE) + np.sqrt(NV) * v.T
     cal = calibrate(Ensayo(THETA, datos), NV)
     np.testing.assert_allclose(params[0], cal.params, rtol=0, atol=1e-12)
     np.testing.assert_allclose(rss[0] / np.array(NV), [cal.fits[a].chi2 for a in "xy"],
