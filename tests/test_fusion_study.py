@@ -16,6 +16,7 @@ from scipy.stats import chi2
 from bench import fusion_study
 from bench.cli import main
 from bench.fusion_study import Scenario, StudyConfig, StudyResult, run_study
+from calib.consistency import mean_nees_band
 from calib.runs import serial_map
 from calib.units import missing_units
 
@@ -100,7 +101,7 @@ def path_study():
 
 def test_path_band_is_bonferroni_and_ranges_are_described():
     lo, hi = fusion_study.path_band(2, 200, 1)
-    assert (lo, hi) == pytest.approx(fusion_study._band_nees(2, 200))
+    assert (lo, hi) == pytest.approx(mean_nees_band(2, 200))
     lo60, hi60 = fusion_study.path_band(2, 200, 60)
     assert lo60 < lo and hi60 > hi  # wider per epoch: the family level stays NEES_ALPHA
     t = np.arange(6.0)

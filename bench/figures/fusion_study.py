@@ -20,7 +20,7 @@ METHOD_COLORS = {"dead_reckoning": "tab:blue", "fixes": "0.45", "filter": "tab:g
 def fusion_study_figure(result) -> plt.Figure:
     """Three panels: RMS error along the path (m), stated final-position std (m) — grouped
     bars per scenario, log scale, NEES outside its band marked ✗ — and the outage panel."""
-    from bench.fusion_study import METHODS
+    from bench.fusion_study_result import METHODS
 
     scen = result.scenarios
     fig = plt.figure(figsize=(13, 13.5), constrained_layout=True)
@@ -79,7 +79,7 @@ def path_nees_panel(ax, result, dof: int = 2) -> None:
     (dashed) and ÷10 (solid); the nominal's per-epoch Bonferroni band shaded (the mis-set
     scenarios have the same fix epochs and run count, hence the same band), its expected
     value ``dof`` dotted."""
-    from bench.fusion_study import NEES_ALPHA
+    from calib.consistency import NEES_ALPHA
 
     scns = result.config["scenarios"]
     names = {p.scenario for p in result.paths if p.method == "filter"}
