@@ -45,6 +45,11 @@ SYNTHETIC_SAMPLE_BYTES = 250
 """``nmin`` synthetic calibration of N samples (draw, fit, residuals): 173 B per sample
 measured (N = 10⁶: 271 MiB against 106 MiB at N = 10³)."""
 
+DESIGN_SAMPLE_BYTES = 8192
+"""``design``, per sample of the largest N in one process: the gap detection of a Monte Carlo
+run (its effect candidates and their profiles); 6.1 kB per sample measured (N = 200001:
+1.29 GiB against 0.22 GiB at N = 20001), rounded up."""
+
 SEED_STREAM_BYTES = 400
 """One spawned ``numpy.random.SeedSequence`` (378 B measured with tracemalloc): Monte Carlo
 loops spawn all their streams up front (``nmin --runs``, ``demo --coverage-runs``)."""

@@ -216,7 +216,7 @@ def test_unwritable_output_names_the_requested_file(capsys, tmp_path, monkeypatc
 
 HELP_COMMANDS = [["generate", "calibration"], ["generate", "vehicle"], ["generate", "course"],
                  ["generate", "class"], ["calibrate"], ["trajectory"], ["nmin"], ["fuse"],
-                 ["validate"], ["gap"], ["record", "read"], ["demo"]]
+                 ["validate"], ["gap"], ["record", "read"], ["demo"], ["design"], ["fusion-study"]]
 
 
 @pytest.mark.parametrize("command", HELP_COMMANDS, ids=" ".join)

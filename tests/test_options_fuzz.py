@@ -283,3 +283,15 @@ def test_trajectory_numbers(course, level, p0, v0):
 def test_nmin_numbers(course, level, mc_n, runs):
     _assert_clean(*_run("nmin", *_course_argv(course), f"--level={level!r}", "--steps", "1,2",
                         f"--mc-n={mc_n}", f"--runs={runs}", "--json"))
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(n=st.one_of(st.integers(-10, 5000), st.sampled_from([10**9, 10**15])),
+       rate=plausible(1e-6, 1e3), alpha=plausible(1e-9, 2.0),
+       size=plausible(-1.0, 1.0))
+def test_design_numbers(n, rate, alpha, size):
+    """`design` (analytic effects only: fast): a finite JSON result or a one-line error."""
+    _assert_clean(*_run("design", "--effects", "misalignment,tilt_offset", "--designs",
+                        "uniform,sweep", "--n", str(n), "--rate", repr(rate), "--alpha",
+                        repr(alpha), "--size", f"misalignment={size!r}", "--json",
+                        "--workers", "1"))

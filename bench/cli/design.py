@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 
+from bench import limits
 from bench.cli.options import (
     OptionError,
     add_force,
@@ -63,6 +64,8 @@ def _cmd_design(args: argparse.Namespace) -> int:
     rates = parse_floats(args.rate, "--rate")
     if any(n < 16 for n in ns):
         raise OptionError(f"--n {args.n}: every N must be >= 16")
+    # each process holds one experiment of the largest N at a time (bench/limits.py)
+    limits.check_memory(limits.DESIGN_SAMPLE_BYTES * max(ns), f"--n {max(ns)}")
     if any(not r > 0 for r in rates):
         raise OptionError(f"--rate {args.rate}: sweep rates must be positive (rad/s)")
     if not 0 < args.alpha < 1:
