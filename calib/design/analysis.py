@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
 
 import numpy as np
 
 from calib.conventions import AXES, G, reference_accel
+from calib.design import grid as mcgrid
 from calib.design.experiments import Experiment
 from calib.design.montecarlo import Cell, fraction, run_cells
 from calib.design.pairs import PAIRS, pair_key, told_apart
@@ -22,6 +24,7 @@ from calib.effects import AxisState, Extensions, ModelState, RunData, effect
 from calib.gap.confusions import AMBIGUITY_LR
 from calib.gap.selection import LATTICE_TESTS, _first_step, candidate_list
 from calib.ls import fit_axis
+from calib.proportion import clopper_pearson
 from calib.runs import Mapper
 
 DEFAULT_SIZES: dict[str, float] = {
@@ -116,11 +119,43 @@ def _pair_linear(d: _Design, a: str, b: str, size: float, axis: str) -> dict:
             "noncentrality": lam}
 
 
+def _hits(res: list, name: str, axis: str) -> int:
+    """Runs in which the gap named ``name`` on ``axis`` (or both axes)."""
+    return sum(any(n == name and a in (axis, "both") for n, a in named) for named, _ in res)
+
+
+def _grid_row(s: np.ndarray, f: np.ndarray, to_size: Callable[[float], float],
+              hits: list[int], runs: int) -> dict:
+    """The grid entries of a Monte Carlo row (:mod:`calib.design.grid`): sizes, powers with
+    their exact 95 % intervals, the isotonic fit, and the smallest sizes with 80 / 95 %
+    (``size_P``, and ``size_P_mc``: relation "=", "<" or ">" in size, the bracketing grid
+    sizes and the exact 95 % intervals of their powers)."""
+    sizes = [to_size(float(x)) for x in s]
+    powers = [h / runs for h in hits]
+    ci = [list(clopper_pearson(h, runs)) for h in hits]
+    fit = mcgrid.isotonic(powers)
+    rising = sizes[-1] > sizes[0]  # size grows with strength (saturation: it falls)
+    out: dict = {"grid": {"factors": [float(x) for x in f], "strength": [float(x) for x in s],
+                          "sizes": sizes, "hits": [int(h) for h in hits], "powers": powers,
+                          "power_ci95": ci, "powers_monotone": [float(x) for x in fit],
+                          "runs": int(runs)}}
+    for p in LEVELS:
+        sp, rel, k = mcgrid.smallest_strength(s, fit, p)
+        idx = [k - 1, k] if rel == "=" else [0] if rel == "<" else [len(s) - 1]
+        if not rising and rel != "=":
+            rel = {"<": ">", ">": "<"}[rel]
+        out[f"size_{round(100 * p)}"] = to_size(sp)
+        out[f"size_{round(100 * p)}_mc"] = {"relation": rel, "bracket": [sizes[j] for j in idx],
+                                            "bracket_power_ci95": [ci[j] for j in idx]}
+    return out
+
+
 def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
                    sizes: Mapping[str, float] | None = None, noise_var=(0.25, 0.64),
                    family_alpha: float = 0.005, axis: str = "x", runs: int = 20,
                    seed: int = 0, g: float = G, mapper: Mapper | None = None,
-                   progress: Callable[[str], None] | None = None) -> DesignResult:
+                   progress: Callable[[str], None] | None = None,
+                   mc_grid: int = 0) -> DesignResult:
     """Power of the gap detection for each experiment and effect, and of the pairs.
 
     Parameters
@@ -132,6 +167,9 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
         is ``family_alpha / m`` for each experiment).  axis : the axis carrying per-axis
         effects.  runs, seed : Monte Carlo runs per cell and seed (0 runs: analytic only).
     mapper : :class:`calib.runs.Mapper` for the Monte Carlo.  progress : message callback.
+    mc_grid : K ≥ 2: each Monte Carlo cell is also run at K sizes on a geometric grid of the
+        effect's strength around the asked size (:mod:`calib.design.grid`; the same noise
+        streams at every size), giving its 80 % / 95 % sizes; 0: the asked size only.
 
     Returns
     -------
@@ -146,6 +184,8 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
         raise ValueError(f"family_alpha must be in (0, 1), got {family_alpha}")
     if axis not in AXES:
         raise ValueError(f"axis must be x or y, got {axis!r}")
+    if mc_grid:
+        mcgrid.factors(mc_grid)  # K >= 2, else ValueError
     unknown = [e for e in effects if e not in LINEAR + SIMULATED]
     if unknown:
         raise ValueError(f"no design power for {', '.join(unknown)}; choose from "
@@ -171,16 +211,38 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
                 cells.append(Cell(d.exp, name, float(sizes[name]), axis, (nv[0], nv[1]), g,
                                   family_alpha))
                 where.append((i, name))
+    # grid cells (mc_grid): cell j's sizes share its spawn key (j,), so run r draws the same
+    # noise at every size; the factor 1 of an odd K is cell j itself
+    extra, keys, grids = [], [(j,) for j in range(len(cells))], []
+    f = mcgrid.factors(mc_grid) if mc_grid else np.ones(0)
+    for j, c in enumerate(cells if mc_grid else []):
+        s0 = mcgrid.strength(c.name, c.size, nv, axis, g)
+        def to_size(x, c=c):
+            return mcgrid.size_from(c.name, x, c.size, nv, axis, g)
+        ids = []
+        for fk in f:
+            if fk == 1.0:
+                ids.append(j)
+                continue
+            ids.append(len(cells) + len(extra))
+            extra.append(replace(c, size=to_size(s0 * fk)))
+            keys.append((j,))
+        grids.append((s0 * f, ids, to_size))
     outcomes: list = []
     if cells:
-        say(f"Monte Carlo: {len(cells)} cell(s) × {runs} runs through the gap detection")
-        outcomes = run_cells(cells, runs, seed, mapper,
-                             lambda done, total: say(f"Monte Carlo chunks {done}/{total}"))
+        say(f"Monte Carlo: {len(cells) + len(extra)} cell(s) × {runs} runs through the gap "
+            "detection")
+        outcomes = run_cells(cells + extra, runs, seed, mapper,
+                             lambda done, total: say(f"Monte Carlo chunks {done}/{total}"),
+                             keys=keys)
     mc = {}
-    for (i, name), res in zip(where, outcomes, strict=True):
-        hits = sum(any(n == name and a in (axis, "both") for n, a in named)
-                   for named, _ in res)
-        table[name]["per_experiment"][i] = {"testable": True, **fraction(hits, runs)}
+    for j, ((i, name), res) in enumerate(zip(where, outcomes, strict=False)):
+        row = {"testable": True, **fraction(_hits(res, name, axis), runs)}
+        if mc_grid:
+            s, ids, to_size = grids[j]
+            row.update(_grid_row(s, f, to_size, [_hits(outcomes[k], name, axis) for k in ids],
+                                 runs))
+        table[name]["per_experiment"][i] = row
         mc[(i, name)] = res
     pairs: dict[str, dict] = {}
     for a, b in PAIRS:
@@ -206,5 +268,7 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
     settings = {"family_alpha": float(family_alpha), "noise_var": [float(v) for v in nv],
                 "axis": axis, "runs": int(runs), "seed": int(seed), "g": float(g),
                 "ambiguity_lr": float(AMBIGUITY_LR)}
+    if mc_grid:
+        settings.update({"mc_grid": int(mc_grid), "mc_span": mcgrid.SPAN})
     return DesignResult(settings, tuple(exps), table, pairs)
 

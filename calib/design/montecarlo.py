@@ -54,13 +54,19 @@ def _run_chunk(task: tuple[Cell, list[np.random.SeedSequence]]) -> list[tuple[li
 
 
 def run_cells(cells: list[Cell], runs: int, seed: int, mapper: Mapper | None = None,
-              progress=None) -> list[list[tuple[list, list]]]:
-    """The runs of every cell (cell i uses spawn key (i,)), mapped in chunks of
-    :data:`CHUNK` runs. ``progress(done, total)`` counts chunks."""
+              progress=None, keys: list[tuple[int, ...]] | None = None
+              ) -> list[list[tuple[list, list]]]:
+    """The runs of every cell (cell i uses spawn key ``keys[i]``, default (i,)), mapped in
+    chunks of :data:`CHUNK` runs. ``progress(done, total)`` counts chunks.
+
+    Cells sharing a spawn key share their noise streams run by run (common random numbers:
+    :func:`calib.design.signals.readings` draws the same normals whatever the size), as the
+    sizes of a grid (:mod:`calib.design.grid`) do."""
     mapper = mapper or serial_map
+    keys = keys or [(i,) for i in range(len(cells))]
     tasks, owner = [], []
     for i, cell in enumerate(cells):
-        seeds = run_seeds(seed, runs, spawn_key=(i,))
+        seeds = run_seeds(seed, runs, spawn_key=keys[i])
         for rg in chunk_ranges(runs, CHUNK):
             tasks.append((cell, [seeds[j] for j in rg]))
             owner.append(i)

@@ -7,6 +7,10 @@ from dataclasses import dataclass
 from calib.results import ResultMixin
 from calib.units import UNITS_KEY, with_units
 
+STRENGTH_UNITS = {"saturation": "1", "noise_level": "1"}
+"""Unit of the grid strength (:mod:`calib.design.grid`) where it is not the size's unit:
+ln(g/L) and |ln(v/σ²)| are ratios."""
+
 
 def _pct(p: float | None) -> str:
     return "—" if p is None else f"{100 * p:5.1f} %"
@@ -24,6 +28,40 @@ def _size(v: float | None, unit: str) -> str:
     return "—" if v is None else f"{v:.3g} {unit}"
 
 
+def _mc_size(r: dict, level: int, unit: str) -> str:
+    """A size from a Monte Carlo grid: marked MC, a bound ("> …", "< …") when the grid's
+    powers never (or already at its smallest size) reach the level."""
+    mc = r.get(f"size_{level}_mc")
+    if mc is None:
+        return _size(r.get(f"size_{level}"), unit)
+    rel = "" if mc["relation"] == "=" else mc["relation"] + " "
+    return f"{rel}{_size(r[f'size_{level}'], unit)} MC"
+
+
+def _grid_notes(effects: dict, runs: int) -> list[str]:
+    """Per Monte Carlo row with a grid: the bracketing grid sizes of the 80 / 95 % sizes and
+    the exact 95 % intervals of their powers (what R runs per point support)."""
+    out = []
+    for name, e in effects.items():
+        for i, r in enumerate(e["per_experiment"]):
+            if "grid" not in r:
+                continue
+            parts = []
+            for level in (80, 95):
+                mc = r[f"size_{level}_mc"]
+                br = ", ".join(f"{_size(v, e['unit'])} ({100 * lo:.0f}–{100 * hi:.0f} %)"
+                               for v, (lo, hi) in zip(mc["bracket"], mc["bracket_power_ci95"],
+                                                      strict=True))
+                parts.append(f"{level} %: {_mc_size(r, level, e['unit'])} [{br}]")
+            lines = "; ".join(parts)
+            out.append(f"  {name} [{i}] {lines}")
+    if out:
+        out = ["", f"Monte Carlo sizes (MC): isotonic fit of the grid powers, interpolated in "
+                   f"ln(strength); {runs} runs per grid point, so each bracketing point's power "
+                   "is known only to its exact 95 % interval (in brackets):", *out]
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class DesignResult(ResultMixin):
     """Power per experiment and effect (JSON: :meth:`to_dict`, units in ``"units"``).
@@ -34,7 +72,11 @@ class DesignResult(ResultMixin):
     effects : name → axis, size, unit, method ("analytic" | "monte_carlo") and
         ``per_experiment`` rows: testable, power (fraction), analytic: noncentrality λ,
         lambda_unit (λ at unit coefficient), df, critical value, size_80 and size_95 (the
-        effect's unit); Monte Carlo: power_std (binomial), runs.
+        effect's unit); Monte Carlo: power_std (binomial), power_ci95 (exact), runs; with
+        a grid (``settings.mc_grid``, :mod:`calib.design.grid`) also ``grid`` (factors,
+        strength, sizes, hits, powers, power_ci95, powers_monotone, runs), size_80 and
+        size_95, and ``size_80_mc`` / ``size_95_mc`` (relation "=", "<" or ">", bracketing
+        grid sizes, the exact 95 % intervals of their powers).
     pairs : "A-vs-B" → names, size of A, unit, method, per_experiment power (to tell A,
         true, from B).
     """
@@ -59,6 +101,20 @@ class DesignResult(ResultMixin):
                 u[f"effects.{name}.{k}"] = e["unit"]
         for key, e in self.pairs.items():
             u[f"pairs.{key}.size"] = e["unit"]
+        if self.settings.get("mc_grid"):
+            u.update({"settings.mc_grid": "count", "settings.mc_span": "1"})
+            for name, e in self.effects.items():
+                pe = f"effects.{name}.per_experiment"
+                u.update({f"{pe}.grid.sizes": e["unit"], f"{pe}.size_80_mc.bracket": e["unit"],
+                          f"{pe}.size_95_mc.bracket": e["unit"],
+                          f"{pe}.grid.strength": STRENGTH_UNITS.get(name, e["unit"])})
+            u.update({"effects.*.per_experiment.grid.factors": "1",
+                      "effects.*.per_experiment.grid.hits": "count",
+                      "effects.*.per_experiment.grid.powers": "1",
+                      "effects.*.per_experiment.grid.power_ci95": "1",
+                      "effects.*.per_experiment.grid.powers_monotone": "1",
+                      "effects.*.per_experiment.grid.runs": "count",
+                      "effects.*.per_experiment.*.bracket_power_ci95": "1"})
         u.update({"effects.*.per_experiment.power": "1",
                   "effects.*.per_experiment.power_std": "1",
                   "effects.*.per_experiment.power_ci95": "1",
@@ -108,8 +164,9 @@ class DesignResult(ResultMixin):
                 else:
                     pw = _power(r)
                 lines.append(f"{head if i == 0 else '':<40} [{i}] {pw:>18} "
-                             f"{_size(r.get('size_80'), e['unit']):>16} "
-                             f"{_size(r.get('size_95'), e['unit']):>16}")
+                             f"{_mc_size(r, 80, e['unit']):>16} "
+                             f"{_mc_size(r, 95, e['unit']):>16}")
+        lines += _grid_notes(self.effects, s["runs"])
         if self.pairs:
             lines += ["", "Telling apart (A true, B the look-alike; the gap's 2 ln 10 margin):"]
             for e in self.pairs.values():
