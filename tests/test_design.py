@@ -125,3 +125,107 @@ def test_cli_json_has_units_and_plot_writes_png(tmp_path, capsys):
 def test_bad_options_are_clear_errors(capsys, argv, words):
     assert main(["design", *argv]) == 2
     assert words in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ --mc-grid
+def test_isotonic_fit_and_log_interpolation():
+    """Pool adjacent violators by hand: (0.3, 0.2) → 0.25 each, (0.6, 0.5) → 0.55; the sum
+    is kept. 80 % between fitted 0.7 at s = 2 and 0.9 at s = 4: halfway in ln s, 2·√2."""
+    from calib.design.grid import factors, isotonic, smallest_strength
+
+    fit = isotonic([0.1, 0.3, 0.2, 0.6, 0.5, 0.9])
+    assert np.allclose(fit, [0.1, 0.25, 0.25, 0.55, 0.55, 0.9])
+    assert np.all(np.diff(isotonic([1.0, 0.0, 0.5, 0.2])) >= 0)
+    assert smallest_strength([1, 2, 4], [0.5, 0.7, 0.9], 0.8) == (
+        pytest.approx(2 * np.sqrt(2)), "=", 2)
+    assert smallest_strength([1, 2, 4], [0.85, 0.9, 0.9], 0.8)[1:] == ("<", 0)
+    assert smallest_strength([1, 2, 4], [0.1, 0.2, 0.3], 0.8)[1:] == (">", None)
+    assert np.allclose(factors(5), [0.25, 0.5, 1, 2, 4]) and factors(5)[2] == 1.0
+
+
+def test_mc_grid_strength_inverts_and_saturation_runs_the_other_way():
+    from calib.design.grid import size_from, strength
+
+    for name, size in (("saturation", 9.6), ("noise_level", 0.3), ("noise_level", 0.2),
+                       ("lowpass_lag", 0.05)):
+        s = strength(name, size, NV, "x", G)
+        assert s > 0 and size_from(name, s, size, NV, "x", G) == pytest.approx(size)
+    assert size_from("saturation", 2 * strength("saturation", 9.6, NV, "x", G), 9.6, NV,
+                     "x", G) < 9.6  # stronger clipping = a lower limit
+    with pytest.raises(ValueError, match="below g"):
+        strength("saturation", 10.0, NV, "x", G)
+
+
+MC_ARGV = ["design", "--designs", "reversal", "--n", "101", "--runs", "6", "--seed", "1",
+           "--effects", "misalignment,lowpass_lag", "--json"]
+
+
+def test_mc_grid_monotone_bracketed_worker_independent_and_opt_in(capsys):
+    """lowpass_lag on a short reversal, 6 runs a point, K = 5: the isotonic powers do not
+    fall, the 80 % size lies between its bracketing grid sizes (where the fitted power
+    crosses 80 %), the bytes are the same in-process and on a 2-process pool; without
+    --mc-grid there are no grid keys, and the analytic row, the asked size's power and the
+    pairs are the same with and without the grid."""
+    outs = []
+    for extra in (["--workers", "1"], ["--workers", "1", "--mc-grid", "5"],
+                  ["--workers", "2", "--mc-grid", "5"]):
+        assert main([*MC_ARGV, *extra]) == 0
+        outs.append(capsys.readouterr().out)
+    assert outs[1] == outs[2]
+    plain, grid = json.loads(outs[0]), json.loads(outs[1])
+    from calib.units import missing_units
+    assert missing_units(grid) == []
+    assert "mc_grid" not in plain["settings"] and "grid" not in outs[0]
+    assert plain["effects"]["misalignment"] == grid["effects"]["misalignment"]
+    assert plain["pairs"] == grid["pairs"]
+    row0 = plain["effects"]["lowpass_lag"]["per_experiment"][0]
+    row = grid["effects"]["lowpass_lag"]["per_experiment"][0]
+    assert not any(k.startswith("size_") for k in row0)
+    assert {k: row[k] for k in row0} == row0
+    g = row["grid"]
+    assert g["sizes"][2] == 0.05 and g["powers"][2] == row["power"]  # factor 1: the asked run
+    fit = np.array(g["powers_monotone"])
+    assert np.all(np.diff(fit) >= 0)
+    mc = row["size_80_mc"]
+    assert mc["relation"] == "="  # the case is chosen so that the grid brackets 80 %
+    lo, hi = mc["bracket"]
+    assert lo < row["size_80"] <= hi
+    k = g["sizes"].index(hi)
+    assert fit[k - 1] < 0.8 <= fit[k]
+    assert mc["bracket_power_ci95"] == [g["power_ci95"][k - 1], g["power_ci95"][k]]
+
+
+def test_mc_grid_common_random_numbers():
+    """Every size of a cell gets the same per-run streams (spawn key of the asked cell), and
+    readings() draws the same noise whatever the size: two sizes' readings of one stream
+    differ by the effect alone (lag: the two low-pass outputs on x, nothing on y)."""
+    from calib.conventions import reference_accel
+    from calib.design.signals import readings
+    from calib.filters import lowpass
+
+    seen = []
+
+    def mapper(fn, tasks, progress=None):  # records the tasks; no gap runs (cheap)
+        seen.extend(tasks)
+        return [[([], [])] * len(seeds) for _, seeds in tasks]
+
+    exp = Experiment("reversal", 101, 0.314)
+    analyze_design([exp], ["lowpass_lag", "saturation"], {}, NV, runs=3, seed=5, mc_grid=4,
+                   mapper=mapper)
+    for name in ("lowpass_lag", "saturation"):
+        streams = {c.size: [(ss.entropy, ss.spawn_key) for ss in seeds]
+                   for c, seeds in seen if c.name == name}
+        # even K = 4: the four grid sizes and the asked one (not on the grid)
+        assert len(streams) == 5 and len({tuple(v) for v in streams.values()}) == 1
+    other = [(ss.entropy, ss.spawn_key) for c, seeds in seen if c.name == "saturation"
+             for ss in seeds]
+    assert other[0] != [(ss.entropy, ss.spawn_key) for c, seeds in seen
+                        if c.name == "lowpass_lag" for ss in seeds][0]
+    ss = seen[0][1][0]
+    ya, yb = (readings(exp, "lowpass_lag", tau, "x", np.array(NV), G,
+                       np.random.default_rng(ss)) for tau in (0.02, 0.08))
+    ar = reference_accel(exp.theta(), G)[:, 0]
+    assert np.allclose(ya[:, 0] - yb[:, 0],
+                       lowpass(ar, exp.times(), 0.02) - lowpass(ar, exp.times(), 0.08),
+                       rtol=0, atol=1e-12)
+    assert np.array_equal(ya[:, 1], yb[:, 1])

@@ -14,7 +14,9 @@ from calib.design.signals import coefficients
 def design_figure(res: DesignResult) -> Figure:
     """Analytic effects: power vs size (``P(χ²_k(λ₁c²) > crit)``), one curve per experiment,
     the 80 % and 95 % lines and the chosen size; Monte Carlo effects: the power at the chosen
-    size ± 2 binomial std per experiment."""
+    size with its exact 95 % interval per experiment, or with a grid (``--mc-grid``) the
+    powers at the grid sizes with their exact 95 % intervals joined by lines (dashed: the
+    isotonic fit), on a log size axis."""
     names = list(res.effects)
     cols = 3
     rows = max(1, -(-len(names) // cols))
@@ -38,6 +40,14 @@ def design_figure(res: DesignResult) -> Figure:
                        for s in sizes]
                 ax.plot(sizes, power_from_lambda(np.array(lam), r["df"], r["critical"]),
                         color=col, label=label)
+            elif "grid" in r:  # --mc-grid: the powers at the grid sizes, joined
+                gr = r["grid"]
+                ci = np.array(gr["power_ci95"])
+                pw = np.array(gr["powers"])
+                ax.errorbar(gr["sizes"], pw, yerr=[pw - ci[:, 0], ci[:, 1] - pw], fmt="o-",
+                            color=col, capsize=3, ms=4,
+                            label=label + f" (MC, {gr['runs']} runs a point, exact 95 %)")
+                ax.plot(gr["sizes"], gr["powers_monotone"], color=col, ls="--", lw=0.8)
             else:
                 lo, hi = r["power_ci95"]
                 ax.errorbar([e["size"]], [r["power"]],
@@ -46,6 +56,8 @@ def design_figure(res: DesignResult) -> Figure:
         for p in (0.8, 0.95):
             ax.axhline(p, color="0.5", ls=":", lw=1)
         ax.axvline(e["size"], color="k", lw=0.8, ls="--")
+        if any("grid" in r for r in e["per_experiment"]):
+            ax.set_xscale("log")
         ax.set_ylim(-0.03, 1.03)
         ax.set_title(f"{name} ({e['axis']}), {e['method']}", fontsize=9)
         ax.set_xlabel(f"size ({e['unit']})")
