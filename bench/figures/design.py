@@ -5,6 +5,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from calib.design import DesignResult, power_from_lambda
 from calib.design.experiments import Experiment
@@ -16,7 +17,7 @@ def design_figure(res: DesignResult) -> Figure:
     the 80 % and 95 % lines and the chosen size; Monte Carlo effects: the power at the chosen
     size with its exact 95 % interval per experiment, or with a grid (``--mc-grid``) the
     powers at the grid sizes with their exact 95 % intervals joined by lines (dashed: the
-    isotonic fit), on a log size axis."""
+    isotonic fit), on a log size axis when the grid spans more than ×3."""
     names = list(res.effects)
     cols = 3
     rows = max(1, -(-len(names) // cols))
@@ -56,8 +57,13 @@ def design_figure(res: DesignResult) -> Figure:
         for p in (0.8, 0.95):
             ax.axhline(p, color="0.5", ls=":", lw=1)
         ax.axvline(e["size"], color="k", lw=0.8, ls="--")
-        if any("grid" in r for r in e["per_experiment"]):
+        spans = [max(r["grid"]["sizes"]) / min(r["grid"]["sizes"])
+                 for r in e["per_experiment"] if "grid" in r]
+        if spans and max(spans) > 3.0:  # a wide grid: log size (saturation's stays linear)
             ax.set_xscale("log")
+            ax.xaxis.set_minor_formatter(NullFormatter())
+            ticks = next(r["grid"]["sizes"] for r in e["per_experiment"] if "grid" in r)
+            ax.set_xticks(ticks, [f"{v:.3g}" for v in ticks])
         ax.set_ylim(-0.03, 1.03)
         ax.set_title(f"{name} ({e['axis']}), {e['method']}", fontsize=9)
         ax.set_xlabel(f"size ({e['unit']})")

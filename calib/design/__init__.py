@@ -3,7 +3,8 @@
 For candidate experiments (:mod:`~calib.design.experiments`) and the catalog effects at given
 sizes, :func:`analyze_design` reports the nominal fit's parameter std, the power to detect
 each effect with the gap workflow's own test and α, the smallest size detected with 80 % and
-95 % power, and the power to tell apart the confusable pairs.
+95 % power (Monte Carlo effects: with ``mc_grid``), and the power to tell apart the
+confusable pairs.
 
 One job per module:
 
@@ -12,6 +13,8 @@ One job per module:
   synthetic readings for the Monte Carlo.
 * :mod:`~calib.design.power`       — analytic: non-central χ² power, λ, smallest sizes.
 * :mod:`~calib.design.montecarlo`  — Monte Carlo through :func:`calib.gap.analyze_gap`.
+* :mod:`~calib.design.grid`        — Monte Carlo effects on a grid of sizes (``mc_grid``):
+  strength, isotonic fit, the 80 % / 95 % sizes.
 * :mod:`~calib.design.pairs`       — the confusable pairs.
 * :mod:`~calib.design.result`      — :class:`DesignResult`.
 * :mod:`~calib.design.analysis`    — :func:`analyze_design`, end to end.
