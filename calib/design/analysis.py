@@ -124,13 +124,12 @@ def _hits(res: list, name: str, axis: str) -> int:
     return sum(any(n == name and a in (axis, "both") for n, a in named) for named, _ in res)
 
 
-def _grid_row(s: np.ndarray, f: np.ndarray, to_size: Callable[[float], float],
-              hits: list[int], runs: int) -> dict:
+def _grid_row(s: np.ndarray, f: np.ndarray, sizes: list[float],
+              to_size: Callable[[float], float], hits: list[int], runs: int) -> dict:
     """The grid entries of a Monte Carlo row (:mod:`calib.design.grid`): sizes, powers with
     their exact 95 % intervals, the isotonic fit, and the smallest sizes with 80 / 95 %
     (``size_P``, and ``size_P_mc``: relation "=", "<" or ">" in size, the bracketing grid
     sizes and the exact 95 % intervals of their powers)."""
-    sizes = [to_size(float(x)) for x in s]
     powers = [h / runs for h in hits]
     ci = [list(clopper_pearson(h, runs)) for h in hits]
     fit = mcgrid.isotonic(powers)
@@ -219,15 +218,17 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
         s0 = mcgrid.strength(c.name, c.size, nv, axis, g)
         def to_size(x, c=c):
             return mcgrid.size_from(c.name, x, c.size, nv, axis, g)
-        ids = []
+        ids, at = [], []
         for fk in f:
-            if fk == 1.0:
+            if fk == 1.0:  # the asked size, exactly
                 ids.append(j)
+                at.append(c.size)
                 continue
             ids.append(len(cells) + len(extra))
-            extra.append(replace(c, size=to_size(s0 * fk)))
+            at.append(to_size(s0 * fk))
+            extra.append(replace(c, size=at[-1]))
             keys.append((j,))
-        grids.append((s0 * f, ids, to_size))
+        grids.append((s0 * f, ids, at, to_size))
     outcomes: list = []
     if cells:
         say(f"Monte Carlo: {len(cells) + len(extra)} cell(s) × {runs} runs through the gap "
@@ -236,12 +237,12 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
                              lambda done, total: say(f"Monte Carlo chunks {done}/{total}"),
                              keys=keys)
     mc = {}
-    for j, ((i, name), res) in enumerate(zip(where, outcomes, strict=False)):
+    for j, ((i, name), res) in enumerate(zip(where, outcomes[:len(cells)], strict=True)):
         row = {"testable": True, **fraction(_hits(res, name, axis), runs)}
         if mc_grid:
-            s, ids, to_size = grids[j]
-            row.update(_grid_row(s, f, to_size, [_hits(outcomes[k], name, axis) for k in ids],
-                                 runs))
+            s, ids, at, to_size = grids[j]
+            row.update(_grid_row(s, f, at, to_size,
+                                 [_hits(outcomes[k], name, axis) for k in ids], runs))
         table[name]["per_experiment"][i] = row
         mc[(i, name)] = res
     pairs: dict[str, dict] = {}
