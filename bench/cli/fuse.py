@@ -10,7 +10,9 @@ The calibration comes from ``--calibration`` or is fitted on ``--ensayo`` (as
 ``trajectory``); P0, V0 and the noise variances come from ``--datos`` (else the course
 values, the noise estimated). With a ``gyro`` variable in acel.mat (``generate vehicle
 --turning``) the extended filter :func:`calib.fusion_turning.fuse_turning` runs instead
-(``--gyro-sigma``, ``--psi0``, ``--psi0-sigma``). The filter is :func:`calib.fusion.fuse`
+(``--gyro-sigma``, ``--psi0``, ``--psi0-sigma``); its ``--plot``/``--rrd`` dead reckoning is
+:func:`calib.turning_trajectory.turning_dead_reckoning`, drawn without a region (the heading
+error is not propagated), with the heading added. The filter is :func:`calib.fusion.fuse`
 (docs/fusion.md): Q from
 the stated noise and the calibration covariance, R from the receiver's σ, P0 from the
 calibration covariance and the initial position/velocity σ of ``--p0-std`` / ``--v0-std``
