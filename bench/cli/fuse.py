@@ -10,7 +10,9 @@ The calibration comes from ``--calibration`` or is fitted on ``--ensayo`` (as
 ``trajectory``); P0, V0 and the noise variances come from ``--datos`` (else the course
 values, the noise estimated). With a ``gyro`` variable in acel.mat (``generate vehicle
 --turning``) the extended filter :func:`calib.fusion_turning.fuse_turning` runs instead
-(``--gyro-sigma``, ``--psi0``, ``--psi0-sigma``). The filter is :func:`calib.fusion.fuse`
+(``--gyro-sigma``, ``--psi0``, ``--psi0-sigma``); its ``--plot``/``--rrd`` dead reckoning is
+:func:`calib.turning_trajectory.turning_dead_reckoning`, drawn without a region (the heading
+error is not propagated), with the heading added. The filter is :func:`calib.fusion.fuse`
 (docs/fusion.md): Q from
 the stated noise and the calibration covariance, R from the receiver's σ, P0 from the
 calibration covariance and the initial position/velocity σ of ``--p0-std`` / ``--v0-std``
@@ -92,22 +94,24 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
            "units": {"decision.level": "1", "decision.mahalanobis.*": "1"}}
     check_finite(out, "the result")
     if args.plot or args.rrd:
-        from calib.region import arrival_region
-        from calib.trajectory import compute_trajectory
-
-        traj = compute_trajectory(acel, cal, p0, v0)
-        region = arrival_region(traj, cal, candidates, noise_var, level)
+        traj, region = _dead_reckoning(acel, cal, candidates, p0, v0, noise_var, level,
+                                       float(args.psi0))
+        truth, true_path, true_heading = _truth(args)
+        # a turning run (no dead-reckoning region): candidates, the true heading and, on the
+        # figure too, the true path
+        turning = ({} if region is not None else
+                   {"candidates": candidates, "true_heading": true_heading})
     if args.plot:
         from bench.figures.fusion import save_fusion_plot
 
         save_fusion_plot(args.plot, traj, region, res, fixes.pos[inside], level, letter,
-                         force=args.force)
+                         force=args.force, **turning,
+                         **({"true_path": true_path} if turning else {}))
     if args.rrd:
         from bench.record.fusion import record_fusion
 
-        truth, true_path = _truth(args)
         record_fusion(args.rrd, traj, region, res, fixes.pos[inside], decision, level,
-                      force=args.force, truth=truth, true_path=true_path)
+                      force=args.force, truth=truth, true_path=true_path, **turning)
     if args.json:
         print_json(out)
         return 0
@@ -129,10 +133,6 @@ def _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos, 
     if args.gps_vel_sigma is not None:
         raise OptionError("--gps-vel-sigma: the turning filter (acel.mat with 'gyro') uses "
                           "position fixes only")
-    for opt, value in (("--plot", args.plot), ("--rrd", args.rrd)):
-        if value:
-            raise OptionError(f"{opt}: the picture's dead reckoning is the non-rotating one; "
-                              "not available for a turning run (acel.mat with 'gyro')")
     gyro_sigma = check_positive(args.gyro_sigma, "--gyro-sigma")
     psi0_sigma = float(args.psi0_sigma)
     if not psi0_sigma >= 0.0:
@@ -144,9 +144,26 @@ def _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos, 
                         psi0_var=psi0_sigma ** 2, smoother=args.smoother)
 
 
+def _dead_reckoning(acel, cal, candidates, p0, v0, noise_var, level: float, psi0: float):
+    """Dead reckoning for the pictures: the course one with its level-L arrival region, or for
+    a turning run (acel.gyro) :func:`calib.turning_trajectory.turning_dead_reckoning` from
+    ``--psi0`` without a region (None: the heading error is not propagated)."""
+    if acel.gyro is not None:
+        from calib.turning_trajectory import turning_dead_reckoning
+
+        traj = turning_dead_reckoning(acel.t, acel.aerr, acel.gyro, cal.bias, cal.scale, p0,
+                                      v0, psi0)
+        return traj, None
+    from calib.region import arrival_region
+    from calib.trajectory import compute_trajectory
+
+    traj = compute_trajectory(acel, cal, p0, v0)
+    return traj, arrival_region(traj, cal, candidates, noise_var, level)
+
+
 def _truth(args: argparse.Namespace):
-    """``--truth``, else ``truth.json`` beside ``--acel`` (None if absent): the manifest and
-    its true path (the samples every second, m), for the recording."""
+    """``--truth``, else ``truth.json`` beside ``--acel`` (None if absent): the manifest, its
+    true path (the samples every second, m) and, turning, its heading (t s, ψ rad)."""
     from pathlib import Path
 
     import numpy as np
@@ -157,11 +174,13 @@ def _truth(args: argparse.Namespace):
     if not path.exists():
         if args.truth:
             raise OptionError(f"--truth {args.truth}: file not found")
-        return None, None
+        return None, None, None
     manifest = load_json(path, "truth")
     samples = manifest.get("vehicle", {}).get("trajectory", {}).get("samples", {})
-    pos = samples.get("pos")
-    return manifest, None if pos is None else np.asarray(pos, dtype=float)
+    pos, psi, ts = samples.get("pos"), samples.get("heading"), samples.get("t")
+    heading = (None if psi is None or ts is None
+               else (np.asarray(ts, dtype=float), np.asarray(psi, dtype=float)))
+    return manifest, None if pos is None else np.asarray(pos, dtype=float), heading
 
 
 def register(sub) -> None:
@@ -190,11 +209,12 @@ def register(sub) -> None:
     p.add_argument("--smoother", action="store_true",
                    help="also run the Rauch-Tung-Striebel smoother")
     p.add_argument("--plot", help="write a figure (.png or .svg): dead reckoning, fixes, "
-                                  "the fused path and both arrival regions")
+                                  "the fused path and both arrival regions (turning run: "
+                                  "no dead-reckoning region, the truth and a heading panel)")
     p.add_argument("--rrd", help="write a rerun recording: truth (if known), dead reckoning, "
-                                 "fixes, the fused path with its ellipses, the innovations "
-                                 "(docs/recordings.md)")
-    p.add_argument("--truth", help="truth.json for the recording (default: truth.json beside "
-                                   "--acel, if there is one)")
+                                 "fixes, the fused path with its ellipses, the innovations, "
+                                 "the heading of a turning run (docs/recordings.md)")
+    p.add_argument("--truth", help="truth.json for the recording and a turning run's figure "
+                                   "(default: truth.json beside --acel, if there is one)")
     add_force(p, "an existing --plot / --rrd file")
     p.set_defaults(handler=_cmd_fuse)

@@ -1,8 +1,14 @@
 """Figure of a fused vehicle run: dead reckoning, the position fixes, the Kalman path and the
-fused level-L arrival region next to the dead-reckoning one, with the candidates."""
+fused level-L arrival region next to the dead-reckoning one, with the candidates.
+
+A turning run (dead reckoning :class:`calib.turning_trajectory.TurningTrajectory`) has no
+dead-reckoning region (the heading error is not propagated; the legend says so), may show the
+true path, and gets a second panel: the heading ψ of the filter ±σ, of the dead reckoning and
+of the truth when known."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -15,21 +21,40 @@ from bench.figures.trajectory import BOX_COLOR, REGION_COLOR
 from calib.fusion import FusionResult
 from calib.region import ArrivalRegion, Ellipse
 from calib.trajectory import Trajectory
+from calib.turning_trajectory import TurningTrajectory, dead_reckoning_path, heading_error
 
 FUSED_COLOR = "tab:green"
+TRUE_COLOR = "black"
+NO_REGION = "dead reckoning (no region: heading error not propagated)"
+"""Legend of a turning run's dead reckoning: no region is drawn for it, none is faked."""
 
 
-def fusion_figure(traj: Trajectory, region: ArrivalRegion, fused: FusionResult,
-                  fixes: np.ndarray, level: float, decision: str | None) -> plt.Figure:
+def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | None,
+                  fused: FusionResult, fixes: np.ndarray, level: float, decision: str | None,
+                  *, candidates: Mapping | None = None, true_path: np.ndarray | None = None,
+                  true_heading: tuple[np.ndarray, np.ndarray] | None = None) -> plt.Figure:
     """Dead-reckoned (corrected) path and its level-L region, the fixes (m), the filtered
     path and the fused level-L region of the arrival, the candidates.
 
     Both regions are drawn at the same level, so their sizes compare directly: the fixes
-    remove the integrated vehicle noise that dominates dead reckoning."""
-    fig, ax = plt.subplots(figsize=(8, 6.5), constrained_layout=True)
-    ax.add_patch(Polygon(region.ellipse.boundary(), closed=True,
-                         facecolor=to_rgba(REGION_COLOR, 0.12), edgecolor=REGION_COLOR, lw=1.2,
-                         zorder=1, label=f"{100 * level:g} % region, dead reckoning"))
+    remove the integrated vehicle noise that dominates dead reckoning.
+
+    A turning run: ``region`` None (no dead-reckoning region), ``candidates`` given, optional
+    ``true_path`` (n, 2) m and ``true_heading`` (t s, ψ rad); a heading panel below."""
+    turning = isinstance(traj, TurningTrajectory)
+    if turning and true_heading is not None:
+        fig, (ax, axh, axe) = plt.subplots(3, 1, figsize=(8, 11), height_ratios=[3, 1.1, 1.1],
+                                           constrained_layout=True)
+    elif turning:
+        fig, (ax, axh) = plt.subplots(2, 1, figsize=(8, 9), height_ratios=[3, 1.1],
+                                      constrained_layout=True)
+    else:
+        fig, ax = plt.subplots(figsize=(8, 6.5), constrained_layout=True)
+    if region is not None:
+        ax.add_patch(Polygon(region.ellipse.boundary(), closed=True,
+                             facecolor=to_rgba(REGION_COLOR, 0.12), edgecolor=REGION_COLOR,
+                             lw=1.2, zorder=1,
+                             label=f"{100 * level:g} % region, dead reckoning"))
     est = np.asarray(fused.final_position, dtype=float).reshape(2)
     cov = np.asarray(fused.final_position_cov, dtype=float).reshape(2, 2)
     ell = Ellipse.from_cov(est, cov, level)
@@ -37,14 +62,20 @@ def fusion_figure(traj: Trajectory, region: ArrivalRegion, fused: FusionResult,
                          edgecolor=FUSED_COLOR, lw=1.6, zorder=4,
                          label=f"{100 * level:g} % region, fused "
                                f"({ell.semi_axes[0]:.2g} × {ell.semi_axes[1]:.2g} m)"))
-    ax.plot(traj.pos_corrected[:, 0], traj.pos_corrected[:, 1], color="tab:blue", lw=1.2,
-            zorder=2, label="dead reckoning (corrected readings)")
+    dr = dead_reckoning_path(traj)
+    ax.plot(dr[:, 0], dr[:, 1], color="tab:blue", lw=1.2, zorder=2,
+            label=NO_REGION if turning else "dead reckoning (corrected readings)")
     ax.plot(fixes[:, 0], fixes[:, 1], ".", color="0.35", ms=4, zorder=3,
             label=f"position fixes ({fixes.shape[0]})")
     path = np.asarray(fused.estimates)[..., :2].reshape(-1, 2)
     ax.plot(path[:, 0], path[:, 1], color=FUSED_COLOR, lw=1.6, zorder=3,
             label="Kalman filter")
-    for k, (name, c) in enumerate(region.candidates.items()):
+    if true_path is not None:
+        tp = np.asarray(true_path, dtype=float)
+        ax.plot(tp[:, 0], tp[:, 1], "--", color=TRUE_COLOR, lw=1.0, zorder=3.5,
+                label="true path (truth.json)")
+    cands = region.candidates if candidates is None else candidates
+    for k, (name, c) in enumerate(cands.items()):
         ax.plot(*c, "x", color=BOX_COLOR, ms=9, mew=2, zorder=5,
                 label="candidate point" if k == 0 else None)
         ax.annotate(name, c, textcoords="offset points", xytext=(6, 6), color=BOX_COLOR,
@@ -55,11 +86,60 @@ def fusion_figure(traj: Trajectory, region: ArrivalRegion, fused: FusionResult,
     ax.grid(True, alpha=0.3)
     ax.set_title(f"Fusion with position fixes — decision: {decision or 'undecided'}")
     ax.legend(loc="best", fontsize=8)
+    if turning:
+        _heading_panel(axh, traj, fused, true_heading)
+    if turning and true_heading is not None:
+        _heading_error_panel(axe, traj, fused, true_heading)
     return fig
 
 
-def save_fusion_plot(path: str | Path, *args, force: bool = False) -> Path:
+def _heading_panel(ax: plt.Axes, traj: TurningTrajectory, fused: FusionResult,
+                   true_heading: tuple[np.ndarray, np.ndarray] | None) -> None:
+    """Heading ψ (rad) against time (s from the first sample): filtered ±σ, dead reckoning
+    (the gyro integrated), truth."""
+    t0 = float(traj.t[0])
+    t = np.asarray(fused.times, dtype=float) - t0
+    psi = np.asarray(fused.estimates, dtype=float)[:, 4]
+    sd = np.sqrt(np.clip(np.asarray(fused.covariances, dtype=float)[:, 4, 4], 0.0, None))
+    ax.fill_between(t, psi - sd, psi + sd, color=to_rgba(FUSED_COLOR, 0.3), lw=0,
+                    label=f"±σ (final σ = {sd[-1]:.2g} rad)")
+    ax.plot(t, psi, color=FUSED_COLOR, lw=1.4, label="Kalman filter")
+    ax.plot(traj.t - t0, traj.heading, color="tab:blue", lw=1.0,
+            label="dead reckoning (gyro integrated)")
+    if true_heading is not None:
+        ax.plot(np.asarray(true_heading[0], float) - t0, true_heading[1], "--",
+                color=TRUE_COLOR, lw=1.0, label="true (truth.json)")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("heading ψ (rad)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+
+
+def _heading_error_panel(ax: plt.Axes, traj: TurningTrajectory, fused: FusionResult,
+                         true_heading: tuple[np.ndarray, np.ndarray]) -> None:
+    """Heading error against the truth's samples (mrad): filtered ±σ, dead reckoning."""
+    t0 = float(traj.t[0])
+    tt, pt = (np.asarray(v, dtype=float) for v in true_heading)
+    keep = (tt >= traj.t[0]) & (tt <= traj.t[-1])
+    tt, pt = tt[keep], pt[keep]
+    times = np.asarray(fused.times, dtype=float)
+    err = 1e3 * heading_error(times, np.asarray(fused.estimates, float)[:, 4], tt, pt)
+    sd = 1e3 * np.sqrt(np.interp(tt, times, np.clip(
+        np.asarray(fused.covariances, float)[:, 4, 4], 0.0, None)))
+    ax.fill_between(tt - t0, -sd, sd, color=to_rgba(FUSED_COLOR, 0.3), lw=0, label="±σ")
+    ax.plot(tt - t0, err, ".-", color=FUSED_COLOR, lw=1.0, ms=3, label="Kalman filter")
+    ax.plot(tt - t0, 1e3 * heading_error(traj.t, traj.heading, tt, pt), ".-",
+            color="tab:blue", lw=1.0, ms=3, label="dead reckoning")
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("ψ − ψ true (mrad)")
+    ax.set_title("heading error against truth.json (its samples, every second)", fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+
+
+def save_fusion_plot(path: str | Path, *args, force: bool = False, **kwargs) -> Path:
     """Write :func:`fusion_figure` as PNG or SVG (by extension), atomically."""
     if FORMATS.get(Path(path).suffix.lower()) is None:  # before drawing anything
         raise ValueError(f"{path}: plot format must be .png or .svg")
-    return save_figure(fusion_figure(*args), path, force=force)
+    return save_figure(fusion_figure(*args, **kwargs), path, force=force)

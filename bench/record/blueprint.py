@@ -129,16 +129,24 @@ def vehicle_blueprint(bounds: Any, *, estimated: bool, acc: tuple[str, ...],
                          time_panel(TIME_TIMELINE, "following"), collapse_panels=True)
 
 
-def fusion_blueprint(bounds: Any, *, level: float, truth: bool, every_s: float | None) -> Any:
+def fusion_blueprint(bounds: Any, *, level: float, truth: bool, every_s: float | None,
+                     heading: bool = False) -> Any:
     """The ``fuse --rrd`` layout: the plane (dead reckoning, fixes, fused path and ellipses,
     truth) beside the innovations of each axis with their ±σ bounds, the fused position std
-    and the decision. The view names are the legend."""
+    and the decision. The view names are the legend. ``heading`` (a turning run): a heading
+    view is added, and the plane's name says the dead reckoning has no region."""
     import rerun.blueprint as rrb
 
     pct = f"{100 * level:g}%"
     every = f" every {every_s:.0f} s" if every_s else ""
-    parts = ["dead reckoning blue", "fixes light grey", f"fused purple ({pct} ellipses{every})",
-             f"{pct} arrival: fused purple, dead reckoning red", "candidates magenta"]
+    if heading:
+        parts = ["dead reckoning blue (no region: heading error not propagated)",
+                 "fixes light grey", f"fused purple ({pct} ellipses{every})",
+                 f"{pct} arrival: fused purple", "candidates magenta"]
+    else:
+        parts = ["dead reckoning blue", "fixes light grey",
+                 f"fused purple ({pct} ellipses{every})",
+                 f"{pct} arrival: fused purple, dead reckoning red", "candidates magenta"]
     if truth:
         parts.insert(0, "true green")
     plane = rrb.Spatial2DView(origin="vehicle", contents=["+ vehicle/plane/**"],
@@ -150,7 +158,23 @@ def fusion_blueprint(bounds: Any, *, level: float, truth: bool, every_s: float |
             for a in AXES]
     side.append(rrb.TimeSeriesView(origin="fusion/position_std", axis_x=full_time_axis(),
                                    name="std of the fused position (m)"))
+    if heading:
+        side.append(rrb.TimeSeriesView(
+            origin="fusion/heading", axis_x=full_time_axis(),
+            name="heading ψ (rad): fused purple, dead reckoning blue"
+                 + (", true green" if truth else "")))
+        if truth:
+            side.append(rrb.TimeSeriesView(
+                origin="fusion", contents=["+ fusion/heading_error/**",
+                                           "+ fusion/heading_error_band/**"],
+                axis_x=full_time_axis(),
+                name="heading error ψ − ψ true (rad) at the truth's samples: fused purple "
+                     "±σ orange, dead reckoning blue"))
+        else:
+            side.append(rrb.TimeSeriesView(origin="fusion/heading_std", axis_x=full_time_axis(),
+                                           name="std of the fused heading (rad)"))
     side.append(rrb.TextDocumentView(origin="summary/decision", name="decision"))
-    layout = rrb.Horizontal(plane, rrb.Vertical(*side, row_shares=[2, 2, 2, 3]),
+    shares = [2] * (len(side) - 1) + [3]
+    layout = rrb.Horizontal(plane, rrb.Vertical(*side, row_shares=shares),
                             column_shares=[3, 2], name="fusion")
     return rrb.Blueprint(layout, time_panel(TIME_TIMELINE, "following"), collapse_panels=True)

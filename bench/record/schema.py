@@ -111,14 +111,16 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
               "grid values in m under the bottom and left of the frame, and the axis names "
               "`x (m)`, `y (m)`", _VEH + ("fusion",)),
     EntityDoc("vehicle/plane/path/{k}", "LineStrips2D", "static",
-              "trajectory, k = raw (uncorrected), corrected or true, m", _VEH + ("fusion",)),
+              "trajectory, k = raw (uncorrected), corrected or true, m (fusion, turning run: "
+              "`corrected` is the turning dead reckoning)", _VEH + ("fusion",)),
     EntityDoc("vehicle/plane/position/{k}", "Points2D", "time",
               "position at the current time, k = raw, corrected or true, m (static colour and "
               "radius: those of the path)", _VEH),
     EntityDoc("vehicle/plane/candidates", "Points2D (labels)", "static",
               "candidate arrival points (puntos.mat), m", _VEH + ("fusion",)),
     EntityDoc("vehicle/plane/arrival/estimate", "Points2D", "static",
-              "corrected arrival point, m", ("vehicle", "fusion")),
+              "corrected arrival point, m (fusion: not for a turning run)",
+              ("vehicle", "fusion")),
     EntityDoc("vehicle/plane/arrival/ellipse", "LineStrips2D", "static",
               "confidence ellipse of the arrival point at the stated level, m",
               ("vehicle", "fusion")),
@@ -153,9 +155,21 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
               "±sqrt(S_ii) of the innovation (k = plus, minus), m", ("fusion",)),
     EntityDoc("fusion/position_std/{axis}", "Scalars + SeriesLines", "time",
               "std of the filtered position, m", ("fusion",)),
+    EntityDoc("fusion/heading/{k}", "Scalars + SeriesLines", "time",
+              "turning run: heading ψ, k = fused (filtered), dead_reckoning (gyro integrated) "
+              "or true (truth.json, every second), rad", ("fusion",), optional=True),
+    EntityDoc("fusion/heading_std", "Scalars + SeriesLines", "time",
+              "turning run: std σ_ψ of the filtered heading, rad", ("fusion",), optional=True),
+    EntityDoc("fusion/heading_error/{k}", "Scalars + SeriesPoints", "time",
+              "turning run with truth: ψ − ψ true at the truth's samples, k = fused or "
+              "dead_reckoning, rad", ("fusion",), optional=True),
+    EntityDoc("fusion/heading_error_band/{k}", "Scalars + SeriesLines", "time",
+              "turning run with truth: ±σ_ψ of the filter at the truth's samples (k = plus, "
+              "minus), rad", ("fusion",), optional=True),
     EntityDoc("fusion_report/**", "Scalars | TextDocument, + json_type, json_path", "static",
-              "final fused position, covariance and std, dead reckoning's std, fixes, mean "
-              "NIS, P0/Q/R, decision (read back under \"fusion_report\")", ("fusion",)),
+              "final fused position, covariance and std, dead reckoning's std (null for a "
+              "turning run: no region), fixes, mean NIS, P0/Q/R, decision (read back under "
+              "\"fusion_report\")", ("fusion",)),
     EntityDoc("gap/{axis}/residual_{k}", "Scalars + SeriesPoints", "sample, theta_urad",
               "discrepancy workflow: residual before / after adding the named effects, m/s² "
               "(bench/gap/recording.py)", ("gap",)),

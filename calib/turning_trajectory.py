@@ -1,0 +1,180 @@
+"""Dead reckoning of a vehicle that turns: heading from the gyro, corrected body readings
+rotated to the world, integrated twice (issue 13 part 6, the pictures of ``fuse``).
+
+Frames, units, signs as :mod:`calib.fusion_turning`: heading ψ (rad) from world +x to the
+body +x, counter-clockwise seen from +z; the gyro reads ``ω = dψ/dt`` (rad/s); the
+accelerometers read body +x, +y (m/s²); ``R(ψ)`` (:func:`calib.fusion_turning.rotation`)
+maps body to world. Positions m, velocities m/s, time s.
+
+Model::
+
+    ψ(t_k) = ψ0 + ∫₀^t_k ω_m dτ                 (cumulative trapezoid, the EKF's rule)
+    Â_b,k = (A_m,k - bias) / (1 + scale)        (:func:`calib.correct.correct`)
+    a_w,k = R(ψ_k) Â_b,k                        (:func:`calib.fusion_turning.body_to_world`)
+    V = V0 + ∫ a_w,   P = P0 + ∫ V              (:func:`calib.trajectory.integrate_twice`)
+
+No uncertainty region: the heading error makes the position error non-linear in the errors
+of the readings (it rotates the integrated accelerations), so the linear region of
+:mod:`calib.region` does not apply, and none is propagated here.
+
+Integration error on the bench: the bench holds the world acceleration over each step
+(zero-order hold, exact ``p⁺ = p + v h + a h²/2``); the double cumulative trapezoid of the
+same samples differs from it by exactly ``e_k = (h²/4) Σ_{j<k} (a_j + a_{j+1} - 2 a_0)``
+on a uniform grid of step h (tests/test_fuse_turning_pictures.py), ``|e_k| ≤ h t_k
+max_j |a_j - a_0| / 2`` — centimetres over the course's 60 s at 100 Hz.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from calib.correct import correct
+from calib.fusion_turning import body_to_world
+from calib.results import ResultMixin
+from calib.trajectory import Integrator, _check_integrator, cumulative_integral, integrate_twice
+
+
+@dataclass(frozen=True, eq=False)
+class TurningTrajectory(ResultMixin):
+    """Dead reckoning of a turning vehicle (module docstring).
+
+    Attributes
+    ----------
+    t : (M,) s.  heading : (M,) ψ, rad.
+    acc_body : (M, 2) corrected body readings ``Â_b``, m/s².
+    acc_world : (M, 2) ``R(ψ) Â_b``, m/s² (world axes).
+    pos, vel : (M, 2) m, m/s (world axes).
+    p0 : (2,) m.  v0 : (2,) m/s.  psi0 : rad.  bias : (2,) m/s² and scale : (2,) used.
+    integrator : "trapezoid" or "simpson" (position and velocity; the heading is always the
+        trapezoid, the extended filter's rule).
+    """
+
+    _TITLE = "Turning dead reckoning"
+    _UNITS = ("t s; heading and psi0 rad; positions m; velocities m/s; accelerations and bias "
+              "m/s²; scale dimensionless")
+
+    t: np.ndarray
+    heading: np.ndarray
+    acc_body: np.ndarray
+    acc_world: np.ndarray
+    pos: np.ndarray
+    vel: np.ndarray
+    p0: np.ndarray
+    v0: np.ndarray
+    psi0: float
+    bias: np.ndarray
+    scale: np.ndarray
+    integrator: Integrator = "trapezoid"
+
+    _ARRAYS = ("t", "heading", "acc_body", "acc_world", "pos", "vel", "p0", "v0", "bias",
+               "scale")
+
+    def __post_init__(self) -> None:
+        for name in self._ARRAYS:
+            arr = np.array(getattr(self, name), dtype=float)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        object.__setattr__(self, "psi0", float(self.psi0))
+
+    @property
+    def final_position(self) -> np.ndarray:
+        """(2,) dead-reckoned arrival point, m."""
+        return self.pos[-1].copy()
+
+    @property
+    def final_heading(self) -> float:
+        """ψ at the last sample, rad."""
+        return float(self.heading[-1])
+
+    def to_dict(self) -> dict:
+        """The final values (``to_state`` adds the arrays)."""
+        return {"final_position": self.final_position.tolist(),
+                "final_velocity": self.vel[-1].tolist(), "final_heading": self.final_heading,
+                "p0": self.p0.tolist(), "v0": self.v0.tolist(), "psi0": self.psi0,
+                "bias": self.bias.tolist(), "scale": self.scale.tolist(),
+                "integrator": self.integrator, "n_samples": int(self.t.shape[0]),
+                "units": {"final_position": "m", "final_velocity": "m/s",
+                          "final_heading": "rad", "p0": "m", "v0": "m/s", "psi0": "rad",
+                          "bias": "m/s²", "scale": "1", "n_samples": "count"}}
+
+    def to_state(self) -> dict:
+        d = self.to_dict()
+        d.update({k: getattr(self, k).tolist() for k in self._ARRAYS})
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> TurningTrajectory:
+        """Rebuild from :meth:`to_state` (exact); :meth:`to_dict` alone has no samples."""
+        if not all(k in d for k in cls._ARRAYS):
+            raise ValueError("this mapping has no samples; rebuild from to_state()")
+        return cls(d["t"], d["heading"], d["acc_body"], d["acc_world"], d["pos"], d["vel"],
+                   d["p0"], d["v0"], d["psi0"], d["bias"], d["scale"], d["integrator"])
+
+    def summary(self) -> str:
+        fp, fv = self.pos[-1], self.vel[-1]
+        return "\n".join([
+            f"Turning dead reckoning: {self.t.shape[0]} samples over "
+            f"{self.t[-1] - self.t[0]:g} s, {self.integrator} double integration, "
+            f"P0 = {self.p0.tolist()} m, V0 = {self.v0.tolist()} m/s, ψ0 = {self.psi0:g} rad",
+            f"  correction: bias = [{self.bias[0]:.6g}, {self.bias[1]:.6g}] m/s², "
+            f"scale = [{self.scale[0]:.6g}, {self.scale[1]:.6g}] (dimensionless)",
+            f"  final position ({fp[0]:10.3f}, {fp[1]:10.3f}) m, velocity ({fv[0]:.3f}, "
+            f"{fv[1]:.3f}) m/s, heading {self.final_heading:.4f} rad",
+            "  no uncertainty region: the heading error is not propagated",
+        ])
+
+
+def turning_dead_reckoning(t, acc_m, gyro, bias, scale, p0, v0, psi0: float = 0.0,
+                           integrator: Integrator = "trapezoid") -> TurningTrajectory:
+    """Dead reckoning of a turning vehicle (module docstring for the equations).
+
+    Parameters
+    ----------
+    t : (M,) s, strictly increasing, M ≥ 3.  acc_m : (M, 2) measured body readings, m/s².
+    gyro : (M,) measured yaw rate, rad/s.  bias : (2,) m/s², scale : (2,) — the calibration.
+    p0 : (2,) m, v0 : (2,) m/s (world axes), psi0 : initial heading, rad.
+    integrator : of the position and velocity, as :func:`calib.trajectory.integrate_twice`.
+    """
+    _check_integrator(integrator)
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or t.shape[0] < 3 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
+        raise ValueError("t must be 1-D, finite, strictly increasing, with ≥ 3 samples")
+    acc_m = np.asarray(acc_m, dtype=float)
+    if acc_m.shape != (t.shape[0], 2):
+        raise ValueError(f"accelerations must be ({t.shape[0]}, 2), got {acc_m.shape}")
+    w = np.asarray(gyro, dtype=float).reshape(-1)
+    if w.shape != t.shape:
+        raise ValueError(f"gyro must be ({t.shape[0]},), got {np.shape(gyro)}")
+    if not np.all(np.isfinite(w)):
+        raise ValueError("gyro has NaN or Inf: remove or interpolate those samples")
+    bias = np.broadcast_to(np.asarray(bias, dtype=float), (2,))
+    scale = np.broadcast_to(np.asarray(scale, dtype=float), (2,))
+    p0 = np.broadcast_to(np.asarray(p0, dtype=float), (2,))
+    v0 = np.broadcast_to(np.asarray(v0, dtype=float), (2,))
+    psi = float(psi0) + cumulative_integral(w, t, "trapezoid")
+    a_b = correct(acc_m, bias, scale)
+    a_w = body_to_world(psi, a_b)
+    pos, vel = integrate_twice(t, a_w, p0, v0, integrator)
+    return TurningTrajectory(t, psi, a_b, a_w, pos, vel, p0, v0, psi0, bias, scale,
+                             integrator)
+
+
+def heading_error(t, psi, t_ref, psi_ref) -> np.ndarray:
+    """``ψ(t_ref) - ψ_ref`` wrapped to (-π, π], rad: ``psi`` (rad) at times ``t`` (s,
+    increasing) interpolated linearly to the reference times ``t_ref`` (s, within ``t``).
+    E.g. the filter's or the dead reckoning's heading against the truth's samples."""
+    at = np.interp(np.asarray(t_ref, dtype=float), np.asarray(t, dtype=float),
+                   np.asarray(psi, dtype=float))
+    return np.angle(np.exp(1j * (at - np.asarray(psi_ref, dtype=float))))
+
+
+def dead_reckoning_path(traj) -> np.ndarray:
+    """(M, 2) dead-reckoned path, m, of either kind: ``pos`` of a :class:`TurningTrajectory`,
+    ``pos_corrected`` of a :class:`calib.trajectory.Trajectory`."""
+    return traj.pos if isinstance(traj, TurningTrajectory) else traj.pos_corrected
+
+
+__all__ = ["TurningTrajectory", "dead_reckoning_path", "heading_error",
+           "turning_dead_reckoning"]
