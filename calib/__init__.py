@@ -40,6 +40,11 @@ Trajectory   :func:`compute_trajectory` → :class:`Trajectory` (``calib.traject
 Arrival      :func:`arrival_region` → :class:`ArrivalRegion` (``calib.region``);
              :func:`analyze_nmin` → ``NminResult`` (``calib.nmin``)
 Gap          :func:`analyze_gap` → :class:`GapAnalysis` (``calib.gap``)
+Fusion       :func:`fuse` → :class:`FusionResult` — Kalman filter and RTS smoother with
+             position fixes (``calib.fusion``; the turning vehicle: ``calib.fusion_turning``)
+Files        :func:`save_calibration`, :func:`load_calibration` (``calib.calfile``)
+Monte Carlo  :func:`simulate_calibrations` → :class:`MonteCarloResult` (``calib.montecarlo``)
+Design       :func:`analyze_design` → ``DesignResult`` (``calib.design``)
 
 Every result type is frozen, compares by value (``==``), renders in a notebook
 (``_repr_markdown_``) and round-trips: ``T.from_dict(x.to_state()) == x`` (see
@@ -82,6 +87,13 @@ _EXPORTS: dict[str, str] = {
     "analyze_nmin": "calib.nmin:analyze_nmin",
     "analyze_gap": "calib.gap:analyze_gap",
     "GapAnalysis": "calib.gap:GapAnalysis",
+    "fuse": "calib.fusion:fuse",
+    "FusionResult": "calib.fusion:FusionResult",
+    "save_calibration": "calib.calfile:save_calibration",
+    "load_calibration": "calib.calfile:load_calibration",
+    "simulate_calibrations": "calib.montecarlo:simulate_calibrations",
+    "MonteCarloResult": "calib.montecarlo:MonteCarloResult",
+    "analyze_design": "calib.design:analyze_design",
 }
 """Public name → ``"module:attribute"`` (PEP 562 lazy exports)."""
 
@@ -106,7 +118,15 @@ def _module(name: str) -> types.ModuleType:
     elif name == "calib.nmin":
         import calib.nmin
     elif name == "calib.gap":
-        import calib.gap  # noqa: F401
+        import calib.gap
+    elif name == "calib.fusion":
+        import calib.fusion
+    elif name == "calib.calfile":
+        import calib.calfile
+    elif name == "calib.montecarlo":
+        import calib.montecarlo
+    elif name == "calib.design":
+        import calib.design  # noqa: F401
     return sys.modules[name]
 
 

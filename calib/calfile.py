@@ -340,6 +340,26 @@ def _read_mat_document(path: Path) -> dict:
 def load_calibration(path: str | os.PathLike) -> Calibration:
     """Read a calibration file written by :func:`save_calibration` (exact rebuild).
 
+    Parameters
+    ----------
+    path : a ``.json`` calibration file or its ``.mat`` export.
+
+    Returns
+    -------
+    Calibration : equal (``==``) to the one saved.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, pathlib
+    >>> from calib import Ensayo, calibrate
+    >>> th = np.linspace(0, 2 * np.pi, 100)
+    >>> cal = calibrate(Ensayo(th, np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)])
+    ...                        + 0.05), noise_var=[0.25, 0.64])
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = save_calibration(d / "cal.mat", cal, sigma2_source="given")
+    >>> load_calibration(d / "cal.mat") == cal
+    True
+
     Raises
     ------
     DataError : file missing, not JSON (or a ``.mat`` export), another format, an unknown

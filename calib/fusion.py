@@ -276,6 +276,22 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
     Returns
     -------
     FusionResult
+
+    Examples
+    --------
+    A vehicle at rest for 10 s (100 Hz readings of zero), a fix every second at the origin
+    (σ = 3 m), a calibration known to 0.01 m/s² in bias:
+
+    >>> import numpy as np
+    >>> t = np.arange(1001) * 0.01
+    >>> res = fuse(t, np.zeros((t.size, 2)), np.arange(11.0), np.zeros((11, 2)),
+    ...            bias=[0, 0], scale=[0, 0], cal_cov=np.diag([1e-4, 1e-6, 1e-4, 1e-6]),
+    ...            noise_var=[0.25, 0.64], sigma_pos=3.0, p0=[0, 0], v0=[0, 0],
+    ...            p0_cov=0.0, v0_cov=0.0)
+    >>> np.round(res.final_position, 6).tolist()
+    [0.0, 0.0]
+    >>> bool(np.all(np.sqrt(np.diag(res.final_position_cov)) < 3.0))  # below one fix's σ
+    True
     """
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or t.shape[0] < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
@@ -458,6 +474,23 @@ def kalman_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, H: np.ndarray,
     return x, P, v, S
 
 
+def _rts_gain(P_f: np.ndarray, Phi: np.ndarray, P_p: np.ndarray) -> np.ndarray:
+    """``C = P⁺_j Φᵀ (P⁻_j+1)⁻¹`` for R runs, through a solve with the symmetric prior.
+
+    A prior can be exactly singular: with the initial position and velocity known (P0 = 0
+    there, the course's case) the prior one step later has, per axis, only the bias and one
+    step's held noise in the three directions (p, v, b): rank 2. The gain is then defined on
+    the prior's range, and the pseudo-inverse (symmetric, ``numpy.linalg.pinv``) gives it;
+    the mean and covariance updates that use it stay exact, since the smoothed and the
+    prior state differ only inside that range.
+    """
+    rhs = Phi @ P_f
+    try:
+        return np.linalg.solve(P_p, rhs).transpose(0, 2, 1)
+    except np.linalg.LinAlgError:
+        return (np.linalg.pinv(P_p, hermitian=True) @ rhs).transpose(0, 2, 1)
+
+
 def rts(x_f, P_f, x_p, P_p, Phi):
     """Rauch–Tung–Striebel smoother over stored nodes (module docstring).
 
@@ -473,8 +506,7 @@ def rts(x_f, P_f, x_p, P_p, Phi):
     """
     xs, Ps = x_f.copy(), P_f.copy()
     for j in range(x_f.shape[1] - 2, -1, -1):
-        # C = P⁺_j Φᵀ (P⁻_j+1)⁻¹, through a solve with the symmetric P⁻_j+1.
-        C = np.linalg.solve(P_p[:, j + 1], Phi[:, j + 1] @ P_f[:, j]).transpose(0, 2, 1)
+        C = _rts_gain(P_f[:, j], Phi[:, j + 1], P_p[:, j + 1])
         xs[:, j] = x_f[:, j] + np.einsum("rij,rj->ri", C, xs[:, j + 1] - x_p[:, j + 1])
         Pj = P_f[:, j] + C @ (Ps[:, j + 1] - P_p[:, j + 1]) @ C.transpose(0, 2, 1)
         Ps[:, j] = 0.5 * (Pj + Pj.transpose(0, 2, 1))

@@ -21,6 +21,10 @@ import pytest
 
 import bench
 import calib
+import calib.calfile
+import calib.design.analysis
+import calib.fusion
+import calib.montecarlo  # noqa: F401  (their docstring examples run below)
 from bench.validate import Validation, validate
 from calib.calibration import Calibration, calibrate
 from calib.io import Acel, Ensayo
@@ -35,7 +39,8 @@ CALIB_EXPORTS = {
     "calibrate", "Calibration", "fit_axis", "fit_joint", "FitResult", "read_ensayo",
     "read_acel", "read_puntos", "read_datos", "Ensayo", "Acel", "correct",
     "compute_trajectory", "Trajectory", "arrival_region", "ArrivalRegion", "analyze_nmin",
-    "analyze_gap", "GapAnalysis",
+    "analyze_gap", "GapAnalysis", "fuse", "FusionResult", "save_calibration",
+    "load_calibration", "simulate_calibrations", "MonteCarloResult", "analyze_design",
 }
 BENCH_EXPORTS = {
     "generate_calibration", "CalibrationConfig", "ThetaDesign", "SweepProfile",
@@ -81,7 +86,8 @@ def test_importing_the_packages_is_cheap():
 
 @pytest.mark.parametrize("module", ["calib", "calib.ls", "calib.calibration", "calib.io",
                                     "calib.trajectory", "calib.region", "calib.nmin",
-                                    "bench.validate"])
+                                    "calib.fusion", "calib.calfile", "calib.montecarlo",
+                                    "calib.design.analysis", "bench.validate"])
 def test_docstring_examples_run(module):
     mod = sys.modules[module]  # all imported above
     res = doctest.testmod(mod, optionflags=doctest.NORMALIZE_WHITESPACE)

@@ -232,3 +232,26 @@ def test_rejects_bad_inputs():
         fuse(t, acc, [2.0], [[0.0, 0.0]], **kw)
     with pytest.raises(ValueError, match="pos_gps"):
         fuse(t, acc, [0.5, 0.7], [[0.0, 0.0]], **kw)
+
+
+def test_smoother_with_a_known_start_and_every_node_kept():
+    """P0 = 0 for position and velocity (the course's case) makes the prior one step later
+    singular; the smoother still runs on every node, starts exactly at P0, and agrees at the
+    fix nodes with the smoother on the fix nodes only (exact on any node subset with every
+    fix, module docstring)."""
+    rng = np.random.default_rng(11)
+    t = np.arange(1001) * 0.01
+    acc = 0.1 * rng.standard_normal((t.size, 2))
+    t_gps = np.arange(1.0, 11.0)
+    pos = 3.0 * rng.standard_normal((t_gps.size, 2))
+    kw = dict(bias=[0.01, -0.02], scale=[0.0, 0.0], cal_cov=np.diag([1e-4, 1e-6, 2e-4, 1e-6]),
+              noise_var=[0.25, 0.64], sigma_pos=3.0, p0=[0.0, 0.0], v0=[1.0, 3.0],
+              p0_cov=0.0, v0_cov=0.0, smoother=True)
+    every = fuse(t, acc, t_gps, pos, keep="all", **kw)
+    fixes = fuse(t, acc, t_gps, pos, keep="fixes", **kw)
+    assert np.all(np.isfinite(every.smoothed)) and np.all(np.isfinite(every.smoothed_covariances))
+    np.testing.assert_allclose(every.smoothed[0, :4], [0.0, 0.0, 1.0, 3.0], atol=1e-9)
+    at = np.searchsorted(every.times, fixes.times)
+    np.testing.assert_allclose(every.smoothed[at], fixes.smoothed, rtol=1e-7, atol=1e-7)
+    np.testing.assert_allclose(every.smoothed_covariances[at], fixes.smoothed_covariances,
+                               rtol=1e-6, atol=1e-9)
