@@ -105,6 +105,8 @@ def test_fuse_writes_the_figure_and_the_recording_of_a_turning_run(capsys, turni
     from bench.record.schema import documented
 
     png, rrd = tmp_path / "f.png", tmp_path / "f.rrd"
+    assert main(["fuse", *_inputs(turning_set), "--plot", str(tmp_path / "t.png")]) == 0
+    assert "decision (dead reckoning): D" in capsys.readouterr().out  # text: both decisions
     assert main(["fuse", *_inputs(turning_set), "--plot", str(png), "--rrd", str(rrd),
                  "--json"]) == 0
     fused = json.loads(capsys.readouterr().out)
@@ -114,33 +116,34 @@ def test_fuse_writes_the_figure_and_the_recording_of_a_turning_run(capsys, turni
     assert back["truth"] == truth
     rep = back["fusion_report"]
     assert rep["final_position"] == fused["fusion"]["final_position"]
-    assert rep["dead_reckoning_std"] is None  # no region is claimed for it
+    assert len(rep["dead_reckoning_std"]) == 2 and min(rep["dead_reckoning_std"]) > 1.0
     ents = {str(e).lstrip("/") for e in recording_entities(rrd)}
     for e in ("vehicle/plane/path/true", "vehicle/plane/path/corrected", "vehicle/plane/fixes",
               "vehicle/plane/fused/path", "vehicle/plane/fused/ellipses",
               "fusion/innovation/x", "fusion/heading/fused", "fusion/heading/true",
               "fusion/heading/dead_reckoning", "fusion/heading_std",
-              "fusion/heading_error/fused", "fusion/heading_error_band/plus"):
+              "fusion/heading_error/fused", "fusion/heading_error_band/plus",
+              "vehicle/plane/arrival/ellipse", "vehicle/plane/arrival/estimate"):
         assert e in ents, e
-    assert not any(e.startswith("vehicle/plane/arrival") for e in ents)  # no fake region
     assert [e for e in ents if documented(e) is None
             or "fusion" not in documented(e).kinds] == []
     names = [v["name"] for v in read_blueprint(rrd)["views"]]
     assert any(n.startswith("heading ψ") for n in names)
-    assert any("no region: heading error not propagated" in n for n in names)
+    assert not any("no region" in n for n in names)
     # never overwritten without --force
     assert main(["fuse", *_inputs(turning_set), "--plot", str(png)]) == 2
     assert "--force" in capsys.readouterr().err
 
 
-def test_turning_figure_has_no_dead_reckoning_region_and_a_heading_panel(turning_set):
+def test_turning_figure_has_the_dead_reckoning_region_and_a_heading_panel(turning_set):
     import matplotlib.pyplot as plt
     from matplotlib.patches import Polygon
 
-    from bench.figures.fusion import NO_REGION, fusion_figure
+    from bench.figures.fusion import fusion_figure
     from calib.calibration import calibrate
     from calib.fusion_turning import fuse_turning
     from calib.io import read_acel, read_datos, read_ensayo, read_gps, read_puntos
+    from calib.turning_trajectory import turning_arrival_region
 
     d = read_datos(turning_set / "datos.txt")
     acel, fixes = read_acel(turning_set / "acel.mat"), read_gps(turning_set / "gps.mat")
@@ -152,14 +155,20 @@ def test_turning_figure_has_no_dead_reckoning_region_and_a_heading_panel(turning
     samples = json.loads((turning_set / "truth.json").read_text())["vehicle"]["trajectory"][
         "samples"]
     cands = read_puntos(turning_set / "puntos.mat")
-    fig = fusion_figure(dr, None, res, fixes.pos, 0.997, "D", candidates=cands,
+    reg = turning_arrival_region(dr, acel.aerr, acel.gyro, cal_cov=cal.cov,
+                                 noise_var=d.noise_var, gyro_var=0.005 ** 2, candidates=cands)
+    assert reg.decision == "D"  # the generated set's answer, seed 3
+    fig = fusion_figure(dr, reg, res, fixes.pos, 0.997, "D",
                         true_path=np.array(samples["pos"]),
                         true_heading=(np.array(samples["t"]), np.array(samples["heading"])))
     assert len(fig.axes) == 3  # plane, heading, heading error
-    assert len([p for p in fig.axes[0].patches if isinstance(p, Polygon)]) == 1  # fused only
+    polys = [p for p in fig.axes[0].patches if isinstance(p, Polygon)]
+    assert len(polys) == 2  # dead reckoning and fused
+    assert np.allclose(polys[0].get_xy()[:256], reg.ellipse.boundary())
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
-    assert NO_REGION in labels
+    assert any(lb.startswith("99.7 % region, dead reckoning") for lb in labels)
+    assert not any("no region" in lb for lb in labels)
     plt.close(fig)
-    fig = fusion_figure(dr, None, res, fixes.pos, 0.997, "D", candidates=cands)
+    fig = fusion_figure(dr, reg, res, fixes.pos, 0.997, "D")
     assert len(fig.axes) == 2  # without the truth: no error panel
     plt.close(fig)

@@ -11,9 +11,10 @@ The calibration comes from ``--calibration`` or is fitted on ``--ensayo`` (as
 values, the noise estimated). With a ``gyro`` variable in acel.mat (``generate vehicle
 --turning``) the extended filter :func:`calib.fusion_turning.fuse_turning` runs instead
 (``--gyro-sigma``, ``--psi0``, ``--psi0-sigma``); its ``--plot``/``--rrd`` dead reckoning is
-:func:`calib.turning_trajectory.turning_dead_reckoning`, drawn without a region (the heading
-error is not propagated), with the heading added. The filter is :func:`calib.fusion.fuse`
-(docs/fusion.md): Q from
+:func:`calib.turning_trajectory.turning_dead_reckoning` with its level-L region (the no-fix
+extended filter's covariance, :func:`calib.turning_trajectory.turning_arrival_region`), with
+the heading added; the text output then prints the dead reckoning's decision too. The
+filter is :func:`calib.fusion.fuse` (docs/fusion.md): Q from
 the stated noise and the calibration covariance, R from the receiver's σ, P0 from the
 calibration covariance and the initial position/velocity σ of ``--p0-std`` / ``--v0-std``
 (default 0: the course gives P0 and V0 exactly; datos.txt states no uncertainty), no
@@ -94,13 +95,11 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
            "units": {"decision.level": "1", "decision.mahalanobis.*": "1"}}
     check_finite(out, "the result")
     if args.plot or args.rrd:
-        traj, region = _dead_reckoning(acel, cal, candidates, p0, v0, noise_var, level,
-                                       float(args.psi0))
+        traj, region = _dead_reckoning(args, acel, cal, candidates, p0, v0, noise_var, level,
+                                       p0_std, v0_std)
         truth, true_path, true_heading = _truth(args)
-        # a turning run (no dead-reckoning region): candidates, the true heading and, on the
-        # figure too, the true path
-        turning = ({} if region is not None else
-                   {"candidates": candidates, "true_heading": true_heading})
+        # a turning run: the true heading and, on the figure too, the true path
+        turning = {} if acel.gyro is None else {"true_heading": true_heading}
     if args.plot:
         from bench.figures.fusion import save_fusion_plot
 
@@ -120,6 +119,8 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
           "(--p0-std/--v0-std; datos.txt states P0 and V0 without uncertainty)")
     print(f"decision: {letter or 'undecided'} ({reason}); fixes used: "
           f"{int(inside.sum())} of {inside.size}")
+    if (args.plot or args.rrd) and acel.gyro is not None:
+        print(region.summary())
     print_files([args.plot, args.rrd])
     return 0
 
@@ -144,16 +145,21 @@ def _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos, 
                         psi0_var=psi0_sigma ** 2, smoother=args.smoother)
 
 
-def _dead_reckoning(acel, cal, candidates, p0, v0, noise_var, level: float, psi0: float):
-    """Dead reckoning for the pictures: the course one with its level-L arrival region, or for
+def _dead_reckoning(args, acel, cal, candidates, p0, v0, noise_var, level: float,
+                    p0_std: float, v0_std: float):
+    """Dead reckoning for the pictures with its level-L arrival region: the course one, or for
     a turning run (acel.gyro) :func:`calib.turning_trajectory.turning_dead_reckoning` from
-    ``--psi0`` without a region (None: the heading error is not propagated)."""
+    ``--psi0`` with :func:`calib.turning_trajectory.turning_arrival_region` (the same σ as
+    the filter: ``--gyro-sigma``, ``--psi0-sigma``, ``--p0-std``, ``--v0-std``)."""
     if acel.gyro is not None:
-        from calib.turning_trajectory import turning_dead_reckoning
+        from calib.turning_trajectory import turning_arrival_region, turning_dead_reckoning
 
         traj = turning_dead_reckoning(acel.t, acel.aerr, acel.gyro, cal.bias, cal.scale, p0,
-                                      v0, psi0)
-        return traj, None
+                                      v0, float(args.psi0))
+        return traj, turning_arrival_region(
+            traj, acel.aerr, acel.gyro, cal_cov=cal.cov, noise_var=noise_var,
+            gyro_var=float(args.gyro_sigma) ** 2, candidates=candidates, level=level,
+            psi0_var=float(args.psi0_sigma) ** 2, p0_cov=p0_std ** 2, v0_cov=v0_std ** 2)
     from calib.region import arrival_region
     from calib.trajectory import compute_trajectory
 
@@ -210,7 +216,7 @@ def register(sub) -> None:
                    help="also run the Rauch-Tung-Striebel smoother")
     p.add_argument("--plot", help="write a figure (.png or .svg): dead reckoning, fixes, "
                                   "the fused path and both arrival regions (turning run: "
-                                  "no dead-reckoning region, the truth and a heading panel)")
+                                  "also the truth and a heading panel)")
     p.add_argument("--rrd", help="write a rerun recording: truth (if known), dead reckoning, "
                                  "fixes, the fused path with its ellipses, the innovations, "
                                  "the heading of a turning run (docs/recordings.md)")

@@ -1,8 +1,8 @@
 """Figure of a fused vehicle run: dead reckoning, the position fixes, the Kalman path and the
 fused level-L arrival region next to the dead-reckoning one, with the candidates.
 
-A turning run (dead reckoning :class:`calib.turning_trajectory.TurningTrajectory`) has no
-dead-reckoning region (the heading error is not propagated; the legend says so), may show the
+A turning run (dead reckoning :class:`calib.turning_trajectory.TurningTrajectory`, region
+:class:`calib.turning_trajectory.TurningRegion`) draws its region the same way, may show the
 true path, and gets a second panel: the heading ψ of the filter ±σ, of the dead reckoning and
 of the truth when known."""
 
@@ -21,15 +21,18 @@ from bench.figures.trajectory import BOX_COLOR, REGION_COLOR
 from calib.fusion import FusionResult
 from calib.region import ArrivalRegion, Ellipse
 from calib.trajectory import Trajectory
-from calib.turning_trajectory import TurningTrajectory, dead_reckoning_path, heading_error
+from calib.turning_trajectory import (
+    TurningRegion,
+    TurningTrajectory,
+    dead_reckoning_path,
+    heading_error,
+)
 
 FUSED_COLOR = "tab:green"
 TRUE_COLOR = "black"
-NO_REGION = "dead reckoning (no region: heading error not propagated)"
-"""Legend of a turning run's dead reckoning: no region is drawn for it, none is faked."""
 
 
-def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | None,
+def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | TurningRegion,
                   fused: FusionResult, fixes: np.ndarray, level: float, decision: str | None,
                   *, candidates: Mapping | None = None, true_path: np.ndarray | None = None,
                   true_heading: tuple[np.ndarray, np.ndarray] | None = None) -> plt.Figure:
@@ -39,8 +42,9 @@ def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | 
     Both regions are drawn at the same level, so their sizes compare directly: the fixes
     remove the integrated vehicle noise that dominates dead reckoning.
 
-    A turning run: ``region`` None (no dead-reckoning region), ``candidates`` given, optional
-    ``true_path`` (n, 2) m and ``true_heading`` (t s, ψ rad); a heading panel below."""
+    A turning run: ``region`` a :class:`~calib.turning_trajectory.TurningRegion`, optional
+    ``true_path`` (n, 2) m and ``true_heading`` (t s, ψ rad); a heading panel below.
+    ``candidates`` default ``region.candidates``."""
     turning = isinstance(traj, TurningTrajectory)
     if turning and true_heading is not None:
         fig, (ax, axh, axe) = plt.subplots(3, 1, figsize=(8, 11), height_ratios=[3, 1.1, 1.1],
@@ -50,11 +54,13 @@ def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | 
                                       constrained_layout=True)
     else:
         fig, ax = plt.subplots(figsize=(8, 6.5), constrained_layout=True)
-    if region is not None:
-        ax.add_patch(Polygon(region.ellipse.boundary(), closed=True,
-                             facecolor=to_rgba(REGION_COLOR, 0.12), edgecolor=REGION_COLOR,
-                             lw=1.2, zorder=1,
-                             label=f"{100 * level:g} % region, dead reckoning"))
+    sa = region.ellipse.semi_axes
+    ax.add_patch(Polygon(region.ellipse.boundary(), closed=True,
+                         facecolor=to_rgba(REGION_COLOR, 0.12), edgecolor=REGION_COLOR,
+                         lw=1.2, zorder=1,
+                         label=f"{100 * level:g} % region, dead reckoning"
+                               + (f" ({sa[0]:.2g} × {sa[1]:.2g} m, decision "
+                                  f"{region.decision or 'undecided'})" if turning else "")))
     est = np.asarray(fused.final_position, dtype=float).reshape(2)
     cov = np.asarray(fused.final_position_cov, dtype=float).reshape(2, 2)
     ell = Ellipse.from_cov(est, cov, level)
@@ -64,7 +70,8 @@ def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | 
                                f"({ell.semi_axes[0]:.2g} × {ell.semi_axes[1]:.2g} m)"))
     dr = dead_reckoning_path(traj)
     ax.plot(dr[:, 0], dr[:, 1], color="tab:blue", lw=1.2, zorder=2,
-            label=NO_REGION if turning else "dead reckoning (corrected readings)")
+            label="dead reckoning (corrected readings"
+                  + (", gyro heading)" if turning else ")"))
     ax.plot(fixes[:, 0], fixes[:, 1], ".", color="0.35", ms=4, zorder=3,
             label=f"position fixes ({fixes.shape[0]})")
     path = np.asarray(fused.estimates)[..., :2].reshape(-1, 2)

@@ -134,19 +134,13 @@ def fusion_blueprint(bounds: Any, *, level: float, truth: bool, every_s: float |
     """The ``fuse --rrd`` layout: the plane (dead reckoning, fixes, fused path and ellipses,
     truth) beside the innovations of each axis with their ±σ bounds, the fused position std
     and the decision. The view names are the legend. ``heading`` (a turning run): a heading
-    view is added, and the plane's name says the dead reckoning has no region."""
+    view is added."""
     import rerun.blueprint as rrb
 
     pct = f"{100 * level:g}%"
     every = f" every {every_s:.0f} s" if every_s else ""
-    if heading:
-        parts = ["dead reckoning blue (no region: heading error not propagated)",
-                 "fixes light grey", f"fused purple ({pct} ellipses{every})",
-                 f"{pct} arrival: fused purple", "candidates magenta"]
-    else:
-        parts = ["dead reckoning blue", "fixes light grey",
-                 f"fused purple ({pct} ellipses{every})",
-                 f"{pct} arrival: fused purple, dead reckoning red", "candidates magenta"]
+    parts = ["dead reckoning blue", "fixes light grey", f"fused purple ({pct} ellipses{every})",
+             f"{pct} arrival: fused purple, dead reckoning red", "candidates magenta"]
     if truth:
         parts.insert(0, "true green")
     plane = rrb.Spatial2DView(origin="vehicle", contents=["+ vehicle/plane/**"],

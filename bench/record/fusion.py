@@ -10,9 +10,9 @@ the dead-reckoning ``arrival/*``; ``fusion/innovation/{axis}``
 ``fusion/position_std/{axis}`` (filtered, m) on ``time``; ``fusion_report/**`` (the tree of
 :func:`fusion_report`), ``truth/**`` when known, ``summary/decision``.
 
-A turning run (dead reckoning :class:`calib.turning_trajectory.TurningTrajectory`): no
-dead-reckoning region (``arrival/*`` absent, ``fusion_report/dead_reckoning_std`` null: the
-heading error is not propagated), and the heading on ``time``: ``fusion/heading/fused``
+A turning run (dead reckoning :class:`calib.turning_trajectory.TurningTrajectory`, region
+:class:`calib.turning_trajectory.TurningRegion`: the no-fix extended filter's covariance) has
+the same ``arrival/*`` and decision text, and the heading on ``time``: ``fusion/heading/fused``
 (filtered ψ, rad) with ``fusion/heading_std`` (σ_ψ, rad),
 ``fusion/heading/dead_reckoning`` (the gyro integrated) and, when the truth is known,
 ``fusion/heading/true`` (truth.json, every second) and the errors at its samples
@@ -36,13 +36,13 @@ from bench.record.summary import decision_markdown, true_arrival
 from bench.record.vehicle import FLIP_Y, _log_arrival, _log_candidates
 from calib.conventions import AXES
 from calib.region import Ellipse
-from calib.turning_trajectory import dead_reckoning_path, heading_error
+from calib.turning_trajectory import TurningTrajectory, dead_reckoning_path, heading_error
 
 if TYPE_CHECKING:
     from calib.fusion import FusionResult
     from calib.region import ArrivalRegion
     from calib.trajectory import Trajectory
-    from calib.turning_trajectory import TurningTrajectory
+    from calib.turning_trajectory import TurningRegion
 
 FUSED_COLOR = (160, 90, 230)
 FIX_COLOR = (210, 210, 210, 200)
@@ -52,7 +52,7 @@ MAX_ELLIPSES = 20
 
 def fusion_report(res: FusionResult, decision: Mapping, dead_reckoning_std) -> dict:
     """The small tree logged under ``fusion_report/``: final fused position and covariance
-    (m, m²), the dead-reckoning std (m; None: no region, a turning run), the decision, mean
+    (m, m²), the dead-reckoning std (m; None if not given), the decision, mean
     NIS, P0/Q/R (SI)."""
     cov = np.asarray(res.final_position_cov, float).reshape(2, 2)
     nis = res.nis()
@@ -72,7 +72,7 @@ def _fix_nodes(res: FusionResult) -> np.ndarray:
 
 
 def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
-                  region: ArrivalRegion | None, res: FusionResult, fixes: np.ndarray,
+                  region: ArrivalRegion | TurningRegion, res: FusionResult, fixes: np.ndarray,
                   decision: Mapping, level: float, force: bool = False,
                   truth: Mapping | None = None, true_path: np.ndarray | None = None, *,
                   candidates: Mapping | None = None,
@@ -82,16 +82,17 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
     Parameters
     ----------
     traj, region : dead reckoning and its arrival region (same level); a turning run: a
-        :class:`~calib.turning_trajectory.TurningTrajectory` and ``region`` None.
+        :class:`~calib.turning_trajectory.TurningTrajectory` and its
+        :class:`~calib.turning_trajectory.TurningRegion`.
     res : the Kalman result (one run, nodes ``res.times``).  fixes : (M, 2) fixes used, m.
     decision : the fused decision (``fuse --json``'s ``decision``).  level : region level.
     truth : ``truth.json`` object, if known.  true_path : (n, 2) true positions, m, if known.
-    candidates : name → (2,) m; default ``region.candidates`` (required without a region).
+    candidates : name → (2,) m; default ``region.candidates``.
     true_heading : (t s, ψ rad) of the truth, turning run, if known.
     """
     import rerun as rr
 
-    turning = region is None
+    turning = isinstance(traj, TurningTrajectory)
     cands = region.candidates if candidates is None else candidates
     est = np.asarray(res.estimates, float)
     P = np.asarray(res.covariances, float)
@@ -104,8 +105,7 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
     every = max(1, int(np.ceil(nodes.size / MAX_ELLIPSES)))
     picked = nodes[::every]
     cand = np.array(list(cands.values()), float)
-    box_pts = (dr, fixes, fused, true_path, cand,
-               None if turning else region.ellipse.boundary(128))
+    box_pts = (dr, fixes, fused, true_path, cand, region.ellipse.boundary(128))
     bp = fusion_blueprint(plane_bounds(*box_pts), level=level, truth=true_path is not None,
                           every_s=float(np.median(np.diff(t[picked]))) if picked.size > 1
                           else None, heading=turning)
@@ -135,8 +135,7 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
                          indexes=[rr.TimeColumn(TIME_TIMELINE, duration=t - t0)],
                          columns=rr.Points2D.columns(positions=fused))
         _log_candidates(rec, cands)
-        if not turning:
-            _log_arrival(rec, region)
+        _log_arrival(rec, region)
         tg = {TIME_TIMELINE: np.asarray(res.t_gps, float) - t0}
         nu = np.asarray(res.innovations, float)
         s = np.sqrt(np.diagonal(np.asarray(res.innovation_covs, float), axis1=-2, axis2=-1))
@@ -153,10 +152,10 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
         if turning:
             _log_heading(rec, traj, est[:, 4], P[:, 4, 4], tn, t0, true_heading)
         log_tree(rec, "fusion_report",
-                 fusion_report(res, decision, None if turning else region.std))
+                 fusion_report(res, decision, region.std))
         if truth is not None:
             log_tree(rec, "truth", truth)
-        text = _decision_text(decision, final, region, true_arrival(truth), dr[-1])
+        text = _decision_text(decision, final, region, true_arrival(truth))
         rec.log("summary/decision", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN),
                 static=True)
     return Path(path)
@@ -192,15 +191,11 @@ def _log_heading(rec, traj: TurningTrajectory, psi: np.ndarray, var: np.ndarray,
                    COLORS["band"], f"{'+' if sign > 0 else '−'}σ", 1.0)
 
 
-def _decision_text(decision: Mapping, final: Ellipse, region: ArrivalRegion | None,
-                   answer: str | None, dr_final: np.ndarray) -> str:
+def _decision_text(decision: Mapping, final: Ellipse, region: ArrivalRegion | TurningRegion,
+                   answer: str | None) -> str:
     sa = final.semi_axes
-    if region is None:
-        versus = (f"; dead reckoning ends at ({dr_final[0]:.2f}, {dr_final[1]:.2f}) m, no "
-                  "region (heading error not propagated).")
-    else:
-        da = region.ellipse.semi_axes
-        versus = f" against {da[0]:.1f} × {da[1]:.1f} m by dead reckoning."
+    da = region.ellipse.semi_axes
+    versus = f" against {da[0]:.1f} × {da[1]:.1f} m by dead reckoning."
     lines = [f"### Fused arrival: {decision.get('decision') or 'undecided'}", "",
              str(decision.get("reason", "")), "",
              f"Fused {100 * final.level:g}% ellipse {sa[0]:.2f} × {sa[1]:.2f} m{versus}", ""]
@@ -208,8 +203,7 @@ def _decision_text(decision: Mapping, final: Ellipse, region: ArrivalRegion | No
         lines += [f"True arrival point (truth.json): **{answer}**", ""]
     lines += ["| candidate | Mahalanobis (fused) |", "|---|---|"]
     lines += [f"| {k} | {v:.2f} |" for k, v in decision.get("mahalanobis", {}).items()]
-    if region is not None:
-        lines += ["", "#### Dead reckoning", "", decision_markdown(region, answer)]
+    lines += ["", "#### Dead reckoning", "", decision_markdown(region, answer)]
     return "\n".join(lines)
 
 

@@ -167,9 +167,8 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
               "turning run with truth: ±σ_ψ of the filter at the truth's samples (k = plus, "
               "minus), rad", ("fusion",), optional=True),
     EntityDoc("fusion_report/**", "Scalars | TextDocument, + json_type, json_path", "static",
-              "final fused position, covariance and std, dead reckoning's std (null for a "
-              "turning run: no region), fixes, mean NIS, P0/Q/R, decision (read back under "
-              "\"fusion_report\")", ("fusion",)),
+              "final fused position, covariance and std, dead reckoning's std, fixes, mean "
+              "NIS, P0/Q/R, decision (read back under \"fusion_report\")", ("fusion",)),
     EntityDoc("gap/{axis}/residual_{k}", "Scalars + SeriesPoints", "sample, theta_urad",
               "discrepancy workflow: residual before / after adding the named effects, m/s² "
               "(bench/gap/recording.py)", ("gap",)),
