@@ -55,6 +55,8 @@ def _sizes(items: list[str], allowed: tuple[str, ...]) -> dict[str, float]:
 
 def _cmd_design(args: argparse.Namespace) -> int:
     from calib.design import DESIGNS, Experiment, analyze_design
+    from calib.design.analysis import ALPHA_MIN
+    from calib.design.experiments import RATE_RANGE
     from calib.design.signals import LINEAR, SIMULATED
 
     allowed = LINEAR + SIMULATED
@@ -66,10 +68,12 @@ def _cmd_design(args: argparse.Namespace) -> int:
         raise OptionError(f"--n {args.n}: every N must be >= 16")
     # each process holds one experiment of the largest N at a time (bench/limits.py)
     limits.check_memory(limits.DESIGN_SAMPLE_BYTES * max(ns), f"--n {max(ns)}")
-    if any(not r > 0 for r in rates):
-        raise OptionError(f"--rate {args.rate}: sweep rates must be positive (rad/s)")
-    if not 0 < args.alpha < 1:
-        raise OptionError(f"--alpha {args.alpha}: must be in (0, 1)")
+    lo, hi = RATE_RANGE
+    if any(not lo <= r <= hi for r in rates):
+        raise OptionError(f"--rate {args.rate}: sweep rates must be within [{lo:g}, {hi:g}] "
+                          "rad/s")
+    if not ALPHA_MIN <= args.alpha < 1:
+        raise OptionError(f"--alpha {args.alpha}: must be in [{ALPHA_MIN:g}, 1)")
     check_count(args.runs, "--runs", 0)
     check_count(args.mc_grid, "--mc-grid", 0)
     if args.mc_grid == 1 or (args.mc_grid and args.runs == 0):

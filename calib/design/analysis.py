@@ -149,6 +149,11 @@ def _grid_row(s: np.ndarray, f: np.ndarray, sizes: list[float],
     return out
 
 
+ALPHA_MIN = 1e-12
+"""Smallest family α: the per-step α (α/m, m ≤ a few dozen tests) must stay a normal float
+whose χ² quantile is finite (a denormal α gives an infinite critical value)."""
+
+
 def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
                    sizes: Mapping[str, float] | None = None, noise_var=(0.25, 0.64),
                    family_alpha: float = 0.005, axis: str = "x", runs: int = 20,
@@ -190,8 +195,8 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
     nv = np.asarray(noise_var, dtype=float)
     if nv.shape != (2,) or np.any(~np.isfinite(nv)) or np.any(nv <= 0):
         raise ValueError(f"noise_var must be two positive variances, got {noise_var!r}")
-    if not 0 < family_alpha < 1:
-        raise ValueError(f"family_alpha must be in (0, 1), got {family_alpha}")
+    if not ALPHA_MIN <= family_alpha < 1:
+        raise ValueError(f"family_alpha must be in [{ALPHA_MIN:g}, 1), got {family_alpha}")
     if axis not in AXES:
         raise ValueError(f"axis must be x or y, got {axis!r}")
     if mc_grid:

@@ -29,6 +29,9 @@ HELD_POSITIONS = 8
 DESIGNS: tuple[str, ...] = ("uniform", "held", "sweep", "reversal", "accel")
 """Design names, in the order of the module table."""
 TIMED: frozenset[str] = frozenset({"sweep", "reversal", "accel"})
+RATE_RANGE = (1e-6, 1e3)
+"""Mean sweep rates a design may have, rad/s: from one turn in 73 days to 160 turns a second
+(beyond, the sample period underflows the timing effects' arithmetic)."""
 
 
 @dataclass(frozen=True)
@@ -50,8 +53,9 @@ class Experiment:
             raise ValueError(f"N must be an integer >= 16, got {self.n}")
         if self.design == "held" and self.n < 2 * HELD_POSITIONS:
             raise ValueError(f"held needs N >= {2 * HELD_POSITIONS}")
-        if not (np.isfinite(self.rate) and self.rate > 0):
-            raise ValueError(f"sweep rate must be a positive number of rad/s, got {self.rate}")
+        lo, hi = RATE_RANGE
+        if not (np.isfinite(self.rate) and lo <= self.rate <= hi):
+            raise ValueError(f"sweep rate must be within [{lo:g}, {hi:g}] rad/s, got {self.rate}")
 
     @property
     def timed(self) -> bool:
