@@ -120,8 +120,9 @@ def test_cli_json_has_units_and_plot_writes_png(tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, words", [
     (["--designs", "spiral"], "choose from"), (["--size", "misalignment"], "NAME=VALUE"),
-    (["--size", "saturation=-1"], "positive"), (["--alpha", "2"], "(0, 1)"),
-    (["--effects", "gravity_mismatch"], "choose from"), (["--rate", "0"], "positive")])
+    (["--size", "saturation=-1"], "positive"), (["--alpha", "2"], "[1e-12, 1)"),
+    (["--alpha", "5e-324"], "[1e-12, 1)"), (["--effects", "gravity_mismatch"], "choose from"),
+    (["--rate", "0"], "within [1e-06, 1000] rad/s"), (["--rate", "1e300"], "within")])
 def test_bad_options_are_clear_errors(capsys, argv, words):
     assert main(["design", *argv]) == 2
     assert words in capsys.readouterr().err
