@@ -8,8 +8,16 @@ from pathlib import Path
 
 import matplotlib
 import pytest
+from hypothesis import settings
 
 matplotlib.use("Agg")
+
+# Property tests draw the same examples on every machine and every run (a green suite stays
+# green on a fresh clone, where no example database exists); `pytest --hypothesis-profile
+# explore` draws new ones, to search for failures on purpose.
+settings.register_profile("repeatable", derandomize=True, database=None)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile("repeatable")
 
 REPO = Path(__file__).resolve().parents[1]
 COURSE_DATA = REPO.parent / "shared" / "course-data"
