@@ -19,10 +19,10 @@ import scipy.io
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bench.cli import main
 from calib.angles import compare_angle_units
 from calib.calibration import calibrate
 from calib.io import DataError, read_ensayo
+from tests.cli import run as _run
 
 G = 9.8
 BIAS = np.array([0.08, -0.02])
@@ -96,12 +96,6 @@ def _commands(path, acel, puntos, datos) -> dict[str, list[str]]:
     }
 
 
-def _run(capsys, argv) -> tuple[int, str, str]:
-    rc = main([str(a) for a in argv])
-    cap = capsys.readouterr()
-    return rc, cap.out, cap.err
-
-
 # ------------------------------------------------------------------ radians: all accepted
 @pytest.mark.parametrize("shape", RADIAN_SHAPES)
 def test_reader_accepts_any_finite_radians(shape, tmp_path):
@@ -124,7 +118,7 @@ def test_every_command_runs_on_any_finite_radians(shape, tmp_path, capsys, cours
     theta = RADIAN_SHAPES[shape]
     path = _save(tmp_path / f"{shape}.mat", theta, readings(theta))
     for name, argv in _commands(path, *course_like).items():
-        rc, out, err = _run(capsys, argv)
+        rc, out, err = _run(capsys, *argv)
         assert rc == 0, (name, err)
         doc = json.loads(out)
         if name == "calibrate":
@@ -137,17 +131,17 @@ def test_generate_takes_any_finite_radians(tmp_path, capsys):
     """Without readings there is nothing to tell degrees by: any finite value is radians."""
     values = [6.2841, -1.0, 7.0, 20.0, 0.5, -12.6, 4 * np.pi + 0.3]
     out = tmp_path / "list"
-    rc, _, err = _run(capsys, ["generate", "calibration", "--theta-list",
+    rc, _, err = _run(capsys, *["generate", "calibration", "--theta-list",
                                ",".join(repr(v) for v in values), "--out", out])
     assert rc == 0, err
     np.testing.assert_allclose(read_ensayo(out / "ensayo.mat").tita, values, rtol=0, atol=1e-9)
     out = tmp_path / "range"
-    rc, _, err = _run(capsys, ["generate", "calibration", "--theta-range", f"-3,{4 * np.pi!r}",
+    rc, _, err = _run(capsys, *["generate", "calibration", "--theta-range", f"-3,{4 * np.pi!r}",
                                "--count", "120", "--out", out])
     assert rc == 0, err
     tita = read_ensayo(out / "ensayo.mat").tita
     assert tita.min() == pytest.approx(-3.0) and tita.max() == pytest.approx(4 * np.pi)
-    rc, _, err = _run(capsys, ["calibrate", out / "ensayo.mat", "--noise-var", "0.25,0.64"])
+    rc, _, err = _run(capsys, *["calibrate", out / "ensayo.mat", "--noise-var", "0.25,0.64"])
     assert rc == 0, err
 
 
@@ -176,7 +170,7 @@ def test_reader_refuses_degrees(name, tmp_path):
 def test_every_command_refuses_degrees(command, tmp_path, capsys, course_like):
     deg = DEGREE_FILES["sweep_0_360deg"]
     path = _save(tmp_path / "deg.mat", deg, readings(np.deg2rad(deg)))
-    rc, out, err = _run(capsys, _commands(path, *course_like)[command])
+    rc, out, err = _run(capsys, *_commands(path, *course_like)[command])
     assert rc == 2 and out == ""
     lines = err.strip().splitlines()
     assert len(lines) == 1, err

@@ -15,23 +15,8 @@ from calib.calfile import FILE_UNITS, FORMAT, FORMAT_VERSION, load_calibration
 from calib.calibration import calibrate
 from calib.io import read_datos, read_ensayo
 from calib.units import missing_units
-
-
-def _run(capsys, *argv) -> tuple[int, str, str]:
-    rc = main([str(a) for a in argv])
-    cap = capsys.readouterr()
-    return rc, cap.out, cap.err
-
-
-def _error(capsys, *argv) -> str:
-    """A command that must fail on bad input: exit 2, nothing on stdout, one line on stderr."""
-    rc, out, err = _run(capsys, *argv)
-    assert rc == 2, err
-    assert out == ""
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith("tiltbench ") and "error:" in lines[0]
-    return lines[0]
+from tests.cli import one_line_error as _error
+from tests.cli import run as _run
 
 
 @pytest.fixture(scope="module")

@@ -11,23 +11,8 @@ import pytest
 import scipy.io
 
 from bench.cli import build_parser, main
-
-
-def _run(capsys, *argv) -> tuple[int, str, str]:
-    rc = main([str(a) for a in argv])
-    cap = capsys.readouterr()
-    return rc, cap.out, cap.err
-
-
-def _error(capsys, *argv) -> str:
-    """Run a command that must fail on bad input; return its one-line message."""
-    rc, out, err = _run(capsys, *argv)
-    assert rc == 2, err
-    assert out == ""
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith("tiltbench ") and "error:" in lines[0]
-    return lines[0]
+from tests.cli import one_line_error as _error
+from tests.cli import run as _run
 
 
 @pytest.fixture

@@ -8,12 +8,7 @@ import numpy as np
 import pytest
 
 from bench.cli import main
-
-
-def _run(capsys, *argv) -> tuple[int, str, str]:
-    rc = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return rc, out, err
+from tests.cli import run as _run
 
 
 @pytest.fixture(scope="module")

@@ -23,9 +23,10 @@ import scipy.sparse
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from bench.cli import main
 from calib.calibration import calibrate
 from calib.io import DataError, DataNote, read_acel, read_datos, read_ensayo, read_puntos
+from tests.cli import one_line_error
+from tests.cli import run as _run
 
 G = 9.8
 NV = "0.25,0.64"
@@ -55,22 +56,9 @@ def _save(path, **variables):
     return path
 
 
-def _run(capsys, *argv) -> tuple[int, str, str]:
-    rc = main([str(a) for a in argv])
-    cap = capsys.readouterr()
-    return rc, cap.out, cap.err
-
-
 def _error(capsys, *argv) -> str:
-    """A command that must fail cleanly: exit 2, nothing on stdout, one line on stderr."""
-    rc, out, err = _run(capsys, *argv)
-    assert rc == 2, err
-    assert out == ""
-    lines = [ln for ln in err.strip().splitlines() if not ln.startswith("warning:")]
-    assert len(lines) == 1, err
-    assert lines[0].startswith("tiltbench ") and "error:" in lines[0]
-    assert "Traceback" not in err
-    return lines[0]
+    """A command that must fail cleanly (warnings aside): :func:`tests.cli.one_line_error`."""
+    return one_line_error(capsys, *argv, ignore=("warning:",))
 
 
 def _no_constant(name):

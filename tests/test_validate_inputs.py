@@ -13,11 +13,12 @@ import scipy.io
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bench.cli import main
 from bench.validate import std_ratio_limits
 from calib.calibration import calibrate
 from calib.conventions import reference_accel
 from calib.io import Ensayo
+from tests.cli import one_line_error
+from tests.cli import run as run_cli
 
 G = 9.8
 BIAS, SCALE, NOISE = np.array([0.08, -0.02]), np.array([-0.03, 0.01]), np.array([0.25, 0.64])
@@ -52,19 +53,11 @@ def _run_files(tmp_path, n: int = N, seed: int = 4, name: str = "run"):
 
 
 def _cli(capsys, *argv) -> tuple[int, str, str]:
-    rc = main(["validate", *map(str, argv)])
-    cap = capsys.readouterr()
-    return rc, cap.out, cap.err
+    return run_cli(capsys, "validate", *argv)
 
 
 def _error(capsys, *argv) -> str:
-    rc, out, err = _cli(capsys, *argv)
-    assert rc == 2, err
-    assert out == ""
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith("tiltbench validate: error: ")
-    return lines[0]
+    return one_line_error(capsys, "validate", *argv, prefix="tiltbench validate: error: ")
 
 
 @pytest.fixture
