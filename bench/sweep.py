@@ -30,11 +30,6 @@ def default_workers() -> int:
     return max(1, os.cpu_count() or 1)
 
 
-def _limit_blas_threads() -> None:
-    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ[var] = "1"
-
-
 POOL_PRELOAD = ("numpy", "scipy.linalg", "calib.montecarlo", "bench.classset")
 """Modules the fork server imports once, so the pool's processes start with them loaded."""
 
@@ -46,6 +41,11 @@ def _context():
     ≈ 0.7 s on the first pool of a process, ≈ 0.03 s on later ones (measured here)."""
     import multiprocessing
 
+    # One BLAS thread per worker. The variables are read when numpy loads, which happens in
+    # the fork server (preload) before any worker exists, so they must be in the environment
+    # the server starts with: this process's (its own BLAS is already loaded, unaffected).
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(list(POOL_PRELOAD))
     return ctx
@@ -62,7 +62,7 @@ def process_map(workers: int) -> Mapper:
             return serial_map(fn, tasks, progress)
         out: list[Any] = [None] * len(tasks)
         with ProcessPoolExecutor(max_workers=min(workers, len(tasks)),
-                                 mp_context=_context(), initializer=_limit_blas_threads) as pool:
+                                 mp_context=_context()) as pool:
             futures = {pool.submit(fn, t): i for i, t in enumerate(tasks)}
             for done, fut in enumerate(as_completed(futures), start=1):
                 out[futures[fut]] = fut.result()
