@@ -33,6 +33,7 @@ from typing import Literal
 
 import numpy as np
 
+from calib.consistency import nees
 from calib.conventions import AXES, JOINT_PARAM_NAMES, G
 from calib.correct import apply_errors
 from calib.ls import axis_factor
@@ -204,11 +205,12 @@ class MonteCarloResult(ResultMixin):
         d = np.stack([np.diag(c) for c in self.cov1])                 # (2, 2)
         return np.sqrt(np.repeat(self.sigma2, 2, axis=1) * d.reshape(4))
 
-    def cov(self, k: int) -> np.ndarray:
-        """(4, 4) block-diagonal covariance of run ``k`` (per-axis OLS: no cross terms)."""
-        c = np.zeros((4, 4))
+    def covs(self) -> np.ndarray:
+        """(R, 4, 4) block-diagonal covariance of every run (per-axis OLS: no cross terms),
+        ``σ²_a,k · cov1[a]`` on each axis' block."""
+        c = np.zeros((self.runs, 4, 4))
         for a in range(2):
-            c[2 * a:2 * a + 2, 2 * a:2 * a + 2] = self.sigma2[k, a] * self.cov1[a]
+            c[:, 2 * a:2 * a + 2, 2 * a:2 * a + 2] = self.sigma2[:, a, None, None] * self.cov1[a]
         return c
 
     def errors(self) -> np.ndarray:
@@ -216,17 +218,9 @@ class MonteCarloResult(ResultMixin):
         return self.params - self.truth
 
     def nees(self) -> np.ndarray:
-        """(R,) ``d² = eᵀ Σ_k⁻¹ e`` per run (χ²₄ for an honest estimator with known σ²).
-
-        Σ_k is block diagonal, so ``d² = Σ_a e_aᵀ (σ²_a,k C1_a)⁻¹ e_a``, solved per axis.
-        """
-        e = self.errors()
-        d2 = np.zeros(self.runs)
-        for a in range(2):
-            ea = e[:, 2 * a:2 * a + 2]
-            sol = np.linalg.solve(self.cov1[a], ea.T).T                # C1⁻¹ e (r, 2)
-            d2 += np.einsum("ri,ri->r", ea, sol) / self.sigma2[:, a]
-        return d2
+        """(R,) ``d² = eᵀ Σ_k⁻¹ e`` per run (χ²₄ for an honest estimator with known σ²;
+        :func:`calib.consistency.nees` on each run's block-diagonal covariance)."""
+        return nees(self.errors(), self.covs())
 
     def interval_hits(self, level: float = 0.95) -> np.ndarray:
         """(R, 4) bool: truth inside each run's two-sided ``level`` interval (normal
