@@ -159,8 +159,8 @@ def coverage_check(truth: dict, runs: int = COVERAGE_RUNS, level: float = COVERA
     the course model and the true parameters (numpy, no MuJoCo: the static table reproduces
     ``[-g sin θ, -g cos θ]`` to 1e-15), calibrates with known σ² and applies the joint test.
     The runs are the batched engine :func:`calib.montecarlo.simulate_calibrations` (run k's
-    stream: ``SeedSequence(seed, spawn_key=(7, k))``, the same draws as a loop of
-    ``calibrate()``; ``mapper`` and the chunking do not change the numbers). The joint test
+    stream: ``SeedSequence(seed, spawn_key=(7, k))``; ``mapper`` and the chunking do not
+    change the numbers). The joint test
     ``d² = eᵀΣ⁻¹e ≤ χ²₄(level)`` and the per-parameter ``|z| ≤ q`` are evaluated for all runs
     at once; the constants of the test (quantiles, the std check, which is the same for
     every run since σ² is known) come from :func:`bench.validate.validate` on run 0.
