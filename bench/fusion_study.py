@@ -76,7 +76,7 @@ Units SI: s, m, m/s, m/s², Hz; areas m².
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -122,9 +122,7 @@ class Scenario:
     r_factor: float = 1.0
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "imu_hz": self.imu_hz, "fix_hz": self.fix_hz,
-                "outage_s": self.outage_s, "p0_factor": self.p0_factor,
-                "q_factor": self.q_factor, "r_factor": self.r_factor}
+        return asdict(self)
 
 
 SCENARIOS: tuple[Scenario, ...] = (
