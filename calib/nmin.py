@@ -77,6 +77,7 @@ from calib.io import Acel, Ensayo, validate_ensayo
 from calib.ls import PoorlyIdentifiedWarning
 from calib.proportion import lower_bound
 from calib.region import (
+    AREA_COMPARISON_UNITS,
     ArrivalRegion,
     arrival_region,
     chi2_2dof,
@@ -88,7 +89,7 @@ from calib.region import (
 from calib.results import ResultMixin
 from calib.runs import Mapper, chunk_ranges, run_seeds, serial_map
 from calib.trajectory import Integrator, compute_trajectory, correct_and_integrate
-from calib.units import with_units
+from calib.units import nest, with_units
 
 N_MAX = 10**12
 """Largest N searched; a crossing beyond it is reported as 'never' (None)."""
@@ -786,9 +787,7 @@ class NminResult(ResultMixin):
         "subsample.mahalanobis.*": "1",
         "monte_carlo.n": "count", "monte_carlo.level": "1", "monte_carlo.right_rate": "1",
         "monte_carlo.coverage": "1", "monte_carlo.*": "count",
-        "area_comparison.ellipse_area": "m²", "area_comparison.calibration_only_area": "m²",
-        "area_comparison.course_box_area": "m²", "area_comparison.course_ellipse_area": "m²",
-        "area_comparison.*": "1",
+        **nest("area_comparison", AREA_COMPARISON_UNITS),
         "fixed_run.n": "count", "fixed_run.n_band": "count", "fixed_run.draws": "count",
         "fixed_run.seed": "count", "fixed_run.grid_n": "count", "fixed_run.*": "1",
         "confirmation.n": "count", "confirmation.runs": "count", "confirmation.right": "count",

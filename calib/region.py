@@ -190,6 +190,11 @@ def decide(d2: dict[str, float], level: float) -> tuple[str | None, tuple[str, .
                           f"{100 * level:g}% region")
 
 
+AREA_COMPARISON_UNITS = {"ellipse_area": "m²", "calibration_only_area": "m²",
+                         "course_box_area": "m²", "course_ellipse_area": "m²", "*": "1"}
+"""Units of :meth:`ArrivalRegion.area_comparison` (areas m², the ratios dimensionless)."""
+
+
 @dataclass(frozen=True, eq=False)
 class Ellipse(ResultMixin):
     """Confidence ellipse ``{p : (p - center)ᵀ cov⁻¹ (p - center) ≤ χ²₂(level)}``.

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from calib.region import AREA_COMPARISON_UNITS
 from calib.units import nest, with_units
 
 if TYPE_CHECKING:
@@ -29,9 +30,7 @@ TRAJECTORY_UNITS: dict[str, str] = {
     "course_box_k": "1", "course_box_a_max": "m/s²", "course_box_bound": "m",
     "ellipse.level": "1", "ellipse.semi_axes": "m", "ellipse.angle_rad": "rad",
     "ellipse.area": "m²", "ellipse.center": "m",
-    "area_comparison.ellipse_area": "m²", "area_comparison.calibration_only_area": "m²",
-    "area_comparison.course_box_area": "m²", "area_comparison.course_ellipse_area": "m²",
-    "area_comparison.*": "1",
+    **nest("area_comparison", AREA_COMPARISON_UNITS),
 }
 """Units of :func:`trajectory_tree` (``trajectory --json``, ``trajectory.json``); the
 calibration under ``"calibration"`` has :attr:`calib.calibration.Calibration._JSON_UNITS`."""
