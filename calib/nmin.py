@@ -58,7 +58,7 @@ on every k-th sample of the course run), :func:`confirm_fixed_run` regenerates c
 with the vehicle run given, and :func:`simulate_decisions` draws fresh synthetic calibration
 and vehicle runs at a given N. Each says what its run count supports: a rate from R runs is
 known to ± 3√(p(1-p)/R), and R runs without a failure bound the failure rate only below
-≈ 3/R at 95 % (one-sided Clopper–Pearson, :func:`clopper_pearson_lower`): 100/100 supports
+≈ 3/R at 95 % (one-sided Clopper–Pearson, :func:`calib.proportion.lower_bound`): 100/100 supports
 P ≥ 0.970, not 0.997.
 """
 
@@ -432,13 +432,6 @@ BAND_SIGMAS = 3.0
 """Half-width of the binomial bands, in binomial standard deviations."""
 
 
-def clopper_pearson_lower(k: int, runs: int, confidence: float = 0.95) -> float:
-    """One-sided Clopper–Pearson lower bound on a rate from ``k`` successes in ``runs``
-    (:func:`calib.proportion.lower_bound`): ``runs`` of ``runs`` bound the rate above
-    ``(1 - confidence)^(1/runs)`` — 100/100 only above 0.9705 at 95 %."""
-    return lower_bound(k, runs, confidence)
-
-
 def _made_and_right(points: np.ndarray, cov: np.ndarray, cands: np.ndarray, truth: int,
                     r2: float) -> int:
     """How many rows of ``points`` (R, 2) the rule of :func:`calib.region.decide` decides
@@ -663,7 +656,7 @@ class ConfirmRow(ResultMixin):
 
     @property
     def lower_95(self) -> float:
-        return clopper_pearson_lower(self.right, self.runs, 0.95)
+        return lower_bound(self.right, self.runs, 0.95)
 
     def to_dict(self) -> dict:
         return {"n": self.n, "runs": self.runs, "right": self.right, "wrong": self.wrong,
@@ -920,7 +913,7 @@ class NminResult(ResultMixin):
             for m in self.monte_carlo:
                 out.append(f"  {m.n:>8}{m.runs:>6}{m.right:>7}{m.wrong:>7}{m.undecided:>10}"
                            f"{m.truth_inside:>14}   supports P(right) ≥ "
-                           f"{clopper_pearson_lower(m.right, m.runs):.4f} at 95 %")
+                           f"{lower_bound(m.right, m.runs):.4f} at 95 %")
         out.extend(f"  note: {n}" for n in self.notes)
         return "\n".join(out)
 
@@ -1061,7 +1054,7 @@ def analyze_nmin(
 __all__ = [
     "CONFIRM_N_MAX", "COURSE_STEPS", "ConfirmRow", "FIXED_RUN_N_MAX", "McRow", "NminResult",
     "PositionCovModel", "SubsampleRow", "analyze_nmin", "calibration_draws",
-    "clopper_pearson_lower", "confirm_fixed_run", "course_box_nrange", "crossing_n",
+    "confirm_fixed_run", "course_box_nrange", "crossing_n",
     "design_nmin", "fixed_run_nmin", "fixed_run_probability", "posterior_nrange",
     "redrawn_design", "redrawn_probability",
     "simulate_decisions", "subsample_analysis", "synthetic_calibration", "uniform_design_cov",

@@ -20,13 +20,13 @@ from calib.nmin import (
     _made_and_right,
     analyze_nmin,
     calibration_draws,
-    clopper_pearson_lower,
     confirm_fixed_run,
     fixed_run_nmin,
     fixed_run_probability,
     redrawn_design,
     uniform_design_cov,
 )
+from calib.proportion import lower_bound
 from calib.region import arrival_region, chi2_2dof, decide, squared_distances
 from calib.runs import serial_map
 from calib.trajectory import correct_and_integrate
@@ -127,9 +127,9 @@ def test_confirmation_does_not_depend_on_the_mapper(course):
 
 def test_clopper_pearson_says_what_runs_support():
     """100/100 bounds the rate above 0.05^(1/100) ≈ 0.9705 only — not 0.997."""
-    assert clopper_pearson_lower(100, 100) == pytest.approx(0.05 ** (1 / 100), rel=1e-9)
-    assert clopper_pearson_lower(0, 10) == 0.0
-    assert clopper_pearson_lower(998, 1000) < LEVEL
+    assert lower_bound(100, 100) == pytest.approx(0.05 ** (1 / 100), rel=1e-9)
+    assert lower_bound(0, 10) == 0.0
+    assert lower_bound(998, 1000) < LEVEL
 
 
 def test_unreachable_level_is_said_plainly():
