@@ -13,7 +13,10 @@ from calib.ls import FitResult, NotIdentifiableError, chi2_from_dof, fit_axis, f
 from calib.results import ResultMixin
 from calib.units import with_units
 
-Method = Literal["ols", "wls"]
+Method = Literal["ols", "wls", "multiposition"]
+METHODS: tuple[str, ...] = ("ols", "wls", "multiposition")
+"""Every method a :class:`Calibration` may come from (``multiposition``:
+:meth:`calib.multiposition.MultiPositionFit.to_calibration`, θ unknown)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -22,7 +25,9 @@ class Calibration(ResultMixin):
 
     Attributes
     ----------
-    method : "ols" (per-axis, course method) or "wls" (joint four-parameter WLS).
+    method : "ols" (per-axis, course method), "wls" (joint four-parameter WLS) or
+        "multiposition" (θ unknown, :mod:`calib.multiposition`; ``joint`` holds the 4×4
+        covariance, whose cross-axis terms the shared pose angles create).
     g : gravity used for the reference, m/s².
     fits : per-axis :class:`FitResult` (``("bias", "scale")``); for WLS the marginal blocks.
     joint : the joint four-parameter fit (WLS), or None.
@@ -141,7 +146,8 @@ class Calibration(ResultMixin):
         return np.sqrt(np.diag(self.cov))
 
     def summary(self, level: float = 0.95) -> str:
-        title = {"ols": "per-axis OLS (course method)", "wls": "joint WLS (4 parameters)"}
+        title = {"ols": "per-axis OLS (course method)", "wls": "joint WLS (4 parameters)",
+                 "multiposition": "multi-position (θ unknown, gravity norm)"}
         out = [f"Calibration: {title[self.method]}, g = {self.g} m/s², N = {self.n}"]
         for a in AXES:
             out.append(f"-- axis {a}")

@@ -518,9 +518,16 @@ def fit_multiposition(
         return _residuals_and_jacobian(x, means, w, g)[1]
 
     x0 = _initial(means, g)
-    sol = optimize.least_squares(fun, x0, jac=jac, method="lm", xtol=1e-15, ftol=1e-15,
-                                 gtol=1e-15, max_nfev=200 * (4 + P))
+    sol = optimize.least_squares(fun, x0, jac=jac, method="lm", max_nfev=200 * (4 + P))
     x = sol.x
+    # Gauss–Newton polish (quadratic near the solution): LM stops on its step-size test with
+    # a gradient of ≈ 1e-6, so the last digits would depend on the order of the samples.
+    for _ in range(10):
+        r, J = _residuals_and_jacobian(x, means, w, g)
+        step = np.linalg.lstsq(J, -r, rcond=None)[0]
+        x = x + step
+        if np.max(np.abs(step)) <= 1e-15 * (1.0 + np.max(np.abs(x))):
+            break
     r, J = _residuals_and_jacobian(x, means, w, g)
     # Covariance by QR of the column-equilibrated Jacobian: cov = D⁻¹ R⁻¹ R⁻ᵀ D⁻¹
     norms = np.linalg.norm(J, axis=0)
