@@ -116,7 +116,7 @@ def calibration_document(cal: Calibration, source: str | os.PathLike | None,
         "source": _file_ref(source),
         "param_names": list(JOINT_PARAM_NAMES), "params": cal.params.tolist(),
         "std": cal.std.tolist(), "cov": cal.cov.tolist(),
-        "units": dict(FILE_UNITS),
+        "units": {**FILE_UNITS, **nest("calibration", cal.state_units())},
         "calibration": cal.to_state(),
     }
 

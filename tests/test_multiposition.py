@@ -222,8 +222,7 @@ def test_lack_of_fit_flags_a_misaligned_axis():
     acc, lab = samples(rng, th, 2000)
     delta = np.radians(2.0)
     thr = np.repeat(th, 2000)
-    acc[:, 0] += (1 + TRUTH[1]) * G * (np.sin(thr) - np.sin(thr + delta)) * 0 + \
-        (1 + TRUTH[1]) * -G * (np.sin(thr + delta) - np.sin(thr))
+    acc[:, 0] += (1 + TRUTH[1]) * -G * (np.sin(thr + delta) - np.sin(thr))
     fit = fit_multiposition(pose_statistics(acc, lab), SIGMA2)
     assert fit.lack_of_fit is not None and fit.lack_of_fit.p_value < 1e-6
     good = fit_multiposition(pose_statistics(*samples(rng, th, 2000)), SIGMA2)
