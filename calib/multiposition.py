@@ -55,6 +55,7 @@ from calib.input_rules import DataError
 from calib.lackoffit import LackOfFit
 from calib.ls import FitResult, NotIdentifiableError, PoorlyIdentifiedWarning
 from calib.results import ResultMixin, readonly
+from calib.units import nest, with_units
 
 POSES_NEEDED = 4
 """Fewest held poses that identify bias and scale of both axes with θ unknown."""
@@ -213,8 +214,7 @@ class MultiPositionFit(ResultMixin):
         "cov": "products of the params' units", "angles": "rad", "angles_std": "rad",
         "residuals": "m/s²", "sigma2": "(m/s²)²", "sigma2_dof": "count", "dof": "count",
         "chi2": "1", "rank": "count", "cond": "1", "max_gap": "rad", "g": "m/s²",
-        "poses.n": "count", "poses.means": "m/s²", "poses.ss": "(m/s²)²",
-        "lack_of_fit.*": "see calib.lackoffit.LackOfFit.JSON_UNITS",
+        "poses.labels": "—", "poses.n": "count", "poses.means": "m/s²", "poses.ss": "(m/s²)²",
     }
 
     def __post_init__(self) -> None:
@@ -679,7 +679,21 @@ def compare_methods(mp: MultiPositionFit, ls) -> MethodComparison:
     return MethodComparison(JOINT_PARAM_NAMES, mp.params, mp.std, ls.params, ls.std)
 
 
+def multiposition_document(fit: MultiPositionFit, comparison: MethodComparison | None,
+                           chosen: str) -> dict:
+    """The ``calibrate --method multiposition --json`` object: ``method``, how it was
+    ``chosen`` ("given" or "automatic: θ unknown"), the ``fit`` (:meth:`MultiPositionFit.to_dict`),
+    the ``comparison`` with the θ-based least squares (or None) and ``units``."""
+    units = {**nest("fit", {k: v for k, v in MultiPositionFit.JSON_UNITS.items()
+                            if not k.startswith("lack_of_fit")}),
+             **nest("fit.lack_of_fit", LackOfFit.JSON_UNITS),
+             **nest("comparison", MethodComparison.JSON_UNITS)}
+    return with_units({"method": "multiposition", "chosen": chosen, "fit": fit.to_dict(),
+                       "comparison": None if comparison is None else comparison.to_dict()},
+                      units)
+
+
 __all__ = ["COND_REFUSE", "COND_WARN", "PLANE_FRACTION", "POSES_NEEDED", "SAME_POSE_STD",
            "SPAN_FRACTION", "UNIDENTIFIED_STD", "MethodComparison", "MultiPositionFit",
            "OutOfPlaneWarning", "Poses", "compare_methods", "distinct_orientations",
-           "fit_multiposition", "in_plane", "pose_statistics"]
+           "fit_multiposition", "in_plane", "multiposition_document", "pose_statistics"]
