@@ -41,7 +41,7 @@ def held_log(deg, n=300, seed=0, theta=False, k2=0.0, source="hand.csv"):
 def serve(monkeypatch):
     """``serve(log)``: every ``read_log`` returns ``log`` (whatever the path)."""
     def _serve(log: ImuLog) -> None:
-        monkeypatch.setattr(calib.logs, "read_log", lambda path, options=None: log)
+        monkeypatch.setattr(calib.logs, "read_log", lambda path, options=None, expect=None: log)
     return _serve
 
 

@@ -48,7 +48,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         raise OptionError("--rrd records the θ-based fit; it is not available with "
                           "--method multiposition (use --plot)")
     refuse_overwrite([args.plot, args.rrd, args.save], args.force)
-    log = read_log_from_args(args, args.ensayo)
+    log = read_log_from_args(args, args.ensayo, expect="ensayo")
     nv = noise_var_from_args(args)
     if args.method == "multiposition" or (args.method is None and log.theta is None):
         return _multiposition(args, log, nv)
