@@ -159,3 +159,25 @@ def test_course_run_is_unchanged(course_dir):
     cal = calibrate(e, groups=None)
     assert cal.lack_of_fit is None and "lack_of_fit" not in cal.to_dict()
     assert "sigma2_dof" not in cal.to_dict()["axes"]["x"]
+
+
+def test_gap_takes_the_noise_from_the_held_poses(capsys, tmp_path):
+    """``gap`` without --noise-var on a held-positions set: the within-pose scatter is the
+    stated noise (said on stderr); a sweep (no θ repeats) is still refused in one line."""
+    from calib.io import read_ensayo
+    from tests.cli import one_line_error, run
+
+    out = tmp_path / "set"
+    assert run(capsys, "generate", "calibration", "--positions", 6, "--per-position", 100,
+               "--seed", 2, "--out", out)[0] == 0
+    rc, text, err = run(capsys, "gap", out / "ensayo.mat", "--json")
+    assert rc == 0, err
+    e = read_ensayo(out / "ensayo.mat")
+    s2, dof = pure_error_variance(e.datos, groups_from(e.tita))
+    assert json.loads(text)["noise_var"] == [float(s2[0]), float(s2[1])]
+    assert "scatter within the held poses" in err and f"pure error, dof {dof}" in err
+    sweep = tmp_path / "sweep"
+    assert run(capsys, "generate", "calibration", "--count", 200, "--seed", 2, "--out",
+               sweep)[0] == 0
+    msg = one_line_error(capsys, "gap", sweep / "ensayo.mat")
+    assert "--noise-var" in msg and "hold poses" in msg
