@@ -36,6 +36,7 @@ from scipy import stats
 
 from calib.conventions import AXES
 from calib.results import ResultMixin
+from calib.units import format_p
 
 LOF_ALPHA = 0.01
 """Significance level at which a command says "the model misses something" (one line)."""
@@ -89,8 +90,8 @@ class LackOfFit(ResultMixin):
     def _stat_text(self) -> str:
         if self.statistic == "F":
             return (f"F = {self.value:.4g} (dof {self.dof_lack_of_fit}, "
-                    f"{self.dof_pure_error}), p = {self.p_value:.3g}")
-        return f"χ² = {self.value:.4g} (dof {self.dof_lack_of_fit}), p = {self.p_value:.3g}"
+                    f"{self.dof_pure_error}), {format_p(self.p_value)}")
+        return f"χ² = {self.value:.4g} (dof {self.dof_lack_of_fit}), {format_p(self.p_value)}"
 
     def summary(self) -> str:
         """One line: the statistic, its dof, p and the pure-error variance."""
