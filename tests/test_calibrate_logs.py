@@ -92,6 +92,12 @@ def test_poses_that_do_not_turn_an_axis_name_its_scale(serve, capsys):
     assert "cannot identify scale_x" in msg
 
 
+def test_least_squares_without_theta_points_to_multiposition(serve, capsys):
+    serve(held_log([0, 90, 180, 270, 45]))
+    msg = one_line_error(capsys, "calibrate", "hand.csv", "--method", "wls")
+    assert "--method wls needs the table angle" in msg and "--method multiposition" in msg
+
+
 def test_no_poses_and_no_theta_is_refused(serve, capsys):
     log = held_log([0, 90, 180, 270])
     serve(ImuLog(acc=log.acc, source="flat.csv"))

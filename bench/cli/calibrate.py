@@ -52,6 +52,10 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     nv = noise_var_from_args(args)
     if args.method == "multiposition" or (args.method is None and log.theta is None):
         return _multiposition(args, log, nv)
+    if log.theta is None:
+        raise OptionError(f"--method {args.method} needs the table angle, which {args.ensayo} "
+                          "does not give: use --method multiposition (held poses, θ unknown) "
+                          "or give the poses' angles (--poses …)")
     ensayo = log.to_ensayo()
     groups = groups_from(ensayo.tita, log.pose)
     cal = warnings_to_stderr(lambda: calibrate(ensayo, nv, args.method or "ols", args.g,
