@@ -267,8 +267,9 @@ class MultiPositionFit(ResultMixin):
         s2 = ", ".join(f"{v:.4g}" for v in self.sigma2)
         src = ("given" if self.sigma2_source == "given"
                else f"estimated within poses, dof {self.sigma2_dof}")
-        out.append(f"σ² = {s2} (m/s²)² ({src}); χ²/dof = {self.chi2_dof:.4f}; "
-                   f"dof = {self.dof}")
+        fit_line = (f"χ²/dof = {self.chi2_dof:.4f}; dof = {self.dof}" if self.dof > 0 else
+                    "dof = 0: 4 poses fit the ellipse exactly (5 or more test the fit)")
+        out.append(f"σ² = {s2} (m/s²)² ({src}); {fit_line}")
         out.append(f"identifiability: {self.poses.count} poses, largest gap between pose "
                    f"directions {np.degrees(self.max_gap):.1f}°, rank {self.rank}, "
                    f"cond = {self.cond:.3g}")
@@ -314,21 +315,29 @@ class MultiPositionFit(ResultMixin):
         """The project's :class:`calib.calibration.Calibration` (method "multiposition"):
         the joint 4×4 covariance (with the cross-axis terms the shared angles create) in
         ``joint``, the per-axis marginal blocks in ``fits`` — what ``--save cal.json`` and
-        ``trajectory --calibration`` use."""
+        ``trajectory --calibration`` use.
+
+        The fits' χ² is that of the samples, as for the least squares: every held sample
+        against its pose's model value, ``Σ_ij (m_ij − model_i)² / σ² = (SS_within +
+        Σ n_i r_i²) / σ²`` per axis, with ``dof = N − P`` (samples less the poses' means);
+        finite also for P = 4 poses, where the pose means fit exactly. Residuals: the pose
+        means' (P per axis), m/s². The joint test of the fit is :attr:`lack_of_fit`."""
         from calib.calibration import Calibration
 
-        w2 = self.poses.n[:, None] * self.residuals**2 / self.sigma2
+        chi2 = (self.poses.ss_within
+                + np.sum(self.poses.n[:, None] * self.residuals**2, axis=0)) / self.sigma2
+        dof = self.sigma2_dof
         extra = {"sigma2_dof": self.sigma2_dof} if self.sigma2_source == "estimated" else {}
         fits = {}
         for k, a in enumerate(AXES):
             sl = slice(2 * k, 2 * k + 2)
             fits[a] = FitResult(PARAM_NAMES, self.params[sl], self.cov[sl, sl],
                                 self.residuals[:, k], self.sigma2[k], self.sigma2_source,
-                                self.dof, 2, self.cond, float(w2[:, k].sum()), dict(extra))
+                                dof, 2, self.cond, float(chi2[k]), dict(extra))
         joint = FitResult(JOINT_PARAM_NAMES, self.params, self.cov, self.residuals,
-                          self.sigma2, self.sigma2_source, self.dof, self.rank, self.cond,
-                          self.chi2, {**extra, "angles": self.angles.tolist(),
-                                      "angles_std": self.angles_std.tolist()})
+                          self.sigma2, self.sigma2_source, 2 * dof, self.rank, self.cond,
+                          float(chi2.sum()), {**extra, "angles": self.angles.tolist(),
+                                              "angles_std": self.angles_std.tolist()})
         return Calibration("multiposition", self.g, fits, self.n, joint=joint)
 
 
@@ -606,7 +615,8 @@ class MethodComparison(ResultMixin):
     the combined std. Both use the same readings, so their errors are positively correlated
     and this std is conservative (|z| tends to be small when both are right); when the
     θ-based fit is efficient, ``var(p_mp − p_ls) = var_mp − var_ls`` (Hausman 1978) is the
-    exact spread, reported as ``z_hausman`` (NaN where that difference is not positive).
+    exact spread, reported as ``z_hausman`` (NaN, null in JSON, where that difference is not
+    positive).
     """
 
     param_names: tuple[str, ...]
@@ -665,7 +675,7 @@ class MethodComparison(ResultMixin):
                 "least_squares_std": self.least_squares_std.tolist(),
                 "difference": self.difference.tolist(),
                 "combined_std": self.combined_std.tolist(), "z": self.z.tolist(),
-                "z_hausman": self.z_hausman.tolist()}
+                "z_hausman": [float(v) if np.isfinite(v) else None for v in self.z_hausman]}
 
     @classmethod
     def from_dict(cls, d: dict) -> MethodComparison:

@@ -77,6 +77,27 @@ def test_multiposition_json_carries_units_and_the_comparison(serve, capsys):
     assert np.all(np.abs(d["comparison"]["z"]) <= 3)
 
 
+def test_four_poses_of_a_six_position_log(serve, capsys, tmp_path):
+    """A 3-axis IMU's six-position log in the x–y plane: ±x and ±y poses on the circle,
+    z-up / z-down reading ≈ 0 (left out with a warning). Four poses fit the ellipse exactly
+    (dof 0), and the calibration file is still all finite numbers."""
+    log = held_log([0, 90, 180, 270])
+    rng = np.random.default_rng(1)
+    acc = np.vstack([log.acc, rng.standard_normal((600, 2)) * np.sqrt(SIGMA2)])
+    serve(ImuLog(acc=acc, pose=np.concatenate([log.pose, np.repeat([4, 5], 300)]),
+                 source="six.csv"))
+    src = tmp_path / "six.csv"
+    src.write_text("the log\n")
+    rc, out, err = run(capsys, "calibrate", src, "--save", tmp_path / "cal.json")
+    assert rc == 0, err
+    assert "poses 4, 5 left out" in err and "within the 4 poses" in err
+    assert "dof = 0: 4 poses fit the ellipse exactly" in out
+    text = (tmp_path / "cal.json").read_text()
+    assert "NaN" not in text and "Infinity" not in text
+    cal = load_calibration(tmp_path / "cal.json")
+    assert np.all(np.abs(cal.params - TRUTH) <= 4 * cal.std)
+
+
 def test_too_few_poses_is_one_line_naming_the_count(serve, capsys, tmp_path):
     serve(held_log([0, 120, 240]))
     save = tmp_path / "cal.json"

@@ -121,7 +121,7 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
         comparison = compare_methods(fit, ls)
     cal = fit.to_calibration()
     doc = multiposition_document(fit, comparison, chosen)
-    check_finite(doc, "the estimates")
+    check_finite({"fit": doc, "calibration": cal.to_dict()}, "the estimates")
     if args.save:
         _save(args, cal)
     if args.plot:
@@ -136,7 +136,7 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
         return 0
     if nv is None:
         print(f"note: noise variances not given; estimated from the scatter within the "
-              f"{poses.count} poses (pure error, dof {fit.sigma2_dof}; intervals use "
+              f"{fit.poses.count} poses (pure error, dof {fit.sigma2_dof}; intervals use "
               "Student t)", file=sys.stderr)
     print(args.ensayo)
     print(f"method: multiposition ({chosen})")
