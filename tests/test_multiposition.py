@@ -297,3 +297,24 @@ def test_docs_python_example_runs():
     fit = ns["fit"]
     assert np.all(np.abs(fit.params - TRUTH) <= 4 * fit.std)
     assert "6 poses" in out.getvalue() and ns["cal"].method == "multiposition"
+
+
+def test_figure_shows_every_pose_with_its_region_and_units(tmp_path):
+    from matplotlib.patches import Ellipse
+
+    from bench.figures.multiposition import multiposition_figure, save_multiposition_plot
+
+    rng = np.random.default_rng(8)
+    fit = fit_multiposition(pose_statistics(*samples(rng, np.radians(np.arange(0, 360, 45)),
+                                                     200)), SIGMA2)
+    fig = multiposition_figure(fit)
+    ax, rx = fig.axes
+    assert sum(isinstance(p, Ellipse) for p in ax.patches) == 8
+    assert "m/s²" in ax.get_xlabel() and "m/s²" in ax.get_ylabel()
+    assert "m/s²" in rx.get_ylabel() and "deg" in rx.get_xlabel()
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("×" in t and "region of each mean" in t for t in labels)
+    path = save_multiposition_plot(tmp_path / "mp.svg", fit)
+    assert path.read_text().startswith("<?xml")
+    with pytest.raises(FileExistsError):
+        save_multiposition_plot(tmp_path / "mp.svg", fit)
