@@ -81,6 +81,18 @@ def test_f_equals_the_extra_sum_of_squares_against_the_group_means_model():
     assert lof.ss_pure_error == pytest.approx(rss_means, rel=1e-10)
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_pure_error_and_lack_of_fit_add_up_to_the_residual_sum(seed):
+    """RSS = SS_pe + SS_lof for any residuals and any grouping (Pythagoras within groups)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(10, 60))
+    r = rng.standard_normal(n) * rng.uniform(0.1, 3)
+    grp = groups_from(None, rng.integers(-1, 5, n))
+    lof = lack_of_fit(r, grp, 1)
+    if lof is not None:
+        assert lof.ss_pure_error + lof.ss_lack_of_fit == pytest.approx(float(r @ r), rel=1e-12)
+
+
 def test_undefined_test_returns_none():
     r = np.array([0.1, -0.1, 0.2, -0.2])
     assert lack_of_fit(r, np.array([0, 0, 1, 1]), 2) is None  # c = p: no lof dof

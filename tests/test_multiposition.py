@@ -66,12 +66,15 @@ def test_interval_coverage_and_nees(known):
     (±0.036, a false alarm ≈ 6e-5 per parameter). With σ² given, the NEES
     (p̂ − p)ᵀ cov⁻¹ (p̂ − p) is χ²(4): its mean over R runs has sd sqrt(2·4/R) = 0.115;
     checked within 4 ± 4 sd. With σ² from the pure error (N − P ≥ 594 dof) the NEES mean is
-    4·(dof/(dof − 2)) ≈ 4.01: the same band holds.
+    4·(dof/(dof − 2)) ≈ 4.01: the same band holds. The joint lack-of-fit test (χ² or F with
+    P − 4 dof) rejects a right model at α = 0.05 with probability 0.05: its rate is checked
+    within 4·sqrt(0.05·0.95/R) = 0.036.
     """
     rng = np.random.default_rng(19)
     R, p = 600, 0.95
     hits = np.zeros(4)
     nees = np.empty(R)
+    rejected = 0
     for r in range(R):
         poses = random_set(rng)
         fit = fit_multiposition(poses, SIGMA2 if known else None)
@@ -79,9 +82,11 @@ def test_interval_coverage_and_nees(known):
         hits += (lo <= TRUTH) & (TRUTH <= hi)
         d = fit.params - TRUTH
         nees[r] = d @ np.linalg.solve(fit.cov, d)
+        rejected += fit.lack_of_fit.p_value < 0.05
     band = 4 * np.sqrt(p * (1 - p) / R)
     assert np.all(np.abs(hits / R - p) <= band), hits / R
     assert abs(nees.mean() - 4) <= 4 * np.sqrt(8 / R), nees.mean()
+    assert abs(rejected / R - 0.05) <= 4 * np.sqrt(0.05 * 0.95 / R), rejected / R
 
 
 def test_pose_statistics_matches_samples_and_order_is_irrelevant():
