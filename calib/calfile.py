@@ -7,7 +7,7 @@ read it with ``--calibration cal.json`` instead of re-fitting. The format is doc
     format           "tiltbench-calibration"          (FORMAT)
     format_version   1                                (FORMAT_VERSION)
     tool             {"name": "tiltbench", "version": "0.1.0"}
-    method, g        "ols" | "wls", m/s²
+    method, g        "ols" | "wls" | "multiposition", m/s²
     n                samples of the calibration run
     sigma2           [σx², σy²] (m/s²)²;  sigma2_source "given" | "datos.txt" | "estimated"
     noise_file       {"name", "sha256"} of the datos.txt the σ² came from, or null
@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from calib.atomic import write_bytes, write_text
-from calib.calibration import Calibration
+from calib.calibration import METHODS, Calibration
 from calib.conventions import AXES, JOINT_PARAM_NAMES
 from calib.input_rules import DataError
 from calib.units import nest
@@ -116,7 +116,7 @@ def calibration_document(cal: Calibration, source: str | os.PathLike | None,
         "source": _file_ref(source),
         "param_names": list(JOINT_PARAM_NAMES), "params": cal.params.tolist(),
         "std": cal.std.tolist(), "cov": cal.cov.tolist(),
-        "units": dict(FILE_UNITS),
+        "units": {**FILE_UNITS, **nest("calibration", cal.state_units())},
         "calibration": cal.to_state(),
     }
 
@@ -242,8 +242,9 @@ def calibration_from_document(doc: Any, path: str | os.PathLike = "<memory>") ->
     for key in _REQUIRED:
         if key not in doc:
             raise _fail(path, key, "missing")
-    if doc["method"] not in ("ols", "wls"):
-        raise _fail(path, "method", f"is {doc['method']!r}, expected 'ols' or 'wls'")
+    if doc["method"] not in METHODS:
+        raise _fail(path, "method", f"is {doc['method']!r}, expected one of "
+                    f"{', '.join(METHODS)}")
     if doc["sigma2_source"] not in SIGMA2_SOURCES:
         raise _fail(path, "sigma2_source", f"is {doc['sigma2_source']!r}, expected one of "
                     f"{', '.join(SIGMA2_SOURCES)}")

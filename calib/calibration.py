@@ -2,18 +2,22 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
 
 from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G
 from calib.io import Ensayo
+from calib.lackoffit import LackOfFit, lack_of_fit_axes, pure_error_variance
 from calib.ls import FitResult, NotIdentifiableError, chi2_from_dof, fit_axis, fit_joint
 from calib.results import ResultMixin
-from calib.units import with_units
+from calib.units import nest, with_units
 
-Method = Literal["ols", "wls"]
+Method = Literal["ols", "wls", "multiposition"]
+METHODS: tuple[str, ...] = ("ols", "wls", "multiposition")
+"""Every method a :class:`Calibration` may come from (``multiposition``:
+:meth:`calib.multiposition.MultiPositionFit.to_calibration`, θ unknown)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -22,11 +26,18 @@ class Calibration(ResultMixin):
 
     Attributes
     ----------
-    method : "ols" (per-axis, course method) or "wls" (joint four-parameter WLS).
+    method : "ols" (per-axis, course method), "wls" (joint four-parameter WLS) or
+        "multiposition" (θ unknown, :mod:`calib.multiposition`; ``joint`` holds the 4×4
+        covariance, whose cross-axis terms the shared pose angles create).
     g : gravity used for the reference, m/s².
     fits : per-axis :class:`FitResult` (``("bias", "scale")``); for WLS the marginal blocks.
     joint : the joint four-parameter fit (WLS), or None.
     n : number of samples.
+    lack_of_fit : per axis, the Draper & Smith test of the fit against the scatter within
+        repeated poses (:mod:`calib.lackoffit`), or None when no pose repeats.
+
+    σ² from the pure error (no ``noise_var``, poses repeat): ``sigma2_source`` is
+    "estimated" and each fit's ``extra["sigma2_dof"]`` holds its dof N − c (Student t).
 
     ``params`` and ``cov`` are ordered ``[bias_x, scale_x, bias_y, scale_y]``.
 
@@ -53,6 +64,7 @@ class Calibration(ResultMixin):
     fits: dict[str, FitResult]
     n: int
     joint: FitResult | None = None
+    lack_of_fit: dict[str, LackOfFit] | None = None
 
     @property
     def params(self) -> np.ndarray:
@@ -89,7 +101,34 @@ class Calibration(ResultMixin):
                 "cov": f.cov.tolist(), "sigma2": f.sigma2.item(),
                 "sigma2_source": f.sigma2_source, "chi2_dof": f.chi2_dof, "n": self.n,
             }
-        return with_units({"method": self.method, "g": self.g, "axes": axes}, self._JSON_UNITS)
+            if "sigma2_dof" in f.extra:
+                axes[a]["sigma2_dof"] = int(f.extra["sigma2_dof"])
+        out = {"method": self.method, "g": self.g, "axes": axes}
+        if self.lack_of_fit is not None:
+            out["lack_of_fit"] = {a: v.to_dict() for a, v in self.lack_of_fit.items()}
+        return with_units(out, {**self._JSON_UNITS, **self._optional_units(state=False)})
+
+    def _optional_units(self, state: bool = True) -> dict[str, str]:
+        """Units of the keys only some calibrations carry (pure-error dof, lack of fit,
+        the multi-position angles), for :meth:`to_dict` (``state=False``) or
+        :meth:`to_state`; empty for a course fit, whose documents stay as they were."""
+        out: dict[str, str] = {}
+        if any("sigma2_dof" in self.fits[a].extra for a in AXES):
+            out["axes.*.sigma2_dof"] = "count"
+            if state:
+                out["fits.*.extra.sigma2_dof"] = "count"
+                out["joint.extra.sigma2_dof"] = "count"
+        if self.lack_of_fit is not None:
+            out.update(nest("lack_of_fit.*", LackOfFit.JSON_UNITS))
+        if state and self.joint is not None and "angles" in self.joint.extra:
+            out["joint.extra.angles"] = "rad"
+            out["joint.extra.angles_std"] = "rad"
+        return out
+
+    def state_units(self) -> dict[str, str]:
+        """Units of the optional keys of :meth:`to_state` (added to a ``cal.json``'s
+        ``units`` by :func:`calib.calfile.calibration_document`)."""
+        return self._optional_units(state=True)
 
     def to_state(self) -> dict:
         """:meth:`to_dict` plus the full per-axis fits and the joint fit (exact rebuild)."""
@@ -124,7 +163,7 @@ class Calibration(ResultMixin):
             fits = {a: FitResult.from_dict(d["fits"][a]) for a in AXES}
             joint = None if d.get("joint") is None else FitResult.from_dict(d["joint"])
             n = int(d["axes"][AXES[0]]["n"])
-            return cls(method, g, fits, n, joint)
+            return cls(method, g, fits, n, joint, _lof_from(d))
         fits = {}
         n = 0
         for a in AXES:
@@ -132,8 +171,9 @@ class Calibration(ResultMixin):
             n = int(ax["n"])
             fits[a] = FitResult(
                 PARAM_NAMES, [ax["bias"], ax["scale"]], ax["cov"], np.zeros(0), ax["sigma2"],
-                ax["sigma2_source"], n - 2, 2, float("nan"), chi2_from_dof(ax["chi2_dof"], n - 2))
-        return cls(method, g, fits, n)
+                ax["sigma2_source"], n - 2, 2, float("nan"), chi2_from_dof(ax["chi2_dof"], n - 2),
+                {"sigma2_dof": int(ax["sigma2_dof"])} if "sigma2_dof" in ax else {})
+        return cls(method, g, fits, n, None, _lof_from(d))
 
     @property
     def std(self) -> np.ndarray:
@@ -141,12 +181,30 @@ class Calibration(ResultMixin):
         return np.sqrt(np.diag(self.cov))
 
     def summary(self, level: float = 0.95) -> str:
-        title = {"ols": "per-axis OLS (course method)", "wls": "joint WLS (4 parameters)"}
+        title = {"ols": "per-axis OLS (course method)", "wls": "joint WLS (4 parameters)",
+                 "multiposition": "multi-position (θ unknown, gravity norm)"}
         out = [f"Calibration: {title[self.method]}, g = {self.g} m/s², N = {self.n}"]
         for a in AXES:
             out.append(f"-- axis {a}")
             out += _axis_table(self.fits[a], level)
+            if self.lack_of_fit is not None:
+                out.append(self.lack_of_fit[a].summary())
         return "\n".join(out)
+
+    def lack_of_fit_warnings(self, alpha: float | None = None) -> list[str]:
+        """One line per axis whose lack-of-fit test rejects at ``alpha``
+        (:data:`calib.lackoffit.LOF_ALPHA` by default): "the model misses something"."""
+        from calib.lackoffit import LOF_ALPHA
+
+        if self.lack_of_fit is None:
+            return []
+        a = LOF_ALPHA if alpha is None else alpha
+        return [v.warning_line() for v in self.lack_of_fit.values() if v.misses(a)]
+
+
+def _lof_from(d: dict) -> dict[str, LackOfFit] | None:
+    lof = d.get("lack_of_fit")
+    return None if lof is None else {a: LackOfFit.from_dict(v) for a, v in lof.items()}
 
 
 _ROW_UNITS = {"bias": "m/s²", "scale": "1"}  # scale is dimensionless (1 + scale = gain)
@@ -168,7 +226,8 @@ def _axis_table(fit: FitResult, level: float) -> list[str]:
 
 
 def calibrate(
-    ensayo: Ensayo, noise_var=None, method: Method = "ols", g: float = G
+    ensayo: Ensayo, noise_var=None, method: Method = "ols", g: float = G,
+    groups: np.ndarray | None = None,
 ) -> Calibration:
     """Estimate bias and scale of both axes from a calibration run.
 
@@ -180,6 +239,11 @@ def calibrate(
     method : "ols" — per axis, ``A_m - A_r = bias + scale·A_r`` (course method);
         "wls" — joint four-parameter WLS weighted by the noise covariance.
     g : gravity, m/s² (reference ``A_rx = -g sin θ``, ``A_ry = -g cos θ``).
+    groups : (N,) int, the held pose (or repeated θ) of each sample
+        (:func:`calib.lackoffit.groups_from`), or None. When samples repeat: the lack-of-fit
+        F test of each axis (``lack_of_fit``) and, with ``noise_var`` None, σ² from the
+        pure error (scatter within the groups, N − c dof, Student t) instead of the residuals
+        — which would absorb what the model misses and print χ²/dof = 1.
 
     Returns
     -------
@@ -199,11 +263,39 @@ def calibrate(
     if method not in ("ols", "wls"):
         raise ValueError(f"method must be 'ols' or 'wls', got {method!r}")
     try:
-        return _calibrate(ensayo, noise_var, method, g)
+        if groups is None:
+            return _calibrate(ensayo, noise_var, method, g)
+        return _with_groups(ensayo, noise_var, method, g, np.asarray(groups, dtype=int))
     except NotIdentifiableError as exc:  # name the file the design came from
         if ensayo.source == "<memory>" or str(exc).startswith(ensayo.source):
             raise
         raise NotIdentifiableError(f"{ensayo.source}: {exc}") from exc
+
+
+def _with_groups(ensayo: Ensayo, noise_var, method: Method, g: float,
+                 groups: np.ndarray) -> Calibration:
+    """:func:`calibrate` with repeated poses: pure-error σ² (when not given), lack of fit."""
+    if groups.shape != (ensayo.n,):
+        raise ValueError(f"groups must have shape ({ensayo.n},), got {groups.shape}")
+    pe = None
+    if noise_var is None:
+        try:
+            s2, dof = pure_error_variance(ensayo.datos, groups)
+        except ValueError:
+            s2, dof = None, 0
+        if s2 is not None and np.all(s2 > 0):
+            pe = (s2, dof)
+    cal = _calibrate(ensayo, noise_var if pe is None else pe[0], method, g)
+    if pe is not None:
+        extra = {"sigma2_dof": pe[1]}
+
+        def est(f: FitResult) -> FitResult:
+            return replace(f, sigma2_source="estimated", extra={**f.extra, **extra})
+
+        cal = replace(cal, fits={a: est(cal.fits[a]) for a in AXES},
+                      joint=None if cal.joint is None else est(cal.joint))
+    resid = np.column_stack([cal.fits[a].residuals for a in AXES])
+    return replace(cal, lack_of_fit=lack_of_fit_axes(resid, groups, 2))
 
 
 def _calibrate(ensayo: Ensayo, noise_var, method: Method, g: float) -> Calibration:
@@ -227,4 +319,4 @@ def _calibrate(ensayo: Ensayo, noise_var, method: Method, g: float) -> Calibrati
     return Calibration("wls", g, fits, n, joint=joint)
 
 
-__all__ = ["Calibration", "calibrate", "JOINT_PARAM_NAMES"]
+__all__ = ["METHODS", "Calibration", "calibrate", "JOINT_PARAM_NAMES"]

@@ -124,8 +124,12 @@ def file_sha256(path: str | os.PathLike) -> str:
     return h.hexdigest()
 
 
-def read_log(path: str | os.PathLike, options: LogOptions | None = None) -> ImuLog:
+def read_log(path: str | os.PathLike, options: LogOptions | None = None,
+             expect: str | None = None) -> ImuLog:
     """Read a measured log into an :class:`ImuLog` (module docstring).
+
+    ``expect="ensayo"`` (or ``"acel"``): a course ``.mat`` goes through that course reader
+    only, with its checks and messages.
 
     Raises
     ------
@@ -137,6 +141,14 @@ def read_log(path: str | os.PathLike, options: LogOptions | None = None) -> ImuL
 
     options = options or LogOptions()
     path = Path(path)
+    if expect is not None and options.fmt in ("auto", "course"):
+        # a course input goes through its course reader unchanged (same checks, messages)
+        prov = {"source": {"name": path.name}, "format": "course"}
+        if expect == "acel":
+            a = read_acel(path)
+            return ImuLog(acc=a.aerr, t=a.t, gyro=a.gyro, source=str(path), provenance=prov)
+        e = read_ensayo(path)
+        return ImuLog(acc=e.datos, t=e.t, theta=e.tita, source=str(path), provenance=prov)
     if options.fmt not in ("auto", "course") or path.suffix.lower() != ".mat":
         raise DataError(f"{path}: only the course .mat files are read so far")
     prov = {"source": {"name": path.name, "sha256": file_sha256(path)}, "format": "course"}

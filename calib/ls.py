@@ -126,12 +126,15 @@ class FitResult(ResultMixin):
         return self.chi2 / self.dof if self.dof > 0 else float("nan")
 
     def quantile(self, level: float) -> float:
-        """Two-sided quantile: normal when σ² is given, Student t (dof) when estimated."""
+        """Two-sided quantile: normal when σ² is given, Student t when estimated, with the
+        dof of the σ² estimate: ``extra["sigma2_dof"]`` when σ² came from elsewhere than
+        this fit's residuals (the pure error within poses, :mod:`calib.lackoffit`), else
+        ``dof``."""
         if not 0 < level < 1:
             raise ValueError(f"level must be in (0, 1), got {level}")
         q = 0.5 + level / 2
         return float(stats.norm.ppf(q) if self.sigma2_source == "given"
-                     else stats.t.ppf(q, self.dof))
+                     else stats.t.ppf(q, int(self.extra.get("sigma2_dof", self.dof))))
 
     def conf_int(self, level: float = 0.95) -> np.ndarray:
         """(p, 2) two-sided confidence intervals at ``level`` for each parameter."""

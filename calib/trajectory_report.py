@@ -70,5 +70,7 @@ def tree_units(tree: dict) -> dict[str, str]:
 
     units = dict(TRAJECTORY_UNITS)
     if "calibration" in tree:
-        units.update(nest("calibration", Calibration._JSON_UNITS))
+        # the calibration's own units (its optional keys, e.g. a pure-error dof, included)
+        units.update(nest("calibration", tree["calibration"].get("units")
+                          or Calibration._JSON_UNITS))
     return units

@@ -1,4 +1,11 @@
-"""``tiltbench calibrate``: parse, call :func:`calib.calibration.calibrate`, print."""
+"""``tiltbench calibrate``: parse, call the library, print.
+
+θ known (a course ``ensayo.mat`` or a log with θ): :func:`calib.calibration.calibrate` (per-axis
+OLS or joint WLS), with the lack-of-fit test and the pure-error σ² when poses or θ values
+repeat (:mod:`calib.lackoffit`). θ unknown with held poses, or ``--method multiposition``:
+:func:`calib.multiposition.fit_multiposition`, compared with the least squares when θ is
+known. The log is read with the shared log options (:mod:`bench.cli.logopts`).
+"""
 
 from __future__ import annotations
 
@@ -6,6 +13,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from bench.cli.logopts import add_log_options
 from bench.cli.options import (
     OptionError,
     add_force,
@@ -27,18 +35,31 @@ from bench.cli.output import (
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
+    from bench.cli.logopts import read_log_from_args
     from calib.calibration import calibrate
-    from calib.io import read_ensayo
+    from calib.lackoffit import groups_from
 
     check_level(args.level)
     check_positive(args.g, "--g")
     if args.save and Path(args.save).suffix.lower() not in (".json", ".mat"):
         raise OptionError(f"--save {args.save}: the name must end in .json (the calibration "
                           "file) or .mat (the MATLAB/Octave export)")
+    if args.method == "multiposition" and args.rrd:
+        raise OptionError("--rrd records the θ-based fit; it is not available with "
+                          "--method multiposition (use --plot)")
     refuse_overwrite([args.plot, args.rrd, args.save], args.force)
-    ensayo = read_ensayo(args.ensayo)
+    log = read_log_from_args(args, args.ensayo, expect="ensayo")
     nv = noise_var_from_args(args)
-    cal = warnings_to_stderr(lambda: calibrate(ensayo, nv, args.method, args.g))
+    if args.method == "multiposition" or (args.method is None and log.theta is None):
+        return _multiposition(args, log, nv)
+    if log.theta is None:
+        raise OptionError(f"--method {args.method} needs the table angle, which {args.ensayo} "
+                          "does not give: use --method multiposition (held poses, θ unknown) "
+                          "or give the poses' angles (--poses …)")
+    ensayo = log.to_ensayo()
+    groups = groups_from(ensayo.tita, log.pose)
+    cal = warnings_to_stderr(lambda: calibrate(ensayo, nv, args.method or "ols", args.g,
+                                               groups=groups))
     if args.save:
         check_finite(cal.to_dict(), "the estimates")  # a file of finite numbers only
         _save(args, cal)
@@ -50,16 +71,80 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         from bench.record import record_calibration
 
         record_calibration(cal, ensayo, args.rrd, force=args.force)
+    for line in cal.lack_of_fit_warnings():
+        print(f"warning: {line}", file=sys.stderr)
     if args.json:
         print_json(cal.to_dict())
         return 0
     check_finite(cal.to_dict(), "the estimates")  # the readable output too: no nan/inf
-    if nv is None:
+    if nv is None and cal.fits["x"].extra.get("sigma2_dof") is not None:
+        print("note: noise variances not given; estimated from the scatter within the "
+              f"repeated poses (pure error, dof {cal.fits['x'].extra['sigma2_dof']}; "
+              "intervals use Student t)", file=sys.stderr)
+    elif nv is None:
         print("note: noise variances not given; estimated from the residuals "
               "(intervals use Student t)", file=sys.stderr)
     print(f"{args.ensayo}")
     print(cal.summary(args.level))
     print_files([args.save, args.plot, args.rrd])
+    return 0
+
+
+def _multiposition(args: argparse.Namespace, log, nv) -> int:
+    """θ unknown (or ``--method multiposition``): the gravity-norm fit on the held poses,
+    compared with the θ-based least squares when θ is known."""
+    from calib.calibration import calibrate
+    from calib.input_rules import DataError
+    from calib.lackoffit import LOF_ALPHA, groups_from
+    from calib.multiposition import (
+        compare_methods,
+        fit_multiposition,
+        multiposition_document,
+        pose_statistics,
+    )
+
+    chosen = "given" if args.method == "multiposition" else "automatic: θ unknown"
+    pose = log.pose
+    if pose is None and log.theta is not None:
+        pose = groups_from(log.theta)  # held positions of a course-format run
+    if pose is None:
+        why = "θ never repeats" if log.theta is not None else "θ unknown, no pose labels"
+        raise DataError(f"{args.ensayo}: no held poses to calibrate from ({why}); the "
+                        "multi-position method needs the sensor held still in at least 4 "
+                        "orientations (a log with held poses, or --poses with their angles)")
+    poses = pose_statistics(log.acc, pose, args.ensayo)
+    fit = warnings_to_stderr(lambda: fit_multiposition(poses, nv, args.g, args.ensayo))
+    comparison = None
+    if log.theta is not None:
+        ls = warnings_to_stderr(lambda: calibrate(log.to_ensayo(), nv, "ols", args.g,
+                                                  groups=groups_from(log.theta, log.pose)))
+        comparison = compare_methods(fit, ls)
+    cal = fit.to_calibration()
+    doc = multiposition_document(fit, comparison, chosen)
+    check_finite({"fit": doc, "calibration": cal.to_dict()}, "the estimates")
+    if args.save:
+        _save(args, cal)
+    if args.plot:
+        from bench.figures.multiposition import save_multiposition_plot
+
+        save_multiposition_plot(args.plot, fit, force=args.force, level=args.level)
+    lof = fit.lack_of_fit
+    if lof is not None and lof.misses(LOF_ALPHA):
+        print(f"warning: {lof.warning_line()}", file=sys.stderr)
+    if args.json:
+        print_json(doc)
+        return 0
+    if nv is None:
+        print(f"note: noise variances not given; estimated from the scatter within the "
+              f"{fit.poses.count} poses (pure error, dof {fit.sigma2_dof}; intervals use "
+              "Student t)", file=sys.stderr)
+    print(args.ensayo)
+    print(f"method: multiposition ({chosen})")
+    print(fit.summary(args.level))
+    if comparison is not None:
+        print("-- compared with the θ-based least squares (per-axis OLS, same readings)")
+        print(comparison.summary())
+    print_files([args.save, args.plot])
     return 0
 
 
@@ -76,10 +161,14 @@ def _save(args: argparse.Namespace, cal) -> None:
 
 def register(sub) -> None:
     p = sub.add_parser("calibrate", help="estimate bias and scale from a calibration run")
-    p.add_argument("ensayo", help="ensayo.mat with tita (N×1, rad) and datos (N×2, m/s²)")
+    p.add_argument("ensayo", help="ensayo.mat with tita (N×1, rad) and datos (N×2, m/s²), or "
+                   "a measured log (see the log options below)")
     add_noise_inputs(p)
-    p.add_argument("--method", choices=["ols", "wls"], default="ols",
-                   help="ols: per axis (course method); wls: joint 4-parameter WLS")
+    p.add_argument("--method", choices=["ols", "wls", "multiposition"], default=None,
+                   help="ols: per axis (course method; the default when θ is known); wls: "
+                   "joint 4-parameter WLS; multiposition: θ unknown, from held poses and the "
+                   "gravity norm (the default when θ is unknown; with θ known it is compared "
+                   "with the least squares) — docs/poses-calibration.md")
     add_gravity(p)
     p.add_argument("--level", type=float, default=0.95, help="confidence level of intervals")
     add_json(p)
@@ -88,4 +177,5 @@ def register(sub) -> None:
     p.add_argument("--save", metavar="CAL", help="write the calibration file (cal.json, read "
                    "by trajectory/validate --calibration) or its MATLAB/Octave export (cal.mat)")
     add_force(p, "an existing --save / --rrd / --plot file")
+    add_log_options(p)
     p.set_defaults(handler=_cmd_calibrate)

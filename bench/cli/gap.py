@@ -54,9 +54,17 @@ def _cmd_gap(args: argparse.Namespace) -> int:
         check_positive(args.rate, "--rate")
     ensayo = read_ensayo(args.ensayo)
     nv = noise_var_from_args(args)
-    if nv is None:
-        raise OptionError(f"{args.ensayo}: the gap is measured against the stated noise; give "
-                          "--noise-var σx²,σy² or --datos datos.txt")
+    if nv is None:  # held poses repeat θ: their scatter is the noise (pure error)
+        from calib.lackoffit import groups_from, pure_error_variance
+
+        if groups_from(ensayo.tita) is None:
+            raise OptionError(f"{args.ensayo}: the gap is measured against the stated noise; "
+                              "give --noise-var σx²,σy² or --datos datos.txt (or hold poses: "
+                              "the scatter within repeated θ is then the noise)")
+        s2, dof = pure_error_variance(ensayo.datos, groups_from(ensayo.tita))
+        nv = (float(s2[0]), float(s2[1]))
+        print(f"note: no --noise-var/--datos: the noise is the scatter within the held poses, "
+              f"σ² = {nv[0]:.4g}, {nv[1]:.4g} (m/s²)² (pure error, dof {dof})", file=sys.stderr)
     if args.rate is not None and ensayo.t is not None:
         print(f"warning: {args.ensayo} has sample times 't'; --rate {args.rate} is ignored",
               file=sys.stderr)

@@ -28,12 +28,12 @@ def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
     g.add_argument("--columns", help="column names by role: t=…,x=…,y=…,z=…,theta=…,label=…,"
                    "gyro=…")
     g.add_argument("--axes", default="x,y", help="the log's axes that are the tilt plane's x,y, "
-                   "with signs (default x,y; e.g. -y,z)")
+                   "with signs (e.g. -y,z)")
     g.add_argument("--units", choices=ACCEL_UNITS, help="acceleration unit of the log "
-                   "(default: recognized from the header, else refused)")
+                   "(if not given: recognized from the header, else refused)")
     g.add_argument("--sensitivity", type=float, help="counts per g (with --units counts)")
     g.add_argument("--angle-unit", choices=("rad", "deg"), help="unit of θ, --poses and "
-                   "label angles (default: rad, with the data-based degrees check)")
+                   "label angles (if not given: rad, with the data-based degrees check)")
     g.add_argument("--map", help=".mat variable names: tita=NAME,datos=NAME,t=NAME")
     if poses:
         g.add_argument("--poses", help="angle of each held pose, in order (e.g. 0,90,180,270 "
@@ -80,8 +80,9 @@ def log_options_from_args(args: argparse.Namespace):
         poses=None if poses is None else tuple(parse_floats(poses, "--poses")))
 
 
-def read_log_from_args(args: argparse.Namespace, path: str):
-    """:func:`calib.logs.read_log` of ``path`` with the command's log options."""
+def read_log_from_args(args: argparse.Namespace, path: str, expect: str | None = None):
+    """:func:`calib.logs.read_log` of ``path`` with the command's log options; ``expect``
+    (``"ensayo"``/``"acel"``) keeps a course ``.mat`` input on its course reader."""
     from calib.logs import read_log
 
-    return read_log(path, log_options_from_args(args))
+    return read_log(path, log_options_from_args(args), expect=expect)
