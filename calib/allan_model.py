@@ -77,14 +77,11 @@ def terms_from_theta(theta: np.ndarray, rate: float) -> np.ndarray:
     return np.sqrt(t * np.array([1.0 / rate, 1.0, rate]))
 
 
-def _unit_filters(m: int, memory: int, kernel_fft, nfft: int):
-    """The filters (white, flicker, random walk) that give ``d_k`` for ``m`` from unit white
-    noise, aligned on a common origin per process, as (array, fft-or-None)."""
+def _box_filters(m: int) -> tuple[np.ndarray, np.ndarray]:
+    """The white-noise filter ``h_m`` and the random walk's (its tail sums Σ_{t≥u} h_t,
+    finite because Σ h = 0), both on the window's own origin."""
     h = np.concatenate([-np.ones(m), np.ones(m)]) / m
-    g = np.cumsum(h[::-1])[::-1]  # tail sums Σ_{t≥u} h_t: the random walk's filter
-    # flicker: a(u') = Σ_u h_u f_{u-u'}, u' from -(memory-1) to 2m-1 = conv(h, reversed f)
-    flick = sfft.irfft(sfft.rfft(h, nfft) * kernel_fft, nfft)[:2 * m + memory - 1]
-    return h, flick, g
+    return h, np.cumsum(h[::-1])[::-1]
 
 
 def _pair_counts(m_i: int, m_j: int, lags: np.ndarray, n: int) -> np.ndarray:
@@ -93,10 +90,13 @@ def _pair_counts(m_i: int, m_j: int, lags: np.ndarray, n: int) -> np.ndarray:
     return np.maximum(0, np.minimum(mi, mj - lags) - np.maximum(0, -lags)).astype(float)
 
 
-def _xcorr(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(lags D, c(D) = Σ_p a(p) b(p - D)); scipy's full correlation puts D = index - (len b - 1)."""
-    c = signal.correlate(a, b, mode="full", method="auto")
-    return np.arange(c.size) - (b.size - 1), c
+def _on_lags(c: np.ndarray, first: int, lo: int, hi: int) -> np.ndarray:
+    """``c`` (lags ``first`` …) placed on the lag axis lo … hi (zeros outside its support)."""
+    out = np.zeros(hi - lo + 1)
+    a, b = max(lo, first), min(hi, first + c.size - 1)
+    if a <= b:
+        out[a - lo:b - lo + 1] = c[a - first:b - first + 1]
+    return out
 
 
 @lru_cache(maxsize=8)
@@ -109,32 +109,39 @@ def allan_moments(n: int, ms: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
     design : (n_tau, 3) — ``E s(m_i) = design[i] @ θ`` (units of θ: y², per unit process).
     tensor : (n_tau, n_tau, 3, 3) — ``Cov(s_i, s_j) = θ @ tensor[i, j] @ θ``.
 
-    Cost: one FFT correlation per pair of τ (flicker filters are a record long); cached, so
-    many logs of one length (a Monte Carlo, both axes of a log) pay it once.
+    Cost: the flicker filters are a record long; their correlations share one FFT per τ and
+    one inverse FFT per pair of τ (about 1 s for 2^17 samples here). Cached, so many logs of
+    one length (a Monte Carlo, both axes of a log) pay it once.
     """
     memory = int(n)
     kern = flicker_coefficients(memory)[::-1]
-    longest = 2 * max(ms) + memory - 1
-    nfft = sfft.next_fast_len(longest + 2 * max(ms))
+    flick_len = [2 * m + memory - 1 for m in ms]
+    nfft = sfft.next_fast_len(2 * max(flick_len))  # room for a full correlation: no wrap
     kernel_fft = sfft.rfft(kern, nfft)
-    filters = [_unit_filters(m, memory, kernel_fft, nfft) for m in ms]
+    # flicker: a(u') = Σ_u h_u f_{u-u'} = conv(h, reversed f); origin shared by every τ
+    flick_fft = [sfft.rfft(_box_filters(m)[0], nfft) * kernel_fft for m in ms]
+    boxes = [_box_filters(m) for m in ms]
     k = len(ms)
     design = np.empty((k, 3))
     tensor = np.empty((k, k, 3, 3))
     for i in range(k):
-        design[i] = [float(f @ f) / 2.0 for f in filters[i]]
+        h, g = boxes[i]
+        design[i, 0], design[i, 2] = h @ h / 2.0, g @ g / 2.0
         for j in range(i, k):
-            cs, lags = [], None
-            for a in range(3):
-                lag, c = _xcorr(filters[i][a], filters[j][a])
-                cs.append((lag, c))
-            # the three processes have filters of different lengths: put them on one lag axis
-            lo = min(c[0][0] for c in cs)
-            hi = max(c[0][-1] for c in cs)
+            # only lags where index pairs exist: D = l - k in [-(M_i - 1), M_j - 1]
+            lo, hi = -(n - 2 * ms[i]), n - 2 * ms[j]
             lags = np.arange(lo, hi + 1)
-            full = np.zeros((3, lags.size))
-            for a, (lag, c) in enumerate(cs):
-                full[a, lag[0] - lo:lag[0] - lo + c.size] = c
+            cw = signal.correlate(h, boxes[j][0], mode="full")
+            cr = signal.correlate(g, boxes[j][1], mode="full")
+            first = -(2 * ms[j] - 1)  # scipy: index 0 is lag -(len(b) - 1)
+            circ = sfft.irfft(flick_fft[i] * np.conj(flick_fft[j]), nfft)  # c(D) at D mod nfft
+            if j == i:
+                design[i, 1] = circ[0] / 2.0
+            cf = np.concatenate([circ[nfft + max(lo, -(flick_len[j] - 1)):],
+                                 circ[:min(hi, flick_len[i] - 1) + 1]])
+            full = np.stack([_on_lags(cw, first, lo, hi),
+                             _on_lags(cf, max(lo, -(flick_len[j] - 1)), lo, hi),
+                             _on_lags(cr, first, lo, hi)])
             w = _pair_counts(ms[i], ms[j], lags, n) / (2.0 * (n - 2 * ms[i] + 1)
                                                         * (n - 2 * ms[j] + 1))
             t = np.einsum("d,ad,bd->ab", w, full, full)
