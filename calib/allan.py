@@ -33,9 +33,10 @@ degrees of freedom; measured 0.82 at 0.95). The interval is instead the set of v
 a score-type test accepts: with θ_a fixed at θ_0 the other two terms are refitted, the
 covariance is evaluated *under that hypothesis* V(θ_0, θ̂_rest), and θ_0 is kept while
 ``|θ̂_a(V) − θ_0| / se_a(V) ≤ z_{(1+level)/2}`` (the construction of Wilson's interval for a
-proportion; it is wider upwards where the data would be noisier). Bounds are mapped to the
-term by the monotone ``√`` of the table; a term's interval always contains its estimate and
-never goes below 0.
+proportion; it is wider upwards where the data would be noisier). A negative estimate is taken
+as 0 in this test, so the interval is then [0, upper] (it only accepts more values: the
+coverage cannot drop). Bounds are mapped to the term by the monotone ``√`` of the table; a
+term's interval always contains its estimate and never goes below 0.
 
 **Resolved or not.** A term other than white noise is *resolved* when the same test rejects
 θ_a = 0 one-sided at ``alpha`` (default 0.05): z_0 = θ̂_a(V_0)/se_a(V_0) > z_{1-α}, V_0 the
@@ -47,6 +48,9 @@ white noise only the rate of false "resolved" is α per term (tested).
 the three-term model describes the curve (a low-pass filter at small τ, temperature drift or a
 periodic disturbance at large τ make it fail); p < 0.01 is reported as lack of fit, and the
 τ range can be restricted (``tau_range``).
+
+**Long logs** (more than :data:`MAX_FIT_SAMPLES`) are averaged in blocks of 2^k samples before
+the fit, so its cost stays bounded; τ then starts at 2^k/fs.
 
 **Quantization.** Readings on a lattice (every distinct value a multiple of one step from the
 smallest) give the step; it is reported, and its white contribution Δ²/12 is part of N.
