@@ -274,3 +274,19 @@ def test_long_logs_are_block_averaged(monkeypatch):
     assert ax.quantization_step == pytest.approx(0.001)
     assert NoiseCharacterization.from_dict(res.to_dict()) == res
     assert "blocks of 4 samples" in res.summary()
+
+
+def test_profile_terms_and_upper_bounds():
+    """What ``gap --sensor`` reads: the walk's NoiseTerm when resolved, else its upper bound."""
+    rng = np.random.default_rng(SEED + 9)
+    theta = theta_from_terms(2e-3, 0.0, 1e-3, RATE)
+    res = characterize_noise(np.column_stack([simulate(rng, 8192, theta),
+                                              0.02 * rng.standard_normal(8192)]), RATE)
+    prof = res.to_profile()
+    for k, ax in enumerate(res.axes):
+        for t in ax.terms:
+            got = prof.term(t.name, k)
+            assert (got is None) == (not t.resolved)
+            assert prof.upper_bound(t.name, k) == (None if t.resolved else t.upper_bound)
+    assert res.axes[0].term("rate_random_walk").resolved  # K√(τ/3) ≫ N/√τ at τ ≈ 20 s
+    assert prof.term("rate_random_walk", 0).value == res.axes[0].term("rate_random_walk").value
