@@ -348,6 +348,10 @@ class AxisNoise(ResultMixin):
         q = self.quantization_step
         lines.append("  quantization step: " + ("none seen (readings not on a lattice)"
                                                 if q is None else f"{q:.4g} m/s²"))
+        if q is not None and self.std < q:
+            lines.append(f"  note: the readings' std ({self.std:.3g} m/s²) is below the "
+                         "quantization step: the Allan deviation measures the quantizer more "
+                         "than the sensor")
         fit = (f"  model fit: χ² = {self.chi2:.2f} on {self.dof} dof (p = {self.p_fit:.2g})")
         if self.lack_of_fit:
             fit += (" — the white + bias-instability + random-walk model misses something "
@@ -500,6 +504,10 @@ def fit_axis_noise(y: np.ndarray, rate: float, *, axis: str = "x", level: float 
                         f"{MIN_SAMPLES} samples, τ range spanning 4 octaves)")
     taus, adev, _ = overlapping_adev(y, rate, ms)
     s = adev ** 2
+    if not (np.all(np.isfinite(s)) and s[0] > 0):
+        raise DataError(f"axis {axis}: the readings do not change from sample to sample (a "
+                        "dead or saturated axis, or a quantization step far above the noise): "
+                        "there is no noise to characterize")
     design, tensor = allan_moments(n, ms)
     # a white floor keeps V positive definite whatever the fit does (a trillionth of the
     # smallest-τ variance: far below anything the data can tell)

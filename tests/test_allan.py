@@ -252,6 +252,10 @@ def test_bad_input():
     bad[10, 1] = np.nan
     with pytest.raises(DataError, match="NaN"):
         characterize_noise(bad, 10.0)
+    with pytest.raises(DataError, match="axis y: the readings do not change"):
+        characterize_noise(np.column_stack([rng.standard_normal(500), np.ones(500)]), 10.0)
+    coarse = 0.1 * np.round(0.02 * rng.standard_normal((4000, 1)) / 0.1)
+    assert "below the quantization step" in characterize_noise(coarse, 10.0).summary()
     with pytest.raises(DataError, match="tau-range"):
         characterize_noise(rng.standard_normal((500, 2)), 10.0, tau_range=(1.0, 2.0))
 
