@@ -64,6 +64,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -137,13 +138,22 @@ def adev_intervals(adev: np.ndarray, ms: tuple[int, ...], n: int, slopes: np.nda
     import allantools
 
     alpha = np.clip(np.rint(-2.0 * slopes - 1.0), -2, 0).astype(int)
-    edf = np.array([allantools.edf_greenhall(alpha=int(a), d=2, m=int(m), N=int(n) + 1,
-                                             overlapping=True, modified=False)
-                    for a, m in zip(alpha, ms, strict=True)], dtype=float)
+    edf = np.array([_edf(int(a), int(m), int(n) + 1) for a, m in zip(alpha, ms, strict=True)],
+                   dtype=float)
     lo, hi = np.empty_like(adev), np.empty_like(adev)
     for i, (dev, e) in enumerate(zip(adev, edf, strict=True)):
         lo[i], hi[i] = allantools.confidence_interval(float(dev), float(e), ci=level)
     return lo, hi, edf, alpha
+
+
+@lru_cache(maxsize=4096)
+def _edf(alpha: int, m: int, n: int) -> float:
+    """Greenhall's EDF of the overlapping Allan variance (a pure function of its integers,
+    cached: its series costs ~2 ms per point and a Monte Carlo repeats the same ones)."""
+    import allantools
+
+    return float(allantools.edf_greenhall(alpha=alpha, d=2, m=m, N=n, overlapping=True,
+                                          modified=False))
 
 
 # --- the GLS fit and its score intervals --------------------------------------------------

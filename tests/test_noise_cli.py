@@ -119,6 +119,8 @@ def test_refusals(course_dir, static_log, tmp_path, capsys):
     line = one_line_error(capsys, "noise", course_dir / "acel.mat", "--plot", tmp_path / "a.png")
     assert "not a static log" in line and "acel.mat" in line
     assert not (tmp_path / "a.png").exists()
+    assert "--alpha" in one_line_error(capsys, "noise", path, "--alpha", "0.7")
+    assert "--level" in one_line_error(capsys, "noise", path, "--level", "1.5")
     line = one_line_error(capsys, "noise", path, "--tau-range", "5,1")
     assert "--tau-range" in line
     line = one_line_error(capsys, "noise", path, "--tau-range", "1,2")

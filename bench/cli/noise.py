@@ -58,9 +58,10 @@ def _cmd_noise(args: argparse.Namespace) -> int:
     from calib.sensor_profile import save_profile
 
     level = check_level(args.level)
-    alpha = check_level(args.alpha)
-    if alpha >= 0.5:
-        raise OptionError(f"--alpha must be below 0.5 (a one-sided significance), got {alpha}")
+    alpha = args.alpha
+    if not 0.0 < alpha < 0.5:
+        raise OptionError(f"--alpha must be in (0, 0.5) (a one-sided significance, e.g. 0.05), "
+                          f"got {alpha}")
     tau_range = None
     if args.tau_range:
         tau_range = tuple(parse_pair(args.tau_range, "--tau-range"))
