@@ -112,14 +112,14 @@ def test_moments_match_monte_carlo():
 
 @pytest.mark.slow
 def test_intervals_cover_and_zero_terms_stay_unresolved():
-    """Closed loop on the model itself, R = 200 logs of 2^14 samples at 100 Hz: axis 1 has all
+    """Closed loop on the model itself, R = 200 logs of 2^13 samples at 100 Hz: axis 1 has all
     three terms (N = 2e-3 (m/s²)/√Hz, B = 1.5e-3 m/s², K = 5e-4 m/s²/√s), axis 2 white noise
     only. Every term's 95 % interval covers its truth at 0.95 ± 4·sqrt(0.95·0.05/R) = ± 0.062;
     on white noise, bias instability and rate random walk are called resolved at most
     α + 4·sqrt(α(1−α)/R) = 0.05 + 0.062 of the time; on axis 1, where they are present, more
     often than that (the test has power: an interval of [0, ∞) would pass the coverage
     check but not this one)."""
-    n, r, level = 2 ** 14, 200, 0.95
+    n, r, level = 2 ** 13, 200, 0.95
     truth = np.array([2e-3, 1.5e-3, 5e-4])
     theta = theta_from_terms(*truth, RATE)
     white = theta_from_terms(2e-3, 0.0, 0.0, RATE)
