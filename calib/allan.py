@@ -56,8 +56,9 @@ the fit, so its cost stays bounded; τ then starts at 2^k/fs.
 smallest) give the step; it is reported, and its white contribution Δ²/12 is part of N.
 
 The static check (:func:`check_static`) refuses a log in which the table moved: a window mean
-more than ``shift`` m/s² above the lowest window mean (a tilt of ≈ 1.75° at 0.3 m/s²), or a
-window variance above ``var_ratio`` × the median window variance (handling, vibration).
+more than ``shift`` m/s² above the lowest window mean (a tilt of ≈ 1.75° at 0.3 m/s²), a window
+variance above ``var_ratio`` × the median window variance (handling, vibration), or, with a
+gyro, a window mean rate above ``max_rate``.
 """
 
 from __future__ import annotations
@@ -94,6 +95,7 @@ UNITS = {
     "mean": "m/s^2", "std": "m/s^2", "block": "count", "static_check.window": "s",
     "static_check.shift": "m/s^2", "static_check.var_ratio": "1",
     "static_check.max_shift": "m/s^2", "static_check.max_var_ratio": "1",
+    "static_check.max_rate": "rad/s", "static_check.max_gyro_rate": "rad/s",
 }
 MIN_SAMPLES = 64
 """Shortest log: octaves m = 1 … N/4 must give at least 5 Allan points (3 terms + 2 dof)."""
@@ -641,9 +643,11 @@ def sample_rate_of(t: np.ndarray | None, rate: float | None, where: str) -> floa
 
 
 def check_static(acc: np.ndarray, rate: float, where: str, *, window: float = 1.0,
-                 shift: float = 0.3, var_ratio: float = 9.0) -> dict[str, float]:
-    """Refuse a log in which the table moved (module docstring); return the check's numbers
-    (window s, thresholds, the largest window shift m/s² and variance ratio) for the report."""
+                 shift: float = 0.3, var_ratio: float = 9.0, gyro: np.ndarray | None = None,
+                 max_rate: float = 0.05) -> dict[str, float]:
+    """Refuse a log in which the table moved (module docstring; with a gyro, also a window
+    whose mean rate exceeds ``max_rate`` rad/s, ≈ 3°/s); return the check's numbers (window s,
+    thresholds, the largest window shift m/s² and variance ratio) for the report."""
     acc = np.asarray(acc, dtype=float)
     w = max(2, int(round(window * rate)))
     nwin = acc.shape[0] // w
@@ -659,6 +663,15 @@ def check_static(acc: np.ndarray, rate: float, where: str, *, window: float = 1.
     var = blocks.var(axis=1, ddof=1)
     med_var = np.median(var, axis=0)
     ratio = var / np.where(med_var > 0, med_var, np.inf)
+    if gyro is not None:
+        spin = np.abs(np.asarray(gyro, dtype=float)[:nwin * w].reshape(nwin, w).mean(axis=1))
+        out["max_rate"], out["max_gyro_rate"] = max_rate, float(spin.max())
+        if spin.max() > max_rate:
+            k = int(np.argmax(spin))
+            raise DataError(f"{where}: not a static log: in the {w / rate:g} s window at "
+                            f"t = {k * w / rate:.4g} s the gyro reads {spin[k]:.3g} rad/s "
+                            f"(limit {max_rate:g} rad/s); `tiltbench noise` needs one held "
+                            "pose: cut the log to a still stretch")
     out["max_shift"] = float(dev.max())
     out["max_var_ratio"] = float(ratio.max()) if np.isfinite(ratio).all() else float("inf")
     for bad, what, limit in ((dev > shift, "mean is {v:.3g} m/s² above the lowest window mean",

@@ -232,6 +232,11 @@ def test_static_check_refuses_motion():
     shaken[1000:1100, 1] += rng.standard_normal(100)  # handling: a burst of vibration
     with pytest.raises(DataError, match="variance"):
         check_static(shaken, 100.0, "log.csv")
+    gyro = 0.005 * rng.standard_normal(6000)
+    assert check_static(acc, 100.0, "log.csv", gyro=gyro)["max_gyro_rate"] < 0.05
+    gyro[2000:2100] += 0.2  # turned by 1.1° and back within the noise of the accelerometers
+    with pytest.raises(DataError, match=r"t = 20 s the gyro reads"):
+        check_static(acc, 100.0, "log.csv", gyro=gyro)
 
 
 def test_sample_rate_and_gaps():

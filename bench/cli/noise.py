@@ -48,7 +48,8 @@ def _static_reading(args: argparse.Namespace):
                         " held poses; `tiltbench noise` needs one (cut the log)")
     rate = sample_rate_of(log.t, args.rate, log.source)
     checked = check_static(log.acc, rate, log.source, window=args.static_window,
-                           shift=args.static_shift, var_ratio=args.static_var_ratio)
+                           shift=args.static_shift, var_ratio=args.static_var_ratio,
+                           gyro=log.gyro)
     return log, rate, checked
 
 
