@@ -121,6 +121,19 @@ TURN_UNITS = {
 """Units of the turning vehicle's extra keys in ``truth.json`` (:mod:`bench.vehicle`), added
 only for a turning run so that other sets keep their bytes."""
 
+TWIN_UNITS: dict[str, str] = {
+    "sensor.*.terms.b": "m/s²", "theta": "rad",
+    "sensor_profile.sample_rate": "Hz", "sensor_profile.run_rate": "Hz",
+    "sensor_profile.white_noise_density": "(m/s²)/√Hz",
+    "sensor_profile.bias_instability": "m/s²",
+    "sensor_profile.rate_random_walk": "m/s²/√s",
+    "sensor_profile.quantization_step": "m/s²",
+    "sensor_profile.calibration.bias": "m/s²", "sensor_profile.calibration.scale": "1",
+}
+"""Units of the twin's and the static log's keys in ``truth.json`` (:mod:`bench.sensor_twin`;
+added only for a ``--sensor`` or a ``generate static`` run, so other sets keep their bytes)."""
+
+
 def truth_units(gps: bool = False, turning: bool = False) -> dict[str, str]:
     """The ``units`` of every ``truth.json`` (calibration, vehicle and course sets; a course
     set nests a calibration and a vehicle truth under ``calibration`` / ``vehicle``), the one
@@ -159,7 +172,10 @@ def truth_manifest(truth: dict, seed: int) -> dict:
     manifest["versions"] = versions()
     turning = bool(truth.get("turning") or (isinstance(truth.get("vehicle"), dict)
                                             and truth["vehicle"].get("turning")))
-    return with_units(manifest, truth_units(gps="gps" in truth, turning=turning))
+    units = truth_units(gps="gps" in truth, turning=turning)
+    if "sensor_profile" in truth or truth.get("kind") == "static":  # only then: bytes kept
+        units.update(TWIN_UNITS)
+    return with_units(manifest, units)
 
 
 def write_truth(path: str | Path, truth: dict, seed: int, force: bool = False) -> Path:

@@ -18,9 +18,9 @@ column exactly:
   is the catalog's "low-pass on the output"; only the noise stays white (filtering it too would
   make the stated σ² wrong by the factor ``(1 - e^{-h/τ}) / (1 + e^{-h/τ})`` and colour the
   residuals).
-* ``bias_drift``, ``bias_random_walk`` — output stage, additive at the bias level, so the reading
-  is ``bias + rate·(t - t0) + …`` exactly as the catalog writes it (a response term would be
-  multiplied by ``1 + scale``).
+* ``bias_drift``, ``bias_instability``, ``bias_random_walk`` — output stage, additive at the
+  bias level, so the reading is ``bias + rate·(t - t0) + …`` exactly as the catalog writes it
+  (a response term would be multiplied by ``1 + scale``).
 * ``quantization`` — output stage: the noisy reading is rounded to a multiple of ``lsb``.
 
 Canonical term order inside a stage: :data:`TERM_ORDER`.
@@ -32,7 +32,9 @@ from dataclasses import dataclass
 from typing import ClassVar, Literal, Protocol
 
 import numpy as np
+from scipy.signal import fftconvolve
 
+from calib.allan_model import flicker_coefficients
 from calib.filters import lowpass, uniform_step
 
 Stage = Literal["response", "output"]
@@ -75,7 +77,7 @@ def register_term(cls: type) -> type:
 
 
 TERM_ORDER: tuple[str, ...] = ("lowpass_lag", "nonlinearity_k2", "cross_axis", "bias_drift",
-                               "bias_random_walk", "quantization")
+                               "bias_instability", "bias_random_walk", "quantization")
 """Order in which sensor terms are applied (stage first, then this order)."""
 
 
@@ -235,6 +237,49 @@ class BiasRandomWalk:
         if self.q is not None:
             return {"q": float(self.q)}
         return {"q_per_sample": float(self.q_per_sample)}
+
+
+@register_term
+@dataclass(frozen=True)
+class BiasInstability:
+    """Bias instability (flicker noise of the bias), additive at the bias level:
+    ``b_k = B · Σ_{j=0}^{N-1} f_j w_{k-j}``, ``f`` Kasdin's fractional-integration filter for
+    α = 1 (:func:`calib.allan_model.flicker_coefficients`), ``w`` standard normal.
+
+    Why this model: its one-sided spectrum is ``S(f) ≈ B²/(π f)`` for f ≪ fs (IEEE Std 952's
+    ``h_{-1} = B²/π``), so its Allan deviation has the flat floor ``√(2 ln2/π)·B = 0.664·B``
+    at every τ from a few samples to the record length — exactly the term ``tiltbench noise``
+    fits (:mod:`calib.allan_model`), not an approximation of it by a few Gauss–Markov
+    corners. The filter's memory is N samples (a stationary process over the run: 2N − 1
+    normals drawn, the first N − 1 as the run's past). Per sample: B does not depend on the
+    sample rate, so the term needs no sample times.
+
+    Parameters
+    ----------
+    b : m/s², B (IEEE Std 952 bias instability coefficient), ≥ 0.
+    """
+
+    b: float
+    name: ClassVar[str] = "bias_instability"
+    stage: ClassVar[Stage] = "output"
+
+    def __post_init__(self) -> None:
+        if require_finite(self.b, "bias_instability b") < 0:
+            raise ValueError(f"bias_instability b must be >= 0, got {self.b}")
+
+    def path(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """The (N,) flicker bias path, m/s² (draws 2N − 1 standard normals)."""
+        if n <= 0:
+            return np.zeros(0)
+        w = rng.standard_normal(2 * n - 1)
+        return self.b * fftconvolve(w, flicker_coefficients(n), mode="valid")
+
+    def apply(self, a: np.ndarray, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:
+        """Return ``a + b`` with ``b`` a fresh flicker path (see :meth:`path`)."""
+        return a + self.path(a.shape[0], rng)
+
+    def to_dict(self) -> dict:
+        return {"b": float(self.b)}
 
 
 @register_term

@@ -120,6 +120,9 @@ class CalibrationConfig:
     sweep: SweepProfile = field(default_factory=SweepProfile)
     sensor: SensorErrorModel = field(default_factory=SensorErrorModel)
     table: TableEdits = field(default_factory=TableEdits)
+    twin: dict | None = None
+    """The measured sensor this run simulates (``generate --sensor``,
+    :func:`bench.sensor_twin.twin_truth`), recorded in the truth; None otherwise."""
 
     @property
     def g(self) -> float:
@@ -130,6 +133,8 @@ class CalibrationConfig:
              "table": asdict(self.table)}
         d["theta_design" if self.mode == "static" else "sweep"] = asdict(
             self.theta if self.mode == "static" else self.sweep)
+        if self.twin is not None:  # only then: other runs keep their bytes
+            d["sensor_profile"] = self.twin
         return d
 
 

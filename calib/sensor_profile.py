@@ -19,7 +19,10 @@ One JSON object (``format`` "tiltbench-sensor", ``format_version`` 1)::
     units                key → unit
 
 A term that the log cannot resolve (no flat minimum, no +½ slope within the τ range) is null
-for that axis, and a simulator leaves it out.
+for that axis, and a simulator leaves it out; its upper bound is kept in
+``extra["unresolved_upper_bounds"][axis][term]`` (:meth:`SensorProfile.upper_bound`).
+``extra`` also holds the interval ``level``, the significance ``alpha``, the sample count ``n``
+and the lack-of-fit verdict per axis (:meth:`calib.allan.NoiseCharacterization.to_profile`).
 """
 
 from __future__ import annotations
@@ -97,6 +100,24 @@ class SensorProfile:
         """Per-sample white-noise std (m/s²) at the profile's rate: σ = N·√fs."""
         term = self.white_noise_density[axis]
         return float("nan") if term is None else float(term.value * np.sqrt(self.sample_rate))
+
+    def term(self, name: str, axis: int) -> NoiseTerm | None:
+        """The :class:`NoiseTerm` ``name`` ("white_noise_density", "bias_instability",
+        "rate_random_walk") of ``axis`` (0 = x, 1 = y), or None when the log did not resolve it.
+        """
+        terms = getattr(self, name)
+        return None if terms is None else terms[axis]
+
+    def upper_bound(self, name: str, axis: int) -> float | None:
+        """For a term the log did not resolve: the upper end of its interval (same unit, at
+        ``extra["level"]``), as ``tiltbench noise`` recorded it; None when resolved or unknown.
+        A model that takes the term from the profile can bound it instead of leaving it free.
+        """
+        if self.term(name, axis) is not None:
+            return None
+        bounds = self.extra.get("unresolved_upper_bounds", {}).get(self.axes[axis], {})
+        value = bounds.get(name)
+        return None if value is None else float(value)
 
     def to_dict(self) -> dict:
         return {

@@ -34,13 +34,42 @@ from bench.cli.progress import Progress
 
 # ---------------------------------------------------------------- option values → config
 # Domain imports inside the functions, not at module level: start-up time of `tiltbench --help`.
-def sensor_model(args: argparse.Namespace):
-    """:class:`bench.sensors.SensorErrorModel` from ``--bias``, ``--scale``, ``--noise-var``."""
+def sensor_model(args: argparse.Namespace, rate: float | None = None):
+    """:class:`bench.sensors.SensorErrorModel` from ``--bias``, ``--scale``, ``--noise-var``,
+    or from ``--sensor sensor.json`` (:func:`bench.sensor_twin.twin_sensor` at ``rate`` Hz,
+    default the profile's own rate)."""
     from bench.sensors import SensorErrorModel
 
-    return SensorErrorModel.from_pairs(parse_pair(args.bias, "--bias"),
-                                       parse_pair(args.scale, "--scale"),
+    bias, scale = parse_pair(args.bias, "--bias"), parse_pair(args.scale, "--scale")
+    profile = sensor_profile(args)
+    if profile is not None:
+        from bench.sensor_twin import twin_sensor
+
+        return twin_sensor(profile, rate, bias, scale)
+    return SensorErrorModel.from_pairs(bias, scale,
                                        parse_variances(args.noise_var, allow_zero=True))
+
+
+def sensor_profile(args: argparse.Namespace):
+    """The :class:`calib.sensor_profile.SensorProfile` of ``--sensor``, or None."""
+    path = getattr(args, "sensor", None)
+    if not path:
+        return None
+    from calib.sensor_profile import load_profile
+
+    return load_profile(path)
+
+
+def twin_record(args: argparse.Namespace, rate: float):
+    """What ``truth.json`` records of ``--sensor`` (None without it)."""
+    profile = sensor_profile(args)
+    if profile is None:
+        return None
+    from pathlib import Path
+
+    from bench.sensor_twin import twin_truth
+
+    return twin_truth(profile, rate, Path(args.sensor).name)
 
 
 def calibration_config(args: argparse.Namespace):
@@ -48,7 +77,13 @@ def calibration_config(args: argparse.Namespace):
     from bench.model import TableEdits
     from bench.tilt import CalibrationConfig, SweepProfile, ThetaDesign
 
-    sensor = sensor_model(args)
+    # a measured sensor (--sensor) runs at the sweep's rate, or, held poses having no sample
+    # times, at its own rate (consecutive samples)
+    profile = sensor_profile(args)
+    run_rate = (args.rate if args.mode == "sweep" or profile is None
+                else profile.sample_rate)
+    check_positive(args.rate, "--rate")
+    sensor = sensor_model(args, run_rate)
     # Any finite angle in radians is valid (several turns, negative, past 2π): no range
     # check here — without readings there is nothing to tell degrees by (calib.angles).
     start, stop = parse_pair(args.theta_range, "--theta-range")
@@ -70,7 +105,7 @@ def calibration_config(args: argparse.Namespace):
     if args.mode == "sweep":
         _check_sweep(sweep)
     config = CalibrationConfig(mode=args.mode, theta=theta, sweep=sweep, sensor=sensor,
-                               table=TableEdits(g=args.g))
+                               table=TableEdits(g=args.g), twin=twin_record(args, run_rate))
     if args.effect:  # effect catalog (docs/effects.md), bench/effects.py
         from bench.effects import apply_effects, parse_effect_option
 
@@ -314,7 +349,8 @@ def _cmd_vehicle(args: argparse.Namespace) -> int:
     from bench.vehicle import make_vehicle_run, write_vehicle
 
     refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
-    cfg = vehicle_config(args, sensor_model(args), parse_profile(args.profile))
+    cfg = vehicle_config(args, sensor_model(args, check_positive(args.rate, "--rate")),
+                         parse_profile(args.profile))
     receiver = gps_receiver(args, cfg.t)
     _refuse_stale_gps(args, receiver)
     _announce("generate vehicle", _check_vehicle_size(cfg))
@@ -409,6 +445,33 @@ def _cmd_class(args: argparse.Namespace) -> int:
         print_summary(args, title, summary, {"count": "count"})
     else:
         print_summary(args, title, {**summary, "files": files}, {"count": "count"})
+    return 0
+
+
+def _cmd_static(args: argparse.Namespace) -> int:
+    from bench import limits
+    from bench.sensor_twin import make_static_run, static_samples, write_static
+
+    profile = sensor_profile(args)
+    rate = args.rate if args.rate is not None else (
+        profile.sample_rate if profile is not None else 100.0)
+    check_positive(rate, "--rate")
+    check_positive(args.duration, "--duration")
+    check_positive(args.g, "--g")
+    if not math.isfinite(args.theta):
+        raise OptionError(f"--theta must be a finite angle in rad, got {args.theta}")
+    n = static_samples(args.duration, rate)
+    # the readings, their truth copy and the flicker's 2N draws: ~ 8 arrays of N doubles
+    limits.check_memory(limits.static_run_bytes(n) + 64 * n,
+                        f"--duration {args.duration:g} s at --rate {rate:g} Hz")
+    sensor = sensor_model(args, rate)
+    run = make_static_run(sensor, args.duration, rate, args.theta, args.seed, g=args.g,
+                          twin=twin_record(args, rate))
+    check_finite({"datos": run.datos, "truth": run.truth()}, f"{args.out}: the run")
+    paths = write_static(run, args.out, force=args.force)
+    print_summary(args, f"generate static: {n} samples at {rate:g} Hz, θ = {args.theta:g} rad, "
+                  f"seed {args.seed}", {"n": n, "rate": rate, "files": paths},
+                  {"n": "count", "rate": "Hz"})
     return 0
 
 
@@ -536,6 +599,21 @@ def _register_class(kinds) -> None:
     p.set_defaults(handler=_cmd_class)
 
 
+def _register_static(kinds) -> None:
+    p = kinds.add_parser("static", help="a static log of one held pose (static.mat), e.g. "
+                         "for `tiltbench noise`",
+                         description="The table held at --theta for --duration s sampled at "
+                         "--rate Hz: static.mat (t, Aerr: the course acel.mat layout) and "
+                         "truth.json. With --sensor, the measured sensor's noise terms.")
+    add_generate_common(p)
+    add_sensor_options(p)
+    p.add_argument("--duration", type=float, default=600.0, help="log length, s")
+    p.add_argument("--rate", type=float, default=None,
+                   help="sample rate, Hz (default: the --sensor profile's, else 100)")
+    p.add_argument("--theta", type=float, default=0.0, help="table angle, rad")
+    p.set_defaults(handler=_cmd_static)
+
+
 def register(sub) -> None:
     gen = sub.add_parser("generate", help="generate datasets with the simulated bench")
     kinds = gen.add_subparsers(dest="kind", required=True, metavar="KIND")
@@ -543,3 +621,4 @@ def register(sub) -> None:
     _register_vehicle(kinds)
     _register_course(kinds)
     _register_class(kinds)
+    _register_static(kinds)

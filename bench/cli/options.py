@@ -138,6 +138,10 @@ def add_sensor_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--bias", default=DEFAULT_BIAS, help="true bias x,y in m/s²")
     p.add_argument("--scale", default=DEFAULT_SCALE, help="true scale-factor error x,y")
     p.add_argument("--noise-var", default=DEFAULT_NOISE, help="noise variances x,y (m/s²)²")
+    p.add_argument("--sensor", metavar="SENSOR_JSON",
+                   help="simulate a measured sensor (`tiltbench noise --save`): its white "
+                        "noise, bias instability, rate random walk and quantization replace "
+                        "--noise-var, its calibration (if any) --bias/--scale (docs/noise.md)")
     add_gravity(p)
 
 

@@ -1,0 +1,133 @@
+"""``tiltbench noise STATIC_LOG``: Allan deviation and noise terms of a static log
+(:mod:`calib.allan`), a log–log figure (``--plot``), the sensor profile (``--save
+sensor.json``, :mod:`calib.sensor_profile`) with a calibration's bias/scale if given
+(``--calibration cal.json``). ``--json`` prints one object: the
+:class:`calib.allan.NoiseCharacterization` with its ``units``, plus the files written.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from bench.cli.logopts import add_log_options, read_log_from_args
+from bench.cli.options import OptionError, add_force, add_json, check_level, parse_pair
+from bench.cli.output import check_finite, print_files, print_json, refuse_overwrite
+
+
+def _calibration_entry(path: str) -> dict:
+    """The profile's ``calibration`` from a ``cal.json``: bias/scale with covariance and the
+    file's name and sha256."""
+    from pathlib import Path
+
+    from calib.calfile import file_sha256, load_calibration
+
+    cal = load_calibration(path)
+    return {"param_names": ["bias_x", "scale_x", "bias_y", "scale_y"],
+            "params": [float(v) for v in cal.params], "cov": cal.cov.tolist(),
+            "method": cal.method, "g": float(cal.g),
+            "source": {"name": Path(path).name, "sha256": file_sha256(path)}}
+
+
+def _static_reading(args: argparse.Namespace):
+    """(readings (N, 2) m/s², rate Hz, static-check numbers) of the log, refused when it is
+    not one held pose."""
+    import numpy as np
+
+    from calib.allan import check_static, sample_rate_of
+    from calib.input_rules import DataError
+
+    log = read_log_from_args(args, args.log)
+    if args.rate is not None and not (np.isfinite(args.rate) and args.rate > 0):
+        raise OptionError(f"--rate must be a positive number of Hz, got {args.rate}")
+    if log.theta is not None and np.ptp(log.theta) > 1e-6:
+        raise DataError(f"{log.source}: θ varies over the log ({np.min(log.theta):.4g} to "
+                        f"{np.max(log.theta):.4g} rad): not one held pose; cut the log to a "
+                        "still stretch")
+    if log.pose is not None and np.unique(log.pose[log.pose >= 0]).size > 1:
+        raise DataError(f"{log.source}: the log holds {np.unique(log.pose[log.pose >= 0]).size}"
+                        " held poses; `tiltbench noise` needs one (cut the log)")
+    rate = sample_rate_of(log.t, args.rate, log.source)
+    checked = check_static(log.acc, rate, log.source, window=args.static_window,
+                           shift=args.static_shift, var_ratio=args.static_var_ratio,
+                           gyro=log.gyro)
+    return log, rate, checked
+
+
+def _cmd_noise(args: argparse.Namespace) -> int:
+    from bench import __version__
+    from calib.allan import characterize_noise
+    from calib.sensor_profile import save_profile
+
+    level = check_level(args.level)
+    alpha = args.alpha
+    if not 0.0 < alpha < 0.5:
+        raise OptionError(f"--alpha must be in (0, 0.5) (a one-sided significance, e.g. 0.05), "
+                          f"got {alpha}")
+    tau_range = None
+    if args.tau_range:
+        tau_range = tuple(parse_pair(args.tau_range, "--tau-range"))
+        if not 0 < tau_range[0] < tau_range[1]:
+            raise OptionError(f"--tau-range {args.tau_range}: expected 0 < min < max (s)")
+    for name in ("static_window", "static_shift", "static_var_ratio"):
+        if not getattr(args, name) > 0:
+            raise OptionError(f"--{name.replace('_', '-')} must be positive")
+    refuse_overwrite([args.plot, args.save], args.force)
+    cal = _calibration_entry(args.calibration) if args.calibration else None
+    log, rate, checked = _static_reading(args)
+    result = characterize_noise(log.acc, rate, level=level, alpha=alpha, tau_range=tau_range,
+                                source=log.provenance.get("source"), static_check=checked)
+    out = result.to_dict()
+    check_finite(out, "the result")
+    written = {}
+    if args.save:
+        profile = result.to_profile(calibration=cal, tool_version=__version__)
+        written["profile"] = str(save_profile(args.save, profile, force=args.force))
+    if args.plot:
+        from bench.figures.allan import save_allan_plot
+
+        written["plot"] = str(save_allan_plot(args.plot, result, force=args.force,
+                                              title=f"Allan deviation of {log.source}"))
+    if args.json:
+        print_json({**out, "files": written})
+        return 0
+    print(result.summary())
+    c = checked
+    print(f"static check: {c['window']:g} s windows, largest mean shift {c['max_shift']:.3g} "
+          f"m/s² (limit {c['shift']:g}), largest variance ratio {c['max_var_ratio']:.3g} "
+          f"(limit {c['var_ratio']:g})")
+    print_files(written.values())
+    return 0
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "noise", help="Allan deviation and noise terms of a static log (sensor.json)",
+        description="Overlapping Allan deviation per axis with χ² intervals from its "
+        "equivalent degrees of freedom; white-noise density, bias instability and rate "
+        "random walk fitted by GLS with score-type intervals, each with the τ range it was "
+        "read from (docs/noise.md).")
+    p.add_argument("log", metavar="STATIC_LOG", help="a log of one held pose")
+    add_log_options(p, poses=False)
+    p.add_argument("--rate", type=float, metavar="HZ",
+                   help="sample rate, Hz (required when the log has no sample times; "
+                        "overrides them otherwise)")
+    p.add_argument("--level", type=float, default=0.683,
+                   help="two-sided level of every interval (default 0.683, one sigma)")
+    p.add_argument("--alpha", type=float, default=0.05,
+                   help="one-sided significance for calling a term resolved (default 0.05)")
+    p.add_argument("--tau-range", metavar="MIN,MAX",
+                   help="fit only the octave τ within MIN,MAX s (e.g. to leave out a filter's "
+                        "τ)")
+    p.add_argument("--static-window", type=float, default=1.0, metavar="S",
+                   help="window of the static check, s (default 1)")
+    p.add_argument("--static-shift", type=float, default=0.3, metavar="MS2",
+                   help="largest window-mean shift of a held pose, m/s² (default 0.3)")
+    p.add_argument("--static-var-ratio", type=float, default=9.0, metavar="R",
+                   help="largest window variance over the median window's (default 9)")
+    p.add_argument("--calibration", metavar="CAL_JSON",
+                   help="a cal.json whose bias/scale (with covariance) go into --save")
+    p.add_argument("--plot", help="write the Allan deviation figure (.png or .svg)")
+    p.add_argument("--save", metavar="SENSOR_JSON", help="write the sensor profile")
+    add_json(p)
+    add_force(p, "an existing --plot / --save file")
+    p.set_defaults(handler=_cmd_noise)
