@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import hashlib
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -140,6 +140,9 @@ class ImuLog:
     gyro: np.ndarray | None = None
     source: str = "<memory>"
     provenance: dict[str, Any] = field(default_factory=dict)
+    course: Any = field(default=None, repr=False, compare=False)
+    """The :class:`calib.io.Ensayo` / :class:`calib.io.Acel` when the log was a course file
+    read by the course reader: :meth:`to_ensayo` / :meth:`to_acel` return it unchanged."""
 
     def __post_init__(self) -> None:
         for name in ("acc", "t", "theta", "gyro"):
@@ -159,8 +162,10 @@ class ImuLog:
 
     def to_ensayo(self):
         """The course :class:`calib.io.Ensayo` (θ known); DataError when θ is unknown."""
-        from calib.io import validate_ensayo
+        from calib.io import Ensayo, validate_ensayo
 
+        if isinstance(self.course, Ensayo):
+            return self.course
         if self.theta is None:
             raise DataError(f"{self.source}: the table angle is unknown; give the poses' "
                             "angles (--poses …) or a θ column (--columns theta=…)")
@@ -170,6 +175,8 @@ class ImuLog:
         """The course :class:`calib.io.Acel` (a vehicle run: uniform ``t`` needed)."""
         from calib.io import Acel
 
+        if isinstance(self.course, Acel):
+            return self.course
         if self.t is None:
             raise DataError(f"{self.source}: no sample times; a vehicle run needs them "
                             "(--columns t=…)")
@@ -272,9 +279,12 @@ def read_log(path: str | os.PathLike, options: LogOptions | None = None,
             if expect == "ensayo":
                 e = read_ensayo(path)
                 return ImuLog(acc=e.datos, t=e.t, theta=e.tita, source=str(path),
-                              provenance=prov)
+                              provenance=prov, course=e)
             a = read_acel(path)
-            return ImuLog(acc=a.aerr, t=a.t, gyro=a.gyro, source=str(path), provenance=prov)
+            return ImuLog(acc=a.aerr, t=a.t, gyro=a.gyro, source=str(path), provenance=prov,
+                          course=a)
+    if expect == "acel":  # a vehicle run: poses and their angles do not apply
+        options = replace(options, poses=None, label_angles=None)
     if not path.exists():
         raise DataError(f"{path}: file not found")
     if fmt == "unknown":
@@ -296,9 +306,11 @@ def _read_course(path: Path, options: LogOptions, read_ensayo, read_acel) -> Imu
     prov = {"source": {"name": path.name, "sha256": file_sha256(path)}, "format": "course"}
     if "Aerr" in names and "tita" not in names:
         a = read_acel(path)
-        return ImuLog(acc=a.aerr, t=a.t, gyro=a.gyro, source=str(path), provenance=prov)
+        return ImuLog(acc=a.aerr, t=a.t, gyro=a.gyro, source=str(path), provenance=prov,
+                      course=a)
     e = read_ensayo(path)
-    return ImuLog(acc=e.datos, t=e.t, theta=e.tita, source=str(path), provenance=prov)
+    return ImuLog(acc=e.datos, t=e.t, theta=e.tita, source=str(path), provenance=prov,
+                  course=e)
 
 
 def _read_raw(path: Path, fmt: str, options: LogOptions) -> RawLog:

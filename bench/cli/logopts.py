@@ -28,18 +28,18 @@ def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
     """Add the log options (module docstring) to a command's parser."""
     g = p.add_argument_group("reading a measured log (docs/real-data.md)")
     g.add_argument("--format", dest="log_format", choices=FORMATS, default="auto",
-                   help="log format (default: recognized from the content)")
+                   help="log format (auto: recognized from the content)")
     g.add_argument("--columns", help="column names by role: t=…,x=…,y=…,z=…,theta=…,label=…,"
                    "gyro=… (topic=… for a bag)")
     g.add_argument("--axes", default="x,y", help="the log's axes that are the tilt plane's x,y, "
-                   "with signs (default x,y; e.g. -y,z)")
+                   "with signs (e.g. -y,z)")
     g.add_argument("--units", choices=ACCEL_UNITS, help="acceleration unit of the log "
-                   "(default: recognized from the header, else refused)")
+                   "(if not given: recognized from the header, else refused)")
     g.add_argument("--sensitivity", type=float, help="counts per g (with --units counts)")
     g.add_argument("--gyro-unit", choices=GYRO_UNITS, help="unit of the gyro columns "
-                   "(default: recognized from the header)")
+                   "(if not given: recognized from the header)")
     g.add_argument("--angle-unit", choices=("rad", "deg"), help="unit of θ, --poses and "
-                   "label angles (default: rad, with the data-based degrees check)")
+                   "label angles (if not given: rad, with the data-based degrees check)")
     g.add_argument("--map", help=".mat variable names: tita=NAME,datos=NAME,t=NAME")
     g.add_argument("--allow-gaps", action="store_true", help="read a log with gaps in time "
                    "(> 5 median steps; refused by default, listed in the provenance)")
@@ -51,9 +51,9 @@ def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
         g.add_argument("--label-angles", help="angle of each value of the label column, e.g. "
                        "1=0,2=90 (in --angle-unit)")
         g.add_argument("--static-window", type=float, metavar="S", help="pose detector's "
-                       "window, s (samples if the log has no times; default 0.5 s / 25)")
+                       "window, s (samples if the log has no times; if not given 0.5 s / 25)")
         g.add_argument("--min-hold", type=float, metavar="S", help="shortest held pose, s "
-                       "(samples if the log has no times; default 1 s / 100)")
+                       "(samples if the log has no times; if not given 1 s / 100)")
 
 
 def _pairs(text: str | None, what: str) -> dict[str, str]:
