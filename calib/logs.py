@@ -38,9 +38,9 @@ or index, and the fix): missing header, unknown units, non-numeric cells, NaN/In
 strictly increasing, gaps in time longer than :data:`GAP_FACTOR` median steps (refused unless
 ``--allow-gaps``: a gap breaks the Allan deviation and integration, while held poses on both
 sides stay valid — with the option the gaps are listed in the provenance), saturated
-stretches (:data:`SATURATION_RUN` or more equal samples at a column's extreme value; refused
-unless ``--allow-saturation``, for a sensor so coarse that a held pose reads one constant
-value).
+stretches (:data:`SATURATION_RUN` or more equal samples at a column's extreme value, that
+value at least g/2 in size; refused unless ``--allow-saturation``, for a sensor so coarse
+that a held pose reads one constant value).
 """
 
 from __future__ import annotations
@@ -399,9 +399,14 @@ def _check_time(raw: RawLog, t: np.ndarray, path: Path, allow_gaps: bool) -> lis
     return gaps
 
 
-def _check_saturation(raw: RawLog, arr: np.ndarray, what: str, path: Path) -> None:
-    """Refuse runs of ≥ :data:`SATURATION_RUN` equal samples at the column's extreme."""
+def _check_saturation(raw: RawLog, arr: np.ndarray, what: str, path: Path, factor: float,
+                      g: float) -> None:
+    """Refuse runs of ≥ :data:`SATURATION_RUN` equal samples at the column's extreme when
+    that extreme is at least g/2 in size (a reading near zero that does not move is an axis
+    across the tilt plane, not a clipped one)."""
     for extreme in (float(np.max(arr)), float(np.min(arr))):
+        if abs(extreme * factor) < 0.5 * g:
+            continue
         at = arr == extreme
         m = np.concatenate(([False], at, [False]))
         edges = np.flatnonzero(m[1:] != m[:-1])
@@ -449,7 +454,7 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         what = f"column '{raw.mapping.get(axis, axis)}'"
         _check_finite(raw, raw.acc[axis], what, path)
         if not options.allow_saturation:
-            _check_saturation(raw, raw.acc[axis], what, path)
+            _check_saturation(raw, raw.acc[axis], what, path, factor, g)
     acc = np.column_stack([(-1.0 if spec.startswith("-") else 1.0) * raw.acc[a] * factor
                            for spec, a in acc_cols])
     n = acc.shape[0]

@@ -21,7 +21,8 @@ or none.
 
 ``acel.mat`` must be uniformly sampled (``calib.io.read_acel``); a log whose steps jitter
 (phones, USB loggers) is resampled by linear interpolation onto the grid ``t0 + k·dt``, ``dt``
-the median step, and the provenance says so with the largest deviation from that grid. A
+the mean step (same sample count), and the provenance says so with the largest deviation of
+the log's times from that grid. A
 ``tita``-less ``ensayo.mat`` is read back by :func:`calib.logs.read_log` (pose labels, θ
 unknown); ``calibrate``/``gap`` need θ and say so.
 """
@@ -63,10 +64,12 @@ def uniform(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict 
     """``(t, x)`` on a uniform grid: unchanged when already uniform (the ``read_acel``
     tolerance), else linearly interpolated onto ``t0 + k·median(dt)``; the record of it."""
     d = np.diff(t)
-    step = float(np.median(d))
     if np.max(np.abs(d - d.mean())) <= 1e-6 * max(d.mean(), 1e-12) + 1e-9:
         return t, x, None
-    count = int(np.floor((t[-1] - t[0]) / step)) + 1
+    # the mean step over the log keeps the sample count and lets the grid not drift from the
+    # log's clock (a median step would, by its bias times N)
+    count = int(t.size)
+    step = float((t[-1] - t[0]) / (count - 1))
     grid = t[0] + step * np.arange(count)
     cols = np.atleast_2d(x.T).T if x.ndim == 1 else x
     out = np.column_stack([np.interp(grid, t, cols[:, k]) for k in range(cols.shape[1])])
