@@ -221,3 +221,31 @@ def _same(a, b, where="") -> None:
         assert abs(a - b) <= 1e-12 * max(1.0, abs(b)), (where, a, b)
     else:
         assert a == b, where
+
+
+def test_gap_reads_a_log_as_it_reads_its_import(capsys, tmp_path, files):
+    """gap LOG --poses … gives the same report as gap on the imported ensayo.mat."""
+    out = tmp_path / "g"
+    _import(capsys, files["csv_no_gyro"], out, *POSES)
+    nv = ["--noise-var", "0.0004,0.0004", "--json"]
+    rc, direct, err = run(capsys, "gap", files["csv_no_gyro"], *POSES, *nv)
+    assert rc == 0, err
+    rc, imported, err = run(capsys, "gap", out / "ensayo.mat", *nv)
+    assert rc == 0, err
+    assert json.loads(direct) == json.loads(imported)
+
+
+def test_label_column_with_poses_in_order_of_appearance(tmp_path):
+    from calib.logs import LogOptions
+
+    rng = np.random.default_rng(8)
+    labels = ["p1"] * 50 + ["-1"] * 10 + ["p2"] * 50 + ["-1"] * 10 + ["p3"] * 50
+    ang = {"p1": 0.0, "p2": 1.0, "p3": 2.0, "-1": 0.5}
+    th = np.array([ang[v] for v in labels])
+    acc = np.c_[-9.8 * np.sin(th), -9.8 * np.cos(th)] + 0.01 * rng.standard_normal((170, 2))
+    rows = [f"{lab};{x!r};{y!r}".replace(".", ",") for lab, (x, y) in
+            zip(labels, acc.tolist(), strict=True)]
+    path = _table(tmp_path / "l.csv", "pose;ax (m/s^2);ay (m/s^2)\n" + "\n".join(rows) + "\n")
+    log = read_log(path, LogOptions(poses=(0.0, 1.0, 2.0)))
+    assert log.n == 150 and np.array_equal(log.theta, np.repeat([0.0, 1.0, 2.0], 50))
+    assert np.array_equal(log.pose, np.repeat([0, 1, 2], 50))
