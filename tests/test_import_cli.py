@@ -249,3 +249,39 @@ def test_label_column_with_poses_in_order_of_appearance(tmp_path):
     log = read_log(path, LogOptions(poses=(0.0, 1.0, 2.0)))
     assert log.n == 150 and np.array_equal(log.theta, np.repeat([0.0, 1.0, 2.0], 50))
     assert np.array_equal(log.pose, np.repeat([0, 1, 2], 50))
+
+
+def test_mangled_logs_never_crash(capsys, tmp_path):
+    """120 random edits (seeded) of a small valid CSV, plus binary junk and an empty file:
+    each import either succeeds or fails with one error line and writes nothing."""
+    rng = np.random.default_rng(21)
+    base = fx.write_csv(tmp_path / "base.csv").read_text().splitlines()[:400]
+    junk = "\n;,\t \"'#xeE+-.0123456789nainf"
+    cases = [b"", bytes(rng.integers(0, 256, 300, dtype=np.uint8)), b"\x1f\x8b\x08junk"]
+    for _ in range(120):
+        text = list("\n".join(base) + "\n")
+        for _ in range(int(rng.integers(1, 4))):
+            i = int(rng.integers(0, len(text)))
+            op = int(rng.integers(0, 3))
+            if op == 0:
+                del text[i]
+            elif op == 1:
+                text.insert(i, junk[int(rng.integers(0, len(junk)))])
+            else:
+                text[i] = junk[int(rng.integers(0, len(junk)))]
+        cases.append("".join(text).encode())
+    outcomes = set()
+    for k, data in enumerate(cases):
+        path = tmp_path / f"m{k}.csv"
+        path.write_bytes(data)
+        out = tmp_path / f"o{k}"
+        rc, stdout, err = run(capsys, "import", path, "--out", out, "--allow-gaps")
+        assert "Traceback" not in err
+        if rc == 0:
+            outcomes.add("read")
+            continue
+        assert rc == 2 and stdout == "" and not out.exists(), err
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("tiltbench import: error: "), err
+        outcomes.add("refused")
+    assert outcomes == {"read", "refused"}

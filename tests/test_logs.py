@@ -206,3 +206,21 @@ def test_provenance_names_source_mapping_units(logs):
     assert p["mapping"]["x"] == "ax (m/s^2)" and p["units"]["acc"] == "m/s2"
     assert p["poses"]["source"] == "detected"
     assert p["poses"]["detection"]["threshold"] > p["poses"]["detection"]["quiet_level"] > 0
+
+
+def test_mat_map_with_angles_and_a_named_gyro_column(tmp_path):
+    rng = np.random.default_rng(6)
+    deg = np.repeat([0.0, 60.0, 120.0, 200.0], 40)
+    acc = np.c_[-9.8 * np.sin(np.deg2rad(deg)), -9.8 * np.cos(np.deg2rad(deg))]
+    acc += 0.01 * rng.standard_normal(acc.shape)
+    scipy.io.savemat(tmp_path / "w.mat", {"angle": deg.reshape(-1, 1), "acc": acc})
+    log = read_log(tmp_path / "w.mat", LogOptions(mapping={"tita": "angle", "datos": "acc"},
+                                                  angle_unit="deg"))
+    assert _close(log.theta, np.deg2rad(deg)) and _close(log.acc, acc)
+    assert log.provenance["mapping"] == {"tita": "angle", "datos": "acc"}
+    rate = rng.standard_normal(160)
+    body = "\n".join(f"{0.01 * k!r},{x!r},{y!r},{w!r}" for k, (x, y, w) in
+                     enumerate(np.c_[acc, rate].tolist()))
+    (tmp_path / "w.csv").write_text("t,ax (m/s^2),ay (m/s^2),turn (deg/s)\n" + body + "\n")
+    log = read_log(tmp_path / "w.csv", LogOptions(columns={"gyro": "turn (deg/s)"}))
+    assert _close(log.gyro, np.deg2rad(rate))
