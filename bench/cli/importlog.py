@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from bench.cli.logopts import add_log_options, read_log_from_args
+from bench.cli.logopts import add_log_options, log_options_from_args
 from bench.cli.options import add_force, add_gravity, add_json, check_positive
 from bench.cli.output import print_files, print_json
 
@@ -27,9 +27,10 @@ def _cmd_import(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
     from bench.version import __version__
     from calib.logread.export import write_course_set
+    from calib.logs import read_log
 
     check_positive(args.g, "--g")
-    log = read_log_from_args(args, args.log)
+    log = read_log(args.log, log_options_from_args(args))  # what it found is printed below
     paths, prov = write_course_set(log, args.out, force=args.force, tool_version=__version__)
     if args.json:
         print_json({"files": [str(p) for p in paths], "provenance": prov,

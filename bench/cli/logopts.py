@@ -124,7 +124,18 @@ def log_options_from_args(args: argparse.Namespace):
 
 def read_log_from_args(args: argparse.Namespace, path: str, expect: str | None = None):
     """:func:`calib.logs.read_log` of ``path`` with the command's log options; ``expect``
-    (``"ensayo"``/``"acel"``) keeps a course ``.mat`` input on its course reader."""
+    (``"ensayo"``/``"acel"``) keeps a course ``.mat`` input on its course reader. When the
+    log's held poses were detected, a note on stderr says how many and the thresholds used
+    (stdout stays the command's own: one JSON object with ``--json``)."""
+    import sys
+
     from calib.logs import read_log
 
-    return read_log(path, log_options_from_args(args), expect=expect)
+    log = read_log(path, log_options_from_args(args), expect=expect)
+    poses = log.provenance.get("poses") or {}
+    if poses.get("source") == "detected":
+        count = len(poses["detection"]["segments"])
+        kept = log.provenance.get("held_samples_only")
+        print(f"note: {path}: {count} held pose(s) detected; {poses['thresholds']}"
+              f"{'; ' + kept if kept else ''}", file=sys.stderr)
+    return log
