@@ -98,6 +98,7 @@ class LogOptions:
     allow_gaps, allow_saturation : accept (and record) gaps in time / saturated stretches.
     window, min_hold : pose detector's window and minimum hold, s (samples without times);
         None: :mod:`calib.poses` defaults.
+    detect : look for held poses when θ is unknown (False for a vehicle run).
     """
 
     fmt: str = "auto"
@@ -115,6 +116,7 @@ class LogOptions:
     allow_saturation: bool = False
     window: float | None = None
     min_hold: float | None = None
+    detect: bool = True
 
 
 @dataclass(frozen=True)
@@ -284,7 +286,7 @@ def read_log(path: str | os.PathLike, options: LogOptions | None = None,
             return ImuLog(acc=a.aerr, t=a.t, gyro=a.gyro, source=str(path), provenance=prov,
                           course=a)
     if expect == "acel":  # a vehicle run: poses and their angles do not apply
-        options = replace(options, poses=None, label_angles=None)
+        options = replace(options, poses=None, label_angles=None, detect=False)
     if not path.exists():
         raise DataError(f"{path}: file not found")
     if fmt == "unknown":
@@ -544,6 +546,8 @@ def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         pose, values = _labels(raw.label)
         prov["poses"] = {"source": f"label column '{raw.mapping.get('label', 'label')}'",
                          "labels": values}
+    elif not options.detect:
+        pose, values = None, None
     else:
         det = detect_poses(log.acc, log.t, log.gyro, window=options.window,
                            min_hold=options.min_hold)
