@@ -22,6 +22,15 @@ from bench.cli.logopts import add_log_options, log_options_from_args
 from bench.cli.options import add_force, add_gravity, add_json, check_positive
 from bench.cli.output import print_files, print_json
 
+UNITS = {"provenance.units.g": "m/s²", "provenance.units.acc_to_m_s2": "m/s² per log unit",
+         "provenance.units.sensitivity_counts_per_g": "counts/g",
+         "provenance.gaps[].t": "s", "provenance.gaps[].length_s": "s",
+         "provenance.gaps[].median_step_s": "s", "provenance.pose_angles_rad": "rad",
+         "provenance.resampled.step_s": "s",
+         "provenance.resampled.max_deviation_from_grid_s": "s",
+         "provenance.poses.detection": "its own units map (poses.detection.units)"}
+"""Units of the numbers in ``--json`` (the detector's result carries its own map)."""
+
 
 def _cmd_import(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
@@ -33,10 +42,7 @@ def _cmd_import(args: argparse.Namespace) -> int:
     log = read_log(args.log, log_options_from_args(args))  # what it found is printed below
     paths, prov = write_course_set(log, args.out, force=args.force, tool_version=__version__)
     if args.json:
-        print_json({"files": [str(p) for p in paths], "provenance": prov,
-                    "units": {"provenance.units.g": "m/s²",
-                              "provenance.poses.detection.*": "see its own units map",
-                              "provenance.gaps[].length_s": "s"}})
+        print_json({"files": [str(p) for p in paths], "provenance": prov, "units": UNITS})
         return 0
     print(f"{args.log}: {prov['format']}, {prov.get('samples', {}).get('read', log.n)} samples")
     mapping = prov.get("mapping") or {}

@@ -324,7 +324,8 @@ def read_csv(path: Path, columns: dict[str, str] | None = None,
         notes={"delimiter": {"\t": "tab", None: "spaces"}.get(delim, delim),
                "decimal": "," if decimal_comma and _has_decimal_comma(lines) else ".",
                "gzip": path.read_bytes()[:2] == b"\x1f\x8b",
-               "time_unit": units.get("t") or ("s" if "t" in index else None)})
+               "time_unit": units.get("t") or ("s (not stated: taken as seconds)"
+                                               if "t" in index else None)})
 
 
 def _fast(lines, delim: str | None, decimal_comma: bool,
