@@ -470,10 +470,13 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
     # gyro about the tilt axis
     gyro, gyro_from = None, None
     g_unit = options.gyro_unit or raw.gyro_unit
-    if raw.gyro:
-        if g_unit not in GYRO_UNITS:
-            raise DataError(f"{path}: the gyro columns' unit is not stated; give --gyro-unit "
-                            "rad/s|deg/s")
+    gyro_note = None
+    if raw.gyro and g_unit not in GYRO_UNITS:
+        if "tilt" in raw.gyro:  # named on purpose with --columns gyro=…: say what is missing
+            raise DataError(f"{path}: the unit of gyro column '{raw.mapping.get('gyro')}' is "
+                            "not stated; give --gyro-unit rad/s|deg/s")
+        gyro_note = "gyro columns ignored: their unit is not stated (give --gyro-unit)"
+    elif raw.gyro:
         gfac = np.pi / 180.0 if g_unit == "deg/s" else 1.0
         if "tilt" in raw.gyro:
             gyro, gyro_from = raw.gyro["tilt"] * gfac, raw.mapping.get("gyro", "gyro")
@@ -506,6 +509,7 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         "units": {"acc": unit, "acc_to_m_s2": factor, "g": g,
                   "sensitivity_counts_per_g": options.sensitivity,
                   "gyro": g_unit if gyro is not None else None, "gyro_from": gyro_from,
+                  "gyro_note": gyro_note,
                   "theta": None if theta is None else (theta_unit or "rad (degrees check)"),
                   "t": "s"},
         "reader": dict(raw.notes),

@@ -125,3 +125,17 @@ def test_round_trip_and_summary():
     text = det.summary()
     assert f"{det.count} held pose(s)" in text and "10th percentile" in text
     assert f"{det.threshold:.3g}" in text
+
+
+def test_poses_of_different_noise_are_each_found_and_trimmed_at_their_own_level():
+    """A hand-held pose 5× noisier in variance than the others (seen on a real YEI log) is
+    still a hold, and each pose's own threshold scales with its noise."""
+    t, acc, _, bounds = multipose(12, holds=(400, 400, 400, 400))
+    rng = np.random.default_rng(13)
+    a, b = bounds[2]
+    acc[a:b] += 0.03 * 2.0 * rng.standard_normal((b - a, 2))  # σ² × (1 + 4)
+    det = detect_poses(acc, t)
+    _check_segments(det, bounds, reach=det.window)
+    quiet = [s.threshold for k, s in enumerate(det.segments) if k != 2]
+    assert det.segments[2].threshold > 3 * max(quiet)  # its own level, ≈ 5× (χ² spread)
+    assert all(s.threshold <= det.threshold for s in det.segments)

@@ -6,7 +6,9 @@ Layout read
 * Text in UTF-8 (with or without BOM), else Latin-1. Blank lines and lines starting with ``#``
   are skipped (line numbers in messages are the file's own, 1-based).
 * The first other line is the header; it must name the columns (a first line of numbers is
-  refused: the reader cannot know which column is which).
+  refused: the reader cannot know which column is which). A YEI 3-Space export's first line,
+  ``# Data format: "%int(ChipTimeUS),%float(RawAccelX),…"``, is read as its header
+  (``chip_time_us``, ``raw_accel_x`` …; its accelerations need ``--units``).
 * Delimiter sniffed from the header: tab, ``;`` or ``,`` (the most frequent), else runs of
   spaces. Quoted cells are allowed (phyphox quotes its header).
 * Decimal comma: with a ``;``, tab or space delimiter, numbers such as ``1,23`` are read as
@@ -62,10 +64,13 @@ from calib.logread.table import (
     time_factor,
 )
 
-_ACC = re.compile(r"^(?:acc|accel|accelerometer|acceleration|a)_?([xyz])$")
-_GYRO = re.compile(r"^(?:gyr|gyro|gyroscope|angular_velocity|omega|w|g)_?([xyz])$")
+_PREFIX = r"(?:raw_?|corrected_?|calibrated_?|cal_|imu_)?"
+_ACC = re.compile(rf"^{_PREFIX}(?:acc|accel|accelerometer|acceleration|a)_?([xyz])$")
+_GYRO = re.compile(rf"^{_PREFIX}(?:gyr|gyro|gyroscope|angular_velocity|omega|w|g)_?([xyz])$")
 _LINEAR = re.compile(r"^(?:linear|user)_?acc(?:el(?:eration)?)?_?[xyz]$")
-_TIME = ("t", "time", "timestamp", "seconds_elapsed")
+_TIME = ("t", "time", "timestamp", "seconds_elapsed", "chip_time", "elapsed_time",
+         "time_stamp")
+_YEI = re.compile(r"%\w+\((\w+)\)")
 _THETA = ("theta", "tita", "angle", "tilt")
 _LABEL = ("label", "pose")
 ROLES = ("t", "x", "y", "z", "theta", "label", "gyro")
@@ -149,9 +154,10 @@ def _recognize(names: list[str]) -> tuple[dict[str, int], dict[str, str | None],
     fmt = "csv"
     if "seconds_elapsed" in plain and {"x", "y", "z"} <= set(plain):
         fmt = "sensorlogger"
-    elif any(n.strip().strip('"').lower().startswith(("acceleration x", "gyroscope x"))
-             for n in names) and any(b == "time" for b in plain):
-        fmt = "phyphox"
+    elif (names[0].strip().strip('"') == "Time (s)"
+          and any(n.strip().strip('"').startswith(("Acceleration x (", "Gyroscope x ("))
+                  for n in names)):
+        fmt = "phyphox"  # its header style: "Time (s)" first, lower-case axis letters
     for i, (base, unit) in enumerate(bases):
         role = None
         m_acc, m_gyro = _ACC.match(base), _GYRO.match(base)
@@ -203,6 +209,9 @@ def read_csv(path: Path, columns: dict[str, str] | None = None,
     lines = list(_content_lines(text))
     if not lines:
         raise DataError(f"{path}: empty (no header, no samples)")
+    yei = _yei_header(text)
+    if yei is not None:  # YEI 3-Space: the header is a '#' line holding a format string
+        lines.insert(0, yei)
     head_line, head_text = lines[0]
     delim = _sniff(head_text)
     names = [c.strip() for c in _split(head_text, delim)]
@@ -326,6 +335,20 @@ def read_csv(path: Path, columns: dict[str, str] | None = None,
                "gzip": path.read_bytes()[:2] == b"\x1f\x8b",
                "time_unit": units.get("t") or ("s (not stated: taken as seconds)"
                                                if "t" in index else None)})
+
+
+def _yei_header(text: str) -> tuple[int, str] | None:
+    """A YEI 3-Space export's header: its first line is ``# Data format:
+    "%int(ChipTimeUS),%float(RawAccelX),…"``; the names, CamelCase split into snake_case
+    (``chip_time_us``: time in µs; ``raw_accel_x``), as a header line."""
+    first = text.split("\n", 1)[0]
+    if "data format" not in first.lower():
+        return None
+    names = _YEI.findall(first)
+    if len(names) < 2:
+        return None
+    snake = [re.sub(r"(?<=[a-z0-9])(?=[A-Z])", "_", n).lower() for n in names]
+    return 1, ",".join(snake)
 
 
 def _fast(lines, delim: str | None, decimal_comma: bool,
