@@ -364,7 +364,7 @@ def read_ensayo(path: str | os.PathLike) -> Ensayo:
     tita, datos = _get(mat, path, "tita"), _get(mat, path, "datos")
     t = _get(mat, path, "t") if "t" in mat else None
     e = validate_ensayo(tita, datos, t, str(path))
-    _note_extra(mat, ("tita", "datos", "t"), "a calibration run")
+    _note_extra(mat, ("tita", "datos", "t", "pose"), "a calibration run")
     return e
 
 

@@ -35,6 +35,7 @@ from bench.cli import (  # noqa: E402
     fusion_study,
     gap,
     generate,
+    importlog,
     nmin,
     noise,
     record,
@@ -44,7 +45,7 @@ from bench.cli import (  # noqa: E402
 from bench.cli.options import Parser, resolve_deferred  # noqa: E402
 
 COMMANDS = (generate, calibrate, trajectory, nmin, design, fuse, fusion_study, record, validate,
-            gap, noise, demo, examples)
+            gap, importlog, noise, demo, examples)
 """Command modules, in the order of the help."""
 
 

@@ -3,7 +3,10 @@
 ::
 
     tiltbench gap ENSAYO.mat [--noise-var 0.25,0.64 | --datos datos.txt] [--rate HZ]
-                  [--g G] [--json] [--report DIR] [--rrd FILE] [--force]
+                  [--g G] [--json] [--report DIR] [--rrd FILE] [--force] [log options]
+
+ENSAYO may be a measured log with θ (a θ column, ``--poses`` or label angles): the shared log
+options of :mod:`bench.cli.logopts` (docs/real-data.md); a course ``.mat`` is read as before.
 
 ``--json`` prints exactly one JSON object on stdout (see :meth:`bench.gap.GapReport.to_dict`);
 progress goes to stderr. Without ``--json`` a readable report is printed, the verdict first
@@ -16,6 +19,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from bench.cli.logopts import add_log_options, read_log_from_args
 from bench.cli.options import (
     OptionError,
     RawDescriptionHelpFormatter,
@@ -47,12 +51,12 @@ REPORT_FILES = ("gap.json", "gap.md", "gap.png", "gap.svg", "model_after.xml")
 def _cmd_gap(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
     from bench.gap import run_gap
-    from calib.io import read_ensayo
 
     check_positive(args.g, "--g")
     if args.rate is not None:
         check_positive(args.rate, "--rate")
-    ensayo = read_ensayo(args.ensayo)
+    # a course ensayo.mat is read as before; a measured log through the log options
+    ensayo = read_log_from_args(args, args.ensayo, expect="ensayo").to_ensayo()
     nv = noise_var_from_args(args)
     if nv is None:  # held poses repeat θ: their scatter is the noise (pure error)
         from calib.lackoffit import groups_from, pure_error_variance
@@ -86,7 +90,7 @@ def register(sub) -> None:
                        "workflow)", epilog=EPILOG,
                        formatter_class=RawDescriptionHelpFormatter)
     p.add_argument("ensayo", help="ensayo.mat with tita (N×1, rad), datos (N×2, m/s²), "
-                   "optional t (N×1, s)")
+                   "optional t (N×1, s); or a measured log with θ (log options below)")
     add_noise_inputs(p, stated=True)
     p.add_argument("--rate", type=float, help="sample rate in Hz of a file without t "
                    "(samples in time order)")
@@ -96,4 +100,5 @@ def register(sub) -> None:
                    f"{REPORT_FILES[-1]} into this directory")
     p.add_argument("--rrd", help="write a rerun recording of the residuals before/after")
     add_force(p)
+    add_log_options(p)
     p.set_defaults(handler=_cmd_gap)

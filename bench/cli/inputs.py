@@ -7,6 +7,11 @@ V0 are the course's (0, 0), (1, 3); a note says so on stderr.
 ``--ensayo``: the calibration is read, not re-fitted, and its method and g are the file's
 (``--method`` / ``--g`` given with it must agree). ``--datos`` then gives P0, V0 and the
 vehicle's noise variances only.
+
+``--ensayo`` and ``--acel`` may be measured logs (CSV, phyphox, Sensor Logger, ROS bag,
+``.mat`` with ``--map``): the shared log options (:mod:`bench.cli.logopts`, docs/real-data.md)
+apply to each input that is not a course ``.mat`` (``--poses`` and label angles to the
+ensayo only); course files are read exactly as before.
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from bench.cli.logopts import add_log_options, read_log_from_args
 from bench.cli.options import (
     GRAVITY,
     Deferred,
@@ -63,18 +69,21 @@ def add_course_inputs(p: argparse.ArgumentParser, calibration: bool = True) -> N
                    metavar="RULE", help="double integration rule: %(choices)s")
     p.add_argument("--g", type=float, default=GRAVITY, action=_Given, help="gravity, m/s²")
     add_json(p)
+    add_log_options(p)
 
 
 def read_course_inputs(args: argparse.Namespace):
     """Read the files; return ensayo, acel, candidates, p0, v0, noise_var (None = estimate)."""
     import numpy as np
 
-    from calib.io import read_acel, read_datos, read_ensayo, read_puntos
+    from calib.io import read_datos, read_puntos
     from calib.trajectory import COURSE_P0, COURSE_V0
 
     check_positive(args.g, "--g")
-    ensayo = read_ensayo(args.ensayo) if args.ensayo else None
-    acel = read_acel(args.acel)
+    # course .mat files are read as before; measured logs through the shared log options
+    ensayo = (read_log_from_args(args, args.ensayo, expect="ensayo").to_ensayo()
+              if args.ensayo else None)
+    acel = read_log_from_args(args, args.acel, expect="acel").to_acel()
     candidates = read_puntos(args.puntos)
     p0, v0, nv = np.array(COURSE_P0), np.array(COURSE_V0), None
     if args.datos:

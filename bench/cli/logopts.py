@@ -3,11 +3,14 @@
 :class:`calib.logs.LogOptions` and read the log with :func:`calib.logs.read_log`.
 
 ``--format`` picks the reader (default: recognized from the content); ``--columns`` names the
-columns (``t=…,x=…,y=…,z=…,theta=…,label=…,gyro=…``); ``--axes`` picks and signs the log's
-two axes that form the tilt plane (``x,y``; ``-y,z``); ``--units`` states the acceleration unit
-(``m/s2``, ``g``, ``mg``, ``counts`` with ``--sensitivity`` counts per g); ``--angle-unit``
-states θ's unit; ``--map`` maps course variable names to a ``.mat`` file's (``tita=angle,
-datos=acc``); ``--poses`` gives each held pose's angle in order.
+columns (``t=…,x=…,y=…,z=…,theta=…,label=…,gyro=…``, ``topic=…`` for a bag); ``--axes`` picks
+and signs the log's two axes that form the tilt plane (``x,y``; ``-y,z``); ``--units`` states
+the acceleration unit (``m/s2``, ``g``, ``mg``, ``counts`` with ``--sensitivity`` counts per
+g); ``--gyro-unit`` the gyro's; ``--angle-unit`` states θ's unit; ``--map`` maps course
+variable names to a ``.mat`` file's (``tita=angle,datos=acc``); ``--poses`` gives each held
+pose's angle in order, ``--label-angles`` each label's; ``--static-window`` and
+``--min-hold`` tune the pose detector; ``--allow-gaps`` / ``--allow-saturation`` accept what
+is refused by default. The command's ``--g`` (when it has one) converts g, mg and counts.
 """
 
 from __future__ import annotations
@@ -18,26 +21,39 @@ from bench.cli.options import OptionError, parse_floats
 
 FORMATS = ("auto", "course", "csv", "phyphox", "sensorlogger", "rosbag", "mat")
 ACCEL_UNITS = ("m/s2", "g", "mg", "counts")
+GYRO_UNITS = ("rad/s", "deg/s")
 
 
 def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
     """Add the log options (module docstring) to a command's parser."""
     g = p.add_argument_group("reading a measured log (docs/real-data.md)")
     g.add_argument("--format", dest="log_format", choices=FORMATS, default="auto",
-                   help="log format (default: recognized from the content)")
+                   help="log format (auto: recognized from the content)")
     g.add_argument("--columns", help="column names by role: t=…,x=…,y=…,z=…,theta=…,label=…,"
-                   "gyro=…")
+                   "gyro=… (topic=… for a bag)")
     g.add_argument("--axes", default="x,y", help="the log's axes that are the tilt plane's x,y, "
                    "with signs (e.g. -y,z)")
     g.add_argument("--units", choices=ACCEL_UNITS, help="acceleration unit of the log "
                    "(if not given: recognized from the header, else refused)")
     g.add_argument("--sensitivity", type=float, help="counts per g (with --units counts)")
+    g.add_argument("--gyro-unit", choices=GYRO_UNITS, help="unit of the gyro columns "
+                   "(if not given: recognized from the header)")
     g.add_argument("--angle-unit", choices=("rad", "deg"), help="unit of θ, --poses and "
                    "label angles (if not given: rad, with the data-based degrees check)")
     g.add_argument("--map", help=".mat variable names: tita=NAME,datos=NAME,t=NAME")
+    g.add_argument("--allow-gaps", action="store_true", help="read a log with gaps in time "
+                   "(> 5 median steps; refused by default, listed in the provenance)")
+    g.add_argument("--allow-saturation", action="store_true", help="read a log with stretches "
+                   "at a column's extreme value (refused by default as saturated)")
     if poses:
         g.add_argument("--poses", help="angle of each held pose, in order (e.g. 0,90,180,270 "
                        "--angle-unit deg); without it, poses found in the log keep θ unknown")
+        g.add_argument("--label-angles", help="angle of each value of the label column, e.g. "
+                       "1=0,2=90 (in --angle-unit)")
+        g.add_argument("--static-window", type=float, metavar="S", help="pose detector's "
+                       "window, s (samples if the log has no times; if not given 0.5 s / 25)")
+        g.add_argument("--min-hold", type=float, metavar="S", help="shortest held pose, s "
+                       "(samples if the log has no times; if not given 1 s / 100)")
 
 
 def _pairs(text: str | None, what: str) -> dict[str, str]:
@@ -62,6 +78,23 @@ def _axes(text: str) -> tuple[str, str]:
     return parts
 
 
+def _positive(value, name: str):
+    import math
+
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise OptionError(f"{name} {value}: must be a positive number")
+    return value
+
+
+def _label_angles(text: str | None) -> dict[str, float] | None:
+    if not text:
+        return None
+    out = {}
+    for key, value in _pairs(text, "--label-angles").items():
+        (out[key],) = parse_floats(value, f"--label-angles {key}")
+    return out
+
+
 def log_options_from_args(args: argparse.Namespace):
     """The parsed options as a :class:`calib.logs.LogOptions`."""
     from calib.logs import LogOptions
@@ -69,6 +102,8 @@ def log_options_from_args(args: argparse.Namespace):
     sens = getattr(args, "sensitivity", None)
     if sens is not None and not sens > 0:
         raise OptionError(f"--sensitivity {sens}: counts per g must be positive")
+    if getattr(args, "units", None) == "counts" and sens is None:
+        raise OptionError("--units counts needs --sensitivity (counts per g)")
     poses = getattr(args, "poses", None)
     return LogOptions(
         fmt=getattr(args, "log_format", "auto"),
@@ -77,12 +112,30 @@ def log_options_from_args(args: argparse.Namespace):
         units=getattr(args, "units", None), sensitivity=sens,
         angle_unit=getattr(args, "angle_unit", None),
         mapping=_pairs(getattr(args, "map", None), "--map"),
-        poses=None if poses is None else tuple(parse_floats(poses, "--poses")))
+        poses=None if poses is None else tuple(parse_floats(poses, "--poses")),
+        label_angles=_label_angles(getattr(args, "label_angles", None)),
+        g=getattr(args, "g", None),
+        gyro_unit=getattr(args, "gyro_unit", None),
+        allow_gaps=bool(getattr(args, "allow_gaps", False)),
+        allow_saturation=bool(getattr(args, "allow_saturation", False)),
+        window=_positive(getattr(args, "static_window", None), "--static-window"),
+        min_hold=_positive(getattr(args, "min_hold", None), "--min-hold"))
 
 
 def read_log_from_args(args: argparse.Namespace, path: str, expect: str | None = None):
     """:func:`calib.logs.read_log` of ``path`` with the command's log options; ``expect``
-    (``"ensayo"``/``"acel"``) keeps a course ``.mat`` input on its course reader."""
+    (``"ensayo"``/``"acel"``) keeps a course ``.mat`` input on its course reader. When the
+    log's held poses were detected, a note on stderr says how many and the thresholds used
+    (stdout stays the command's own: one JSON object with ``--json``)."""
+    import sys
+
     from calib.logs import read_log
 
-    return read_log(path, log_options_from_args(args), expect=expect)
+    log = read_log(path, log_options_from_args(args), expect=expect)
+    poses = log.provenance.get("poses") or {}
+    if poses.get("source") == "detected":
+        count = len(poses["detection"]["segments"])
+        kept = log.provenance.get("held_samples_only")
+        print(f"note: {path}: {count} held pose(s) detected; {poses['thresholds']}"
+              f"{'; ' + kept if kept else ''}", file=sys.stderr)
+    return log

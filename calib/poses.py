@@ -1,0 +1,364 @@
+"""Held poses found in a continuous log: the static-segment detector.
+
+A board turned by hand, a phone laid on its sides, a tilt table stepped through positions:
+the log alternates held poses and motion. This module labels each sample with its pose
+(0, 1, …) or -1 while moving.
+
+Statistic
+---------
+For each sample i a centred window of ``w`` samples (truncated at the ends) gives
+
+    V_i = s²_x,i + s²_y,i                      (m/s²)²
+
+the sum of the two tilt-plane axes' sample variances in the window. Not the variance of the
+norm ``|a|``: turning a board in the tilt plane keeps ``|a| = g`` and changes only the axes,
+so a slow rotation would read as static. With a gyro (rate ω about the tilt axis, rad/s), also
+
+    W_i = mean over the window of (ω - median(ω))²        (rad/s)²
+
+(the log-wide median is the bias while mostly held: a constant turning rate has no variance
+but a large W). A sample is *static* when ``V_i ≤ τ_V`` (and ``W_i ≤ τ_W``): its whole window
+is quiet, so the samples within half a window of any motion are excluded.
+
+Thresholds from the data's own quiet level (two stages)
+-------------------------------------------------------
+For white noise of equal variance σ² on both axes, ``V = σ² χ²_ν/(w-1)`` with ``ν = 2(w-1)``.
+
+1. Candidates. The quiet level ``q`` is the 10th percentile of V over the log
+   (:data:`QUIET_QUANTILE`: at least 10 % of the log must be held still), an estimate of
+   ``σ² χ²_ν(0.10)/(w-1)`` for the quietest pose. Candidate holds are where
+
+       V ≤ τ = LOOSE · MARGIN · q · χ²_ν(0.999) / χ²_ν(0.10)
+
+   — the 99.9 % point of a static window, times :data:`MARGIN` = 2, times :data:`LOOSE` = 10
+   because poses differ in noise (measured on a real YEI 3-Space log: a hand-held pose 4×
+   noisier in variance than one resting on a table), while motion is orders of magnitude
+   louder.
+2. Each candidate against its own noise: with ``q_k`` the median of V over the candidate,
+   an estimate of ``σ_k² χ²_ν(0.5)/(w-1)``, its samples are static where
+
+       V ≤ τ_k = min(τ, MARGIN · q_k · χ²_ν(0.999) / χ²_ν(0.5))
+
+   so the edges of a hold are trimmed at that pose's own 99.9 % point (× 2), not at the
+   loudest pose's: samples at the start of a slow turn do not bias the pose's mean.
+
+``q`` and ``q_k`` are floored at the quantization variance ``Σ_k Δ_k²/12`` (Δ_k the smallest
+step between distinct readings of axis k), so a coarse sensor whose quiet windows are
+constant does not get a zero threshold. The gyro's statistic goes through the same two
+stages with ``ν = w`` (a mean of w squares). Both thresholds of each pose are in its
+:class:`Segment`.
+
+Segments
+--------
+Runs of static samples shorter than ``min_hold`` become moving. Two runs separated by less
+than ``min_hold`` whose means differ by less than :data:`MERGE_STDS` per-sample standard
+deviations on both axes are one pose (a bump while holding); the samples of the bump stay -1.
+Defaults: window 0.5 s and min hold 1 s with sample times; 25 and 100 samples without.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from calib.results import ResultMixin, readonly
+
+QUIET_QUANTILE = 0.10
+"""Quantile of the window statistic taken as the quiet level (≥ 10 % of the log held)."""
+STATIC_QUANTILE = 0.999
+"""A static window exceeds the threshold with about this complement probability (before
+the margin)."""
+MARGIN = 2.0
+"""Factor on the threshold for noise that differs between poses."""
+LOOSE = 10.0
+"""A held pose may be this much noisier (variance) than the quietest tenth of the log — a
+board held by hand beside one resting on a table — and still be a candidate hold."""
+MERGE_STDS = 3.0
+"""Runs closer than ``min_hold`` whose means differ by less than this many per-sample stds
+on both axes are the same pose."""
+DEFAULT_WINDOW_S, DEFAULT_HOLD_S = 0.5, 1.0
+"""Window and minimum hold, s, when the log has sample times."""
+DEFAULT_WINDOW_N, DEFAULT_HOLD_N = 25, 100
+"""Window and minimum hold, samples, when it has none."""
+
+
+@dataclass(frozen=True, eq=False)
+class Segment(ResultMixin):
+    """One held pose.
+
+    Attributes
+    ----------
+    start, stop : sample indices, ``[start, stop)``; the pose's samples are those labelled
+        with it inside (a merged bump stays -1).
+    n : number of samples labelled with the pose.
+    t_start, t_stop : times of the first and last labelled sample, s (None without times).
+    mean, std : (2,) per-axis mean and sample std of the labelled samples, m/s².
+    """
+
+    start: int
+    stop: int
+    n: int
+    t_start: float | None
+    t_stop: float | None
+    mean: np.ndarray
+    std: np.ndarray
+    threshold: float = float("nan")
+    gyro_threshold: float | None = None
+
+    _TITLE = "Held pose"
+    _UNITS = {"mean": "m/s²", "std": "m/s²", "t_start": "s", "t_stop": "s",
+              "threshold": "(m/s²)²", "gyro_threshold": "(rad/s)²"}
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "mean", readonly(self.mean))
+        object.__setattr__(self, "std", readonly(self.std))
+
+    def summary(self) -> str:
+        when = ("" if self.t_start is None else
+                f" t {self.t_start:.3f}–{self.t_stop:.3f} s")
+        return (f"samples {self.start}–{self.stop - 1}{when} (n = {self.n}): mean "
+                f"[{self.mean[0]:+.5f}, {self.mean[1]:+.5f}] m/s², std "
+                f"[{self.std[0]:.3g}, {self.std[1]:.3g}] m/s², threshold "
+                f"{self.threshold:.3g} (m/s²)²")
+
+    def to_dict(self) -> dict:
+        return {"start": self.start, "stop": self.stop, "n": self.n,
+                "t_start": self.t_start, "t_stop": self.t_stop,
+                "mean": self.mean.tolist(), "std": self.std.tolist(),
+                "threshold": self.threshold, "gyro_threshold": self.gyro_threshold}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Segment:
+        return cls(**{k: d[k] for k in ("start", "stop", "n", "t_start", "t_stop", "mean",
+                                         "std", "threshold", "gyro_threshold")})
+
+
+@dataclass(frozen=True, eq=False)
+class PoseDetection(ResultMixin):
+    """Held poses of a log and the thresholds that found them (module docstring).
+
+    Attributes
+    ----------
+    segments : the poses in time order.
+    labels : (N,) int, pose index per sample, -1 while moving.
+    window, min_samples : window and minimum hold, samples.
+    quiet_level, threshold : q and τ_V, (m/s²)².
+    gyro_quiet_level, gyro_threshold : the same for the gyro, (rad/s)², or None.
+    """
+
+    segments: tuple[Segment, ...]
+    labels: np.ndarray
+    window: int
+    min_samples: int
+    quiet_level: float
+    threshold: float
+    gyro_quiet_level: float | None = None
+    gyro_threshold: float | None = None
+
+    _TITLE = "Held poses"
+    _UNITS = {"quiet_level": "(m/s²)²", "threshold": "(m/s²)²",
+              "gyro_quiet_level": "(rad/s)²", "gyro_threshold": "(rad/s)²",
+              "window": "samples", "min_samples": "samples"}
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "segments", tuple(self.segments))
+        object.__setattr__(self, "labels", readonly(self.labels, int))
+
+    @property
+    def count(self) -> int:
+        return len(self.segments)
+
+    def thresholds_line(self) -> str:
+        """One line: the window, the minimum hold and the thresholds with how they came."""
+        line = (f"candidate holds where var_x + var_y over {self.window} samples ≤ "
+                f"{self.threshold:.3g} (m/s²)² (= {LOOSE:g} × {MARGIN:g} × the static 99.9 % "
+                f"point from the quiet level {self.quiet_level:.3g} (m/s²)², the 10th "
+                "percentile)")
+        if self.gyro_threshold is not None:
+            line += (f" and the gyro's mean square ≤ {self.gyro_threshold:.3g} (rad/s)² "
+                     f"(quiet level {self.gyro_quiet_level:.3g})")
+        return line + (f"; each hold then against {MARGIN:g} × the 99.9 % point from its own "
+                       f"median (below); holds shorter than {self.min_samples} samples "
+                       "ignored")
+
+    def summary(self) -> str:
+        held = int(np.sum(self.labels >= 0))
+        lines = [f"{self.count} held pose(s) found; {held} of {self.labels.size} samples held",
+                 self.thresholds_line()]
+        lines += [f"  pose {k}: {s.summary()}" for k, s in enumerate(self.segments)]
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """JSON-able; ``labels`` run-length encoded as ``[label, count]`` pairs."""
+        runs = []
+        for v in self.labels.tolist():
+            if runs and runs[-1][0] == v:
+                runs[-1][1] += 1
+            else:
+                runs.append([v, 1])
+        return {"segments": [s.to_dict() for s in self.segments], "labels_rle": runs,
+                "window": self.window, "min_samples": self.min_samples,
+                "quiet_level": self.quiet_level, "threshold": self.threshold,
+                "gyro_quiet_level": self.gyro_quiet_level,
+                "gyro_threshold": self.gyro_threshold,
+                "units": dict(self._UNITS, **{"segments.mean": "m/s²", "segments.std": "m/s²",
+                                             "segments.t_start": "s",
+                                             "segments.t_stop": "s"})}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> PoseDetection:
+        labels = np.concatenate([np.full(c, v, dtype=int) for v, c in d["labels_rle"]]
+                                ) if d["labels_rle"] else np.zeros(0, dtype=int)
+        return cls(segments=tuple(Segment.from_dict(s) for s in d["segments"]),
+                   labels=labels, window=d["window"], min_samples=d["min_samples"],
+                   quiet_level=d["quiet_level"], threshold=d["threshold"],
+                   gyro_quiet_level=d.get("gyro_quiet_level"),
+                   gyro_threshold=d.get("gyro_threshold"))
+
+
+def window_variance(x: np.ndarray, w: int) -> np.ndarray:
+    """Sample variance (ddof 1) of ``x`` in a centred window of ``w`` samples per sample,
+    truncated at the ends; O(N) by cumulative sums of the centred data (centring keeps the
+    difference of sums accurate: the values are O(g) while the variances may be 10⁻⁸)."""
+    x = np.asarray(x, dtype=float) - np.mean(x)
+    n, h = x.size, w // 2
+    s1 = np.concatenate(([0.0], np.cumsum(x)))
+    s2 = np.concatenate(([0.0], np.cumsum(x * x)))
+    i = np.arange(n)
+    lo, hi = np.maximum(0, i - h), np.minimum(n, i + (w - h))
+    cnt = (hi - lo).astype(float)
+    mean = (s1[hi] - s1[lo]) / cnt
+    var = (s2[hi] - s2[lo]) / cnt - mean * mean
+    return np.maximum(var, 0.0) * cnt / np.maximum(cnt - 1.0, 1.0)
+
+
+def _window_mean(x: np.ndarray, w: int) -> np.ndarray:
+    n, h = x.size, w // 2
+    s1 = np.concatenate(([0.0], np.cumsum(x)))
+    i = np.arange(n)
+    lo, hi = np.maximum(0, i - h), np.minimum(n, i + (w - h))
+    return (s1[hi] - s1[lo]) / (hi - lo)
+
+
+def _quant_step(x: np.ndarray) -> float:
+    u = np.unique(x)
+    d = np.diff(u)
+    return float(d.min()) if d.size else 0.0
+
+
+def _ratio(nu: float, level: float) -> float:
+    """``χ²_ν(0.999) / χ²_ν(level)``: from a quantile of static windows to their 99.9 %
+    point."""
+    from scipy.stats import chi2
+
+    return float(chi2.ppf(STATIC_QUANTILE, nu) / chi2.ppf(level, nu))
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """``[start, stop)`` of each run of True."""
+    m = np.concatenate(([False], mask, [False]))
+    edges = np.flatnonzero(m[1:] != m[:-1])
+    return list(zip(edges[0::2].tolist(), edges[1::2].tolist(), strict=True))
+
+
+def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray | None = None,
+                 *, window: float | None = None, min_hold: float | None = None
+                 ) -> PoseDetection:
+    """Find the held poses of a log (module docstring).
+
+    Parameters
+    ----------
+    acc : (N, 2) m/s², the tilt-plane readings.
+    t : (N,) s, increasing, or None.
+    gyro : (N,) rad/s about the tilt axis, or None.
+    window, min_hold : s when ``t`` is given (defaults 0.5 and 1), samples when not (25 and
+        100).
+
+    Returns
+    -------
+    PoseDetection : segments, per-sample labels (-1 moving), thresholds.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(1)
+    >>> th = np.repeat([0.0, 1.0, 2.0], 400)
+    >>> acc = np.c_[-9.8 * np.sin(th), -9.8 * np.cos(th)] + 0.01 * rng.standard_normal((1200, 2))
+    >>> detect_poses(acc).count
+    3
+    """
+    acc = np.asarray(acc, dtype=float)
+    n = acc.shape[0]
+    if t is not None:
+        dt = float(np.median(np.diff(t))) if n > 1 else 1.0
+        w = int(round((DEFAULT_WINDOW_S if window is None else window) / dt))
+        hold = int(round((DEFAULT_HOLD_S if min_hold is None else min_hold) / dt))
+    else:
+        w = int(DEFAULT_WINDOW_N if window is None else window)
+        hold = int(DEFAULT_HOLD_N if min_hold is None else min_hold)
+    w = max(w, 5)
+    hold = max(hold, w)
+    nu_v, nu_w = 2.0 * (w - 1), float(w)
+    v = window_variance(acc[:, 0], w) + window_variance(acc[:, 1], w)
+    floor = sum(_quant_step(acc[:, k]) ** 2 / 12.0 for k in range(2))
+    q = max(float(np.quantile(v, QUIET_QUANTILE)), floor, 1e-18)
+    thr = LOOSE * MARGIN * q * _ratio(nu_v, QUIET_QUANTILE)
+    coarse = v <= thr
+    gq = gthr = wsq = None
+    gfloor = 0.0
+    if gyro is not None:
+        g = np.asarray(gyro, dtype=float)
+        wsq = _window_mean((g - np.median(g)) ** 2, w)
+        gfloor = max(_quant_step(g) ** 2 / 12.0, 1e-24)
+        gq = max(float(np.quantile(wsq, QUIET_QUANTILE)), gfloor)
+        gthr = LOOSE * MARGIN * gq * _ratio(nu_w, QUIET_QUANTILE)
+        coarse &= wsq <= gthr
+    # stage 2: each candidate hold against its own noise (median of its windows)
+    runs, own = [], []
+    for a, b in _runs(coarse):
+        if b - a < hold:
+            continue
+        tau = min(thr, MARGIN * max(float(np.median(v[a:b])), floor) * _ratio(nu_v, 0.5))
+        quiet = v[a:b] <= tau
+        gtau = None
+        if wsq is not None:
+            gtau = min(gthr, MARGIN * max(float(np.median(wsq[a:b])), gfloor)
+                       * _ratio(nu_w, 0.5))
+            quiet &= wsq[a:b] <= gtau
+        for x, y in _runs(quiet):
+            if y - x >= hold:
+                runs.append((a + x, a + y))
+                own.append((tau, gtau))
+    groups: list[list[tuple[int, int]]] = []
+    taus: list[tuple[float, float | None]] = []
+    for (a, b), tau in zip(runs, own, strict=True):
+        if groups and a - groups[-1][-1][1] < hold:
+            prev = np.concatenate([acc[x:y] for x, y in groups[-1]])
+            here = acc[a:b]
+            limit = MERGE_STDS * np.maximum(prev.std(0, ddof=1), here.std(0, ddof=1))
+            if np.all(np.abs(prev.mean(0) - here.mean(0)) <= limit):
+                groups[-1].append((a, b))
+                continue
+        groups.append([(a, b)])
+        taus.append(tau)
+    labels = np.full(n, -1, dtype=int)
+    segments = []
+    for k, grp in enumerate(groups):
+        for a, b in grp:
+            labels[a:b] = k
+        idx = np.flatnonzero(labels == k)
+        sel = acc[idx]
+        segments.append(Segment(
+            start=int(grp[0][0]), stop=int(grp[-1][1]), n=int(idx.size),
+            t_start=None if t is None else float(t[idx[0]]),
+            t_stop=None if t is None else float(t[idx[-1]]),
+            mean=sel.mean(0), std=sel.std(0, ddof=1), threshold=taus[k][0],
+            gyro_threshold=taus[k][1]))
+    return PoseDetection(segments=tuple(segments), labels=labels, window=w, min_samples=hold,
+                         quiet_level=q, threshold=thr, gyro_quiet_level=gq,
+                         gyro_threshold=gthr)
+
+
+__all__ = ["DEFAULT_HOLD_N", "DEFAULT_HOLD_S", "DEFAULT_WINDOW_N", "DEFAULT_WINDOW_S",
+           "LOOSE", "MARGIN", "MERGE_STDS", "PoseDetection", "QUIET_QUANTILE", "STATIC_QUANTILE",
+           "Segment", "detect_poses", "window_variance"]
