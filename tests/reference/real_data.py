@@ -119,6 +119,24 @@ SPECS: dict[str, LogSpec] = {
         poses=(Pose("z_up", "z", +1, 180, 499),),
         pose_source="by eye from a plot (README): the quiet stretch after the last motion",
     ),
+    # Pololu MinIMU-9 v5 (LSM6DS33), held by hand: x up, turned over, x down; ~150 Hz. Raw
+    # counts, 0.061 mg per count (the source's loader; LSM6DS33 at ±2 g). Time in ms.
+    "pololu-minimu9-x-flip.csv": LogSpec(
+        header_lines=1,
+        acc_columns=(1, 2, 3),
+        acc_names=("acc_x (counts)", "acc_y (counts)", "acc_z (counts)"),
+        acc_to_ms2=0.061e-3 * G_UNIT,
+        acc_unit="counts (0.061 mg per count)",
+        time_column=0,
+        time_to_s=1e-3,
+        gyro_columns=None,
+        gyro_to_rads=1.0,
+        poses=(
+            Pose("x_up", "x", +1, 100, 1000),
+            Pose("x_down", "x", -1, 2800, 3653),
+        ),
+        pose_source="by eye from a plot (README): the two long quiet stretches",
+    ),
     # imucal (mad-lab-fau) example Ferraris session, 102.4 Hz, acc m/s², gyro deg/s. Poses
     # from the source's own annotation (example_ferraris_session_list.json, iloc[start:end]).
     # Not in the repository (see data/real/README.md, "Staged, not shipped").
