@@ -58,6 +58,18 @@ def test_file_matches_its_checksum_rows_and_size(name):
     assert len(lines) - (ref.SPECS[name].header_lines if name in ref.SPECS else 0) == rows
 
 
+def test_readme_pose_table_is_the_reference_spec():
+    """The held poses the README documents are the ones the reference computes with."""
+    section = README.read_text().split("## Held poses", 1)[1].split("\n## ", 1)[0]
+    rows = re.findall(r"^\| `([^`]+)` \| `(\w+)` \| (\d+)–(\d+) \| (\w): ([+−])g \|", section,
+                      re.M)
+    documented = {(f, pose, int(a), int(b), axis, 1 if sign == "+" else -1)
+                  for f, pose, a, b, axis, sign in rows}
+    specified = {(f, p.name, p.start, p.stop, p.axis, p.sign)
+                 for f in LOGS for p in ref.SPECS[f].poses}
+    assert documented == specified
+
+
 def test_licence_copy_is_the_bsd_3_clause_notice():
     text = (REAL / "LICENSE-scikit-kinematics").read_text()
     assert "Copyright (C) 2016 Thomas Haslwanter" in text
