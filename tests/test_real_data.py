@@ -177,6 +177,23 @@ def test_six_position_formulas_on_known_bias_and_scale(tmp_path):
                                           rel=1e-9)
 
 
+def test_g_unit_converts_logs_in_g_and_counts():
+    """A command converting g with 9.8 m/s² is compared with ``g_unit=9.8``: means scale."""
+    for name in ("yei-3space-z-flip.csv", "pololu-minimu9-x-flip.csv"):
+        std = ref.pose_means(REAL / name)["poses"]
+        low = ref.pose_means(REAL / name, g_unit=9.8)["poses"]
+        for pose in std:
+            for axis in "xyz":
+                assert low[pose]["mean"][axis] == pytest.approx(
+                    std[pose]["mean"][axis] * 9.8 / ref.G_UNIT, rel=1e-12)
+
+
+def test_find_log_looks_in_data_real_then_shared():
+    assert ref.find_log("ngimu-sensors.csv") == REAL / "ngimu-sensors.csv"
+    with pytest.raises(FileNotFoundError, match="real-data"):
+        ref.find_log("no-such-log.csv")
+
+
 def test_six_position_refuses_a_bad_g():
     with pytest.raises(ValueError, match="g must be"):
         ref.six_position(REAL / "yei-3space-z-flip.csv", 0.0)

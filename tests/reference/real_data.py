@@ -7,14 +7,16 @@ numbers the code under test did not make.
 Held poses
 ----------
 Each log's held poses are listed once in ``SPECS``: a pose is a half-open range of data rows
-(0-based, header excluded) or, for a log with a label column, the rows carrying that label.
-Where the ranges come from (the source's own annotation, or read by eye from a plot) is stated
-per log in ``LogSpec.pose_source`` and in data/real/README.md. For each pose and axis:
+(0-based, header excluded). Where the ranges come from (the source's own annotation, or read
+by eye from a plot) is stated per log in ``LogSpec.pose_source`` and in data/real/README.md.
+For each pose and axis:
 
     mean  m = (1/n)·Σ a_i,    std  s = sqrt(Σ (a_i − m)² / (n − 1)),    norm = |(m_x, m_y, m_z)|
 
-in m/s² (files in g are converted with 1 g = 9.80665 m/s², the unit's definition — not the
-local gravity; files in raw counts with the sensitivity the source states).
+in m/s². Files in g are converted with ``g_unit`` m/s² per g, by default 9.80665 (the unit's
+definition, standard gravity); files in raw counts with the sensitivity the source states, then
+the same. A command that converts g with another value (``tiltbench … --g 9.8``) is compared
+with ``pose_means(path, g_unit=9.8)``.
 
 Six-position method
 -------------------
@@ -33,8 +35,8 @@ samples within a pose (white noise), var(m) = s²/n:
 
 A real sensor's noise is not white over long poses (bias instability, see IEEE Std 952 Allan
 practice): positively correlated samples make these stds optimistic, so compare with them
-using a stated multiple. The
-model ignores cross-axis terms (misalignment), which the two-point form cannot identify.
+using a stated multiple. The model ignores cross-axis terms (misalignment), which the
+two-point form cannot identify.
 """
 
 from __future__ import annotations
@@ -51,18 +53,20 @@ G_UNIT = 9.80665
 
 REPO = Path(__file__).resolve().parents[2]
 REAL_DIR = REPO / "data" / "real"
+SHARED_REAL_DIR = REPO.parent / "shared" / "real-data"
+"""Where logs that are not shipped in the repository are placed beside the checkout, as the
+course files are (``../shared/course-data``): see data/real/README.md, "Not shipped here"."""
 
 
 @dataclass(frozen=True)
 class Pose:
-    """One held pose: ``axis`` reads ``sign``·g there; rows ``[start, stop)`` or a label."""
+    """One held pose: ``axis`` reads ``sign``·g in data rows ``[start, stop)``."""
 
     name: str
     axis: str  # "x", "y" or "z": the axis that points along the vertical
     sign: int  # +1: the axis points up (reads +g); -1: down (reads -g)
-    start: int = 0
-    stop: int = 0
-    label: str = ""  # rows whose label column equals this (start/stop unused)
+    start: int
+    stop: int
 
 
 @dataclass(frozen=True)
@@ -72,7 +76,7 @@ class LogSpec:
     header_lines: int
     acc_columns: tuple[int, int, int]  # x, y, z
     acc_names: tuple[str, str, str]  # text each header cell contains (checked by the tests)
-    acc_to_ms2: float  # multiply the file's acceleration by this to get m/s²
+    acc_in_g: float | None  # g per unit of the file (1: g; 0.061e-3: those counts); None: m/s²
     acc_unit: str  # the file's own unit, as the source states it
     time_column: int | None
     time_to_s: float  # multiply the time column by this to get seconds
@@ -80,7 +84,6 @@ class LogSpec:
     gyro_to_rads: float
     poses: tuple[Pose, ...]
     pose_source: str
-    label_column: int | None = None
 
 
 SPECS: dict[str, LogSpec] = {
@@ -91,7 +94,7 @@ SPECS: dict[str, LogSpec] = {
         header_lines=1,
         acc_columns=(7, 8, 9),
         acc_names=("RawAccelX", "RawAccelY", "RawAccelZ"),
-        acc_to_ms2=G_UNIT,
+        acc_in_g=1.0,
         acc_unit="g",
         time_column=0,
         time_to_s=1e-6,
@@ -110,7 +113,7 @@ SPECS: dict[str, LogSpec] = {
         header_lines=1,
         acc_columns=(4, 5, 6),
         acc_names=("Accelerometer X (g)", "Accelerometer Y (g)", "Accelerometer Z (g)"),
-        acc_to_ms2=G_UNIT,
+        acc_in_g=1.0,
         acc_unit="g",
         time_column=0,
         time_to_s=1.0,
@@ -125,7 +128,7 @@ SPECS: dict[str, LogSpec] = {
         header_lines=1,
         acc_columns=(1, 2, 3),
         acc_names=("acc_x (counts)", "acc_y (counts)", "acc_z (counts)"),
-        acc_to_ms2=0.061e-3 * G_UNIT,
+        acc_in_g=0.061e-3,
         acc_unit="counts (0.061 mg per count)",
         time_column=0,
         time_to_s=1e-3,
@@ -139,12 +142,13 @@ SPECS: dict[str, LogSpec] = {
     ),
     # imucal (mad-lab-fau) example Ferraris session, 102.4 Hz, acc m/s², gyro deg/s. Poses
     # from the source's own annotation (example_ferraris_session_list.json, iloc[start:end]).
-    # Not in the repository (see data/real/README.md, "Staged, not shipped").
+    # Not in the repository (data/real/README.md, "Not shipped here"): ``find_log`` finds it in
+    # ../shared/real-data once placed there.
     "imucal-ferraris-session.csv": LogSpec(
         header_lines=1,
         acc_columns=(4, 5, 6),
         acc_names=("acc_x", "acc_y", "acc_z"),
-        acc_to_ms2=1.0,
+        acc_in_g=None,
         acc_unit="m/s^2",
         time_column=0,
         time_to_s=1.0 / 102.4,
@@ -163,6 +167,21 @@ SPECS: dict[str, LogSpec] = {
 }
 
 
+def find_log(name: str) -> Path:
+    """The path of a log by file name: ``data/real/NAME`` if shipped, else
+    ``../shared/real-data/NAME``; FileNotFoundError (naming both places) if neither."""
+    for folder in (REAL_DIR, SHARED_REAL_DIR):
+        if (folder / name).is_file():
+            return folder / name
+    raise FileNotFoundError(f"{name}: in neither {REAL_DIR} nor {SHARED_REAL_DIR}; "
+                            "data/real/README.md says where to get it")
+
+
+def acc_to_ms2(spec: LogSpec, g_unit: float = G_UNIT) -> float:
+    """m/s² per unit of the log's acceleration columns."""
+    return 1.0 if spec.acc_in_g is None else spec.acc_in_g * g_unit
+
+
 def spec_for(path: str | Path) -> LogSpec:
     """The ``LogSpec`` of a log, looked up by its file name."""
     name = Path(path).name
@@ -172,10 +191,8 @@ def spec_for(path: str | Path) -> LogSpec:
 
 
 def read_rows(path: str | Path) -> tuple[list[list[str]], list[list[float]]]:
-    """``(header_lines, rows)``: the header cells and every data row as floats (plain csv).
-
-    Label columns (non-numeric) become NaN in ``rows``; use ``read_labels`` for them.
-    """
+    """``(header_lines, rows)``: the header cells and every data row as floats (plain csv);
+    a cell that is not a number becomes NaN."""
     spec = spec_for(path)
     with open(path, newline="") as f:
         lines = list(csv.reader(f))
@@ -191,30 +208,26 @@ def _number(cell: str) -> float:
         return math.nan
 
 
-def _pose_rows(pose: Pose, labels: list[str]) -> slice | np.ndarray:
-    if pose.label:
-        return np.flatnonzero(np.array(labels) == pose.label)
-    return slice(pose.start, pose.stop)
-
-
-def pose_means(path: str | Path) -> dict:
+def pose_means(path: str | Path, g_unit: float = G_UNIT) -> dict:
     """Per held pose: sample count, mean, std and norm of each axis (m/s²), gyro rms (rad/s).
 
-    Returns ``{"file", "units", "acc_unit_in_file", "pose_source", "poses": {name: {"axis",
-    "sign", "start", "stop", "n", "mean": {x, y, z}, "std": {x, y, z}, "norm", "gyro_rms"}}}``;
+    ``g_unit``: m/s² per g, converts logs in g or counts (module docstring).
+
+    Returns ``{"file", "units", "acc_unit_in_file", "acc_to_ms2", "pose_source",
+    "poses": {name: {"axis", "sign", "start", "stop", "n", "mean": {x, y, z},
+    "std": {x, y, z}, "norm", "gyro_rms"}}}``;
     ``std`` is the sample standard deviation (n − 1), ``gyro_rms`` the rms over the pose of
     the gyro vector's magnitude (None when the log has no gyro).
     """
     spec = spec_for(path)
     _, rows = read_rows(path)
     table = np.array(rows, dtype=float)
-    labels = read_labels(path) if spec.label_column is not None else []
-    acc = table[:, list(spec.acc_columns)] * spec.acc_to_ms2
+    acc = table[:, list(spec.acc_columns)] * acc_to_ms2(spec, g_unit)
     gyro = (table[:, list(spec.gyro_columns)] * spec.gyro_to_rads
             if spec.gyro_columns is not None else None)
     poses = {}
     for pose in spec.poses:
-        rows_of = _pose_rows(pose, labels)
+        rows_of = slice(pose.start, pose.stop)
         block = acc[rows_of]
         mean = block.mean(axis=0)
         std = block.std(axis=0, ddof=1)
@@ -222,7 +235,7 @@ def pose_means(path: str | Path) -> dict:
                     if gyro is not None else None)
         poses[pose.name] = {
             "axis": pose.axis, "sign": pose.sign, "start": pose.start, "stop": pose.stop,
-            "label": pose.label, "n": int(block.shape[0]),
+            "n": int(block.shape[0]),
             "mean": dict(zip("xyz", map(float, mean), strict=True)),
             "std": dict(zip("xyz", map(float, std), strict=True)),
             "norm": float(np.linalg.norm(mean)),
@@ -234,34 +247,24 @@ def pose_means(path: str | Path) -> dict:
                   "start": "data row (0-based, header excluded)", "stop": "data row, exclusive",
                   "n": "samples"},
         "acc_unit_in_file": spec.acc_unit,
-        "acc_to_ms2": spec.acc_to_ms2,
+        "acc_to_ms2": acc_to_ms2(spec, g_unit),
         "pose_source": spec.pose_source,
         "poses": poses,
     }
 
 
-def read_labels(path: str | Path) -> list[str]:
-    """The label column of a log that has one (plain csv), one string per data row."""
-    spec = spec_for(path)
-    if spec.label_column is None:
-        raise ValueError(f"{Path(path).name}: no label column")
-    with open(path, newline="") as f:
-        lines = list(csv.reader(f))[spec.header_lines:]
-    return [line[spec.label_column] for line in lines if line]
-
-
-def six_position(path: str | Path, g: float) -> dict:
+def six_position(path: str | Path, g: float, g_unit: float = G_UNIT) -> dict:
     """Bias and scale of every axis that has an up and a down pose (two-point tumble test).
 
-    ``g`` is the local gravity in m/s². For each axis the first pose listed with sign +1 and
-    the first with sign −1 are used (a repeated pose, e.g. ``z_up_end``, is left out so the
-    pair is the one the source recorded back to back). Returns ``{"file", "g", "units",
+    ``g`` is the local gravity in m/s²; ``g_unit`` converts logs in g or counts (as in
+    ``pose_means``). For each axis the first pose listed with sign +1 and the first with sign
+    −1 are used (a repeated pose, e.g. ``z_up_end``, is left out). Returns ``{"file", "g", "units",
     "axes": {axis: {"up", "down", "n_up", "n_down", "bias", "bias_std", "scale",
     "scale_std"}}}``; axes without both poses are absent. Equations: module docstring.
     """
     if not (math.isfinite(g) and g > 0):
         raise ValueError(f"g must be a positive number of m/s², got {g!r}")
-    means = pose_means(path)
+    means = pose_means(path, g_unit)
     axes = {}
     for axis in "xyz":
         up = _first(means["poses"], axis, +1)
