@@ -188,12 +188,6 @@ def test_g_unit_converts_logs_in_g_and_counts():
                     std[pose]["mean"][axis] * 9.8 / ref.G_UNIT, rel=1e-12)
 
 
-def test_find_log_looks_in_data_real_then_shared():
-    assert ref.find_log("ngimu-sensors.csv") == REAL / "ngimu-sensors.csv"
-    with pytest.raises(FileNotFoundError, match="real-data"):
-        ref.find_log("no-such-log.csv")
-
-
 def test_six_position_refuses_a_bad_g():
     with pytest.raises(ValueError, match="g must be"):
         ref.six_position(REAL / "yei-3space-z-flip.csv", 0.0)

@@ -22,7 +22,7 @@ Six-position method
 -------------------
 The classic six-position (up/down) test: the multipoint tumble test of IEEE Std 1293 (linear
 accelerometers) reduced to its two points per axis, as in the six-position calibration of
-MEMS IMUs (Ferraris et al. 1995, the method imucal implements). With the axis pointing up
+MEMS IMUs (Ferraris et al. 1995). With the axis pointing up
 (reading +g) and down (reading −g) and the model  a_m = (1 + scale)·a_true + bias,
 
     bias  = (m_up + m_down) / 2                      [m/s²]
@@ -53,9 +53,6 @@ G_UNIT = 9.80665
 
 REPO = Path(__file__).resolve().parents[2]
 REAL_DIR = REPO / "data" / "real"
-SHARED_REAL_DIR = REPO.parent / "shared" / "real-data"
-"""Where logs that are not shipped in the repository are placed beside the checkout, as the
-course files are (``../shared/course-data``): see data/real/README.md, "Not shipped here"."""
 
 
 @dataclass(frozen=True)
@@ -140,41 +137,7 @@ SPECS: dict[str, LogSpec] = {
         ),
         pose_source="by eye from a plot (README): the two long quiet stretches",
     ),
-    # imucal (mad-lab-fau) example Ferraris session, 102.4 Hz, acc m/s², gyro deg/s. Poses
-    # from the source's own annotation (example_ferraris_session_list.json, iloc[start:end]).
-    # Not in the repository (data/real/README.md, "Not shipped here"): ``find_log`` finds it in
-    # ../shared/real-data once placed there.
-    "imucal-ferraris-session.csv": LogSpec(
-        header_lines=1,
-        acc_columns=(4, 5, 6),
-        acc_names=("acc_x", "acc_y", "acc_z"),
-        acc_in_g=None,
-        acc_unit="m/s^2",
-        time_column=0,
-        time_to_s=1.0 / 102.4,
-        gyro_columns=(1, 2, 3),
-        gyro_to_rads=math.pi / 180.0,
-        poses=(
-            Pose("x_p", "x", +1, 540, 1271),
-            Pose("x_a", "x", -1, 1620, 2361),
-            Pose("y_p", "y", +1, 2814, 3298),
-            Pose("y_a", "y", -1, 3740, 4152),
-            Pose("z_p", "z", +1, 4522, 4975),
-            Pose("z_a", "z", -1, 5376, 5983),
-        ),
-        pose_source="the source's annotation (example_ferraris_session_list.json)",
-    ),
 }
-
-
-def find_log(name: str) -> Path:
-    """The path of a log by file name: ``data/real/NAME`` if shipped, else
-    ``../shared/real-data/NAME``; FileNotFoundError (naming both places) if neither."""
-    for folder in (REAL_DIR, SHARED_REAL_DIR):
-        if (folder / name).is_file():
-            return folder / name
-    raise FileNotFoundError(f"{name}: in neither {REAL_DIR} nor {SHARED_REAL_DIR}; "
-                            "data/real/README.md says where to get it")
 
 
 def acc_to_ms2(spec: LogSpec, g_unit: float = G_UNIT) -> float:
