@@ -1,0 +1,257 @@
+"""Independent reference values for the real IMU logs described in data/real/README.md.
+
+Computed here with the standard library's ``csv`` and plain numpy only — never with ``calib``
+or ``bench`` — so that the readers, ``calibrate`` and the twin loop can be tested against
+numbers the code under test did not make.
+
+Held poses
+----------
+Each log's held poses are listed once in ``SPECS``: a pose is a half-open range of data rows
+(0-based, header excluded). Where the ranges come from (the source's own annotation, or read
+by eye from a plot) is stated per log in ``LogSpec.pose_source`` and in data/real/README.md.
+For each pose and axis:
+
+    mean  m = (1/n)·Σ a_i,    std  s = sqrt(Σ (a_i − m)² / (n − 1)),    norm = |(m_x, m_y, m_z)|
+
+in m/s². Files in g are converted with ``g_unit`` m/s² per g, by default 9.80665 (the unit's
+definition, standard gravity); files in raw counts with the sensitivity the source states, then
+the same. A command that converts g with another value (``tiltbench … --g 9.8``) is compared
+with ``pose_means(path, g_unit=9.8)``.
+
+Six-position method
+-------------------
+The classic six-position (up/down) test: the multipoint tumble test of IEEE Std 1293 (linear
+accelerometers) reduced to its two points per axis, as in the six-position calibration of
+MEMS IMUs (Ferraris et al. 1995). With the axis pointing up
+(reading +g) and down (reading −g) and the model  a_m = (1 + scale)·a_true + bias,
+
+    bias  = (m_up + m_down) / 2                      [m/s²]
+    scale = (m_up − m_down) / (2·g) − 1              [dimensionless, 0 for a perfect sensor]
+
+where g is the local gravity the caller states (m/s²). Standard deviations assume independent
+samples within a pose (white noise), var(m) = s²/n:
+
+    std(bias)  = ½·sqrt(s_up²/n_up + s_down²/n_down),    std(scale) = std(bias) / g
+
+A real sensor's noise is not white over long poses (bias instability, see IEEE Std 952 Allan
+practice): positively correlated samples make these stds optimistic, so compare with them
+using a stated multiple. The model ignores cross-axis terms (misalignment), which the
+two-point form cannot identify.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+G_UNIT = 9.80665
+"""m/s² per g: the definition of the unit g (standard gravity), used to convert files in g."""
+
+REPO = Path(__file__).resolve().parents[2]
+REAL_DIR = REPO / "data" / "real"
+
+
+@dataclass(frozen=True)
+class Pose:
+    """One held pose: ``axis`` reads ``sign``·g in data rows ``[start, stop)``."""
+
+    name: str
+    axis: str  # "x", "y" or "z": the axis that points along the vertical
+    sign: int  # +1: the axis points up (reads +g); -1: down (reads -g)
+    start: int
+    stop: int
+
+
+@dataclass(frozen=True)
+class LogSpec:
+    """How to read one log with plain csv: header lines, columns by index, units."""
+
+    header_lines: int
+    acc_columns: tuple[int, int, int]  # x, y, z
+    acc_names: tuple[str, str, str]  # text each header cell contains (checked by the tests)
+    acc_in_g: float | None  # g per unit of the file (1: g; 0.061e-3: those counts); None: m/s²
+    acc_unit: str  # the file's own unit, as the source states it
+    time_column: int | None
+    time_to_s: float  # multiply the time column by this to get seconds
+    gyro_columns: tuple[int, int, int] | None
+    gyro_to_rads: float
+    poses: tuple[Pose, ...]
+    pose_source: str
+
+
+SPECS: dict[str, LogSpec] = {
+    # YEI 3-Space sensor, uncalibrated ("Raw") channels: gyro rad/s, compass gauss, accel g;
+    # ~110 Hz (ChipTimeUS in µs). Poses read by eye from a plot of the three acceleration
+    # axes and the gyro (data/real/README.md): flat, turned over, flat again.
+    "yei-3space-z-flip.csv": LogSpec(
+        header_lines=1,
+        acc_columns=(7, 8, 9),
+        acc_names=("RawAccelX", "RawAccelY", "RawAccelZ"),
+        acc_in_g=1.0,
+        acc_unit="g",
+        time_column=0,
+        time_to_s=1e-6,
+        gyro_columns=(1, 2, 3),
+        gyro_to_rads=1.0,
+        poses=(
+            Pose("z_up", "z", +1, 0, 100),
+            Pose("z_down", "z", -1, 1090, 1250),
+            Pose("z_up_end", "z", +1, 2650, 2715),
+        ),
+        pose_source="by eye from a plot (README): quiet stretches of acceleration and gyro",
+    ),
+    # x-io NGIMU export (firmware v1.8), 50 Hz: gyro deg/s, accel g (device-calibrated).
+    # Moved by hand for the first ~3.5 s, then laid flat (z up) until the end.
+    "ngimu-sensors.csv": LogSpec(
+        header_lines=1,
+        acc_columns=(4, 5, 6),
+        acc_names=("Accelerometer X (g)", "Accelerometer Y (g)", "Accelerometer Z (g)"),
+        acc_in_g=1.0,
+        acc_unit="g",
+        time_column=0,
+        time_to_s=1.0,
+        gyro_columns=(1, 2, 3),
+        gyro_to_rads=math.pi / 180.0,
+        poses=(Pose("z_up", "z", +1, 180, 499),),
+        pose_source="by eye from a plot (README): the quiet stretch after the last motion",
+    ),
+    # Pololu MinIMU-9 v5 (LSM6DS33), held by hand: x up, turned over, x down; ~150 Hz. Raw
+    # counts, 0.061 mg per count (the source's loader; LSM6DS33 at ±2 g). Time in ms.
+    "pololu-minimu9-x-flip.csv": LogSpec(
+        header_lines=1,
+        acc_columns=(1, 2, 3),
+        acc_names=("acc_x (counts)", "acc_y (counts)", "acc_z (counts)"),
+        acc_in_g=0.061e-3,
+        acc_unit="counts (0.061 mg per count)",
+        time_column=0,
+        time_to_s=1e-3,
+        gyro_columns=None,
+        gyro_to_rads=1.0,
+        poses=(
+            Pose("x_up", "x", +1, 100, 1000),
+            Pose("x_down", "x", -1, 2800, 3653),
+        ),
+        pose_source="by eye from a plot (README): the two long quiet stretches",
+    ),
+}
+
+
+def acc_to_ms2(spec: LogSpec, g_unit: float = G_UNIT) -> float:
+    """m/s² per unit of the log's acceleration columns."""
+    return 1.0 if spec.acc_in_g is None else spec.acc_in_g * g_unit
+
+
+def spec_for(path: str | Path) -> LogSpec:
+    """The ``LogSpec`` of a log, looked up by its file name."""
+    name = Path(path).name
+    if name not in SPECS:
+        raise KeyError(f"{name}: no reference spec; known logs: {', '.join(SPECS)}")
+    return SPECS[name]
+
+
+def read_rows(path: str | Path) -> tuple[list[list[str]], list[list[float]]]:
+    """``(header_lines, rows)``: the header cells and every data row as floats (plain csv);
+    a cell that is not a number becomes NaN."""
+    spec = spec_for(path)
+    with open(path, newline="") as f:
+        lines = list(csv.reader(f))
+    header, data = lines[: spec.header_lines], lines[spec.header_lines:]
+    rows = [[_number(cell) for cell in line] for line in data if line]
+    return header, rows
+
+
+def _number(cell: str) -> float:
+    try:
+        return float(cell)
+    except ValueError:
+        return math.nan
+
+
+def pose_means(path: str | Path, g_unit: float = G_UNIT) -> dict:
+    """Per held pose: sample count, mean, std and norm of each axis (m/s²), gyro rms (rad/s).
+
+    ``g_unit``: m/s² per g, converts logs in g or counts (module docstring).
+
+    Returns ``{"file", "units", "acc_unit_in_file", "acc_to_ms2", "pose_source",
+    "poses": {name: {"axis", "sign", "start", "stop", "n", "mean": {x, y, z},
+    "std": {x, y, z}, "norm", "gyro_rms"}}}``;
+    ``std`` is the sample standard deviation (n − 1), ``gyro_rms`` the rms over the pose of
+    the gyro vector's magnitude (None when the log has no gyro).
+    """
+    spec = spec_for(path)
+    _, rows = read_rows(path)
+    table = np.array(rows, dtype=float)
+    acc = table[:, list(spec.acc_columns)] * acc_to_ms2(spec, g_unit)
+    gyro = (table[:, list(spec.gyro_columns)] * spec.gyro_to_rads
+            if spec.gyro_columns is not None else None)
+    poses = {}
+    for pose in spec.poses:
+        rows_of = slice(pose.start, pose.stop)
+        block = acc[rows_of]
+        mean = block.mean(axis=0)
+        std = block.std(axis=0, ddof=1)
+        gyro_rms = (float(np.sqrt(np.mean(np.sum(gyro[rows_of] ** 2, axis=1))))
+                    if gyro is not None else None)
+        poses[pose.name] = {
+            "axis": pose.axis, "sign": pose.sign, "start": pose.start, "stop": pose.stop,
+            "n": int(block.shape[0]),
+            "mean": dict(zip("xyz", map(float, mean), strict=True)),
+            "std": dict(zip("xyz", map(float, std), strict=True)),
+            "norm": float(np.linalg.norm(mean)),
+            "gyro_rms": gyro_rms,
+        }
+    return {
+        "file": Path(path).name,
+        "units": {"mean": "m/s^2", "std": "m/s^2", "norm": "m/s^2", "gyro_rms": "rad/s",
+                  "start": "data row (0-based, header excluded)", "stop": "data row, exclusive",
+                  "n": "samples"},
+        "acc_unit_in_file": spec.acc_unit,
+        "acc_to_ms2": acc_to_ms2(spec, g_unit),
+        "pose_source": spec.pose_source,
+        "poses": poses,
+    }
+
+
+def six_position(path: str | Path, g: float, g_unit: float = G_UNIT) -> dict:
+    """Bias and scale of every axis that has an up and a down pose (two-point tumble test).
+
+    ``g`` is the local gravity in m/s²; ``g_unit`` converts logs in g or counts (as in
+    ``pose_means``). For each axis the first pose listed with sign +1 and the first with sign
+    −1 are used (a repeated pose, e.g. ``z_up_end``, is left out). Returns ``{"file", "g", "units",
+    "axes": {axis: {"up", "down", "n_up", "n_down", "bias", "bias_std", "scale",
+    "scale_std"}}}``; axes without both poses are absent. Equations: module docstring.
+    """
+    if not (math.isfinite(g) and g > 0):
+        raise ValueError(f"g must be a positive number of m/s², got {g!r}")
+    means = pose_means(path, g_unit)
+    axes = {}
+    for axis in "xyz":
+        up = _first(means["poses"], axis, +1)
+        down = _first(means["poses"], axis, -1)
+        if up is None or down is None:
+            continue
+        pu, pd = means["poses"][up], means["poses"][down]
+        m_up, m_down = pu["mean"][axis], pd["mean"][axis]
+        bias_std = 0.5 * math.sqrt(pu["std"][axis] ** 2 / pu["n"] + pd["std"][axis] ** 2 / pd["n"])
+        axes[axis] = {
+            "up": up, "down": down, "n_up": pu["n"], "n_down": pd["n"],
+            "bias": (m_up + m_down) / 2.0, "bias_std": bias_std,
+            "scale": (m_up - m_down) / (2.0 * g) - 1.0, "scale_std": bias_std / g,
+        }
+    return {
+        "file": means["file"], "g": g,
+        "units": {"bias": "m/s^2", "bias_std": "m/s^2", "scale": "1", "scale_std": "1",
+                  "g": "m/s^2", "n_up": "samples", "n_down": "samples"},
+        "axes": axes,
+    }
+
+
+def _first(poses: dict, axis: str, sign: int) -> str | None:
+    for name, pose in poses.items():
+        if pose["axis"] == axis and pose["sign"] == sign:
+            return name
+    return None
