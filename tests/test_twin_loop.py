@@ -19,6 +19,9 @@ without the code under test where one exists:
   cannot resolve. The loop goes on with what it does identify (the y axis by per-axis least
   squares, x's bias from its mean) as the twin's calibration; its static stretch is 1.45 s,
   so only the white noise is resolved (bias instability and random walk: upper bounds).
+  What the twin lacks is then shown by the lack-of-fit F test per axis (calib.lackoffit),
+  real run against twin: the real x axis reads differently flat and turned over (a tilt
+  offset or misalignment of ≈ 0.5°), which neither the model nor its twin has.
 * the multi-pose stand-in (``tests/logfixtures.py``: five held poses, white noise 0.02 m/s²
   per sample at 100 Hz, no bias or scale error) until a real multi-pose log ships: every
   step runs; references are its known truth.
@@ -39,6 +42,7 @@ import numpy as np
 import pytest
 import scipy.io
 
+from calib.lackoffit import lack_of_fit
 from calib.ls import fit_axis
 from tests import logfixtures as fx
 from tests.cli import one_line_error, run
@@ -225,6 +229,25 @@ def test_twin_loop_on_the_shipped_real_log(capsys, tmp_path, monkeypatch):
     ft = fit_axis(twin["tita"].ravel(), twin["datos"][:, 1], "y", g=G)
     assert abs(ft.params[0] - fy.params[0]) <= K * ft.std[0]
     assert abs(ft.params[1] - fy.params[1]) <= K * ft.std[1]
+    # what the twin lacks (gap cannot run here; the lack-of-fit F test says it per axis):
+    # the real x reads differently flat and turned over, the model (A_rx = 0 in both) and
+    # its twin do not; y is consistent on both
+    real = scipy.io.loadmat(Path(out["import"]["files"][0]))
+    groups = real["pose"].ravel()
+    for name, mat in (("real", real), ("twin", twin)):
+        x = mat["datos"][:, 0]
+        lof_x = lack_of_fit(x - x.mean(), groups, 1, "x")  # model: bias only (A_rx = 0)
+        fit = fit_axis(mat["tita"].ravel(), mat["datos"][:, 1], "y", g=G)
+        lof_y = lack_of_fit(fit.residuals, groups, 2, "y")
+        out[f"lof_{name}"] = (lof_x, lof_y)
+    (real_x, real_y), (twin_x, twin_y) = out["lof_real"], out["lof_twin"]
+    assert real_x.p_value < 1e-10 and twin_x.p_value > 1e-3
+    assert real_y.p_value > 1e-3 and twin_y.p_value > 1e-3
+    # the size of the miss, from the reference's own pose means: half the x difference
+    # between flat and turned over is g·sin δ, a tilt offset / misalignment of δ ≈ 0.5°
+    means = ref.pose_means(log.path, g_unit=G)["poses"]
+    half = 0.5 * (means["z_down"]["mean"]["x"] - means["z_up"]["mean"]["x"])
+    assert 0.05 < half < 0.12  # m/s²: δ = asin(half / g) between 0.3° and 0.7°
 
 
 @pytest.mark.slow  # ~10 s: gap's search and report
