@@ -274,3 +274,33 @@ def test_one_pose_only_and_too_few_poses_for_unknown_theta(capsys, tmp_path):
                           save, ignore=("note:",))
     assert YEI.name in line and "cannot identify scale_x" in line and "x up and x down" in line
     assert not save.exists()
+
+
+def test_noise_on_the_longest_shipped_static_stretch(capsys, tmp_path):
+    """NGIMU, lying flat 6.4 s at 50 Hz (the longest quiet stretch shipped): the white-noise
+    density matches the stretch's own std (N·√fs = σ for white noise; reference: plain csv),
+    within 4 half-widths of its 68 % interval; the bias instability and the random walk are
+    not resolved (τ reaches 1.28 s) and are reported as upper bounds, null in the profile."""
+    spec = ref.SPECS[NGIMU.name]
+    pose = ref.pose_means(NGIMU, g_unit=G)["poses"]["z_up"]
+    lines = NGIMU.read_bytes().splitlines(keepends=True)
+    still = tmp_path / "still.csv"
+    still.write_bytes(b"".join([lines[0], *lines[1 + pose["start"]:1 + pose["stop"]]]))
+    rc, stdout, err = run(capsys, "noise", still, "--axes", "x,-z", "--save",
+                          tmp_path / "sensor.json", "--json")
+    assert rc == 0, err
+    doc = json.loads(stdout)
+    assert doc["units"]
+    profile = json.loads((tmp_path / "sensor.json").read_text())
+    _, rows = ref.read_rows(NGIMU)
+    t = np.array(rows)[pose["start"]:pose["stop"], spec.time_column] * spec.time_to_s
+    fs = (t.size - 1) / (t[-1] - t[0])
+    assert abs(profile["sample_rate"] / fs - 1) < 1e-6
+    for i, axis in enumerate("xz"):
+        w = profile["white_noise_density"][i]
+        lo, hi = w["interval"]
+        half = 0.5 * (hi - lo) * math.sqrt(fs)
+        assert abs(w["value"] * math.sqrt(fs) - pose["std"][axis]) <= 4 * half, axis
+    assert profile["bias_instability"] is None and profile["rate_random_walk"] is None
+    bounds = profile["extra"]["unresolved_upper_bounds"]
+    assert all(bounds[a]["rate_random_walk"] > 0 for a in "xy")
