@@ -144,7 +144,9 @@ def loop(capsys, log: LoopLog, d: Path) -> dict:
         ensayo, *twin_cal, "--seed", "19", "--out", d / "twin")
     out["twin_truth"] = json.loads((d / "twin" / "truth.json").read_text())
     out["twin"] = scipy.io.loadmat(d / "twin" / "ensayo.mat")
-    # 6. gap of the real run (gap simulates its twin with the fitted parameters)
+    # 6. gap of the real run (gap simulates its twin with the fitted parameters). When
+    # `gap --sensor` lands, pass "--sensor", d / "sensor.json" here: the walk's intensity
+    # then comes from the profile (issue 19, item 7) and the report says so.
     if log.calibratable:
         text, _ = _ok(capsys, "gap", ensayo, "--report", d / "gap", "--json")
         out["gap"] = json.loads(text)
