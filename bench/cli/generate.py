@@ -87,7 +87,11 @@ def calibration_config(args: argparse.Namespace):
     # Any finite angle in radians is valid (several turns, negative, past 2π): no range
     # check here — without readings there is nothing to tell degrees by (calib.angles).
     start, stop = parse_pair(args.theta_range, "--theta-range")
-    if args.theta_list is not None:
+    if args.theta_list is not None and args.theta_from is not None:
+        raise OptionError("give --theta-list or --theta-from, not both")
+    if args.theta_from is not None:
+        theta = ThetaDesign(kind="list", values=_theta_of(args.theta_from))
+    elif args.theta_list is not None:
         values = parse_floats(args.theta_list, "--theta-list")
         theta = ThetaDesign(kind="list", values=values)
     elif args.positions is not None:
@@ -111,6 +115,15 @@ def calibration_config(args: argparse.Namespace):
 
         config = apply_effects(config, [parse_effect_option(e) for e in args.effect])
     return config
+
+
+def _theta_of(path: str) -> tuple[float, ...]:
+    """``--theta-from``: the θ schedule (rad, every sample in order) of a course-format
+    ``ensayo.mat`` — a measured run imported with ``tiltbench import`` — so that its twin holds
+    the same poses for the same number of samples (docs/real-data.md, the twin loop)."""
+    from calib.io import read_ensayo
+
+    return tuple(float(v) for v in read_ensayo(path).tita)
 
 
 def _check_sweep(sweep) -> None:
@@ -539,6 +552,9 @@ def _register_calibration(kinds) -> None:
     p.add_argument("--count", type=integer, default=20001, help="static: samples over the range")
     p.add_argument("--theta-list",
                    help="static: explicit θ values in rad (any finite), comma separated")
+    p.add_argument("--theta-from", metavar="ENSAYO",
+                   help="static: the θ of every sample of this ensayo.mat (e.g. a measured "
+                        "run's import), in order: its twin holds the same poses")
     p.add_argument("--positions", type=integer, help="static: number of discrete held positions")
     p.add_argument("--per-position", type=integer, default=100,
                    help="static: samples held at each position")
