@@ -63,7 +63,8 @@ where this module steps all runs at once as (R, n, n) arrays (a Monte Carlo of 5
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from typing import Protocol
 
 import numpy as np
 
@@ -75,7 +76,8 @@ CAL_ORDER = ("bias_x", "scale_x", "bias_y", "scale_y")
 """Order of the calibration covariance (:class:`calib.calibration.Calibration.cov`)."""
 
 
-def _as_runs(a, width: int, name: str) -> tuple[np.ndarray, bool]:
+def as_runs(a, width: int, name: str) -> tuple[np.ndarray, bool]:
+    """``a`` as (R, N, width) floats and whether it had a run axis; refuses NaN/Inf."""
     a = np.asarray(a, dtype=float)
     batched = a.ndim == 3
     if a.ndim == 2:
@@ -87,7 +89,8 @@ def _as_runs(a, width: int, name: str) -> tuple[np.ndarray, bool]:
     return a, batched
 
 
-def _cov2(v, name: str) -> np.ndarray:
+def cov2(v, name: str) -> np.ndarray:
+    """A (2, 2) covariance from a variance, two variances or a (2, 2) matrix."""
     v = np.asarray(v, dtype=float)
     if v.ndim == 0:
         return np.eye(2) * v
@@ -99,7 +102,7 @@ def _cov2(v, name: str) -> np.ndarray:
                      f"got shape {v.shape}")
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class FusionResult(ResultMixin):
     """Kalman filter (and smoother) estimates of one run or of R runs at once.
 
@@ -199,10 +202,7 @@ class FusionResult(ResultMixin):
 
     @classmethod
     def from_dict(cls, d: dict) -> FusionResult:
-        return cls(tuple(d["state_names"]), d["times"], d["estimates"], d["covariances"],
-                   d["is_fix"], d["t_gps"], d["innovations"], d["innovation_covs"],
-                   d["smoothed"], d["smoothed_covariances"], d["P0"], d["Q"], d["R"],
-                   d["noise_var"], d["estimate_scale"], d["dt"])
+        return cls(**{f.name: d[f.name] for f in fields(cls)})
 
     def summary(self) -> str:
         def mat(name: str, m: np.ndarray, unit: str) -> list[str]:
@@ -249,9 +249,10 @@ def _timeline(t: np.ndarray, t_gps: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     return nodes, hold, fix
 
 
-def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos,
-         p0, v0, p0_cov, v0_cov, vel_gps=None, sigma_vel=None, estimate_scale=False,
-         smoother=False, keep="all") -> FusionResult:
+def fuse(t, acc_m, t_gps, pos_gps, *, noise_var, sigma_pos, p0, v0, p0_cov, v0_cov,
+         calibration: CalibrationLike | None = None, bias=None, scale=None, cal_cov=None,
+         vel_gps=None, sigma_vel=None, estimate_scale=False, smoother=False,
+         keep="all") -> FusionResult:
     """Kalman filter (and RTS smoother) of accelerometer readings with position fixes.
 
     Parameters
@@ -261,8 +262,10 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
         runs on the same times (Monte Carlo).
     t_gps : (M,) fix times, s, strictly increasing, within ``[t_0, t_N-1]``.
     pos_gps : (M, 2) or (R, M, 2) position fixes, m.
-    bias : (2,) m/s² and scale : (2,) dimensionless, the calibration estimate.
-    cal_cov : (4, 4) its covariance, order ``[bias_x, scale_x, bias_y, scale_y]``.
+    calibration : the calibration (a :class:`calib.calibration.Calibration`, or anything with
+        ``bias`` (2,) m/s², ``scale`` (2,) dimensionless and ``cov`` (4, 4) in the order
+        ``[bias_x, scale_x, bias_y, scale_y]``); or give those three as ``bias``, ``scale``
+        and ``cal_cov``.
     noise_var : σ_a², variance of each reading's white noise, (2,) (m/s²)² or a scalar.
     sigma_pos : σ of each position fix coordinate, m.
     p0 : (2,) m, v0 : (2,) m/s initial estimate; p0_cov, v0_cov : their covariances (scalar,
@@ -293,82 +296,176 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
     >>> bool(np.all(np.sqrt(np.diag(res.final_position_cov)) < 3.0))  # below one fix's σ
     True
     """
-    t = np.asarray(t, dtype=float)
-    if t.ndim != 1 or t.shape[0] < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
-        raise ValueError("t must be 1-D, finite, strictly increasing, with ≥ 2 samples")
-    acc, batched = _as_runs(acc_m, 2, "acc_m")
+    t = check_times(t, 2)
+    acc, batched = as_runs(acc_m, 2, "acc_m")
     if acc.shape[1] != t.shape[0]:
         raise ValueError(f"acc_m has {acc.shape[1]} samples for {t.shape[0]} times")
     t_gps = np.asarray(t_gps, dtype=float).reshape(-1)
     if np.any(np.diff(t_gps) <= 0) or (t_gps.size and (t_gps[0] < t[0] or t_gps[-1] > t[-1])):
         raise ValueError("t_gps must be strictly increasing and inside [t[0], t[-1]]")
-    zp, _ = _as_runs(pos_gps, 2, "pos_gps")
-    if zp.shape[1] != t_gps.shape[0]:
-        raise ValueError(f"pos_gps has {zp.shape[1]} fixes for {t_gps.shape[0]} times")
     Rn = acc.shape[0]
-    zs = [np.broadcast_to(zp, (Rn, *zp.shape[1:]))]
-    r_diag = [float(sigma_pos) ** 2] * 2
-    if vel_gps is not None:
-        zv, _ = _as_runs(vel_gps, 2, "vel_gps")
-        zs.append(np.broadcast_to(zv, (Rn, *zv.shape[1:])))
-        r_diag += [float(sigma_vel) ** 2] * 2
-    Z = np.concatenate(zs, axis=-1)  # (R, M, d)
-    d = Z.shape[-1]
-    Rm = np.diag(r_diag)
-
-    n = 8 if estimate_scale else 6
-    H = np.zeros((d, n))
-    H[:2, :2] = np.eye(2)
-    if d == 4:
-        H[2:4, 2:4] = np.eye(2)
-    bias = np.broadcast_to(np.asarray(bias, dtype=float), (2,))
-    scale = np.broadcast_to(np.asarray(scale, dtype=float), (2,))
-    cal_cov = np.asarray(cal_cov, dtype=float)
-    if cal_cov.shape != (4, 4):
-        raise ValueError(f"cal_cov must be (4, 4) in order {CAL_ORDER}, got {cal_cov.shape}")
+    Z, Rm = fix_measurements(pos_gps, t_gps.shape[0], Rn, sigma_pos, vel_gps, sigma_vel)
+    cal = CalibrationPrior.of(calibration, bias=bias, scale=scale, cal_cov=cal_cov)
     sa2 = np.broadcast_to(np.asarray(noise_var, dtype=float), (2,)).copy()
 
+    n = 8 if estimate_scale else 6
     # P0: position, velocity, then the calibration blocks (bias [0, 2], scale [1, 3]).
-    P0 = np.zeros((n, n))
-    P0[:2, :2] = _cov2(p0_cov, "p0_cov")
-    P0[2:4, 2:4] = _cov2(v0_cov, "v0_cov")
     cal_idx = [0, 2, 1, 3] if estimate_scale else [0, 2]
-    P0[4:, 4:] = cal_cov[np.ix_(cal_idx, cal_idx)]
-    ss2 = np.zeros(2) if estimate_scale else np.diag(cal_cov)[[1, 3]]
-    x0 = np.concatenate([p0, v0, bias] + ([scale] if estimate_scale else []))
+    P0 = initial_cov(n, p0_cov, v0_cov, {4: cal.cov[np.ix_(cal_idx, cal_idx)]})
+    x0 = np.concatenate([p0, v0, cal.bias] + ([cal.scale] if estimate_scale else []))
 
     nodes, hold, fixi = _timeline(t, t_gps)
-    K_nodes = nodes.shape[0]
+    step = LinearStep(nodes, hold, acc, cal, sa2, estimate_scale)
+    kept, nu, S_all = run_filter(step, x0, P0, fixi, Z, Rm, keep, smoother)
+    dt = float(np.median(np.diff(t)))
+    names = STATE_NAMES + (SCALE_NAMES if estimate_scale else ())
+    return FusionResult(state_names=names, times=nodes[kept.store], t_gps=t_gps,
+                        **filter_outputs(kept, nu, S_all, batched), P0=P0,
+                        Q=nominal_q(n, sa2, 1.0 / (1.0 + cal.scale), dt), R=Rm, noise_var=sa2,
+                        estimate_scale=estimate_scale, dt=dt)
+
+
+class CalibrationLike(Protocol):
+    """What the filters read from a calibration (:class:`calib.calibration.Calibration`)."""
+
+    @property
+    def bias(self) -> np.ndarray: ...  # (2,) m/s²
+    @property
+    def scale(self) -> np.ndarray: ...  # (2,) dimensionless
+    @property
+    def cov(self) -> np.ndarray: ...  # (4, 4), order CAL_ORDER
+
+
+@dataclass(frozen=True, eq=False)
+class CalibrationPrior:
+    """The calibration as the filters use it: ``bias`` (2,) m/s², ``scale`` (2,) and ``cov``
+    (4, 4) in the order ``CAL_ORDER``, validated once for both filters."""
+
+    bias: np.ndarray
+    scale: np.ndarray
+    cov: np.ndarray
+
+    @classmethod
+    def of(cls, calibration: CalibrationLike | None = None, *, bias=None, scale=None,
+           cal_cov=None) -> CalibrationPrior:
+        """From a calibration, or from its three parts (exactly one of the two ways)."""
+        if calibration is not None:
+            if bias is not None or scale is not None or cal_cov is not None:
+                raise ValueError("give calibration or bias/scale/cal_cov, not both")
+            bias, scale, cal_cov = calibration.bias, calibration.scale, calibration.cov
+        if bias is None or scale is None or cal_cov is None:
+            raise ValueError("the filter needs a calibration: calibration=, or bias=, scale= "
+                             "and cal_cov=")
+        cov = np.asarray(cal_cov, dtype=float)
+        if cov.shape != (4, 4):
+            raise ValueError(f"cal_cov must be (4, 4) in order {CAL_ORDER}, got {cov.shape}")
+        return cls(np.broadcast_to(np.asarray(bias, dtype=float), (2,)),
+                   np.broadcast_to(np.asarray(scale, dtype=float), (2,)), cov)
+
+    @property
+    def scale_var(self) -> np.ndarray:
+        """(2,) the scale factors' variances ``σ_s²``, folded into Q as white terms."""
+        return np.diag(self.cov)[[1, 3]]
+
+
+def check_times(t, min_samples: int) -> np.ndarray:
+    """IMU times (N,) s: 1-D, finite, strictly increasing, at least ``min_samples``."""
+    t = np.asarray(t, dtype=float)
+    if (t.ndim != 1 or t.shape[0] < min_samples or np.any(np.diff(t) <= 0)
+            or not np.all(np.isfinite(t))):
+        raise ValueError(f"t must be 1-D, finite, strictly increasing, with ≥ {min_samples} "
+                         "samples")
+    return t
+
+
+def fix_measurements(pos_gps, m: int, runs: int, sigma_pos: float, vel_gps=None,
+                     sigma_vel: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The fixes as measurements ``Z`` (R, M, d) (positions m, then velocities m/s when
+    given) and their noise ``R = diag(σ_pos², σ_pos² [, σ_vel², σ_vel²])`` (d, d)."""
+    zp, _ = as_runs(pos_gps, 2, "pos_gps")
+    if zp.shape[1] != m:
+        raise ValueError(f"pos_gps has {zp.shape[1]} fixes for {m} times")
+    zs = [np.broadcast_to(zp, (runs, *zp.shape[1:]))]
+    r_diag = [float(sigma_pos) ** 2] * 2
+    if vel_gps is not None:
+        zv, _ = as_runs(vel_gps, 2, "vel_gps")
+        zs.append(np.broadcast_to(zv, (runs, *zv.shape[1:])))
+        r_diag += [float(sigma_vel) ** 2] * 2
+    return np.concatenate(zs, axis=-1), np.diag(r_diag)
+
+
+def initial_cov(n: int, p0_cov, v0_cov, blocks: dict[int, np.ndarray]) -> np.ndarray:
+    """P0 (n, n): position (m²) and velocity ((m/s)²) blocks first, then each square block
+    of ``blocks`` at its start index (the calibration's, a heading variance, …)."""
+    P0 = np.zeros((n, n))
+    P0[:2, :2] = cov2(p0_cov, "p0_cov")
+    P0[2:4, 2:4] = cov2(v0_cov, "v0_cov")
+    for i, b in blocks.items():
+        b = np.atleast_2d(np.asarray(b, dtype=float))
+        P0[i:i + b.shape[0], i:i + b.shape[0]] = b
+    return P0
+
+
+class LinearStep:
+    """The course vehicle's step (module docstring): ``step(k, x, F, Qk)`` moves the means
+    ``x`` (R, n) from node k-1 to node k in place and fills the step Jacobian ``F`` and the
+    process noise ``Qk`` (R, n, n) (entries it does not write stay as :func:`run_filter`
+    set them: identity, zeros)."""
+
+    def __init__(self, nodes: np.ndarray, hold: np.ndarray, acc: np.ndarray,
+                 cal: CalibrationPrior, noise_var: np.ndarray, estimate_scale: bool) -> None:
+        self.nodes, self.hold, self.acc, self.scale = nodes, hold, acc, cal.scale
+        self.sa2, self.estimate_scale = noise_var, estimate_scale
+        self.ss2 = np.zeros(2) if estimate_scale else cal.scale_var
+
+    def __call__(self, k: int, x: np.ndarray, F: np.ndarray, Qk: np.ndarray) -> None:
+        ax = np.arange(2)
+        h = self.nodes[k] - self.nodes[k - 1]
+        A = self.acc[:, self.hold[k - 1], :]
+        s_hat = x[:, 6:8] if self.estimate_scale else self.scale
+        c = 1.0 / (1.0 + s_hat)  # (R, 2) or (2,)
+        a = (A - x[:, 4:6]) * c
+        # Jacobian of the step (exact for b; linearised for s).
+        F[:, ax, ax + 2] = h
+        F[:, ax, ax + 4] = -0.5 * h * h * c
+        F[:, ax + 2, ax + 4] = -h * c
+        if self.estimate_scale:
+            F[:, ax, ax + 6] = -0.5 * h * h * a * c
+            F[:, ax + 2, ax + 6] = -h * a * c
+        q = (self.sa2 + self.ss2 * a * a) * c * c  # (R, 2): (σ_a² + σ_s² â²)/(1+ŝ)²
+        g1, g2 = 0.5 * h * h, h
+        Qk[:, ax, ax] = q * g1 * g1
+        Qk[:, ax, ax + 2] = Qk[:, ax + 2, ax] = q * g1 * g2
+        Qk[:, ax + 2, ax + 2] = q * g2 * g2
+        x[:, 0:2] += x[:, 2:4] * h + a * g1
+        x[:, 2:4] += a * h
+
+
+def run_filter(step, x0: np.ndarray, P0: np.ndarray, fixi: np.ndarray, Z: np.ndarray,
+               Rm: np.ndarray, keep: str, smoother: bool
+               ) -> tuple[NodeStore, np.ndarray, np.ndarray]:
+    """The predict/update loop both filters share, over K nodes for R runs at once.
+
+    ``step(k, x, F, Qk)`` predicts from node k-1 to node k (:class:`LinearStep`, the turning
+    filter's step); then ``P⁻ = F P Fᵀ + Qk``; at a node with a fix (``fixi[k] ≥ 0``) the
+    Joseph-form update :func:`kalman_update` with ``H = [I_d 0]`` (the fixes measure the
+    first d states: positions, then velocities) and ``Rm``. Returns the stored nodes
+    (:class:`NodeStore`), the innovations (R, M, d) and their covariances (R, M, d, d).
+    """
+    Rn, M, d = Z.shape
+    n = x0.shape[0]
+    H = np.zeros((d, n))
+    H[:, :d] = np.eye(d)
     kept = NodeStore(fixi, keep, Rn, n, smoother)
     x = np.broadcast_to(x0, (Rn, n)).copy()
     P = np.broadcast_to(P0, (Rn, n, n)).copy()
-    M = t_gps.shape[0]
     nu = np.empty((Rn, M, d))
     S_all = np.empty((Rn, M, d, d))
-    F = np.broadcast_to(np.eye(n), (Rn, n, n)).copy()
+    F = kept.identity()
     Qk = np.zeros((Rn, n, n))
-    ax = np.arange(2)
-    for k in range(K_nodes):
+    for k in range(fixi.shape[0]):
         if k > 0:
-            h = nodes[k] - nodes[k - 1]
-            A = acc[:, hold[k - 1], :]
-            s_hat = x[:, 6:8] if estimate_scale else scale
-            c = 1.0 / (1.0 + s_hat)  # (R, 2) or (2,)
-            a = (A - x[:, 4:6]) * c
-            # Jacobian of the step (exact for b; linearised for s).
-            F[:, ax, ax + 2] = h
-            F[:, ax, ax + 4] = -0.5 * h * h * c
-            F[:, ax + 2, ax + 4] = -h * c
-            if estimate_scale:
-                F[:, ax, ax + 6] = -0.5 * h * h * a * c
-                F[:, ax + 2, ax + 6] = -h * a * c
-            q = (sa2 + ss2 * a * a) * c * c  # (R, 2): (σ_a² + σ_s² â²)/(1+ŝ)²
-            g1, g2 = 0.5 * h * h, h
-            Qk[:, ax, ax] = q * g1 * g1
-            Qk[:, ax, ax + 2] = Qk[:, ax + 2, ax] = q * g1 * g2
-            Qk[:, ax + 2, ax + 2] = q * g2 * g2
-            x[:, 0:2] += x[:, 2:4] * h + a * g1
-            x[:, 2:4] += a * h
+            step(k, x, F, Qk)
             P = F @ P @ F.transpose(0, 2, 1) + Qk
             kept.step(F)
         xp, Pp = x.copy(), P.copy()
@@ -376,17 +473,18 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
         if m >= 0:
             x, P, nu[:, m], S_all[:, m] = kalman_update(x, P, Z[:, m, :], H, Rm)
         kept.keep(k, x, P, xp, Pp)
+    return kept, nu, S_all
 
+
+def filter_outputs(kept: NodeStore, nu: np.ndarray, S_all: np.ndarray, batched: bool) -> dict:
+    """The per-node fields of a :class:`FusionResult` (filtered, innovations, smoothed),
+    without the run axis for a single run."""
     xsm, Psm = kept.smoothed()
-    dt = float(np.median(np.diff(t)))
-    Qnom = nominal_q(n, sa2, 1.0 / (1.0 + scale), dt)
-    out = [kept.x_f, kept.P_f, nu, S_all, xsm, Psm]
+    out = {"estimates": kept.x_f, "covariances": kept.P_f, "innovations": nu,
+           "innovation_covs": S_all, "smoothed": xsm, "smoothed_covariances": Psm}
     if not batched:
-        out = [o[0] for o in out]
-    names = STATE_NAMES + (SCALE_NAMES if estimate_scale else ())
-    st = kept.store
-    return FusionResult(names, nodes[st], out[0], out[1], fixi[st] >= 0, t_gps, out[2],
-                        out[3], out[4], out[5], P0, Qnom, Rm, sa2, estimate_scale, dt)
+        out = {k: v[0] for k, v in out.items()}
+    return {**out, "is_fix": kept.is_fix}
 
 
 class NodeStore:
@@ -407,6 +505,7 @@ class NodeStore:
         else:
             raise ValueError(f"keep must be 'all' or 'fixes', got {keep!r}")
         self.store, self.smoother, self.runs, self.n = store, smoother, runs, n
+        self.is_fix = fixi[store] >= 0
         n_store = int(store.sum())
         n_prior = n_store if smoother else 1  # priors and Φ only for the smoother
         self.x_f, self.P_f = np.empty((runs, n_store, n)), np.empty((runs, n_store, n, n))
@@ -513,5 +612,7 @@ def rts(x_f, P_f, x_p, P_p, Phi):
     return xs, Ps
 
 
-__all__ = ["CAL_ORDER", "FusionResult", "SCALE_NAMES", "STATE_NAMES", "fuse", "kalman_update",
-           "rts"]
+__all__ = ["CAL_ORDER", "CalibrationLike", "CalibrationPrior", "FusionResult", "LinearStep",
+           "NodeStore", "SCALE_NAMES", "STATE_NAMES", "as_runs", "check_times", "cov2",
+           "filter_outputs", "fix_measurements", "fuse", "initial_cov", "kalman_update",
+           "nominal_q", "rts", "run_filter"]

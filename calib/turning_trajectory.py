@@ -43,9 +43,9 @@ import numpy as np
 
 from calib.correct import correct
 from calib.fusion_turning import body_to_world, fuse_turning
-from calib.region import Ellipse, decide, squared_distances
+from calib.region import Decision, Ellipse
 from calib.results import ResultMixin
-from calib.trajectory import Integrator, _check_integrator, cumulative_integral, integrate_twice
+from calib.trajectory import Integrator, check_integrator, cumulative_integral, integrate_twice
 
 
 @dataclass(frozen=True, eq=False)
@@ -148,7 +148,7 @@ def turning_dead_reckoning(t, acc_m, gyro, bias, scale, p0, v0, psi0: float = 0.
     p0 : (2,) m, v0 : (2,) m/s (world axes), psi0 : initial heading, rad.
     integrator : of the position and velocity, as :func:`calib.trajectory.integrate_twice`.
     """
-    _check_integrator(integrator)
+    check_integrator(integrator)
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or t.shape[0] < 3 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
         raise ValueError("t must be 1-D, finite, strictly increasing, with ≥ 3 samples")
@@ -232,6 +232,11 @@ class TurningRegion(ResultMixin):
         """(2,) standard deviation of the arrival point per axis, m."""
         return np.sqrt(np.diag(self.cov))
 
+    def as_decision(self) -> Decision:
+        """The decision part of this region (:class:`calib.region.Decision`)."""
+        return Decision(self.level, self.candidates, self.mahalanobis, self.likelihood,
+                        self.inside, self.decision, self.reason)
+
     def to_dict(self) -> dict:
         return {"final_position": self.estimate.tolist(), "cov": self.cov.tolist(),
                 "std": self.std.tolist(), "heading_std": self.heading_std,
@@ -294,14 +299,11 @@ def turning_arrival_region(traj: TurningTrajectory, acc_m, gyro, *, cal_cov, noi
     P = np.asarray(free.covariances, dtype=float)[-1]
     cov = 0.5 * (P[:2, :2] + P[:2, :2].T)
     est = traj.final_position
-    d2 = squared_distances(est, cov, candidates)
-    decision, inside, reason = decide(d2, level)
+    dec = Decision.at(est, cov, candidates, level)
     return TurningRegion(est, cov, float(np.sqrt(max(P[4, 4], 0.0))),
-                         np.asarray(free.final_position, dtype=float) - est, float(level),
-                         Ellipse.from_cov(est, cov, level), dict(candidates),
-                         {k: float(np.sqrt(v)) for k, v in d2.items()},
-                         {k: float(np.exp(-0.5 * v)) for k, v in d2.items()}, inside,
-                         decision, reason)
+                         np.asarray(free.final_position, dtype=float) - est, dec.level,
+                         Ellipse.from_cov(est, cov, level), dec.candidates, dec.mahalanobis,
+                         dec.likelihood, dec.inside, dec.letter, dec.reason)
 
 
 __all__ = ["TurningRegion", "TurningTrajectory", "dead_reckoning_path", "heading_error",
