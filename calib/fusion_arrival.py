@@ -156,7 +156,7 @@ def dead_reckoning_region(acel: Acel, calibration: Calibration,
     nv = stated_noise_var(noise_var, calibration)
     if acel.gyro is not None:
         traj = turning_dead_reckoning(acel.t, acel.aerr, acel.gyro, calibration.bias,
-                                      calibration.scale, p0, v0, psi0)
+                                      calibration.scale, p0, v0, psi0=psi0)
         return traj, turning_arrival_region(
             traj, acel.aerr, acel.gyro, cal_cov=calibration.cov, noise_var=nv,
             gyro_var=gyro_var, candidates=candidates, level=level, psi0_var=psi0_var,

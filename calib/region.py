@@ -50,7 +50,7 @@ bounds the calibration part only, with worst-case acceleration and a triangle in
 course draws the axis-aligned ellipse with semi-axes ``(δP_x, δP_y)`` around each candidate and
 decides when the estimate lies inside exactly one (:func:`course_decision`). On the course data
 this gives (25.63, 44.89) m. The report's δP_y = 45.18 m is reproduced with its code's
-correction ``(A_m - b)/(1 - s)`` (the bug named in DESIGN.md; a_max then differs); its
+correction ``(A_m - b)/(1 - s)`` (the bug named in docs/conventions.md; a_max then differs); its
 δP_x = 22.25 m does not follow from its own covariance and code (25.25 m) — a typo, probably.
 """
 
@@ -361,7 +361,7 @@ class Ellipse(ResultMixin):
                 f"from +x, area {self.area:.0f} m²")
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class ArrivalRegion(ResultMixin):
     """Arrival point, its covariance, the confidence region and the decision.
 

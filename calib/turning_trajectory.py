@@ -37,7 +37,7 @@ max_j |a_j - a_0| / 2`` — centimetres over the course's 60 s at 100 Hz.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -48,7 +48,7 @@ from calib.results import ResultMixin
 from calib.trajectory import Integrator, check_integrator, cumulative_integral, integrate_twice
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class TurningTrajectory(ResultMixin):
     """Dead reckoning of a turning vehicle (module docstring).
 
@@ -121,8 +121,7 @@ class TurningTrajectory(ResultMixin):
         """Rebuild from :meth:`to_state` (exact); :meth:`to_dict` alone has no samples."""
         if not all(k in d for k in cls._ARRAYS):
             raise ValueError("this mapping has no samples; rebuild from to_state()")
-        return cls(d["t"], d["heading"], d["acc_body"], d["acc_world"], d["pos"], d["vel"],
-                   d["p0"], d["v0"], d["psi0"], d["bias"], d["scale"], d["integrator"])
+        return cls(**{f.name: d[f.name] for f in fields(cls)})
 
     def summary(self) -> str:
         fp, fv = self.pos[-1], self.vel[-1]
@@ -137,7 +136,7 @@ class TurningTrajectory(ResultMixin):
         ])
 
 
-def turning_dead_reckoning(t, acc_m, gyro, bias, scale, p0, v0, psi0: float = 0.0,
+def turning_dead_reckoning(t, acc_m, gyro, bias, scale, p0, v0, *, psi0: float = 0.0,
                            integrator: Integrator = "trapezoid") -> TurningTrajectory:
     """Dead reckoning of a turning vehicle (module docstring for the equations).
 
@@ -168,8 +167,9 @@ def turning_dead_reckoning(t, acc_m, gyro, bias, scale, p0, v0, psi0: float = 0.
     a_b = correct(acc_m, bias, scale)
     a_w = body_to_world(psi, a_b)
     pos, vel = integrate_twice(t, a_w, p0, v0, integrator)
-    return TurningTrajectory(t, psi, a_b, a_w, pos, vel, p0, v0, psi0, bias, scale,
-                             integrator)
+    return TurningTrajectory(t=t, heading=psi, acc_body=a_b, acc_world=a_w, pos=pos, vel=vel,
+                             p0=p0, v0=v0, psi0=psi0, bias=bias, scale=scale,
+                             integrator=integrator)
 
 
 def heading_error(t, psi, t_ref, psi_ref) -> np.ndarray:
@@ -187,7 +187,7 @@ def dead_reckoning_path(traj) -> np.ndarray:
     return traj.pos if isinstance(traj, TurningTrajectory) else traj.pos_corrected
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class TurningRegion(ResultMixin):
     """Level-L arrival region of a turning dead reckoning (module docstring, "Arrival region").
 
@@ -256,12 +256,13 @@ class TurningRegion(ResultMixin):
     def from_dict(cls, d: dict) -> TurningRegion:
         """Rebuild from :meth:`to_dict` (exact)."""
         c = d["candidates"]
-        return cls(d["final_position"], d["cov"], float(d["heading_std"]), d["ekf_offset"],
-                   float(d["level"]), Ellipse.from_dict(d["ellipse"]),
-                   {k: v["pos"] for k, v in c.items()},
-                   {k: float(v["mahalanobis"]) for k, v in c.items()},
-                   {k: float(v["likelihood"]) for k, v in c.items()}, tuple(d["inside"]),
-                   d["decision"], d["reason"])
+        return cls(estimate=d["final_position"], cov=d["cov"],
+                   heading_std=float(d["heading_std"]), ekf_offset=d["ekf_offset"],
+                   level=float(d["level"]), ellipse=Ellipse.from_dict(d["ellipse"]),
+                   candidates={k: v["pos"] for k, v in c.items()},
+                   mahalanobis={k: float(v["mahalanobis"]) for k, v in c.items()},
+                   likelihood={k: float(v["likelihood"]) for k, v in c.items()},
+                   inside=tuple(d["inside"]), decision=d["decision"], reason=d["reason"])
 
     def summary(self) -> str:
         e, sd = self.ellipse, self.std
@@ -300,10 +301,12 @@ def turning_arrival_region(traj: TurningTrajectory, acc_m, gyro, *, cal_cov, noi
     cov = 0.5 * (P[:2, :2] + P[:2, :2].T)
     est = traj.final_position
     dec = Decision.at(est, cov, candidates, level)
-    return TurningRegion(est, cov, float(np.sqrt(max(P[4, 4], 0.0))),
-                         np.asarray(free.final_position, dtype=float) - est, dec.level,
-                         Ellipse.from_cov(est, cov, level), dec.candidates, dec.mahalanobis,
-                         dec.likelihood, dec.inside, dec.letter, dec.reason)
+    return TurningRegion(estimate=est, cov=cov, heading_std=float(np.sqrt(max(P[4, 4], 0.0))),
+                         ekf_offset=np.asarray(free.final_position, dtype=float) - est,
+                         level=dec.level, ellipse=Ellipse.from_cov(est, cov, level),
+                         candidates=dec.candidates, mahalanobis=dec.mahalanobis,
+                         likelihood=dec.likelihood, inside=dec.inside, decision=dec.letter,
+                         reason=dec.reason)
 
 
 __all__ = ["TurningRegion", "TurningTrajectory", "dead_reckoning_path", "heading_error",
