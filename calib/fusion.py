@@ -202,7 +202,16 @@ class FusionResult(ResultMixin):
 
     @classmethod
     def from_dict(cls, d: dict) -> FusionResult:
-        return cls(**{f.name: d[f.name] for f in fields(cls)})
+        """Rebuild from :meth:`to_dict` (exact, also through JSON, which keeps no shape for
+        the empty smoothed or innovation arrays: they get theirs back here)."""
+        kw = {f.name: d[f.name] for f in fields(cls)}
+        est = np.asarray(kw["estimates"], dtype=float)
+        runs, n, dm = est.shape[:-2], est.shape[-1], np.shape(kw["R"])[0]
+        for name, shape in (("smoothed", (0, n)), ("smoothed_covariances", (0, n, n)),
+                            ("innovations", (0, dm)), ("innovation_covs", (0, dm, dm))):
+            if not np.size(kw[name]):
+                kw[name] = np.zeros((*runs, *shape))
+        return cls(**kw)
 
     def summary(self) -> str:
         def mat(name: str, m: np.ndarray, unit: str) -> list[str]:
