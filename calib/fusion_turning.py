@@ -38,8 +38,8 @@ where Q gives ``σ_g² h² N`` — conservative by half a step. No gyro bias is 
 bench's gyro has none; a real one would add ``bg`` to the state).
 
 P0 = blockdiag(P_p0, P_v0, σ_ψ0², the bias block of the calibration covariance); R = σ_pos² I
-from the receiver. The update is :func:`calib.fusion.kalman_update` (Joseph form) with
-``H = [I₂ 0]``, the smoother :func:`calib.fusion.rts` on the products ``Φ`` of the step
+from the receiver. The update is :func:`calib.kalman.kalman_update` (Joseph form) with
+``H = [I₂ 0]``, the smoother :func:`calib.kalman.rts` on the products ``Φ`` of the step
 Jacobians evaluated at the filtered estimates (an extended RTS smoother).
 
 Fixes must fall on IMU sample times (the bench's receiver puts them there): the heading's
@@ -51,7 +51,8 @@ filterpy 2.0.0's ``ExtendedKalmanFilter`` and ``UnscentedKalmanFilter`` run one 
 time, a Python call per step (3000 steps × 500 Monte Carlo runs = 1.5·10⁶ predict calls, plus
 an ``sigma_points`` loop for the UKF), and its ``rts_smoother`` is for the linear filter
 without a control input (see :mod:`calib.fusion`). This module steps R runs at once as
-(R, n, n) arrays, like :func:`calib.fusion.fuse`.
+(R, n, n) arrays, like :func:`calib.fusion.fuse`, in the loop they share
+(:func:`calib.kalman.run_filter`).
 """
 
 from __future__ import annotations
@@ -60,10 +61,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from calib.fusion import (
+from calib.fusion import FusionResult
+from calib.kalman import (
     CalibrationLike,
     CalibrationPrior,
-    FusionResult,
     as_runs,
     check_times,
     filter_outputs,
@@ -205,7 +206,7 @@ def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, noise_var, gyro_var, sigma_p
 
 
 class TurningStep:
-    """The turning vehicle's step (module docstring), for :func:`calib.fusion.run_filter`:
+    """The turning vehicle's step (module docstring), for :func:`calib.kalman.run_filter`:
     ``step(k, x, F, Qk)`` moves ``x`` (R, 7) from sample k-1 to k in place and fills the
     Jacobian ``F`` and the process noise ``Qk`` (R, 7, 7)."""
 

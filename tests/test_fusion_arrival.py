@@ -10,10 +10,11 @@ import numpy as np
 import pytest
 
 from calib.calibration import calibrate
-from calib.fusion import CalibrationPrior, fuse
+from calib.fusion import fuse
 from calib.fusion_arrival import FusedArrival, dead_reckoning_region, fuse_arrival
 from calib.fusion_turning import fuse_turning
 from calib.io import Acel, Ensayo, Fixes
+from calib.kalman import CalibrationPrior
 from calib.nmin import VehicleCase
 from calib.region import Decision, arrival_region, decide, squared_distances, stated_noise_var
 from calib.trajectory import compute_trajectory
