@@ -45,10 +45,10 @@ Numbers per method and scenario (:class:`StudyRow`)
   (:meth:`calib.region.Ellipse.area`), m².
 * ``nees``: mean over runs of the final-position NEES ``eᵀ P⁻¹ e`` (2 dof); if the stated P is
   right, R·NEES ~ χ²(2R), and the band is its two-sided quantiles at α = 6.3e-5 (≈ ±4σ,
-  STYLE.md); ``nees_ok``: inside. ``coverage``: share of runs whose true end point is inside
-  the level-L ellipse, with the exact Binomial(R, L) band at the same α. The smoother's last
-  node is the filter's (no later data), so its NEES and coverage repeat the filter's; it
-  differs along the path (RMS).
+  docs/conventions.md); ``nees_ok``: inside. ``coverage``: share of runs whose true end point
+  is inside the level-L ellipse, with the exact Binomial(R, L) band at the same α. The
+  smoother's last node is the filter's (no later data), so its NEES and coverage repeat the
+  filter's; it differs along the path (RMS).
 
 * NEES **along the path** (filter, smoother, fixes; not computed for dead reckoning, whose
   stated covariance comes at the end point only): at every fix epoch t_j (j = 1..M; the

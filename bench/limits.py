@@ -70,19 +70,36 @@ class SizeError(ValueError):
 
 
 def available_memory() -> int:
-    """Memory a new allocation can get without swapping, bytes: ``MemAvailable`` of
-    ``/proc/meminfo`` (Linux), else the physical memory (``sysconf``)."""
+    """Memory a new allocation can get without swapping, bytes — the one home of this
+    estimate (the size checks of every command use it): ``MemAvailable`` of
+    ``/proc/meminfo`` (Linux), else the free physical pages (``SC_AVPHYS_PAGES``), else all
+    physical pages, capped by a cgroup v2 ``memory.max`` (a container's limit); 8 GiB when
+    the system says nothing (assume a small machine)."""
+    avail = None
     try:
         with open("/proc/meminfo", encoding="ascii") as f:
             for line in f:
                 if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
+                    avail = int(line.split()[1]) * 1024
+                    break
     except (OSError, ValueError, IndexError):
         pass
+    for pages in ("SC_AVPHYS_PAGES", "SC_PHYS_PAGES"):
+        if avail is not None:
+            break
+        try:
+            avail = int(os.sysconf(pages) * os.sysconf("SC_PAGE_SIZE"))
+        except (OSError, ValueError, AttributeError):
+            pass
+    if avail is None:
+        avail = 8 * GIB
     try:
-        return int(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
-    except (OSError, ValueError, AttributeError):
-        return 8 * GIB  # no way to ask: assume a small machine
+        cap = Path("/sys/fs/cgroup/memory.max").read_text().strip()
+        if cap.isdigit():
+            avail = min(avail, int(cap))
+    except OSError:
+        pass
+    return avail
 
 
 def gib(n: float) -> str:

@@ -57,7 +57,7 @@ class SensorContext:
 class ErrorTerm(Protocol):
     """One additional error term of the accelerometer model."""
 
-    name: ClassVar[str]  # effect vocabulary name (DESIGN.md), e.g. "nonlinearity_k2"
+    name: ClassVar[str]  # effect vocabulary name (docs/effects.md), e.g. "nonlinearity_k2"
     stage: ClassVar[Stage]
 
     def apply(self, a: np.ndarray, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:

@@ -37,7 +37,6 @@ from __future__ import annotations
 import functools
 import json
 import math
-import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,6 +45,7 @@ from typing import Any, Literal
 import numpy as np
 from scipy import stats
 
+from bench.limits import available_memory
 from calib.conventions import AXES, JOINT_PARAM_NAMES, G, reference_accel
 from calib.io import DataError
 from calib.results import ResultMixin
@@ -323,30 +323,6 @@ BYTES_PER_SAMPLE = 160
 ``tracemalloc`` at N = 10⁶: 159 B for a static range, 152 B for a sweep)."""
 
 
-def available_memory() -> int | None:
-    """Bytes this process can still allocate: ``MemAvailable`` of ``/proc/meminfo`` (else
-    ``SC_AVPHYS_PAGES × SC_PAGE_SIZE``), capped by a cgroup ``memory.max``; None if unknown."""
-    avail = None
-    try:
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemAvailable:"):
-                avail = int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    if avail is None:
-        try:
-            avail = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-        except (ValueError, OSError, AttributeError):
-            return None
-    try:
-        cap = Path("/sys/fs/cgroup/memory.max").read_text().strip()
-        if cap.isdigit():
-            avail = min(avail, int(cap))
-    except OSError:
-        pass
-    return avail
-
-
 def design_size(truth: Mapping, name: str = "truth.json") -> tuple[int, str]:
     """Sample count N of the design in ``truth.json`` and the field it comes from, computed
     without building θ. :class:`DataError` when there is no design."""
@@ -373,7 +349,7 @@ def design_size(truth: Mapping, name: str = "truth.json") -> tuple[int, str]:
 
 def _check_memory(n: int, label: str, name: str) -> None:
     need, avail = n * BYTES_PER_SAMPLE, available_memory()
-    if avail is not None and need > avail:
+    if need > avail:
         raise DataError(f"{name}: {label} means {n:,} samples; rebuilding θ and its design "
                         f"covariance needs {need / 2**30:,.1f} GiB, this machine has "
                         f"{avail / 2**30:,.1f} GiB available")
@@ -515,7 +491,7 @@ def std_ratio_limits(n: int, p: int = 2) -> tuple[float, float]:
     return min(lo, 1 / STD_FACTOR), max(hi, STD_FACTOR)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class Validation(ResultMixin):
     """Result of :func:`validate`.
 
@@ -633,10 +609,13 @@ class Validation(ResultMixin):
         sc = d.get("std_check")
         ratio = None if sc is None else np.array([sc["ratio"][n] for n in names], dtype=float)
         limits = None if sc is None else (float(sc["limits"][0]), float(sc["limits"][1]))
-        return cls(names, col("estimate"), col("truth"), std, cov, col("z"), float(d["level"]),
-                   float(d["z_limit"]), float(d["chi2"]), float(d["chi2_limit"]),
-                   col("passed", bool), bool(d["passed"]), d["std_source"], d["theta_source"],
-                   ratio, limits, None if sc is None else bool(sc["passed"]))
+        return cls(names=names, estimate=col("estimate"), truth=col("truth"), std=std, cov=cov,
+                   z=col("z"), level=float(d["level"]), quantile=float(d["z_limit"]),
+                   chi2=float(d["chi2"]), chi2_limit=float(d["chi2_limit"]),
+                   passed_each=col("passed", bool), passed=bool(d["passed"]),
+                   std_source=d["std_source"], theta_source=d["theta_source"],
+                   std_ratio=ratio, std_limits=limits,
+                   std_passed=None if sc is None else bool(sc["passed"]))
 
     def summary(self) -> str:
         pct = f"{100 * self.level:g}%"
@@ -759,9 +738,11 @@ def validate(truth: Mapping, estimates: Mapping, level: float = 0.99,
         ratio = std / np.sqrt(np.diag(dc))
         limits = std_ratio_limits(n)
         std_ok = bool(np.all((ratio >= limits[0]) & (ratio <= limits[1])))
-    return Validation(JOINT_PARAM_NAMES, est["params"], p_true, std, cov, z, float(level), q,
-                      d2, lim, np.abs(z) <= q, d2 <= lim and std_ok is not False, src, t_src,
-                      ratio, limits, std_ok)
+    return Validation(names=JOINT_PARAM_NAMES, estimate=est["params"], truth=p_true, std=std,
+                      cov=cov, z=z, level=float(level), quantile=q, chi2=d2, chi2_limit=lim,
+                      passed_each=np.abs(z) <= q, passed=d2 <= lim and std_ok is not False,
+                      std_source=src, theta_source=t_src, std_ratio=ratio, std_limits=limits,
+                      std_passed=std_ok)
 
 
 class _NoDesignError(DataError):

@@ -5,8 +5,8 @@ truth, P the stated covariance, ``dof`` = len(e)): χ²(dof) when P is right and
 Gaussian. Over R independent runs ``R · mean(d²) ~ χ²(dof·R)``, and the number of runs whose
 truth is inside the level-L region is Binomial(R, L). The bands below are the exact two-sided
 quantiles of those laws at ``alpha`` (mass ``alpha/2`` each side; default :data:`NEES_ALPHA`,
-the mass outside ±4σ of a normal, STYLE.md), divided by R: a consistent estimator leaves a
-band with probability ≤ ``alpha``.
+the mass outside ±4σ of a normal, docs/conventions.md), divided by R: a consistent estimator
+leaves a band with probability ≤ ``alpha``.
 
 Along a path (the same R runs judged at M epochs, or T tests in all) the band of each test is
 taken at ``alpha/T`` (Bonferroni): a consistent filter then has every test inside with

@@ -40,6 +40,8 @@ import numpy as np
 from scipy import stats
 from scipy.special import log_ndtr, ndtri_exp
 
+from calib.numerics import equilibrated_cond
+
 LN2 = float(np.log(2.0))
 LOGP_FLOOR = -1.0e4
 """log p-values are floored here (z ≈ 141) so every z stays finite and JSON-friendly."""
@@ -241,7 +243,7 @@ def flat_top_score(resid_w: np.ndarray, design_w: np.ndarray | None,
     h = np.asarray(hinges_w, dtype=float)
     if design_w is not None and design_w.size:
         q, r = np.linalg.qr(design_w)
-        if _equilibrated_cond(r) * max(q.shape) * np.finfo(float).eps >= 1.0:
+        if equilibrated_cond(r) * max(q.shape) * np.finfo(float).eps >= 1.0:
             q = _range_basis(np.asarray(design_w, dtype=float))
         h = h - q @ (q.T @ h)
     norms = np.linalg.norm(h, axis=0)
@@ -252,16 +254,6 @@ def flat_top_score(resid_w: np.ndarray, design_w: np.ndarray | None,
     z = (resid_w @ h[:, ok]) / norms[ok]
     m, _, logp = davies_logp(z)
     return m, logp
-
-
-def _equilibrated_cond(r: np.ndarray) -> float:
-    """Condition number of a design with unit-norm columns from its R factor (inf if
-    singular)."""
-    norms = np.linalg.norm(r, axis=0)
-    if np.any(norms == 0) or not np.all(np.isfinite(r)):
-        return float("inf")
-    s = np.linalg.svd(r / norms, compute_uv=False)
-    return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
 
 
 def _range_basis(d: np.ndarray) -> np.ndarray:

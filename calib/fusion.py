@@ -38,17 +38,9 @@ variance, P0 from the stated initial uncertainty and the calibration, R from the
 Fixes come at their own times ``t_gps`` (asynchronous): the timeline is the union of the IMU
 times and the fix times; a fix inside ``(t_k, t_k+1)`` splits that step in two with the same
 held reading (the two parts are given independent noise: an approximation of order
-``σ_a² h⁴``, 1e-8 m² at 50 Hz). Update (Joseph form, symmetric for any gain)::
-
-    ν = z - H x⁻,   S = H P⁻ Hᵀ + R,   K = P⁻ Hᵀ S⁻¹,
-    x⁺ = x⁻ + K ν,  P⁺ = (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ
-
-Rauch–Tung–Striebel smoother, backwards over the stored nodes (``Φ_j`` the product of the
-step Jacobians between stored nodes j and j+1; exact on any subset of nodes that includes
-every fix, since no information enters between them)::
-
-    C_j = P⁺_j Φ_jᵀ (P⁻_j+1)⁻¹,  xˢ_j = x⁺_j + C_j (xˢ_j+1 - x⁻_j+1),
-    Pˢ_j = P⁺_j + C_j (Pˢ_j+1 - P⁻_j+1) C_jᵀ
+``σ_a² h⁴``, 1e-8 m² at 50 Hz). The update at a fix (Joseph form) and the Rauch–Tung–Striebel
+smoother over the stored nodes are those of :mod:`calib.kalman`, which runs this model's step
+(:class:`LinearStep`) in the loop both filters share.
 
 Why numpy and not filterpy
 --------------------------
@@ -63,43 +55,31 @@ where this module steps all runs at once as (R, n, n) arrays (a Monte Carlo of 5
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
+from calib.kalman import (
+    CAL_ORDER,
+    CalibrationLike,
+    CalibrationPrior,
+    as_runs,
+    check_times,
+    filter_outputs,
+    fix_measurements,
+    initial_cov,
+    kalman_update,
+    nominal_q,
+    rts,
+    run_filter,
+)
 from calib.results import ResultMixin, readonly
 
 STATE_NAMES = ("px", "py", "vx", "vy", "bx", "by")
 SCALE_NAMES = ("sx", "sy")
-CAL_ORDER = ("bias_x", "scale_x", "bias_y", "scale_y")
-"""Order of the calibration covariance (:class:`calib.calibration.Calibration.cov`)."""
 
 
-def _as_runs(a, width: int, name: str) -> tuple[np.ndarray, bool]:
-    a = np.asarray(a, dtype=float)
-    batched = a.ndim == 3
-    if a.ndim == 2:
-        a = a[None]
-    if a.ndim != 3 or a.shape[-1] != width:
-        raise ValueError(f"{name} must be (N, {width}) or (R, N, {width}), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} has NaN or Inf: remove or interpolate those samples")
-    return a, batched
-
-
-def _cov2(v, name: str) -> np.ndarray:
-    v = np.asarray(v, dtype=float)
-    if v.ndim == 0:
-        return np.eye(2) * v
-    if v.shape == (2,):
-        return np.diag(v)
-    if v.shape == (2, 2):
-        return v
-    raise ValueError(f"{name} must be a variance, two variances or a (2, 2) matrix, "
-                     f"got shape {v.shape}")
-
-
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class FusionResult(ResultMixin):
     """Kalman filter (and smoother) estimates of one run or of R runs at once.
 
@@ -199,10 +179,16 @@ class FusionResult(ResultMixin):
 
     @classmethod
     def from_dict(cls, d: dict) -> FusionResult:
-        return cls(tuple(d["state_names"]), d["times"], d["estimates"], d["covariances"],
-                   d["is_fix"], d["t_gps"], d["innovations"], d["innovation_covs"],
-                   d["smoothed"], d["smoothed_covariances"], d["P0"], d["Q"], d["R"],
-                   d["noise_var"], d["estimate_scale"], d["dt"])
+        """Rebuild from :meth:`to_dict` (exact, also through JSON, which keeps no shape for
+        the empty smoothed or innovation arrays: they get theirs back here)."""
+        kw = {f.name: d[f.name] for f in fields(cls)}
+        est = np.asarray(kw["estimates"], dtype=float)
+        runs, n, dm = est.shape[:-2], est.shape[-1], np.shape(kw["R"])[0]
+        for name, shape in (("smoothed", (0, n)), ("smoothed_covariances", (0, n, n)),
+                            ("innovations", (0, dm)), ("innovation_covs", (0, dm, dm))):
+            if not np.size(kw[name]):
+                kw[name] = np.zeros((*runs, *shape))
+        return cls(**kw)
 
     def summary(self) -> str:
         def mat(name: str, m: np.ndarray, unit: str) -> list[str]:
@@ -249,9 +235,10 @@ def _timeline(t: np.ndarray, t_gps: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     return nodes, hold, fix
 
 
-def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos,
-         p0, v0, p0_cov, v0_cov, vel_gps=None, sigma_vel=None, estimate_scale=False,
-         smoother=False, keep="all") -> FusionResult:
+def fuse(t, acc_m, t_gps, pos_gps, *, noise_var, sigma_pos, p0, v0, p0_cov, v0_cov,
+         calibration: CalibrationLike | None = None, bias=None, scale=None, cal_cov=None,
+         vel_gps=None, sigma_vel=None, estimate_scale=False, smoother=False,
+         keep="all") -> FusionResult:
     """Kalman filter (and RTS smoother) of accelerometer readings with position fixes.
 
     Parameters
@@ -261,8 +248,10 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
         runs on the same times (Monte Carlo).
     t_gps : (M,) fix times, s, strictly increasing, within ``[t_0, t_N-1]``.
     pos_gps : (M, 2) or (R, M, 2) position fixes, m.
-    bias : (2,) m/s² and scale : (2,) dimensionless, the calibration estimate.
-    cal_cov : (4, 4) its covariance, order ``[bias_x, scale_x, bias_y, scale_y]``.
+    calibration : the calibration (a :class:`calib.calibration.Calibration`, or anything with
+        ``bias`` (2,) m/s², ``scale`` (2,) dimensionless and ``cov`` (4, 4) in the order
+        ``[bias_x, scale_x, bias_y, scale_y]``); or give those three as ``bias``, ``scale``
+        and ``cal_cov``.
     noise_var : σ_a², variance of each reading's white noise, (2,) (m/s²)² or a scalar.
     sigma_pos : σ of each position fix coordinate, m.
     p0 : (2,) m, v0 : (2,) m/s initial estimate; p0_cov, v0_cov : their covariances (scalar,
@@ -293,225 +282,71 @@ def fuse(t, acc_m, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var, sigma_pos
     >>> bool(np.all(np.sqrt(np.diag(res.final_position_cov)) < 3.0))  # below one fix's σ
     True
     """
-    t = np.asarray(t, dtype=float)
-    if t.ndim != 1 or t.shape[0] < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
-        raise ValueError("t must be 1-D, finite, strictly increasing, with ≥ 2 samples")
-    acc, batched = _as_runs(acc_m, 2, "acc_m")
+    t = check_times(t, 2)
+    acc, batched = as_runs(acc_m, 2, "acc_m")
     if acc.shape[1] != t.shape[0]:
         raise ValueError(f"acc_m has {acc.shape[1]} samples for {t.shape[0]} times")
     t_gps = np.asarray(t_gps, dtype=float).reshape(-1)
     if np.any(np.diff(t_gps) <= 0) or (t_gps.size and (t_gps[0] < t[0] or t_gps[-1] > t[-1])):
         raise ValueError("t_gps must be strictly increasing and inside [t[0], t[-1]]")
-    zp, _ = _as_runs(pos_gps, 2, "pos_gps")
-    if zp.shape[1] != t_gps.shape[0]:
-        raise ValueError(f"pos_gps has {zp.shape[1]} fixes for {t_gps.shape[0]} times")
     Rn = acc.shape[0]
-    zs = [np.broadcast_to(zp, (Rn, *zp.shape[1:]))]
-    r_diag = [float(sigma_pos) ** 2] * 2
-    if vel_gps is not None:
-        zv, _ = _as_runs(vel_gps, 2, "vel_gps")
-        zs.append(np.broadcast_to(zv, (Rn, *zv.shape[1:])))
-        r_diag += [float(sigma_vel) ** 2] * 2
-    Z = np.concatenate(zs, axis=-1)  # (R, M, d)
-    d = Z.shape[-1]
-    Rm = np.diag(r_diag)
-
-    n = 8 if estimate_scale else 6
-    H = np.zeros((d, n))
-    H[:2, :2] = np.eye(2)
-    if d == 4:
-        H[2:4, 2:4] = np.eye(2)
-    bias = np.broadcast_to(np.asarray(bias, dtype=float), (2,))
-    scale = np.broadcast_to(np.asarray(scale, dtype=float), (2,))
-    cal_cov = np.asarray(cal_cov, dtype=float)
-    if cal_cov.shape != (4, 4):
-        raise ValueError(f"cal_cov must be (4, 4) in order {CAL_ORDER}, got {cal_cov.shape}")
+    Z, Rm = fix_measurements(pos_gps, t_gps.shape[0], Rn, sigma_pos, vel_gps, sigma_vel)
+    cal = CalibrationPrior.of(calibration, bias=bias, scale=scale, cal_cov=cal_cov)
     sa2 = np.broadcast_to(np.asarray(noise_var, dtype=float), (2,)).copy()
 
+    n = 8 if estimate_scale else 6
     # P0: position, velocity, then the calibration blocks (bias [0, 2], scale [1, 3]).
-    P0 = np.zeros((n, n))
-    P0[:2, :2] = _cov2(p0_cov, "p0_cov")
-    P0[2:4, 2:4] = _cov2(v0_cov, "v0_cov")
     cal_idx = [0, 2, 1, 3] if estimate_scale else [0, 2]
-    P0[4:, 4:] = cal_cov[np.ix_(cal_idx, cal_idx)]
-    ss2 = np.zeros(2) if estimate_scale else np.diag(cal_cov)[[1, 3]]
-    x0 = np.concatenate([p0, v0, bias] + ([scale] if estimate_scale else []))
+    P0 = initial_cov(n, p0_cov, v0_cov, {4: cal.cov[np.ix_(cal_idx, cal_idx)]})
+    x0 = np.concatenate([p0, v0, cal.bias] + ([cal.scale] if estimate_scale else []))
 
     nodes, hold, fixi = _timeline(t, t_gps)
-    K_nodes = nodes.shape[0]
-    kept = NodeStore(fixi, keep, Rn, n, smoother)
-    x = np.broadcast_to(x0, (Rn, n)).copy()
-    P = np.broadcast_to(P0, (Rn, n, n)).copy()
-    M = t_gps.shape[0]
-    nu = np.empty((Rn, M, d))
-    S_all = np.empty((Rn, M, d, d))
-    F = np.broadcast_to(np.eye(n), (Rn, n, n)).copy()
-    Qk = np.zeros((Rn, n, n))
-    ax = np.arange(2)
-    for k in range(K_nodes):
-        if k > 0:
-            h = nodes[k] - nodes[k - 1]
-            A = acc[:, hold[k - 1], :]
-            s_hat = x[:, 6:8] if estimate_scale else scale
-            c = 1.0 / (1.0 + s_hat)  # (R, 2) or (2,)
-            a = (A - x[:, 4:6]) * c
-            # Jacobian of the step (exact for b; linearised for s).
-            F[:, ax, ax + 2] = h
-            F[:, ax, ax + 4] = -0.5 * h * h * c
-            F[:, ax + 2, ax + 4] = -h * c
-            if estimate_scale:
-                F[:, ax, ax + 6] = -0.5 * h * h * a * c
-                F[:, ax + 2, ax + 6] = -h * a * c
-            q = (sa2 + ss2 * a * a) * c * c  # (R, 2): (σ_a² + σ_s² â²)/(1+ŝ)²
-            g1, g2 = 0.5 * h * h, h
-            Qk[:, ax, ax] = q * g1 * g1
-            Qk[:, ax, ax + 2] = Qk[:, ax + 2, ax] = q * g1 * g2
-            Qk[:, ax + 2, ax + 2] = q * g2 * g2
-            x[:, 0:2] += x[:, 2:4] * h + a * g1
-            x[:, 2:4] += a * h
-            P = F @ P @ F.transpose(0, 2, 1) + Qk
-            kept.step(F)
-        xp, Pp = x.copy(), P.copy()
-        m = fixi[k]
-        if m >= 0:
-            x, P, nu[:, m], S_all[:, m] = kalman_update(x, P, Z[:, m, :], H, Rm)
-        kept.keep(k, x, P, xp, Pp)
-
-    xsm, Psm = kept.smoothed()
+    step = LinearStep(nodes, hold, acc, cal, sa2, estimate_scale)
+    kept, nu, S_all = run_filter(step, x0, P0, fixi, Z, Rm, keep, smoother)
     dt = float(np.median(np.diff(t)))
-    Qnom = nominal_q(n, sa2, 1.0 / (1.0 + scale), dt)
-    out = [kept.x_f, kept.P_f, nu, S_all, xsm, Psm]
-    if not batched:
-        out = [o[0] for o in out]
     names = STATE_NAMES + (SCALE_NAMES if estimate_scale else ())
-    st = kept.store
-    return FusionResult(names, nodes[st], out[0], out[1], fixi[st] >= 0, t_gps, out[2],
-                        out[3], out[4], out[5], P0, Qnom, Rm, sa2, estimate_scale, dt)
+    return FusionResult(state_names=names, times=nodes[kept.store], t_gps=t_gps,
+                        **filter_outputs(kept, nu, S_all, batched), P0=P0,
+                        Q=nominal_q(n, sa2, 1.0 / (1.0 + cal.scale), dt), R=Rm, noise_var=sa2,
+                        estimate_scale=estimate_scale, dt=dt)
 
 
-class NodeStore:
-    """What a forward pass keeps at its stored nodes, for the result and the RTS smoother.
+class LinearStep:
+    """The course vehicle's step (module docstring): ``step(k, x, F, Qk)`` moves the means
+    ``x`` (R, n) from node k-1 to node k in place and fills the step Jacobian ``F`` and the
+    process noise ``Qk`` (R, n, n) (entries it does not write stay as
+    :func:`calib.kalman.run_filter` set them: identity, zeros)."""
 
-    ``keep="all"``: every node; ``"fixes"``: the fix nodes and the first and last. Kept per
-    stored node j: the filtered ``x⁺_j, P⁺_j``; with ``smoother``, also the prior
-    ``x⁻_j, P⁻_j`` and ``Φ_j``, the product of the step Jacobians since the previous stored
-    node (module docstring), reset after each stored node.
-    """
+    def __init__(self, nodes: np.ndarray, hold: np.ndarray, acc: np.ndarray,
+                 cal: CalibrationPrior, noise_var: np.ndarray, estimate_scale: bool) -> None:
+        self.nodes, self.hold, self.acc, self.scale = nodes, hold, acc, cal.scale
+        self.sa2, self.estimate_scale = noise_var, estimate_scale
+        self.ss2 = np.zeros(2) if estimate_scale else cal.scale_var
 
-    def __init__(self, fixi: np.ndarray, keep: str, runs: int, n: int, smoother: bool) -> None:
-        if keep == "all":
-            store = np.ones(fixi.shape[0], bool)
-        elif keep == "fixes":
-            store = fixi >= 0
-            store[0] = store[-1] = True
-        else:
-            raise ValueError(f"keep must be 'all' or 'fixes', got {keep!r}")
-        self.store, self.smoother, self.runs, self.n = store, smoother, runs, n
-        n_store = int(store.sum())
-        n_prior = n_store if smoother else 1  # priors and Φ only for the smoother
-        self.x_f, self.P_f = np.empty((runs, n_store, n)), np.empty((runs, n_store, n, n))
-        self.x_p, self.P_p = np.empty((runs, n_prior, n)), np.empty((runs, n_prior, n, n))
-        self.Phis = np.empty((runs, n_prior, n, n))
-        self.Phi = self.identity()
-        self.j = 0
-
-    def identity(self) -> np.ndarray:
-        """A fresh (R, n, n) stack of identities."""
-        return np.broadcast_to(np.eye(self.n), (self.runs, self.n, self.n)).copy()
-
-    def step(self, F: np.ndarray) -> None:
-        """Accumulate a step Jacobian into Φ (smoother only)."""
-        if self.smoother:
-            self.Phi = F @ self.Phi
-
-    def keep(self, k: int, x: np.ndarray, P: np.ndarray, xp: np.ndarray, Pp: np.ndarray
-             ) -> None:
-        """Node k's posterior (and prior): stored if node k is kept."""
-        if not self.store[k]:
-            return
-        j = self.j
-        if self.smoother:
-            self.x_p[:, j], self.P_p[:, j], self.Phis[:, j] = xp, Pp, self.Phi
-        self.x_f[:, j], self.P_f[:, j] = x, P
-        self.Phi = self.identity()
-        self.j += 1
-
-    def smoothed(self) -> tuple[np.ndarray, np.ndarray]:
-        """The RTS means and covariances at the stored nodes (empty without ``smoother``)."""
-        if not self.smoother:
-            return np.zeros((self.runs, 0, self.n)), np.zeros((self.runs, 0, self.n, self.n))
-        return rts(self.x_f, self.P_f, self.x_p, self.P_p, self.Phis)
+    def __call__(self, k: int, x: np.ndarray, F: np.ndarray, Qk: np.ndarray) -> None:
+        ax = np.arange(2)
+        h = self.nodes[k] - self.nodes[k - 1]
+        A = self.acc[:, self.hold[k - 1], :]
+        s_hat = x[:, 6:8] if self.estimate_scale else self.scale
+        c = 1.0 / (1.0 + s_hat)  # (R, 2) or (2,)
+        a = (A - x[:, 4:6]) * c
+        # Jacobian of the step (exact for b; linearised for s).
+        F[:, ax, ax + 2] = h
+        F[:, ax, ax + 4] = -0.5 * h * h * c
+        F[:, ax + 2, ax + 4] = -h * c
+        if self.estimate_scale:
+            F[:, ax, ax + 6] = -0.5 * h * h * a * c
+            F[:, ax + 2, ax + 6] = -h * a * c
+        q = (self.sa2 + self.ss2 * a * a) * c * c  # (R, 2): (σ_a² + σ_s² â²)/(1+ŝ)²
+        g1, g2 = 0.5 * h * h, h
+        Qk[:, ax, ax] = q * g1 * g1
+        Qk[:, ax, ax + 2] = Qk[:, ax + 2, ax] = q * g1 * g2
+        Qk[:, ax + 2, ax + 2] = q * g2 * g2
+        x[:, 0:2] += x[:, 2:4] * h + a * g1
+        x[:, 2:4] += a * h
 
 
-def nominal_q(n: int, noise_var: np.ndarray, gain: np.ndarray, dt: float) -> np.ndarray:
-    """The Q of one step ``dt`` held at the stated accelerometer noise, printed by the
-    reports: per axis i, ``σ_a,i² · gain_i² · g gᵀ`` on (p_i, v_i) with ``g = [dt²/2, dt]``
-    (states ordered px, py, vx, vy, …; ``gain = 1/(1 + ŝ)``), zero elsewhere."""
-    Q = np.zeros((n, n))
-    g = np.array([0.5 * dt * dt, dt])
-    for i in range(2):
-        Q[np.ix_([i, i + 2], [i, i + 2])] = noise_var[i] * gain[i] ** 2 * np.outer(g, g)
-    return Q
 
 
-def kalman_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, H: np.ndarray,
-                  Rm: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Joseph-form update of R runs with a linear measurement (module docstring).
-
-    x : (R, n) prior means, P : (R, n, n) their covariances, z : (R, d) measurements,
-    H : (d, n), Rm : (d, d) measurement noise. Returns the posterior ``x⁺`` (R, n), ``P⁺``
-    (R, n, n, symmetrised), the innovations ``ν`` (R, d) and their covariances ``S``
-    (R, d, d). The gain comes from a solve with S, never an inverse.
-    """
-    v = z - x @ H.T
-    S = H @ P @ H.T + Rm
-    PHt = P @ H.T
-    Kg = np.linalg.solve(S, PHt.transpose(0, 2, 1)).transpose(0, 2, 1)
-    x = x + np.einsum("rij,rj->ri", Kg, v)
-    IKH = np.eye(P.shape[-1]) - Kg @ H
-    P = IKH @ P @ IKH.transpose(0, 2, 1) + Kg @ Rm @ Kg.transpose(0, 2, 1)
-    P = 0.5 * (P + P.transpose(0, 2, 1))
-    return x, P, v, S
-
-
-def _rts_gain(P_f: np.ndarray, Phi: np.ndarray, P_p: np.ndarray) -> np.ndarray:
-    """``C = P⁺_j Φᵀ (P⁻_j+1)⁻¹`` for R runs, through a solve with the symmetric prior.
-
-    A prior can be exactly singular: with the initial position and velocity known (P0 = 0
-    there, the course's case) the prior one step later has, per axis, only the bias and one
-    step's held noise in the three directions (p, v, b): rank 2. The gain is then defined on
-    the prior's range, and the pseudo-inverse (symmetric, ``numpy.linalg.pinv``) gives it;
-    the mean and covariance updates that use it stay exact, since the smoothed and the
-    prior state differ only inside that range.
-    """
-    rhs = Phi @ P_f
-    try:
-        return np.linalg.solve(P_p, rhs).transpose(0, 2, 1)
-    except np.linalg.LinAlgError:
-        return (np.linalg.pinv(P_p, hermitian=True) @ rhs).transpose(0, 2, 1)
-
-
-def rts(x_f, P_f, x_p, P_p, Phi):
-    """Rauch–Tung–Striebel smoother over stored nodes (module docstring).
-
-    Parameters
-    ----------
-    x_f, P_f : (R, K, n), (R, K, n, n) filtered (posterior) means and covariances.
-    x_p, P_p : the predicted (prior) ones at the same nodes.
-    Phi : (R, K, n, n), ``Phi[:, j]`` maps node j-1 to node j (``Phi[:, 0]`` unused).
-
-    Returns
-    -------
-    Smoothed means (R, K, n) and covariances (R, K, n, n).
-    """
-    xs, Ps = x_f.copy(), P_f.copy()
-    for j in range(x_f.shape[1] - 2, -1, -1):
-        C = _rts_gain(P_f[:, j], Phi[:, j + 1], P_p[:, j + 1])
-        xs[:, j] = x_f[:, j] + np.einsum("rij,rj->ri", C, xs[:, j + 1] - x_p[:, j + 1])
-        Pj = P_f[:, j] + C @ (Ps[:, j + 1] - P_p[:, j + 1]) @ C.transpose(0, 2, 1)
-        Ps[:, j] = 0.5 * (Pj + Pj.transpose(0, 2, 1))
-    return xs, Ps
-
-
-__all__ = ["CAL_ORDER", "FusionResult", "SCALE_NAMES", "STATE_NAMES", "fuse", "kalman_update",
-           "rts"]
+__all__ = ["CAL_ORDER", "CalibrationPrior", "FusionResult", "LinearStep", "SCALE_NAMES",
+           "STATE_NAMES", "fuse", "kalman_update", "rts"]

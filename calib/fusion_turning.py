@@ -38,8 +38,8 @@ where Q gives ``σ_g² h² N`` — conservative by half a step. No gyro bias is 
 bench's gyro has none; a real one would add ``bg`` to the state).
 
 P0 = blockdiag(P_p0, P_v0, σ_ψ0², the bias block of the calibration covariance); R = σ_pos² I
-from the receiver. The update is :func:`calib.fusion.kalman_update` (Joseph form) with
-``H = [I₂ 0]``, the smoother :func:`calib.fusion.rts` on the products ``Φ`` of the step
+from the receiver. The update is :func:`calib.kalman.kalman_update` (Joseph form) with
+``H = [I₂ 0]``, the smoother :func:`calib.kalman.rts` on the products ``Φ`` of the step
 Jacobians evaluated at the filtered estimates (an extended RTS smoother).
 
 Fixes must fall on IMU sample times (the bench's receiver puts them there): the heading's
@@ -51,7 +51,8 @@ filterpy 2.0.0's ``ExtendedKalmanFilter`` and ``UnscentedKalmanFilter`` run one 
 time, a Python call per step (3000 steps × 500 Monte Carlo runs = 1.5·10⁶ predict calls, plus
 an ``sigma_points`` loop for the UKF), and its ``rts_smoother`` is for the linear filter
 without a control input (see :mod:`calib.fusion`). This module steps R runs at once as
-(R, n, n) arrays, like :func:`calib.fusion.fuse`.
+(R, n, n) arrays, like :func:`calib.fusion.fuse`, in the loop they share
+(:func:`calib.kalman.run_filter`).
 """
 
 from __future__ import annotations
@@ -60,14 +61,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from calib.fusion import (
-    CAL_ORDER,
-    FusionResult,
-    NodeStore,
-    _as_runs,
-    _cov2,
-    kalman_update,
+from calib.fusion import FusionResult
+from calib.kalman import (
+    CalibrationLike,
+    CalibrationPrior,
+    as_runs,
+    check_times,
+    filter_outputs,
+    fix_measurements,
+    initial_cov,
     nominal_q,
+    run_filter,
 )
 
 TURN_STATE_NAMES = ("px", "py", "vx", "vy", "psi", "bx", "by")
@@ -88,7 +92,7 @@ def body_to_world(psi: np.ndarray, acc_body: np.ndarray) -> np.ndarray:
                      np.asarray(acc_body, dtype=float))
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class TurningFusionResult(FusionResult):
     """Extended Kalman filter (and smoother) of the turning vehicle: the fields of
     :class:`calib.fusion.FusionResult` with the state ``TURN_STATE_NAMES`` (ψ in rad) and
@@ -122,13 +126,6 @@ class TurningFusionResult(FusionResult):
                       "innovations": "[m, m]", "innovation_covs": "[m², m²]"}
         return d
 
-    @classmethod
-    def from_dict(cls, d: dict) -> TurningFusionResult:
-        return cls(tuple(d["state_names"]), d["times"], d["estimates"], d["covariances"],
-                   d["is_fix"], d["t_gps"], d["innovations"], d["innovation_covs"],
-                   d["smoothed"], d["smoothed_covariances"], d["P0"], d["Q"], d["R"],
-                   d["noise_var"], d["estimate_scale"], d["dt"], d["gyro_var"])
-
     def summary(self) -> str:
         lines = super().summary().splitlines()
         lines[0] = lines[0].replace("Kalman fusion", "Extended Kalman fusion (turning)", 1)
@@ -141,9 +138,10 @@ class TurningFusionResult(FusionResult):
         return "\n".join(lines)
 
 
-def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, bias, scale, cal_cov, noise_var,
-                 gyro_var, sigma_pos, p0, v0, psi0=0.0, p0_cov=0.0, v0_cov=0.0,
-                 psi0_var=0.0, smoother=False, keep="all") -> TurningFusionResult:
+def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, noise_var, gyro_var, sigma_pos, p0, v0,
+                 calibration: CalibrationLike | None = None, bias=None, scale=None,
+                 cal_cov=None, psi0=0.0, p0_cov=0.0, v0_cov=0.0, psi0_var=0.0,
+                 smoother=False, keep="all") -> TurningFusionResult:
     """Extended Kalman filter (and RTS smoother) of a turning vehicle (module docstring).
 
     Parameters
@@ -153,7 +151,9 @@ def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, bias, scale, cal_cov, noise_
     gyro : (N,) or (R, N) measured yaw rate ω_m, rad/s.
     t_gps : (M,) fix times, s, strictly increasing, each equal to an IMU time.
     pos_gps : (M, 2) or (R, M, 2) position fixes, world axes, m.
-    bias : (2,) m/s², scale : (2,) 1, cal_cov : (4, 4) order ``CAL_ORDER`` — the calibration.
+    calibration : the calibration (``bias`` (2,) m/s², ``scale`` (2,) 1, ``cov`` (4, 4) order
+        ``CAL_ORDER``), or its three parts as ``bias``, ``scale``, ``cal_cov`` — as
+        :func:`calib.fusion.fuse`.
     noise_var : σ_a², (m/s²)², scalar or (2,).  gyro_var : σ_g², (rad/s)².
     sigma_pos : σ of each fix coordinate, m.
     p0 (m), v0 (m/s), psi0 (rad): initial estimate; p0_cov, v0_cov (scalar, (2,) or (2, 2)),
@@ -165,10 +165,8 @@ def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, bias, scale, cal_cov, noise_
     -------
     TurningFusionResult
     """
-    t = np.asarray(t, dtype=float)
-    if t.ndim != 1 or t.shape[0] < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
-        raise ValueError("t must be 1-D, finite, strictly increasing, with ≥ 2 samples")
-    acc, batched = _as_runs(acc_m, 2, "acc_m")
+    t = check_times(t, 2)
+    acc, batched = as_runs(acc_m, 2, "acc_m")
     Rn, N = acc.shape[0], t.shape[0]
     if acc.shape[1] != N:
         raise ValueError(f"acc_m has {acc.shape[1]} samples for {N} times")
@@ -185,83 +183,63 @@ def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, bias, scale, cal_cov, noise_
     if (np.any(np.diff(t_gps) <= 0) or np.any(np.abs(t[k_fix] - t_gps) > tol)):
         raise ValueError("t_gps must be strictly increasing and each fix on an IMU sample time "
                          "(the heading's trapezoid needs the gyro at both ends of a step)")
-    zp, _ = _as_runs(pos_gps, 2, "pos_gps")
-    if zp.shape[1] != t_gps.shape[0]:
-        raise ValueError(f"pos_gps has {zp.shape[1]} fixes for {t_gps.shape[0]} times")
-    Z = np.broadcast_to(zp, (Rn, *zp.shape[1:]))
-    Rm = np.eye(2) * float(sigma_pos) ** 2
-    n = 7
-    H = np.zeros((2, n))
-    H[:, :2] = np.eye(2)
-    bias = np.broadcast_to(np.asarray(bias, dtype=float), (2,))
-    scale = np.broadcast_to(np.asarray(scale, dtype=float), (2,))
-    cal_cov = np.asarray(cal_cov, dtype=float)
-    if cal_cov.shape != (4, 4):
-        raise ValueError(f"cal_cov must be (4, 4) in order {CAL_ORDER}, got {cal_cov.shape}")
+    Z, Rm = fix_measurements(pos_gps, t_gps.shape[0], Rn, sigma_pos)
+    cal = CalibrationPrior.of(calibration, bias=bias, scale=scale, cal_cov=cal_cov)
     sa2 = np.broadcast_to(np.asarray(noise_var, dtype=float), (2,)).copy()
     sg2 = float(gyro_var)
-    ss2 = np.diag(cal_cov)[[1, 3]]
-    c = 1.0 / (1.0 + scale)
-
-    P0 = np.zeros((n, n))
-    P0[:2, :2] = _cov2(p0_cov, "p0_cov")
-    P0[2:4, 2:4] = _cov2(v0_cov, "v0_cov")
-    P0[4, 4] = float(psi0_var)
-    P0[5:, 5:] = cal_cov[np.ix_([0, 2], [0, 2])]
-    x0 = np.concatenate([np.asarray(p0, float), np.asarray(v0, float), [float(psi0)], bias])
-
+    n = 7
+    P0 = initial_cov(n, p0_cov, v0_cov, {4: float(psi0_var),
+                                         5: cal.cov[np.ix_([0, 2], [0, 2])]})
+    x0 = np.concatenate([np.asarray(p0, float), np.asarray(v0, float), [float(psi0)],
+                         cal.bias])
     fixi = np.full(N, -1)
     fixi[k_fix] = np.arange(t_gps.shape[0])
-    kept = NodeStore(fixi, keep, Rn, n, smoother)
-    x = np.broadcast_to(x0, (Rn, n)).copy()
-    P = np.broadcast_to(P0, (Rn, n, n)).copy()
-    M = t_gps.shape[0]
-    nu, S_all = np.empty((Rn, M, 2)), np.empty((Rn, M, 2, 2))
-    F = kept.identity()
-    Qk = np.zeros((Rn, n, n))
-    for k in range(N):
-        if k > 0:
-            h = t[k] - t[k - 1]
-            g1, g2 = 0.5 * h * h, h
-            a_b = (acc[:, k - 1, :] - x[:, 5:7]) * c          # (R, 2) body
-            Rot, dRot = rotation(x[:, 4])
-            a_w = np.einsum("rij,rj->ri", Rot, a_b)
-            da_dpsi = np.einsum("rij,rj->ri", dRot, a_b)      # (R, 2)
-            da_db = -Rot * c                                    # (R, 2, 2): -R(ψ) C
-            F[:, 0:2, 2:4] = np.eye(2) * h
-            F[:, 0:2, 4] = g1 * da_dpsi
-            F[:, 2:4, 4] = g2 * da_dpsi
-            F[:, 0:2, 5:7] = g1 * da_db
-            F[:, 2:4, 5:7] = g2 * da_db
-            q = (sa2 + ss2 * a_b * a_b) * c * c                 # (R, 2) body variances
-            W = np.einsum("rij,rj,rkj->rik", Rot, q, Rot)       # R diag(q) Rᵀ
-            Qk[:, 0:2, 0:2] = g1 * g1 * W
-            Qk[:, 0:2, 2:4] = Qk[:, 2:4, 0:2] = g1 * g2 * W
-            Qk[:, 2:4, 2:4] = g2 * g2 * W
-            Qk[:, 4, 4] = sg2 * h * h
-            x[:, 0:2] += x[:, 2:4] * h + a_w * g1
-            x[:, 2:4] += a_w * h
-            x[:, 4] += 0.5 * h * (w[:, k - 1] + w[:, k])
-            P = F @ P @ F.transpose(0, 2, 1) + Qk
-            kept.step(F)
-        xp, Pp = x.copy(), P.copy()
-        m = fixi[k]
-        if m >= 0:
-            x, P, nu[:, m], S_all[:, m] = kalman_update(x, P, Z[:, m, :], H, Rm)
-        kept.keep(k, x, P, xp, Pp)
-
-    xsm, Psm = kept.smoothed()
+    step = TurningStep(t, acc, w, cal, sa2, sg2)
+    kept, nu, S_all = run_filter(step, x0, P0, fixi, Z, Rm, keep, smoother)
     dt = float(np.median(np.diff(t)))
-    Qnom = nominal_q(n, sa2, c, dt)
+    Qnom = nominal_q(n, sa2, step.c, dt)
     Qnom[4, 4] = sg2 * dt * dt
-    out = [kept.x_f, kept.P_f, nu, S_all, xsm, Psm]
-    if not batched:
-        out = [o[0] for o in out]
-    st = kept.store
-    return TurningFusionResult(TURN_STATE_NAMES, t[st], out[0], out[1], fixi[st] >= 0, t_gps,
-                               out[2], out[3], out[4], out[5], P0, Qnom, Rm, sa2, False, dt,
-                               sg2)
+    return TurningFusionResult(state_names=TURN_STATE_NAMES, times=t[kept.store], t_gps=t_gps,
+                               **filter_outputs(kept, nu, S_all, batched), P0=P0, Q=Qnom,
+                               R=Rm, noise_var=sa2, estimate_scale=False, dt=dt,
+                               gyro_var=sg2)
 
 
-__all__ = ["TURN_STATE_NAMES", "TurningFusionResult", "body_to_world", "fuse_turning",
-           "rotation"]
+class TurningStep:
+    """The turning vehicle's step (module docstring), for :func:`calib.kalman.run_filter`:
+    ``step(k, x, F, Qk)`` moves ``x`` (R, 7) from sample k-1 to k in place and fills the
+    Jacobian ``F`` and the process noise ``Qk`` (R, 7, 7)."""
+
+    def __init__(self, t: np.ndarray, acc: np.ndarray, gyro: np.ndarray,
+                 cal: CalibrationPrior, noise_var: np.ndarray, gyro_var: float) -> None:
+        self.t, self.acc, self.w = t, acc, gyro
+        self.sa2, self.sg2, self.ss2 = noise_var, gyro_var, cal.scale_var
+        self.c = 1.0 / (1.0 + cal.scale)
+
+    def __call__(self, k: int, x: np.ndarray, F: np.ndarray, Qk: np.ndarray) -> None:
+        c = self.c
+        h = self.t[k] - self.t[k - 1]
+        g1, g2 = 0.5 * h * h, h
+        a_b = (self.acc[:, k - 1, :] - x[:, 5:7]) * c          # (R, 2) body
+        Rot, dRot = rotation(x[:, 4])
+        a_w = np.einsum("rij,rj->ri", Rot, a_b)
+        da_dpsi = np.einsum("rij,rj->ri", dRot, a_b)      # (R, 2)
+        da_db = -Rot * c                                    # (R, 2, 2): -R(ψ) C
+        F[:, 0:2, 2:4] = np.eye(2) * h
+        F[:, 0:2, 4] = g1 * da_dpsi
+        F[:, 2:4, 4] = g2 * da_dpsi
+        F[:, 0:2, 5:7] = g1 * da_db
+        F[:, 2:4, 5:7] = g2 * da_db
+        q = (self.sa2 + self.ss2 * a_b * a_b) * c * c       # (R, 2) body variances
+        W = np.einsum("rij,rj,rkj->rik", Rot, q, Rot)       # R diag(q) Rᵀ
+        Qk[:, 0:2, 0:2] = g1 * g1 * W
+        Qk[:, 0:2, 2:4] = Qk[:, 2:4, 0:2] = g1 * g2 * W
+        Qk[:, 2:4, 2:4] = g2 * g2 * W
+        Qk[:, 4, 4] = self.sg2 * h * h
+        x[:, 0:2] += x[:, 2:4] * h + a_w * g1
+        x[:, 2:4] += a_w * h
+        x[:, 4] += 0.5 * h * (self.w[:, k - 1] + self.w[:, k])
+
+
+__all__ = ["TURN_STATE_NAMES", "TurningFusionResult", "TurningStep", "body_to_world",
+           "fuse_turning", "rotation"]

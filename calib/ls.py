@@ -26,9 +26,10 @@ from typing import Literal
 import numpy as np
 from scipy import linalg as sla
 from scipy import stats
-from scipy.linalg import blas, lapack
+from scipy.linalg import blas
 
 from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G, reference_accel
+from calib.numerics import design_cond, r_factor
 from calib.results import ResultMixin
 
 Sigma2Source = Literal["given", "estimated"]
@@ -204,26 +205,6 @@ class FitResult(ResultMixin):
         )
 
 
-def _r_factor(A: np.ndarray) -> np.ndarray:
-    """R (k × k) of the Householder QR of ``A`` (n × k, n ≥ k), without forming Q.
-
-    LAPACK ``dgeqrf`` directly: ``numpy.linalg.qr(mode="r")`` computes the same factor but
-    its wrapper's copies cost 7× the factorisation on a 20001 × 3 design.
-    """
-    qr, _, _, info = lapack.dgeqrf(np.asfortranarray(A, dtype=float))
-    if info != 0:
-        raise np.linalg.LinAlgError(f"dgeqrf failed (info = {info})")
-    return np.triu(qr[: A.shape[1], :])
-
-
-def _equilibrated_cond(H: np.ndarray) -> float:
-    """2-norm condition number of ``H`` with unit-norm columns (= that of its R factor)."""
-    norms = np.linalg.norm(H, axis=0)
-    norms[norms == 0] = 1.0
-    s = np.linalg.svd(_r_factor(H / norms), compute_uv=False)
-    return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
-
-
 def _equilibrate(Hc: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(norms, scale, Hs)``: column norms of ``Hc``, the divisors (1 for a zero column) and
     the equilibrated ``Hs = Hc / scale`` (unit-norm columns)."""
@@ -247,7 +228,7 @@ def _solve_centred(
     norms, scale, Hs = _equilibrate(Hc) if equilibrated is None else equilibrated
     aug = np.empty((n, p + 1), order="F")
     aug[:, :p], aug[:, p] = Hs, y
-    Ra = _r_factor(aug)
+    Ra = r_factor(aug)
     R, z = Ra[:p, :p], Ra[:p, p]
     sv = np.linalg.svd(R, compute_uv=False)
     rank = int(np.sum(sv > sv[0] * max(n, p) * np.finfo(float).eps)) if sv[0] > 0 else 0
@@ -361,7 +342,7 @@ def factor_design(
     A = (M / scale) @ sla.solve_triangular(R, np.eye(p))
     cov1 = A @ A.T
     return DesignFactor(q=Q, solve_map=A, cov1=0.5 * (cov1 + cov1.T), rank=rank,
-                        cond=_equilibrated_cond(H))
+                        cond=design_cond(H))
 
 
 def axis_factor(tita: np.ndarray, axis: str = "x", g: float = G
@@ -417,7 +398,7 @@ def fit_linear(
         raise NotIdentifiableError(
             f"{n} samples cannot identify {p} parameters ({', '.join(names)})")
     Hc, M = centre_design(H, names, intercept)
-    return _fit_centred(Hc, M, y, names, sigma2, lambda: _equilibrated_cond(H))
+    return _fit_centred(Hc, M, y, names, sigma2, lambda: design_cond(H))
 
 
 def _sigma2_used(rss: float, dof: int, sigma2: float | None) -> tuple[float, Sigma2Source]:
@@ -676,13 +657,13 @@ def fit_joint(
     fit = FitResult(
         param_names=JOINT_PARAM_NAMES, params=params, cov=cov, residuals=resid,
         sigma2=np.diag(C), sigma2_source=source, dof=2 * n - 4, rank=rank,
-        cond=_equilibrated_cond(H_full), chi2=float(np.sum(white**2)),
+        cond=design_cond(H_full), chi2=float(np.sum(white**2)),
         extra={"noise_cov": C.tolist()},
     )
     for k, ax in enumerate(AXES):
         sub = FitResult(PARAM_NAMES, params[2 * k:2 * k + 2], cov[2 * k:2 * k + 2, 2 * k:2 * k + 2],
                         resid[:, k], np.array(C[k, k]), source, n - 2, 2,
-                        _equilibrated_cond(H_full[k * n:(k + 1) * n, 2 * k:2 * k + 2]),
+                        design_cond(H_full[k * n:(k + 1) * n, 2 * k:2 * k + 2]),
                         float(resid[:, k] @ resid[:, k] / C[k, k]))
         _check_poor(a_r[:, k], g, ax, sub)
     return fit

@@ -50,7 +50,7 @@ bounds the calibration part only, with worst-case acceleration and a triangle in
 course draws the axis-aligned ellipse with semi-axes ``(δP_x, δP_y)`` around each candidate and
 decides when the estimate lies inside exactly one (:func:`course_decision`). On the course data
 this gives (25.63, 44.89) m. The report's δP_y = 45.18 m is reproduced with its code's
-correction ``(A_m - b)/(1 - s)`` (the bug named in DESIGN.md; a_max then differs); its
+correction ``(A_m - b)/(1 - s)`` (the bug named in docs/conventions.md; a_max then differs); its
 δP_x = 22.25 m does not follow from its own covariance and code (25.25 m) — a typo, probably.
 """
 
@@ -190,6 +190,80 @@ def decide(d2: dict[str, float], level: float) -> tuple[str | None, tuple[str, .
                           f"{100 * level:g}% region")
 
 
+@dataclass(frozen=True, eq=False)
+class Decision(ResultMixin):
+    """The arrival decision at level L around one estimate (module docstring, "Region and
+    decision"): the one value the dead-reckoning regions (:class:`ArrivalRegion`,
+    :class:`calib.turning_trajectory.TurningRegion`) and the fused arrival
+    (:class:`calib.fusion_arrival.FusedArrival`) are decided with.
+
+    Attributes
+    ----------
+    level : L.  candidates : name → (2,) m.  mahalanobis : name → d (dimensionless).
+    likelihood : name → ``exp(-d²/2)``.  inside : names with ``d² ≤ χ²₂(L)``, sorted.
+    letter : the decided name, or None.  reason : why, in words.
+    """
+
+    _TITLE = "Arrival decision"
+    _UNITS = "candidates m; level, Mahalanobis distance and relative likelihood dimensionless"
+
+    level: float
+    candidates: dict
+    mahalanobis: dict
+    likelihood: dict
+    inside: tuple
+    letter: str | None
+    reason: str
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "candidates",
+                           {k: _ro(v) for k, v in self.candidates.items()})
+        object.__setattr__(self, "level", float(self.level))
+        object.__setattr__(self, "inside", tuple(self.inside))
+
+    @classmethod
+    def at(cls, estimate, cov, candidates: dict, level: float) -> Decision:
+        """Decide around ``estimate`` (2,) m with covariance ``cov`` (2, 2) m²
+        (:func:`squared_distances`, :func:`decide`)."""
+        d2 = squared_distances(estimate, cov, candidates)
+        letter, inside, reason = decide(d2, level)
+        return cls(float(level), {k: np.asarray(v, dtype=float) for k, v in candidates.items()},
+                   {k: float(np.sqrt(v)) for k, v in d2.items()},
+                   {k: float(np.exp(-0.5 * v)) for k, v in d2.items()}, inside, letter, reason)
+
+    UNITS = {"level": "1", "mahalanobis.*": "1"}
+    """Units of :meth:`to_dict` (the ``decision`` object of ``fuse --json``)."""
+
+    def to_dict(self) -> dict:
+        """``decision`` (letter or None), ``inside``, ``reason``, ``level``, ``mahalanobis``
+        (the ``decision`` object of ``fuse --json``; :meth:`to_state` adds the rest)."""
+        return {"decision": self.letter, "inside": list(self.inside), "reason": self.reason,
+                "level": self.level, "mahalanobis": dict(self.mahalanobis)}
+
+    def to_state(self) -> dict:
+        """:meth:`to_dict` plus ``candidates`` (m) and ``likelihood``: an exact rebuild."""
+        return {**self.to_dict(), "likelihood": dict(self.likelihood),
+                "candidates": {k: v.tolist() for k, v in self.candidates.items()}}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Decision:
+        """Rebuild from :meth:`to_state` (exact)."""
+        return cls(d["level"], d["candidates"], d["mahalanobis"], d["likelihood"],
+                   d["inside"], d["decision"], d["reason"])
+
+    def summary(self) -> str:
+        return f"decision: {self.letter or 'undecided'} ({self.reason})"
+
+
+def stated_noise_var(noise_var, calibration: Calibration) -> np.ndarray:
+    """σ² of the vehicle readings, (m/s²)²: ``noise_var`` as given ((2,) or (2, 2)), else the
+    calibration's σ² per axis (given to it or estimated from its residuals): the same
+    sensors, so the same white noise. The one place this fallback is written."""
+    if noise_var is not None:
+        return np.asarray(noise_var, dtype=float)
+    return np.array([calibration.fits[a].sigma2.item() for a in ("x", "y")])
+
+
 AREA_COMPARISON_UNITS = {"ellipse_area": "m²", "calibration_only_area": "m²",
                          "course_box_area": "m²", "course_ellipse_area": "m²", "*": "1"}
 """Units of :meth:`ArrivalRegion.area_comparison` (areas m², the ratios dimensionless)."""
@@ -287,7 +361,7 @@ class Ellipse(ResultMixin):
                 f"from +x, area {self.area:.0f} m²")
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class ArrivalRegion(ResultMixin):
     """Arrival point, its covariance, the confidence region and the decision.
 
@@ -343,6 +417,11 @@ class ArrivalRegion(ResultMixin):
     def std(self) -> np.ndarray:
         """(2,) standard deviation of the final position per axis, m."""
         return np.sqrt(np.diag(self.cov))
+
+    def as_decision(self) -> Decision:
+        """The decision part of this region (:class:`Decision`)."""
+        return Decision(self.level, self.candidates, self.mahalanobis, self.likelihood,
+                        self.inside, self.decision, self.reason)
 
     def course_box_at_level(self) -> np.ndarray:
         """The course box with ``k = Φ⁻¹((1 + L)/2)`` instead of 3 (same per-axis level)."""
@@ -504,32 +583,27 @@ def arrival_region(
     >>> r.decision
     'A'
     """
-    if noise_var is None:
-        noise_var = [calibration.fits[a].sigma2.item() for a in ("x", "y")]
-    C = noise_cov_matrix(noise_var)
+    C = noise_cov_matrix(stated_noise_var(noise_var, calibration))
     J = position_jacobian(traj)
     cov_cal = J @ calibration.cov @ J.T
     cov_noise = noise_position_cov(traj, C) if include_noise else np.zeros((2, 2))
     cov = 0.5 * ((cov_cal + cov_noise) + (cov_cal + cov_noise).T)
     est = traj.final_corrected
     ell = Ellipse.from_cov(est, cov, level)
-    d2 = squared_distances(est, cov, candidates)
-    decision, inside, reason = decide(d2, level)
+    dec = Decision.at(est, cov, candidates, level)
     a_max = np.max(np.abs(traj.acc_corrected), axis=0)
     box = course_box_bound(traj.duration, calibration.cov, a_max)
     return ArrivalRegion(
         estimate=est, cov=cov, cov_calibration=cov_cal, cov_noise=cov_noise, jacobian=J,
-        noise_var=C, level=float(level), ellipse=ell,
-        candidates={k: np.asarray(v, dtype=float) for k, v in candidates.items()},
-        mahalanobis={k: float(np.sqrt(v)) for k, v in d2.items()},
-        likelihood={k: float(np.exp(-0.5 * v)) for k, v in d2.items()},
-        inside=inside, decision=decision, reason=reason, course_box_bound=box, a_max=a_max,
+        noise_var=C, level=float(level), ellipse=ell, candidates=dec.candidates,
+        mahalanobis=dec.mahalanobis, likelihood=dec.likelihood, inside=dec.inside,
+        decision=dec.letter, reason=dec.reason, course_box_bound=box, a_max=a_max,
         duration=traj.duration, include_noise=include_noise,
     )
 
 
 __all__ = [
-    "COURSE_BOX_K", "ArrivalRegion", "Ellipse", "arrival_region", "box_k_for_level",
+    "COURSE_BOX_K", "ArrivalRegion", "Decision", "Ellipse", "arrival_region", "box_k_for_level",
     "chi2_2dof", "course_box_bound", "course_decision", "decide", "noise_cov_matrix",
-    "noise_position_cov", "position_jacobian", "squared_distances",
+    "noise_position_cov", "position_jacobian", "squared_distances", "stated_noise_var",
 ]

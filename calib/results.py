@@ -1,6 +1,6 @@
 """What every result object of tiltbench shares: value equality, hashing, notebook rendering.
 
-Result objects are frozen dataclasses holding numpy arrays (statsmodels-like, see STYLE.md).
+Result objects are frozen dataclasses holding numpy arrays (statsmodels-like; docs/conventions.md).
 The dataclass-generated ``==`` compares tuples of fields, which raises on arrays
 (``ValueError: truth value of an array is ambiguous``). :class:`ResultMixin` replaces it with a
 field-by-field comparison (:func:`same`): arrays by shape and value (``NaN`` equal to ``NaN``),

@@ -47,7 +47,8 @@ COURSE_V0: tuple[float, float] = (1.0, 3.0)
 """Initial velocity of the course vehicle, m/s (course ``datos.txt``)."""
 
 
-def _check_integrator(integrator: str) -> None:
+def check_integrator(integrator: str) -> None:
+    """Refuse an integrator name outside ``INTEGRATORS`` (ValueError naming the choices)."""
     if integrator not in INTEGRATORS:
         raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
 
@@ -67,7 +68,7 @@ def cumulative_integral(y: np.ndarray, t: np.ndarray, integrator: Integrator = "
     -------
     Same shape as ``y``; row 0 is 0.
     """
-    _check_integrator(integrator)
+    check_integrator(integrator)
     y = np.asarray(y, dtype=float)
     t = np.asarray(t, dtype=float)
     d = np.diff(t)
@@ -191,7 +192,7 @@ def double_integral_weights(t: np.ndarray, integrator: Integrator = "trapezoid")
     uniform grid it equals the closed form :func:`trapezoid_weights_uniform`. Both rules
     integrate constants exactly, so ``Σ w = (t_end - t_0)²/2``.
     """
-    _check_integrator(integrator)
+    check_integrator(integrator)
     t = np.ascontiguousarray(np.asarray(t, dtype=float))
     if t.ndim != 1 or t.shape[0] < 3:
         raise ValueError(f"t must be 1-D with at least 3 samples, got shape {t.shape}")
@@ -350,7 +351,7 @@ def correct_and_integrate(
     bias : (2,) m/s².  scale : (2,) dimensionless.  p0 : (2,) m.  v0 : (2,) m/s.
     integrator : "trapezoid" (default, the course) or "simpson".
     """
-    _check_integrator(integrator)
+    check_integrator(integrator)
     t = np.asarray(t, dtype=float)
     a_m = np.asarray(a_m, dtype=float)
     if a_m.ndim != 2 or a_m.shape != (t.shape[0], 2):
@@ -403,7 +404,8 @@ def compute_trajectory(
 
 
 __all__ = [
-    "COURSE_P0", "COURSE_V0", "INTEGRATORS", "Trajectory", "compute_trajectory",
+    "COURSE_P0", "COURSE_V0", "INTEGRATORS", "Trajectory", "check_integrator",
+    "compute_trajectory",
     "correct_and_integrate", "cumulative_integral", "double_integral_weights",
     "integrate_twice", "trapezoid_sum_w2_uniform", "trapezoid_weights_uniform",
 ]

@@ -37,18 +37,18 @@ max_j |a_j - a_0| / 2`` — centimetres over the course's 60 s at 100 Hz.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from calib.correct import correct
 from calib.fusion_turning import body_to_world, fuse_turning
-from calib.region import Ellipse, decide, squared_distances
+from calib.region import Decision, Ellipse
 from calib.results import ResultMixin
-from calib.trajectory import Integrator, _check_integrator, cumulative_integral, integrate_twice
+from calib.trajectory import Integrator, check_integrator, cumulative_integral, integrate_twice
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class TurningTrajectory(ResultMixin):
     """Dead reckoning of a turning vehicle (module docstring).
 
@@ -121,8 +121,7 @@ class TurningTrajectory(ResultMixin):
         """Rebuild from :meth:`to_state` (exact); :meth:`to_dict` alone has no samples."""
         if not all(k in d for k in cls._ARRAYS):
             raise ValueError("this mapping has no samples; rebuild from to_state()")
-        return cls(d["t"], d["heading"], d["acc_body"], d["acc_world"], d["pos"], d["vel"],
-                   d["p0"], d["v0"], d["psi0"], d["bias"], d["scale"], d["integrator"])
+        return cls(**{f.name: d[f.name] for f in fields(cls)})
 
     def summary(self) -> str:
         fp, fv = self.pos[-1], self.vel[-1]
@@ -137,7 +136,7 @@ class TurningTrajectory(ResultMixin):
         ])
 
 
-def turning_dead_reckoning(t, acc_m, gyro, bias, scale, p0, v0, psi0: float = 0.0,
+def turning_dead_reckoning(t, acc_m, gyro, bias, scale, p0, v0, *, psi0: float = 0.0,
                            integrator: Integrator = "trapezoid") -> TurningTrajectory:
     """Dead reckoning of a turning vehicle (module docstring for the equations).
 
@@ -148,7 +147,7 @@ def turning_dead_reckoning(t, acc_m, gyro, bias, scale, p0, v0, psi0: float = 0.
     p0 : (2,) m, v0 : (2,) m/s (world axes), psi0 : initial heading, rad.
     integrator : of the position and velocity, as :func:`calib.trajectory.integrate_twice`.
     """
-    _check_integrator(integrator)
+    check_integrator(integrator)
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or t.shape[0] < 3 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
         raise ValueError("t must be 1-D, finite, strictly increasing, with ≥ 3 samples")
@@ -168,8 +167,9 @@ def turning_dead_reckoning(t, acc_m, gyro, bias, scale, p0, v0, psi0: float = 0.
     a_b = correct(acc_m, bias, scale)
     a_w = body_to_world(psi, a_b)
     pos, vel = integrate_twice(t, a_w, p0, v0, integrator)
-    return TurningTrajectory(t, psi, a_b, a_w, pos, vel, p0, v0, psi0, bias, scale,
-                             integrator)
+    return TurningTrajectory(t=t, heading=psi, acc_body=a_b, acc_world=a_w, pos=pos, vel=vel,
+                             p0=p0, v0=v0, psi0=psi0, bias=bias, scale=scale,
+                             integrator=integrator)
 
 
 def heading_error(t, psi, t_ref, psi_ref) -> np.ndarray:
@@ -187,7 +187,7 @@ def dead_reckoning_path(traj) -> np.ndarray:
     return traj.pos if isinstance(traj, TurningTrajectory) else traj.pos_corrected
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class TurningRegion(ResultMixin):
     """Level-L arrival region of a turning dead reckoning (module docstring, "Arrival region").
 
@@ -232,6 +232,11 @@ class TurningRegion(ResultMixin):
         """(2,) standard deviation of the arrival point per axis, m."""
         return np.sqrt(np.diag(self.cov))
 
+    def as_decision(self) -> Decision:
+        """The decision part of this region (:class:`calib.region.Decision`)."""
+        return Decision(self.level, self.candidates, self.mahalanobis, self.likelihood,
+                        self.inside, self.decision, self.reason)
+
     def to_dict(self) -> dict:
         return {"final_position": self.estimate.tolist(), "cov": self.cov.tolist(),
                 "std": self.std.tolist(), "heading_std": self.heading_std,
@@ -251,12 +256,13 @@ class TurningRegion(ResultMixin):
     def from_dict(cls, d: dict) -> TurningRegion:
         """Rebuild from :meth:`to_dict` (exact)."""
         c = d["candidates"]
-        return cls(d["final_position"], d["cov"], float(d["heading_std"]), d["ekf_offset"],
-                   float(d["level"]), Ellipse.from_dict(d["ellipse"]),
-                   {k: v["pos"] for k, v in c.items()},
-                   {k: float(v["mahalanobis"]) for k, v in c.items()},
-                   {k: float(v["likelihood"]) for k, v in c.items()}, tuple(d["inside"]),
-                   d["decision"], d["reason"])
+        return cls(estimate=d["final_position"], cov=d["cov"],
+                   heading_std=float(d["heading_std"]), ekf_offset=d["ekf_offset"],
+                   level=float(d["level"]), ellipse=Ellipse.from_dict(d["ellipse"]),
+                   candidates={k: v["pos"] for k, v in c.items()},
+                   mahalanobis={k: float(v["mahalanobis"]) for k, v in c.items()},
+                   likelihood={k: float(v["likelihood"]) for k, v in c.items()},
+                   inside=tuple(d["inside"]), decision=d["decision"], reason=d["reason"])
 
     def summary(self) -> str:
         e, sd = self.ellipse, self.std
@@ -294,14 +300,13 @@ def turning_arrival_region(traj: TurningTrajectory, acc_m, gyro, *, cal_cov, noi
     P = np.asarray(free.covariances, dtype=float)[-1]
     cov = 0.5 * (P[:2, :2] + P[:2, :2].T)
     est = traj.final_position
-    d2 = squared_distances(est, cov, candidates)
-    decision, inside, reason = decide(d2, level)
-    return TurningRegion(est, cov, float(np.sqrt(max(P[4, 4], 0.0))),
-                         np.asarray(free.final_position, dtype=float) - est, float(level),
-                         Ellipse.from_cov(est, cov, level), dict(candidates),
-                         {k: float(np.sqrt(v)) for k, v in d2.items()},
-                         {k: float(np.exp(-0.5 * v)) for k, v in d2.items()}, inside,
-                         decision, reason)
+    dec = Decision.at(est, cov, candidates, level)
+    return TurningRegion(estimate=est, cov=cov, heading_std=float(np.sqrt(max(P[4, 4], 0.0))),
+                         ekf_offset=np.asarray(free.final_position, dtype=float) - est,
+                         level=dec.level, ellipse=Ellipse.from_cov(est, cov, level),
+                         candidates=dec.candidates, mahalanobis=dec.mahalanobis,
+                         likelihood=dec.likelihood, inside=dec.inside, decision=dec.letter,
+                         reason=dec.reason)
 
 
 __all__ = ["TurningRegion", "TurningTrajectory", "dead_reckoning_path", "heading_error",

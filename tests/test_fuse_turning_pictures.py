@@ -46,7 +46,7 @@ def test_dead_reckoning_with_the_true_calibration_is_the_truth_up_to_the_trapezo
     tr = truth
     a_m = apply_errors(tr.acc, BIAS, SCALE)               # noise-free readings
     dr = turning_dead_reckoning(tr.t, a_m, tr.yaw_rate, BIAS, SCALE, tr.pos[0], tr.vel[0],
-                                float(tr.heading[0]))
+                                psi0=float(tr.heading[0]))
     assert np.max(np.abs(dr.heading - tr.heading)) < 1e-12  # rad: trapezoid exact here
     h = float(tr.t[1] - tr.t[0])
     a = body_to_world(tr.heading, tr.acc)
@@ -63,11 +63,12 @@ def test_a_wrong_calibration_drifts_by_the_rotated_double_integral(truth):
     tr = truth
     a_m = apply_errors(tr.acc, BIAS, SCALE)
     args = (tr.t, a_m, tr.yaw_rate)
-    init = (tr.pos[0], tr.vel[0], float(tr.heading[0]))
+    init = (tr.pos[0], tr.vel[0])
+    psi0 = float(tr.heading[0])
     # calibration errors of a few σ of the course's calibration (σ_b ≈ 4e-3 m/s²)
     b_hat, s_hat = BIAS + [0.012, -0.009], SCALE + [1e-3, -2e-3]
-    good = turning_dead_reckoning(*args, BIAS, SCALE, *init)
-    bad = turning_dead_reckoning(*args, b_hat, s_hat, *init)
+    good = turning_dead_reckoning(*args, BIAS, SCALE, *init, psi0=psi0)
+    bad = turning_dead_reckoning(*args, b_hat, s_hat, *init, psi0=psi0)
     w = double_integral_weights(tr.t)
     expected = w @ body_to_world(tr.heading, correct(a_m, b_hat, s_hat) - tr.acc)
     drift = bad.pos[-1] - good.pos[-1]

@@ -11,7 +11,7 @@ then the truth's distribution, so NEES is χ²(n) per run.
 Bands. For R independent runs the average of R χ²(n) values is χ²(nR)/R: the band is its
 exact 0.001 and 0.999 quantiles (scipy.stats.chi2). NIS: R·M innovations (white for the
 optimal filter) of dimension d → χ²(dRM)/(RM). Coverage: hits/R is binomial, the band
-|hits/R − p| ≤ 4·sqrt(p(1−p)/R) (STYLE.md).
+|hits/R − p| ≤ 4·sqrt(p(1−p)/R) (docs/conventions.md).
 """
 
 from __future__ import annotations

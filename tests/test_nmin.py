@@ -11,6 +11,7 @@ from bench.cli import main
 from calib.calibration import calibrate
 from calib.nmin import (
     PositionCovModel,
+    VehicleCase,
     crossing_n,
     design_nmin,
     posterior_nrange,
@@ -92,8 +93,8 @@ def test_posterior_range_on_course_estimate(course, level):
 
 def test_course_subsampling_reproduces_the_report(course):
     ensayo, acel, puntos, _, _ = course
-    rows = subsample_analysis(ensayo, acel, puntos, tuple(REPORT_STEPS), noise_var=ref.NOISE_VAR,
-                              level=0.997)
+    rows = subsample_analysis(ensayo, acel, VehicleCase(puntos, level=0.997),
+                              tuple(REPORT_STEPS), noise_var=ref.NOISE_VAR)
     by_step = {r.step: r for r in rows}
     for step, n in REPORT_STEPS.items():
         assert by_step[step].n == n
@@ -115,9 +116,10 @@ def test_fresh_runs_at_design_n_decide_right_at_least_at_level(course):
     design = design_nmin(puntos, PositionCovModel.from_region(reg), level)
     assert design["n"] is not None
     shift = reg.estimate - puntos["C"]  # the truth sits on C; geometry kept
-    moved = {k: c + shift for k, c in puntos.items()}
-    row = simulate_decisions(acel.t, traj.acc_corrected, moved, "C", design["n"], runs, 7,
-                             cal.bias, cal.scale, ref.NOISE_VAR, level=level)
+    moved = VehicleCase({k: c + shift for k, c in puntos.items()}, level=level)
+    row = simulate_decisions(moved, acel.t, traj.acc_corrected, truth="C", n=design["n"],
+                             runs=runs, seed=7, bias=cal.bias, scale=cal.scale,
+                             noise_var=ref.NOISE_VAR)
     assert row.right / runs >= level - 4 * np.sqrt(level * (1 - level) / runs)
     assert row.wrong <= runs * (1 - level) + 4 * np.sqrt(runs * level * (1 - level))
 

@@ -17,7 +17,7 @@ from bench.sweep import process_map
 from calib.io import Acel, Ensayo
 from calib.nmin import (
     PositionCovModel,
-    _made_and_right,
+    VehicleCase,
     analyze_nmin,
     calibration_draws,
     confirm_fixed_run,
@@ -26,6 +26,7 @@ from calib.nmin import (
     redrawn_design,
     uniform_design_cov,
 )
+from calib.nmin.fixed_run import made_and_right
 from calib.proportion import lower_bound
 from calib.region import arrival_region, chi2_2dof, decide, squared_distances
 from calib.runs import serial_map
@@ -89,7 +90,7 @@ def test_vectorised_rule_is_calib_region_decide(region):
     for t, name in enumerate(names):
         want = sum(decide(squared_distances(p, cov, region.candidates), LEVEL)[0] == name
                    for p in pts)
-        assert _made_and_right(pts, cov, cands, t, chi2_2dof(LEVEL)) == want
+        assert made_and_right(pts, cov, cands, t, chi2_2dof(LEVEL)) == want
 
 
 def test_common_random_numbers_and_monotone_curve(region):
@@ -110,8 +111,9 @@ def test_sampling_law_agrees_with_regeneration(course, region, n):
     model = PositionCovModel.from_region(region)
     u = calibration_draws(region.jacobian, region.noise_var, 10**5, 8)
     p = fixed_run_probability(n, region.estimate, u, model, puntos, "C", LEVEL)
-    row = confirm_fixed_run(acel, puntos, "C", n, 400, 11, cal.bias, cal.scale, ref.NOISE_VAR,
-                            p, level=LEVEL)
+    row = confirm_fixed_run(acel, VehicleCase(puntos, level=LEVEL), truth="C", n=n, runs=400,
+                            seed=11, bias=cal.bias, scale=cal.scale, noise_var=ref.NOISE_VAR,
+                            predicted=p)
     assert 0.5 < p < 0.995
     assert abs(row.rate - p) <= _band(p, 400) + _band(p, 10**5)
     assert row.consistent == (abs(row.rate - p) <= _band(p, 400))
@@ -119,9 +121,11 @@ def test_sampling_law_agrees_with_regeneration(course, region, n):
 
 def test_confirmation_does_not_depend_on_the_mapper(course):
     _, acel, puntos, cal, _ = course
-    args = (acel, puntos, "C", 1500, 24, 3, cal.bias, cal.scale, ref.NOISE_VAR, 0.9)
-    a = confirm_fixed_run(*args, level=LEVEL, mapper=serial_map, chunk=5)
-    b = confirm_fixed_run(*args, level=LEVEL, mapper=process_map(2), chunk=7)
+    kw = dict(truth="C", n=1500, runs=24, seed=3, bias=cal.bias, scale=cal.scale,
+              noise_var=ref.NOISE_VAR, predicted=0.9)
+    case = VehicleCase(puntos, level=LEVEL)
+    a = confirm_fixed_run(acel, case, mapper=serial_map, chunk=5, **kw)
+    b = confirm_fixed_run(acel, case, mapper=process_map(2), chunk=7, **kw)
     assert a == b and a.right + a.wrong + a.undecided == 24
 
 

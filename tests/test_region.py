@@ -127,8 +127,8 @@ def test_course_decision_is_c(course, level):
 def test_course_box_bound_reproduces_the_reports(course):
     """a_max: report WLS (max |corrected acceleration| with A_r = (A_m - b)/(1 + s)).
     Box: report LS eq. 49 (y = 45.18) comes from its code, which corrects with (1 - scale) —
-    the bug DESIGN.md names — so reproduce it with that correction. (Its x value, 22.25, is not
-    what its own code and covariance give.)"""
+    the bug docs/conventions.md names — so reproduce it with that correction. (Its x value,
+    22.25, is not what its own code and covariance give.)"""
     _, acel, _, cal, traj = course
     reg = arrival_region(traj, cal, {"C": np.zeros(2)}, ref.NOISE_VAR)
     for k, (value, decimals) in enumerate(REPORT_AMAX):

@@ -64,13 +64,15 @@ def runs(truth):
     acc_m = ((1 + s)[:, None] * tr.acc + b[:, None]
              + rng.normal(size=(R_RUNS, N, 2)) * np.sqrt(SIGMA_A2))
     gyro = tr.yaw_rate + rng.normal(0.0, SIGMA_G, (R_RUNS, N))
-    init = (tr.pos[0], tr.vel[0], float(tr.heading[0]))
-    final = np.array([turning_dead_reckoning(tr.t, acc_m[r], gyro[r], B_HAT, S_HAT,
-                                             *init).final_position for r in range(R_RUNS)])
+    init = (tr.pos[0], tr.vel[0])
+    final = np.array([turning_dead_reckoning(tr.t, acc_m[r], gyro[r], B_HAT, S_HAT, *init,
+                                             psi0=float(tr.heading[0])).final_position
+                      for r in range(R_RUNS)])
     free = fuse_turning(tr.t, acc_m, gyro, np.empty(0), np.empty((0, 2)), bias=B_HAT,
                         scale=S_HAT, cal_cov=CAL_COV, noise_var=SIGMA_A2,
                         gyro_var=SIGMA_G ** 2, sigma_pos=1.0, p0=init[0], v0=init[1],
-                        psi0=init[2], keep="fixes")  # the region's covariance, all runs at once
+                        psi0=float(tr.heading[0]),
+                        keep="fixes")  # the region's covariance, all runs at once
     P = np.asarray(free.covariances)[:, -1]
     return acc_m, gyro, final, P
 
@@ -91,7 +93,7 @@ def test_region_is_the_filters_covariance_around_the_dead_reckoning(truth, runs)
     acc_m, gyro, final, P = runs
     tr = truth
     dr = turning_dead_reckoning(tr.t, acc_m[0], gyro[0], B_HAT, S_HAT, tr.pos[0], tr.vel[0],
-                                float(tr.heading[0]))
+                                psi0=float(tr.heading[0]))
     reg = turning_arrival_region(dr, acc_m[0], gyro[0], cal_cov=CAL_COV, noise_var=SIGMA_A2,
                                  gyro_var=SIGMA_G ** 2, candidates=CANDIDATES, level=LEVEL)
     assert np.array_equal(reg.estimate, final[0])

@@ -14,6 +14,7 @@ values, the noise estimated). With a ``gyro`` variable in acel.mat (``generate v
 :func:`calib.turning_trajectory.turning_dead_reckoning` with its level-L region (the no-fix
 extended filter's covariance, :func:`calib.turning_trajectory.turning_arrival_region`), with
 the heading added; the text output then prints the dead reckoning's decision too. The
+work is :func:`calib.fusion_arrival.fuse_arrival` (this module parses and prints); the
 filter is :func:`calib.fusion.fuse` (docs/fusion.md): Q from
 the stated noise and the calibration covariance, R from the receiver's σ, P0 from the
 calibration covariance and the initial position/velocity σ of ``--p0-std`` / ``--v0-std``
@@ -46,12 +47,9 @@ def _check_nonnegative(value: float, name: str) -> float:
 
 def _cmd_fuse(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
-    import numpy as np
-
     from calib.calibration import calibrate
-    from calib.fusion import fuse
+    from calib.fusion_arrival import dead_reckoning_region, fixes_inside, fuse_arrival
     from calib.io import read_gps
-    from calib.region import decide, squared_distances
 
     level = check_level(args.level)
     check_initial_state(args)
@@ -66,105 +64,52 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
     if cal is None:
         cal = calibrate(ensayo, nv, args.method, args.g)
-    noise_var = (np.asarray(nv, dtype=float) if nv is not None
-                 else np.array([cal.fits[a].sigma2.item() for a in ("x", "y")]))
-    t = acel.t
-    inside = (fixes.t_gps >= t[0]) & (fixes.t_gps <= t[-1])
-    if not np.any(inside):
-        raise ValueError(f"{fixes.source}: no fix falls within the vehicle run "
-                         f"[{t[0]:g}, {t[-1]:g}] s")
-    vel = None
-    if fixes.vel is not None and sigma_vel is not None:
-        vel = fixes.vel[inside]
-    if acel.gyro is not None:  # a turning vehicle: the extended filter
-        res = _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos,
-                            p0_std, v0_std)
-    else:
-        res = fuse(t, acel.aerr, fixes.t_gps[inside], fixes.pos[inside],
-                   bias=cal.bias, scale=cal.scale, cal_cov=cal.cov, noise_var=noise_var,
-                   sigma_pos=sigma_pos, p0=p0, v0=v0, p0_cov=p0_std ** 2, v0_cov=v0_std ** 2,
-                   vel_gps=vel, sigma_vel=sigma_vel if vel is not None else None,
-                   smoother=args.smoother)
-    est = np.asarray(res.final_position, dtype=float).reshape(2)
-    cov = np.asarray(res.final_position_cov, dtype=float).reshape(2, 2)
-    d2 = squared_distances(est, cov, candidates)
-    letter, inside_names, reason = decide(d2, level)
-    decision = {"decision": letter, "inside": list(inside_names), "reason": reason,
-                "level": level, "mahalanobis": {n: float(np.sqrt(v)) for n, v in d2.items()}}
-    out = {"fusion": res.to_dict(), "decision": decision,
-           "units": {"decision.level": "1", "decision.mahalanobis.*": "1"}}
+    turning = acel.gyro is not None  # a turning vehicle: the extended filter
+    if turning:
+        _check_turning_options(args)
+    initial = dict(p0=p0, v0=v0, level=level, noise_var=nv, gyro_var=args.gyro_sigma ** 2,
+                   psi0=float(args.psi0), psi0_var=float(args.psi0_sigma) ** 2,
+                   p0_std=p0_std, v0_std=v0_std)
+    res = fuse_arrival(acel, fixes, cal, candidates, sigma_pos=sigma_pos, sigma_vel=sigma_vel,
+                       smoother=args.smoother, **initial)
+    out = res.to_dict()
     check_finite(out, "the result")
     if args.plot or args.rrd:
-        traj, region = _dead_reckoning(args, acel, cal, candidates, p0, v0, noise_var, level,
-                                       p0_std, v0_std)
+        traj, region = dead_reckoning_region(acel, cal, candidates, **initial)
         truth, true_path, true_heading = _truth(args)
         # a turning run: the true heading and, on the figure too, the true path
-        turning = {} if acel.gyro is None else {"true_heading": true_heading}
+        extra = {"true_heading": true_heading} if turning else {}
+    fused_pos = fixes.pos[fixes_inside(acel, fixes)]  # the fixes the filter used
     if args.plot:
         from bench.figures.fusion import save_fusion_plot
 
-        save_fusion_plot(args.plot, traj, region, res, fixes.pos[inside], level, letter,
-                         force=args.force, **turning,
+        save_fusion_plot(args.plot, traj, region, res.fusion, fused_pos, level,
+                         res.decision.letter, force=args.force, **extra,
                          **({"true_path": true_path} if turning else {}))
     if args.rrd:
         from bench.record.fusion import record_fusion
 
-        record_fusion(args.rrd, traj, region, res, fixes.pos[inside], decision, level,
-                      force=args.force, truth=truth, true_path=true_path, **turning)
+        record_fusion(args.rrd, traj, region, res.fusion, fused_pos, out["decision"], level,
+                      force=args.force, truth=truth, true_path=true_path, **extra)
     if args.json:
         print_json(out)
         return 0
     print(res.summary())
-    print(f"initial uncertainty: σ_p0 = {p0_std:g} m, σ_v0 = {v0_std:g} m/s per axis "
-          "(--p0-std/--v0-std; datos.txt states P0 and V0 without uncertainty)")
-    print(f"decision: {letter or 'undecided'} ({reason}); fixes used: "
-          f"{int(inside.sum())} of {inside.size}")
-    if (args.plot or args.rrd) and acel.gyro is not None:
+    if (args.plot or args.rrd) and turning:
         print(region.summary())
     print_files([args.plot, args.rrd])
     return 0
 
 
-def _fuse_turning(args, acel, fixes, inside, cal, p0, v0, noise_var, sigma_pos, p0_std,
-                  v0_std):
-    """The turning vehicle (acel.mat has ``gyro``): :func:`calib.fusion_turning.fuse_turning`
-    with σ_g from ``--gyro-sigma`` and the initial heading ``--psi0`` ± ``--psi0-sigma``."""
-    from calib.fusion_turning import fuse_turning
-
+def _check_turning_options(args: argparse.Namespace) -> None:
+    """A turning run (acel.mat has ``gyro``): position fixes only, σ_g from ``--gyro-sigma``,
+    the initial heading's σ from ``--psi0-sigma``."""
     if args.gps_vel_sigma is not None:
         raise OptionError("--gps-vel-sigma: the turning filter (acel.mat with 'gyro') uses "
                           "position fixes only")
-    gyro_sigma = check_positive(args.gyro_sigma, "--gyro-sigma")
-    psi0_sigma = float(args.psi0_sigma)
-    if not psi0_sigma >= 0.0:
+    check_positive(args.gyro_sigma, "--gyro-sigma")
+    if not float(args.psi0_sigma) >= 0.0:
         raise OptionError(f"--psi0-sigma must be >= 0 rad, got {args.psi0_sigma}")
-    return fuse_turning(acel.t, acel.aerr, acel.gyro, fixes.t_gps[inside], fixes.pos[inside],
-                        bias=cal.bias, scale=cal.scale, cal_cov=cal.cov, noise_var=noise_var,
-                        gyro_var=gyro_sigma ** 2, sigma_pos=sigma_pos, p0=p0, v0=v0,
-                        psi0=float(args.psi0), p0_cov=p0_std ** 2, v0_cov=v0_std ** 2,
-                        psi0_var=psi0_sigma ** 2, smoother=args.smoother)
-
-
-def _dead_reckoning(args, acel, cal, candidates, p0, v0, noise_var, level: float,
-                    p0_std: float, v0_std: float):
-    """Dead reckoning for the pictures with its level-L arrival region: the course one, or for
-    a turning run (acel.gyro) :func:`calib.turning_trajectory.turning_dead_reckoning` from
-    ``--psi0`` with :func:`calib.turning_trajectory.turning_arrival_region` (the same σ as
-    the filter: ``--gyro-sigma``, ``--psi0-sigma``, ``--p0-std``, ``--v0-std``)."""
-    if acel.gyro is not None:
-        from calib.turning_trajectory import turning_arrival_region, turning_dead_reckoning
-
-        traj = turning_dead_reckoning(acel.t, acel.aerr, acel.gyro, cal.bias, cal.scale, p0,
-                                      v0, float(args.psi0))
-        return traj, turning_arrival_region(
-            traj, acel.aerr, acel.gyro, cal_cov=cal.cov, noise_var=noise_var,
-            gyro_var=float(args.gyro_sigma) ** 2, candidates=candidates, level=level,
-            psi0_var=float(args.psi0_sigma) ** 2, p0_cov=p0_std ** 2, v0_cov=v0_std ** 2)
-    from calib.region import arrival_region
-    from calib.trajectory import compute_trajectory
-
-    traj = compute_trajectory(acel, cal, p0, v0)
-    return traj, arrival_region(traj, cal, candidates, noise_var, level)
 
 
 def _truth(args: argparse.Namespace):

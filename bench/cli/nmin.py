@@ -37,7 +37,6 @@ def _course_steps() -> str:
 def _cmd_nmin(args: argparse.Namespace) -> int:
     from calib.nmin import CONFIRM_N_MAX, analyze_nmin  # start-up time of `tiltbench --help`
 
-
     level = check_level(args.level)
     check_initial_state(args)
     steps = parse_ints(args.steps, "--steps")
@@ -64,9 +63,10 @@ def _cmd_nmin(args: argparse.Namespace) -> int:
     if cal is not None and ensayo is None and steps:
         prog(f"no --ensayo: the course subsampling (--steps) re-fits the calibration run's "
              f"samples, which {args.calibration} does not hold; skipped")
-    res = analyze_nmin(ensayo, acel, candidates, p0, v0, nv, level, args.method,
-                       args.integrator, args.g, steps, mc_n, args.runs, args.seed,
-                       progress=prog, draws=args.draws, confirm_runs=args.confirm_runs,
+    res = analyze_nmin(ensayo, acel, candidates, p0=p0, v0=v0, noise_var=nv, level=level,
+                       method=args.method, integrator=args.integrator, g=args.g, steps=steps,
+                       mc_n=mc_n, runs=args.runs, seed=args.seed, progress=prog,
+                       draws=args.draws, confirm_runs=args.confirm_runs,
                        mapper=mapper_from_args(args) if args.confirm_runs else None,
                        count=lambda done, total: prog.count(done, total, "regeneration chunks"),
                        calibration=cal)

@@ -33,7 +33,7 @@ from bench.record.blueprint import fusion_blueprint, plane_bounds
 from bench.record.plot import log_grid, plane_box
 from bench.record.stream import COLORS, TIME_TIMELINE, log_series, log_tree, open_recording
 from bench.record.summary import decision_markdown, true_arrival
-from bench.record.vehicle import FLIP_Y, _log_arrival, _log_candidates
+from bench.record.vehicle import FLIP_Y, log_arrival, log_candidates
 from calib.conventions import AXES
 from calib.region import Ellipse
 from calib.turning_trajectory import TurningTrajectory, dead_reckoning_path, heading_error
@@ -73,8 +73,8 @@ def _fix_nodes(res: FusionResult) -> np.ndarray:
 
 def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
                   region: ArrivalRegion | TurningRegion, res: FusionResult, fixes: np.ndarray,
-                  decision: Mapping, level: float, force: bool = False,
-                  truth: Mapping | None = None, true_path: np.ndarray | None = None, *,
+                  decision: Mapping, level: float, *, force: bool = False,
+                  truth: Mapping | None = None, true_path: np.ndarray | None = None,
                   candidates: Mapping | None = None,
                   true_heading: tuple[np.ndarray, np.ndarray] | None = None) -> Path:
     """Record a fused vehicle run (module docstring for the entities).
@@ -134,8 +134,8 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
         rec.send_columns("vehicle/plane/fused/position",
                          indexes=[rr.TimeColumn(TIME_TIMELINE, duration=t - t0)],
                          columns=rr.Points2D.columns(positions=fused))
-        _log_candidates(rec, cands)
-        _log_arrival(rec, region)
+        log_candidates(rec, cands)
+        log_arrival(rec, region)
         tg = {TIME_TIMELINE: np.asarray(res.t_gps, float) - t0}
         nu = np.asarray(res.innovations, float)
         s = np.sqrt(np.diagonal(np.asarray(res.innovation_covs, float), axis1=-2, axis2=-1))

@@ -77,7 +77,8 @@ def _log_paths(rec: rr.RecordingStream, t: np.ndarray, paths: Mapping[str, Any])
                          columns=rr.Points2D.columns(positions=p))
 
 
-def _log_candidates(rec: rr.RecordingStream, candidates: Mapping[str, Any]) -> None:
+def log_candidates(rec: rr.RecordingStream, candidates: Mapping[str, Any]) -> None:
+    """The candidate arrival points (name → (2,) m) with their labels (static)."""
     import rerun as rr
 
     names = list(candidates)
@@ -101,7 +102,7 @@ def _log_accelerations(rec: rr.RecordingStream, t: np.ndarray,
                        0.5 if name == "measured" else 1.5)
 
 
-def _log_arrival(rec: rr.RecordingStream, region: ArrivalRegion) -> None:
+def log_arrival(rec: rr.RecordingStream, region: ArrivalRegion) -> None:
     """The corrected arrival point and its confidence ellipse (static)."""
     import rerun as rr
 
@@ -164,8 +165,8 @@ def log_vehicle(rec: rr.RecordingStream, traj: Trajectory, region: ArrivalRegion
                                      "corrected": traj.acc_corrected, "true": true_acc})
     _log_paths(rec, traj.t, {"raw": traj.pos_raw, "corrected": traj.pos_corrected,
                              "true": true_path})
-    _log_candidates(rec, region.candidates)
-    _log_arrival(rec, region)
+    log_candidates(rec, region.candidates)
+    log_arrival(rec, region)
     _log_uncertainty(rec, traj, region, cal, n_ellipses)
     log_grid(rec, "vehicle/plane/grid", plane_box(*_region_points(traj, region, true_path)))
 
@@ -200,7 +201,7 @@ def record_vehicle_truth(run: VehicleRun, path: str | os.PathLike, force: bool =
         _log_paths(rec, run.t, {"raw": raw, "true": run.truth.pos})
         log_grid(rec, "vehicle/plane/grid", plane_box(raw, run.truth.pos, cand))
         if candidates is not None:
-            _log_candidates(rec, candidates)
+            log_candidates(rec, candidates)
         if calibration is not None:
             log_truth_axes(rec, calibration)
         log_tree(rec, "truth", manifest)

@@ -65,30 +65,12 @@ from calib.effects.run import RunData
 from calib.effects.state import AxisState, ModelState
 from calib.filters import lowpass
 from calib.ls import FitResult, NotIdentifiableError, fit_linear
+from calib.numerics import equilibrated_cond as _equilibrated_cond
+from calib.numerics import r_factor as _r_factor
 
 COND_MAX = 1e10
 """An extension whose whitened design has a larger (equilibrated) condition number is not
 testable in this experiment (its columns are collinear with the model's)."""
-
-
-def _r_factor(a: np.ndarray) -> np.ndarray:
-    """Upper triangle R (c × c) of the Householder QR of ``a`` (n × c, n ≥ c; overwritten
-    when it is already a Fortran-ordered float array)."""
-    qr, _, _, info = lapack.dgeqrf(np.asfortranarray(a, dtype=float), overwrite_a=1)
-    if info != 0:
-        raise np.linalg.LinAlgError(f"dgeqrf failed (info = {info})")
-    c = a.shape[1]
-    return np.triu(qr[:c, :c])
-
-
-def _equilibrated_cond(r: np.ndarray) -> float:
-    """2-norm condition number of a design with unit-norm columns, from any matrix with the
-    design's Gram matrix (its R factor): the column norms and singular values are equal."""
-    norms = np.linalg.norm(r, axis=0)
-    if r.size == 0 or np.any(norms == 0) or not np.all(np.isfinite(r)):
-        return float("inf")
-    s = np.linalg.svd(r / norms, compute_uv=False)
-    return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
 
 
 class _LRU(OrderedDict):

@@ -1,6 +1,6 @@
 """Course answer for ../shared/course-data/ensayo.mat (FreeMat data of 2009).
 
-Provenance: ../shared/DESIGN.md ("Conventions"), which records the course answer; the same
+Provenance: docs/conventions.md ("The sensor model"), which records the course answer; the same
 estimates appear in ../shared/references/course-report-WLS.txt, section 2.1.2
 (x̂ = [-0.0301, 0.0767, 0.0100, -0.0175]). Model A_m = (1 + scale)·A_r + bias + v with
 σ² = 0.25 (x), 0.64 (y). Values are given to 4 decimals (estimates) and 5 significant digits

@@ -1,0 +1,168 @@
+"""Where the vehicle arrived, from its accelerometers fused with position fixes: the filter
+for the run's kind, then the arrival decision (what ``tiltbench fuse`` prints).
+
+The run's kind decides the filter: readings with a yaw rate (``Acel.gyro``, a turning
+vehicle) go through the extended filter :func:`calib.fusion_turning.fuse_turning`, the others
+through the linear :func:`calib.fusion.fuse` (docs/fusion.md). Only the fixes inside the
+vehicle run's time span are used. The decision (:class:`calib.region.Decision`) is taken at
+level L around the filtered final position with its covariance (m, m²), by the same rule as
+the dead-reckoning regions (:mod:`calib.region`). The vehicle noise σ² is the stated one, else
+the calibration's (:func:`calib.region.stated_noise_var`). Nothing is tuned: Q from the stated
+noise and the calibration covariance, R from the receiver's σ, P0 from the calibration and
+the initial-state σ (``p0_std`` m, ``v0_std`` m/s per axis; 0 for the course, whose
+datos.txt states P0 and V0 exactly).
+
+:func:`dead_reckoning_region` gives the pictures' comparison: the dead reckoning without fixes
+and its level-L region (:func:`calib.region.arrival_region`, or for a turning run
+:func:`calib.turning_trajectory.turning_arrival_region`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from calib.calibration import Calibration
+from calib.fusion import FusionResult, fuse
+from calib.fusion_turning import TurningFusionResult, fuse_turning
+from calib.io import Acel, Fixes
+from calib.region import ArrivalRegion, Decision, arrival_region, stated_noise_var
+from calib.results import ResultMixin
+from calib.trajectory import Trajectory, compute_trajectory
+from calib.turning_trajectory import (
+    TurningRegion,
+    TurningTrajectory,
+    turning_arrival_region,
+    turning_dead_reckoning,
+)
+
+
+@dataclass(frozen=True, eq=False)
+class FusedArrival(ResultMixin):
+    """The fused run and its arrival decision.
+
+    Attributes
+    ----------
+    fusion : :class:`calib.fusion.FusionResult` (or the turning one).
+    decision : :class:`calib.region.Decision` around the filtered final position.
+    fixes_used : fixes inside the vehicle run.  fixes_total : fixes in the file.
+    p0_std : σ of the initial position per axis, m.  v0_std : of the velocity, m/s.
+    """
+
+    _TITLE = "Fused arrival"
+    _UNITS = ("as the fusion result; decision level, Mahalanobis distances dimensionless; "
+              "p0_std m, v0_std m/s")
+
+    fusion: FusionResult
+    decision: Decision
+    fixes_used: int
+    fixes_total: int
+    p0_std: float = 0.0
+    v0_std: float = 0.0
+
+    def to_dict(self) -> dict:
+        """The ``fuse --json`` object: ``fusion``, ``decision``, ``units``."""
+        return {"fusion": self.fusion.to_dict(), "decision": self.decision.to_dict(),
+                "units": {f"decision.{k}": u for k, u in Decision.UNITS.items()}}
+
+    def to_state(self) -> dict:
+        """:meth:`to_dict` plus what an exact rebuild needs."""
+        return {**self.to_dict(), "decision": self.decision.to_state(),
+                "fixes_used": self.fixes_used, "fixes_total": self.fixes_total,
+                "p0_std": self.p0_std, "v0_std": self.v0_std}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> FusedArrival:
+        """Rebuild from :meth:`to_state` (exact)."""
+        kind = TurningFusionResult if "gyro_var" in d["fusion"] else FusionResult
+        return cls(kind.from_dict(d["fusion"]), Decision.from_dict(d["decision"]),
+                   int(d["fixes_used"]), int(d["fixes_total"]), float(d["p0_std"]),
+                   float(d["v0_std"]))
+
+    def summary(self) -> str:
+        return "\n".join([
+            self.fusion.summary(),
+            f"initial uncertainty: σ_p0 = {self.p0_std:g} m, σ_v0 = {self.v0_std:g} m/s per "
+            "axis (--p0-std/--v0-std; datos.txt states P0 and V0 without uncertainty)",
+            f"decision: {self.decision.letter or 'undecided'} ({self.decision.reason}); fixes "
+            f"used: {self.fixes_used} of {self.fixes_total}",
+        ])
+
+
+def fixes_inside(acel: Acel, fixes: Fixes) -> np.ndarray:
+    """(M,) bool: the fixes within the vehicle run ``[t_0, t_end]`` (s); refuses a file with
+    none there (ValueError naming it)."""
+    t = acel.t
+    inside = (fixes.t_gps >= t[0]) & (fixes.t_gps <= t[-1])
+    if not np.any(inside):
+        raise ValueError(f"{fixes.source}: no fix falls within the vehicle run "
+                         f"[{t[0]:g}, {t[-1]:g}] s")
+    return inside
+
+
+def fuse_arrival(acel: Acel, fixes: Fixes, calibration: Calibration,
+                 candidates: dict[str, np.ndarray], *, p0, v0, level: float, noise_var=None,
+                 sigma_pos: float = 3.0, sigma_vel: float | None = None, p0_std: float = 0.0,
+                 v0_std: float = 0.0, gyro_var: float = 0.005 ** 2, psi0: float = 0.0,
+                 psi0_var: float = 0.0, smoother: bool = False) -> FusedArrival:
+    """Fuse the vehicle run with the fixes inside it and decide where it arrived.
+
+    Parameters
+    ----------
+    acel : the vehicle run (``t`` s, ``aerr`` m/s², ``gyro`` rad/s for a turning vehicle).
+    fixes : the receiver's fixes (``t_gps`` s, ``pos`` m, optional ``vel`` m/s).
+    calibration : the accelerometer calibration (bias, scale, covariance, σ²).
+    candidates : name → (2,) candidate arrival point, m.
+    p0 (2,) m, v0 (2,) m/s : initial state; p0_std m, v0_std m/s : its σ per axis.
+    level : confidence level L of the decision.
+    noise_var : σ_a² (2,) (m/s²)², or None: the calibration's.
+    sigma_pos : σ of a position fix coordinate, m.  sigma_vel : of a velocity fix, m/s —
+        velocity fixes are used only when given (linear filter only).
+    gyro_var (rad/s)², psi0 rad, psi0_var rad² : a turning run's gyro noise and initial
+        heading (ignored otherwise).
+    smoother : also run the RTS smoother.
+    """
+    inside = fixes_inside(acel, fixes)
+    nv = stated_noise_var(noise_var, calibration)
+    common = dict(calibration=calibration, noise_var=nv, sigma_pos=sigma_pos, p0=p0, v0=v0,
+                  p0_cov=p0_std ** 2, v0_cov=v0_std ** 2, smoother=smoother)
+    if acel.gyro is not None:  # a turning vehicle: the extended filter
+        if sigma_vel is not None:
+            raise ValueError("the turning filter (readings with a gyro) uses position fixes "
+                             "only: give no velocity-fix σ")
+        res: FusionResult = fuse_turning(acel.t, acel.aerr, acel.gyro, fixes.t_gps[inside],
+                                         fixes.pos[inside], gyro_var=gyro_var, psi0=psi0,
+                                         psi0_var=psi0_var, **common)
+    else:
+        vel = fixes.vel[inside] if fixes.vel is not None and sigma_vel is not None else None
+        res = fuse(acel.t, acel.aerr, fixes.t_gps[inside], fixes.pos[inside], vel_gps=vel,
+                   sigma_vel=sigma_vel if vel is not None else None, **common)
+    est = np.asarray(res.final_position, dtype=float).reshape(2)
+    cov = np.asarray(res.final_position_cov, dtype=float).reshape(2, 2)
+    return FusedArrival(res, Decision.at(est, cov, candidates, level), int(inside.sum()),
+                        int(inside.size), float(p0_std), float(v0_std))
+
+
+def dead_reckoning_region(acel: Acel, calibration: Calibration,
+                          candidates: dict[str, np.ndarray], *, p0, v0, level: float,
+                          noise_var=None, gyro_var: float = 0.005 ** 2, psi0: float = 0.0,
+                          psi0_var: float = 0.0, p0_std: float = 0.0, v0_std: float = 0.0
+                          ) -> tuple[Trajectory | TurningTrajectory, ArrivalRegion | TurningRegion]:
+    """The dead reckoning without fixes and its level-L arrival region, the comparison the
+    fused run is drawn against: :func:`calib.region.arrival_region` of the course trajectory,
+    or for a turning run (``acel.gyro``) :func:`calib.turning_trajectory.turning_arrival_region`
+    from ``psi0`` with the same σ as the filter (parameters as :func:`fuse_arrival`)."""
+    nv = stated_noise_var(noise_var, calibration)
+    if acel.gyro is not None:
+        traj = turning_dead_reckoning(acel.t, acel.aerr, acel.gyro, calibration.bias,
+                                      calibration.scale, p0, v0, psi0=psi0)
+        return traj, turning_arrival_region(
+            traj, acel.aerr, acel.gyro, cal_cov=calibration.cov, noise_var=nv,
+            gyro_var=gyro_var, candidates=candidates, level=level, psi0_var=psi0_var,
+            p0_cov=p0_std ** 2, v0_cov=v0_std ** 2)
+    traj = compute_trajectory(acel, calibration, p0, v0)
+    return traj, arrival_region(traj, calibration, candidates, nv, level)
+
+
+__all__ = ["FusedArrival", "dead_reckoning_region", "fixes_inside", "fuse_arrival"]
