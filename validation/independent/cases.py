@@ -71,7 +71,14 @@ def split_of(case_id: str) -> str:
     return "heldout" if int.from_bytes(h[:8], "big") / 2**64 < HELDOUT_FRACTION else "tune"
 
 
-C, CL, A, O = "catalog", "clean", "absorbed", "out_of_catalog"
+SCALED = {"settling_transient": "amp", "direction_hysteresis": "h", "dead_zone": "d",
+          "fractional_harmonic": "amp", "bias_jump": "jump", "flicker": "amp",
+          "ringing": "amp", "drive_vibration": "amp", "thermal_cycle": "amp",
+          "scale_asymmetry": "kappa", "cubic_k3": "k3"}
+"""Mechanisms sized on their mean signature (z σ), and the parameter that sets the size. The
+others (extra noise, spikes, rails, a stuck stretch) are sized in their own terms (note)."""
+
+C, CL, A, OOC = "catalog", "clean", "absorbed", "out_of_catalog"
 
 CASES: tuple[CaseDef, ...] = (
     # --- catalog effects, three each, on designs validation/ does not use
@@ -128,38 +135,38 @@ CASES: tuple[CaseDef, ...] = (
     CaseDef(CL, "clean", "-", "partial_sweep", "rate", rate=100, noise=2, n=12001),
     CaseDef(CL, "clean", "-", "slow_fast_turns", "none", rate=100, noise=0, n=20001),
     # --- mechanisms outside the catalog, two designs each
-    CaseDef(O, "settling_transient", "x", "stop_and_go", "rate", rate=100, noise=1, z=10),
-    CaseDef(O, "settling_transient", "y", "random_poses", "rate", rate=50, noise=0, z=10),
-    CaseDef(O, "direction_hysteresis", "y", "backforth_dwell", "rate", rate=100, noise=0, z=10),
-    CaseDef(O, "direction_hysteresis", "x", "partial_poses", noise=2, z=10),
-    CaseDef(O, "dead_zone", "y", "random_poses", noise=1, z=10),
-    CaseDef(O, "dead_zone", "x", "slow_fast_turns", "rate", rate=100, noise=0, z=10),
-    CaseDef(O, "fractional_harmonic", "x", "slow_fast_turns", "rate", rate=100, noise=2, z=10,
+    CaseDef(OOC, "settling_transient", "x", "stop_and_go", "rate", rate=100, noise=1, z=10),
+    CaseDef(OOC, "settling_transient", "y", "random_poses", "rate", rate=50, noise=0, z=10),
+    CaseDef(OOC, "direction_hysteresis", "y", "backforth_dwell", "rate", rate=100, noise=0, z=10),
+    CaseDef(OOC, "direction_hysteresis", "x", "partial_poses", noise=2, z=10),
+    CaseDef(OOC, "dead_zone", "y", "random_poses", noise=1, z=10),
+    CaseDef(OOC, "dead_zone", "x", "slow_fast_turns", "rate", rate=100, noise=0, z=10),
+    CaseDef(OOC, "fractional_harmonic", "x", "slow_fast_turns", "rate", rate=100, noise=2, z=10,
             extra={"nu": 1.5}),
-    CaseDef(O, "fractional_harmonic", "y", "random_poses", noise=0, z=10, extra={"nu": 2.5}),
-    CaseDef(O, "bias_jump", "y", "backforth_dwell", "t", "jitter", noise=1, z=10),
-    CaseDef(O, "bias_jump", "x", "random_poses", noise=3, z=10),
-    CaseDef(O, "flicker", "x", "repeated_poses", noise=0, z=10),
-    CaseDef(O, "flicker", "y", "partial_sweep", "t", "jitter", noise=1, z=10),
-    CaseDef(O, "ringing", "x", "stop_and_go", "rate", rate=200, noise=2, z=10),
-    CaseDef(O, "ringing", "y", "growing_rock", "rate", rate=200, noise=0, z=10),
-    CaseDef(O, "drive_vibration", "y", "slow_fast_turns", "rate", rate=200, noise=1, z=10),
-    CaseDef(O, "drive_vibration", "x", "negative_turns", "rate", rate=200, noise=3, z=10),
-    CaseDef(O, "thermal_cycle", "x", "random_poses", "rate", rate=50, noise=0, z=10),
-    CaseDef(O, "thermal_cycle", "y", "backforth_dwell", "rate", rate=100, noise=2, z=10),
-    CaseDef(O, "scale_asymmetry", "x", "random_poses", noise=1, z=10),
-    CaseDef(O, "scale_asymmetry", "y", "stop_and_go", "rate", rate=100, noise=0, z=10),
-    CaseDef(O, "cubic_k3", "y", "slow_fast_turns", "rate", rate=100, noise=0, z=10),
-    CaseDef(O, "cubic_k3", "x", "partial_poses", noise=1, z=10),
-    CaseDef(O, "speed_noise", "y", "growing_rock", "rate", rate=200, noise=1, z=2.0),
-    CaseDef(O, "speed_noise", "x", "slow_fast_turns", "t", "jitter", noise=0, z=2.0),
-    CaseDef(O, "impulsive_spikes", "x", "random_poses", noise=2, z=7.0),
-    CaseDef(O, "impulsive_spikes", "y", "backforth_dwell", "rate", rate=100, noise=0, z=7.0),
-    CaseDef(O, "asymmetric_clip", "y", "slow_fast_turns", "rate", rate=100, noise=1),
-    CaseDef(O, "asymmetric_clip", "x", "random_poses", noise=0),
-    CaseDef(O, "frozen_output", "both", "backforth_dwell", "rate", rate=100, noise=0,
+    CaseDef(OOC, "fractional_harmonic", "y", "random_poses", noise=0, z=10, extra={"nu": 2.5}),
+    CaseDef(OOC, "bias_jump", "y", "backforth_dwell", "t", "jitter", noise=1, z=10),
+    CaseDef(OOC, "bias_jump", "x", "random_poses", noise=3, z=10),
+    CaseDef(OOC, "flicker", "x", "repeated_poses", noise=0, z=10),
+    CaseDef(OOC, "flicker", "y", "partial_sweep", "t", "jitter", noise=1, z=10),
+    CaseDef(OOC, "ringing", "x", "stop_and_go", "rate", rate=200, noise=2, z=10),
+    CaseDef(OOC, "ringing", "y", "growing_rock", "rate", rate=200, noise=0, z=10),
+    CaseDef(OOC, "drive_vibration", "y", "slow_fast_turns", "rate", rate=200, noise=1, z=10),
+    CaseDef(OOC, "drive_vibration", "x", "negative_turns", "rate", rate=200, noise=3, z=10),
+    CaseDef(OOC, "thermal_cycle", "x", "random_poses", "rate", rate=50, noise=0, z=10),
+    CaseDef(OOC, "thermal_cycle", "y", "backforth_dwell", "rate", rate=100, noise=2, z=10),
+    CaseDef(OOC, "scale_asymmetry", "x", "random_poses", noise=1, z=10),
+    CaseDef(OOC, "scale_asymmetry", "y", "stop_and_go", "rate", rate=100, noise=0, z=10),
+    CaseDef(OOC, "cubic_k3", "y", "slow_fast_turns", "rate", rate=100, noise=0, z=10),
+    CaseDef(OOC, "cubic_k3", "x", "partial_poses", noise=1, z=10),
+    CaseDef(OOC, "speed_noise", "y", "growing_rock", "rate", rate=200, noise=1, z=2.0),
+    CaseDef(OOC, "speed_noise", "x", "slow_fast_turns", "t", "jitter", noise=0, z=2.0),
+    CaseDef(OOC, "impulsive_spikes", "x", "random_poses", noise=2, z=7.0),
+    CaseDef(OOC, "impulsive_spikes", "y", "backforth_dwell", "rate", rate=100, noise=0, z=7.0),
+    CaseDef(OOC, "asymmetric_clip", "y", "slow_fast_turns", "rate", rate=100, noise=1),
+    CaseDef(OOC, "asymmetric_clip", "x", "random_poses", noise=0),
+    CaseDef(OOC, "frozen_output", "both", "backforth_dwell", "rate", rate=100, noise=0,
             extra={"length": 300}),
-    CaseDef(O, "frozen_output", "both", "partial_poses", noise=2, extra={"length": 200}),
+    CaseDef(OOC, "frozen_output", "both", "partial_poses", noise=2, extra={"length": 200}),
 )
 
 
@@ -320,10 +327,7 @@ def _make(c, motion, base, draws, axes, phase, beta, sign):  # noqa: C901 - one 
             return effect_z(motion, base, {**base, "mechanisms": [{**mech, key: s}]}, draws)
         return _solve(zf, lo, hi, z)
     sig = np.sqrt(base["axes"][axes[0]]["sigma2"])
-    scaled = {"settling_transient": "amp", "direction_hysteresis": "h", "dead_zone": "d",
-              "fractional_harmonic": "amp", "bias_jump": "jump", "flicker": "amp",
-              "ringing": "amp", "drive_vibration": "amp", "thermal_cycle": "amp",
-              "scale_asymmetry": "kappa", "cubic_k3": "k3"}
+    scaled = SCALED
     if w in scaled:
         key = scaled[w]
         hi = {"dead_zone": 0.5 * G, "scale_asymmetry": 0.5, "cubic_k3": 1e-2}.get(w, 50.0)
@@ -377,7 +381,8 @@ def _truth(c, seed, motion, base, spec, draws, params, size_note, stated) -> dic
                         "out_of_catalog": "unexplained"}[c.kind]
     effects = [{"name": c.what, "axis": ax, "params": p} for ax, p in params.items()] \
         if c.kind == "catalog" else []
-    z_real = effect_z(motion, base, spec, draws) if c.kind != "clean" else 0.0
+    sized = c.kind == "catalog" or c.what in SCALED
+    z_real = effect_z(motion, base, spec, draws) if sized else None
     if c.what in ("noise_level", "quantization"):
         z_real = c.z  # not a change of the mean: χ² excess in σ / lsb in σ (size note)
     z_near, near = (float("nan"), "")
@@ -394,7 +399,7 @@ def _truth(c, seed, motion, base, spec, draws, params, size_note, stated) -> dic
         "noise_var": list(stated), "g_nominal": G,
         "expected": {"verdict": expected_verdict, "effects": effects},
         "mechanism": spec.get("mechanisms", [None])[0] if c.kind == "out_of_catalog" else None,
-        "size": {"z_target": c.z if c.kind in ("catalog", "out_of_catalog") else None,
+        "size": {"z_target": c.z if sized else None,
                  "z": z_real, "z_vs_nearest": z_near, "nearest_rival": near,
                  "note": size_note},
         "sensor": {"g": spec.get("g", G), "tilt_offset": spec.get("tilt_offset", 0.0),

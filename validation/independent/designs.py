@@ -27,7 +27,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.polynomial import Polynomial as P
+from numpy.polynomial import Polynomial
 
 PARTIAL = (np.deg2rad(-60.0), np.deg2rad(200.0))
 """θ range (rad) of the partial designs."""
@@ -69,30 +69,30 @@ class Motion:
         return bool(np.any(self.omega != 0.0))
 
 
-_S = P([0, 0, 0, 10, -15, 6])      # minimum-jerk shape s(u)
+_S = Polynomial([0, 0, 0, 10, -15, 6])      # minimum-jerk shape s(u)
 _SI = _S.integ()                   # S(u) = ∫₀ᵘ s
 
 
 @dataclass(frozen=True)
 class Segment:
     duration: float
-    poly: P  # θ(τ) − θ₀, τ in s
+    poly: Polynomial  # θ(τ) − θ₀, τ in s
 
 
 def hold(T: float) -> Segment:
-    return Segment(T, P([0.0]))
+    return Segment(T, Polynomial([0.0]))
 
 
 def move(dtheta: float, T: float) -> Segment:
-    return Segment(T, dtheta * _S(P([0, 1.0 / T])))
+    return Segment(T, dtheta * _S(Polynomial([0, 1.0 / T])))
 
 
 def ramp(w0: float, w1: float, T: float) -> Segment:
-    return Segment(T, P([0, w0]) + (w1 - w0) * T * _SI(P([0, 1.0 / T])))
+    return Segment(T, Polynomial([0, w0]) + (w1 - w0) * T * _SI(Polynomial([0, 1.0 / T])))
 
 
 def cruise(w: float, T: float) -> Segment:
-    return Segment(T, P([0, w]))
+    return Segment(T, Polynomial([0, w]))
 
 
 def evaluate(segments: list[Segment], t: np.ndarray, theta0: float = 0.0):
