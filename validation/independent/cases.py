@@ -31,7 +31,16 @@ import numpy as np
 from scipy.optimize import brentq
 
 from . import designs
-from .effects import AXES, Draws, effect_z, mean_readings, neutral_axis, readings, z_vs_nearest
+from .effects import (
+    AXES,
+    Draws,
+    catalog_columns,
+    effect_z,
+    mean_readings,
+    neutral_axis,
+    readings,
+    z_vs_nearest,
+)
 from .physics import G, static_force, walk_trace
 
 SPLIT_SALT = "tiltbench-independent-2026"
@@ -70,6 +79,9 @@ def split_of(case_id: str) -> str:
     h = hashlib.sha256(f"{SPLIT_SALT}:{case_id}".encode()).digest()
     return "heldout" if int.from_bytes(h[:8], "big") / 2**64 < HELDOUT_FRACTION else "tune"
 
+
+BAND = 16
+"""Low-frequency bins of the band size of a 1/f path (:func:`.effects.effect_z`)."""
 
 SCALED = {"settling_transient": "amp", "direction_hysteresis": "h", "dead_zone": "d",
           "fractional_harmonic": "amp", "bias_jump": "jump", "flicker": "amp",
@@ -319,12 +331,18 @@ def _make(c, motion, base, draws, axes, phase, beta, sign):  # noqa: C901 - one 
         return (_with(base, axes, lever=pos),
                 {axes[0]: {"pos_x": pos[0], "pos_z": pos[1]}}, f"z = {z}, |p| = {r:.3f} m")
     # --- mechanisms outside the catalog
+    rivals = catalog_columns(motion)
     mech = {"kind": w, "axis": c.axis}
     mech.update(_mechanism_defaults(w, motion, c, phase))
 
+    # sized on what the catalog's parametric effects leave of it (catalog_columns), and a
+    # 1/f path on its low band (effect_z, band): a fair miss is a clear structure missed
+    band = BAND if w == "flicker" else 0
+
     def mz(key, lo, hi):
         def zf(s):
-            return effect_z(motion, base, {**base, "mechanisms": [{**mech, key: s}]}, draws)
+            return effect_z(motion, base, {**base, "mechanisms": [{**mech, key: s}]}, draws,
+                            rivals=rivals, band=band)
         return _solve(zf, lo, hi, z)
     sig = np.sqrt(base["axes"][axes[0]]["sigma2"])
     scaled = SCALED
@@ -352,7 +370,7 @@ def _make(c, motion, base, draws, axes, phase, beta, sign):  # noqa: C901 - one 
     spec = {**base, "mechanisms": [mech]}
     if w in scaled:
         # the sign may flip the direction of a monotone size: check the size reached
-        real = effect_z(motion, base, spec, draws)
+        real = effect_z(motion, base, spec, draws, rivals=rivals, band=band)
         if abs(real - z) > 1e-3 * z:
             raise RuntimeError(f"{c.case_id}: size {real} instead of {z}")
     return spec, {}, note
@@ -383,6 +401,10 @@ def _truth(c, seed, motion, base, spec, draws, params, size_note, stated) -> dic
         if c.kind == "catalog" else []
     sized = c.kind == "catalog" or c.what in SCALED
     z_real = effect_z(motion, base, spec, draws) if sized else None
+    z_beyond = None
+    if c.kind == "out_of_catalog" and sized:
+        z_beyond = effect_z(motion, base, spec, draws, rivals=catalog_columns(motion),
+                            band=BAND if c.what == "flicker" else 0)
     if c.what in ("noise_level", "quantization"):
         z_real = c.z  # not a change of the mean: χ² excess in σ / lsb in σ (size note)
     z_near, near = (float("nan"), "")
@@ -400,7 +422,8 @@ def _truth(c, seed, motion, base, spec, draws, params, size_note, stated) -> dic
         "expected": {"verdict": expected_verdict, "effects": effects},
         "mechanism": spec.get("mechanisms", [None])[0] if c.kind == "out_of_catalog" else None,
         "size": {"z_target": c.z if sized else None,
-                 "z": z_real, "z_vs_nearest": z_near, "nearest_rival": near,
+                 "z": z_real, "z_beyond_catalog": z_beyond, "z_vs_nearest": z_near,
+                 "nearest_rival": near,
                  "note": size_note},
         "sensor": {"g": spec.get("g", G), "tilt_offset": spec.get("tilt_offset", 0.0),
                    "axes": {a: {k: (list(v) if isinstance(v, tuple) else v)
@@ -413,7 +436,8 @@ def _truth(c, seed, motion, base, spec, draws, params, size_note, stated) -> dic
         "mean_reading_range": [float(mu.min()), float(mu.max())],
         "units": {"noise_var": "(m/s²)²", "rate_hz": "Hz", "n": "count", "seed": "—",
                   "g_nominal": "m/s²", "size.z": "1", "size.z_target": "1",
-                  "size.z_vs_nearest": "1", "motion.theta_min": "rad",
+                  "size.z_vs_nearest": "1", "size.z_beyond_catalog": "1",
+                  "motion.theta_min": "rad",
                   "motion.theta_max": "rad", "motion.omega_max": "rad/s",
                   "motion.alpha_max": "rad/s²", "motion.stops": "count",
                   "motion.duration": "s", "mean_reading_range": "m/s²",

@@ -48,7 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .designs import Motion
-from .physics import G, lever_force, nuisance_basis, signature_z, static_force
+from .physics import G, lever_force, residual, signature_z, static_force
 
 AXES = ("x", "y")
 
@@ -228,18 +228,40 @@ def readings(motion: Motion, spec: dict, draws: Draws) -> np.ndarray:
 
 
 def effect_z(motion: Motion, base: dict, spec: dict, draws: Draws,
-             rivals: dict[str, np.ndarray] | None = None) -> float:
+             rivals: dict[str, np.ndarray] | None = None, band: int = 0) -> float:
     """Size of ``spec``'s effect over ``base`` in noise σ, both axes pooled:
     z = √(Σ_a z_a²), z_a = :func:`~.physics.signature_z` of the change of μ on axis a with
-    the stated σ² of ``base``; ``rivals`` (axis → (N, k)) are projected out too."""
+    the stated σ² of ``base``; ``rivals`` (axis → (N, k)) are projected out too.
+
+    ``band`` K > 0 measures a broadband change instead (1/f noise, whose energy is spread over
+    all frequencies, so that ‖P⊥Δ‖ overstates what any test can see): the residual's
+    periodogram I_k = |R_k|²/N summed over the K lowest non-zero frequencies, in units of its
+    standard deviation under white noise (each I_k ~ σ²·Exp(1): sum mean Kσ², sd √K σ²),
+    z_a = Σ I_k / (√K σ²) — the excess a low-band χ² test sees.
+    """
     d = mean_readings(motion, spec, draws) - mean_readings(motion, base, draws)
     ref = static_force(motion.theta, base.get("g", G))
     z2 = 0.0
     for i, ax in enumerate(AXES):
-        if np.any(d[:, i] != 0):
-            riv = None if rivals is None else rivals.get(ax)
-            z2 += signature_z(d[:, i], ref[:, i], base["axes"][ax]["sigma2"], riv) ** 2
+        if not np.any(d[:, i] != 0):
+            continue
+        riv = None if rivals is None else rivals.get(ax)
+        s2 = base["axes"][ax]["sigma2"]
+        if band:
+            r = residual(d[:, i], ref[:, i], riv)
+            za = float(np.sum(np.abs(np.fft.rfft(r)[1:band + 1]) ** 2) / r.size
+                       / (np.sqrt(band) * s2))
+        else:
+            za = signature_z(d[:, i], ref[:, i], s2, riv)
+        z2 += za**2
     return float(np.sqrt(z2))
+
+
+def catalog_columns(motion: Motion) -> dict[str, np.ndarray]:
+    """Per axis, every linear catalog signature stacked (N, k): what the catalog's parametric
+    effects could take of a mechanism. A mechanism outside the catalog is sized on what is
+    left after them (the detector then has something no catalog effect explains)."""
+    return {ax: np.column_stack(list(rival_columns(motion, ax, "").values())) for ax in AXES}
 
 
 def rival_columns(motion: Motion, axis: str, exclude: str) -> dict[str, np.ndarray]:
@@ -276,5 +298,5 @@ def z_vs_nearest(motion: Motion, base: dict, spec: dict, draws: Draws, name: str
     return float(worst), who
 
 
-__all__ = ["AXES", "CATALOG", "Draws", "effect_z", "lowpass", "mean_readings",
-           "neutral_axis", "nuisance_basis", "readings", "rival_columns", "z_vs_nearest"]
+__all__ = ["AXES", "CATALOG", "Draws", "catalog_columns", "effect_z", "lowpass",
+           "mean_readings", "neutral_axis", "readings", "rival_columns", "z_vs_nearest"]

@@ -83,10 +83,15 @@ def signature_z(delta: np.ndarray, a_ref: np.ndarray, sigma2: float,
     test of the signature Δ has non-centrality z² (one degree of freedom): z is how many σ
     the effect stands above the noise once the nominal model has taken its share.
     """
+    r = residual(delta, a_ref, rivals)
+    return float(np.sqrt(r @ r / sigma2))
+
+
+def residual(delta: np.ndarray, a_ref: np.ndarray, rivals: np.ndarray | None = None):
+    """P⊥Δ: what is left of Δ (N,) after least squares on [1, A_r, rivals] (lstsq)."""
     h = np.column_stack([np.ones_like(a_ref), a_ref] + ([] if rivals is None else [rivals]))
     coef, *_ = np.linalg.lstsq(h, delta, rcond=None)
-    r = delta - h @ coef
-    return float(np.sqrt(r @ r / sigma2))
+    return delta - h @ coef
 
 
 def walk_trace(dt: np.ndarray, a_ref: np.ndarray) -> float:
