@@ -182,3 +182,25 @@ def test_judge_marks_contradictions_false_alarms_and_reports():
                                  "result": None})["ok"]
     s = score.summarize([score.judge(cat, res("explained", [("misalignment", "x")], bad_gap))])
     assert s["contradictions"] == {"hits": 1, "of": 1} and s["catalog_named_right"]["of"] == 1
+
+
+def test_scorer_command_runs_the_cli_with_the_stated_noise_and_rate(tmp_path, capsys):
+    """The scorer's command line is one the real CLI accepts; --rate only for uniform runs
+    stored without t. One small clean static case through ``bench.cli.main`` in-process."""
+    from tests.cli import run
+
+    c = next(c for c in cases.CASES if c.kind == "clean" and c.n == 2001)
+    motion, datos, truth = cases.build(c, 0)
+    generate.write_case(tmp_path / c.case_id, motion, datos, truth)
+    entry = {"file": f"{c.case_id}/ensayo.mat", "noise_var": truth["noise_var"],
+             "timing": truth["timing"], "rate_hz": truth["rate_hz"]}
+    cmd = score.gap_command(entry, tmp_path)
+    assert cmd[1:4] == ["-m", "bench.cli", "gap"] and "--rate" not in cmd
+    assert "--rate" in score.gap_command({**entry, "timing": "rate", "rate_hz": 50.0}, tmp_path)
+    rc, out, err = run(capsys, *cmd[3:])
+    assert rc == 0, err
+    res = json.loads(out)
+    assert res["verdict"] in ("nothing_detected", "explained", "unexplained")
+    row = score.judge({**entry, **truth, "split": truth["split"]},
+                      {"rc": 0, "seconds": 1.0, "result": res, "stderr": ""})
+    assert row["expected"] == "nothing_detected" and row["verdict"] == res["verdict"]

@@ -167,7 +167,7 @@ CASES: tuple[CaseDef, ...] = (
     CaseDef(OOC, "thermal_cycle", "x", "random_poses", "rate", rate=50, noise=0, z=10),
     CaseDef(OOC, "thermal_cycle", "y", "backforth_dwell", "rate", rate=100, noise=2, z=10),
     CaseDef(OOC, "scale_asymmetry", "x", "random_poses", noise=1, z=10),
-    CaseDef(OOC, "scale_asymmetry", "y", "stop_and_go", "rate", rate=100, noise=0, z=10),
+    CaseDef(OOC, "scale_asymmetry", "y", "stop_and_go", "rate", rate=100, noise=2, z=10),
     CaseDef(OOC, "cubic_k3", "y", "slow_fast_turns", "rate", rate=100, noise=0, z=10),
     CaseDef(OOC, "cubic_k3", "x", "partial_poses", noise=1, z=10),
     CaseDef(OOC, "speed_noise", "y", "growing_rock", "rate", rate=200, noise=1, z=2.0),
@@ -209,7 +209,10 @@ def _motion(c: CaseDef, rng) -> designs.Motion:
 
 
 def _solve(zfun, lo: float, hi: float, target: float) -> float:
-    """The size s in [lo, hi] with zfun(s) = target (zfun monotone on the bracket)."""
+    """The size s in [lo, hi] with zfun(s) = target (zfun increasing on the bracket)."""
+    if zfun(hi) < target:
+        raise ValueError(f"size {target} σ not reached below {hi:g}: the effect is too weak "
+                         "on this design and noise (change the case)")
     return float(brentq(lambda s: zfun(s) - target, lo, hi, xtol=1e-12, rtol=1e-10))
 
 
