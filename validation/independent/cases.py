@@ -348,14 +348,14 @@ def _make(c, motion, base, draws, axes, phase, beta, sign):  # noqa: C901 - one 
                             rivals=rivals, band=band)
         return _solve(zf, lo, hi, z)
     sig = np.sqrt(base["axes"][axes[0]]["sigma2"])
-    scaled = SCALED
-    if w in scaled:
-        key = scaled[w]
+    if w in SCALED:
+        key = SCALED[w]
+        # upper ends of plausible sizes: a dead zone below g/2 (beyond, its z falls again as
+        # the whole signal vanishes into the scale), a gain asymmetry below 50 %, |K3| below
+        # 0.01 /(m/s²)²; a dead zone has no sign
         hi = {"dead_zone": 0.5 * G, "scale_asymmetry": 0.5, "cubic_k3": 1e-2}.get(w, 50.0)
-        mech[key] = mz(key, 1e-9, hi) * (1 if w in ("dead_zone",) else sign)
-        if w in ("scale_asymmetry", "cubic_k3") and mech[key] != mech[key]:
-            raise RuntimeError(w)
-        note = f"z = {z}"
+        mech[key] = mz(key, 1e-9, hi) * (1.0 if w == "dead_zone" else sign)
+        note = f"z = {z} beyond the catalog's parametric signatures"
     elif w == "speed_noise":
         mech["amp"] = z * sig
         note = f"extra noise std {z} σ at the top speed"
@@ -371,7 +371,7 @@ def _make(c, motion, base, draws, axes, phase, beta, sign):  # noqa: C901 - one 
     else:
         raise ValueError(w)
     spec = {**base, "mechanisms": [mech]}
-    if w in scaled:
+    if w in SCALED:
         # the sign may flip the direction of a monotone size: check the size reached
         real = effect_z(motion, base, spec, draws, rivals=rivals, band=band)
         if abs(real - z) > 1e-3 * z:
@@ -410,7 +410,7 @@ def _truth(c, seed, motion, base, spec, draws, params, size_note, stated) -> dic
                             band=BAND if c.what == "flicker" else 0)
     if c.what in ("noise_level", "quantization"):
         z_real = c.z  # not a change of the mean: χ² excess in σ / lsb in σ (size note)
-    z_near, near = (float("nan"), "")
+    z_near, near = None, ""
     if c.kind == "catalog" and c.what in ("misalignment", "tilt_offset", "nonlinearity_k2",
                                           "cross_axis", "bias_drift", "saturation",
                                           "lowpass_lag", "lever_arm"):

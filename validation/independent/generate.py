@@ -45,8 +45,9 @@ def write_case(folder: Path, motion, datos: np.ndarray, truth: dict) -> None:
     if motion.timing == "t":
         mat["t"] = motion.t.reshape(-1, 1)
     scipy.io.savemat(folder / "ensayo.mat", mat, format="5", do_compression=False)
-    (folder / "truth.json").write_text(json.dumps(truth, indent=1, default=_json_default,
-                                                  ensure_ascii=False) + "\n", encoding="utf-8")
+    text = json.dumps(truth, indent=1, default=_json_default, allow_nan=False,
+                      ensure_ascii=False)
+    (folder / "truth.json").write_text(text + "\n", encoding="utf-8")
 
 
 def manifest(seed: int, split: str, truths: list[dict]) -> dict:
