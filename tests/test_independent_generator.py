@@ -165,6 +165,9 @@ def test_judge_marks_contradictions_false_alarms_and_reports():
             "gap_after": gap, "unexplained": []}}
     r = score.judge(cat, res("explained", [("misalignment", "x")], ok_gap))
     assert r["ok"] and not r["contradiction"]
+    fit = res("explained", [("misalignment", "x")], ok_gap)
+    fit["result"]["effects"][0].update(params={"delta": 0.013}, std={"delta": 0.001})
+    assert score.judge(cat, fit)["param_z"] == pytest.approx(3.0)
     r = score.judge(cat, res("explained", [("misalignment", "x")], bad_gap))
     assert r["contradiction"]
     r = score.judge(cat, res("explained", [("misalignment", "x"), ("noise_level", "y")], ok_gap))
