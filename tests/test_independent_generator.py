@@ -72,7 +72,9 @@ def test_written_files_are_valid_course_files_and_the_manifest_is_complete(tmp_p
             assert truth["mechanism"]["kind"] == truth["what"]
             assert truth["what"] not in EFFECTS
         size = truth["size"]
-        if truth["kind"] == "catalog":
+        if truth["what"] == "bias_random_walk":
+            assert size["z_beyond_catalog"] == pytest.approx(size["z_target"], rel=1e-3)
+        elif truth["kind"] == "catalog":
             assert size["z"] == pytest.approx(size["z_target"], rel=1e-3)
         if truth["kind"] == "out_of_catalog" and size["z_target"]:
             # sized on what the catalog's parametric signatures leave of it

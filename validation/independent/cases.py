@@ -295,12 +295,16 @@ def _make(c, motion, base, draws, axes, phase, beta, sign):  # noqa: C901 - one 
     if w == "bias_random_walk":
         # The path's size varies a lot between draws (‖P⊥b‖² is a weighted χ² dominated by
         # a few slow components), so q is set on the drawn path: the walk stands z σ above
-        # the noise in every case. The expected size at that q is in the note.
+        # the noise in every case, measured on what the catalog's parametric signatures leave
+        # of it — on a single monotone turn a slow path is a smooth function of θ, and a
+        # drift plus a misalignment can take most of it (then no detector could name it).
+        # The expected size at that q is in the note.
         ax = axes[0]
         i = AXES.index(ax)
         dt = np.diff(motion.clock, prepend=motion.clock[0])
         ref = static_force(motion.theta)[:, i]
-        unit = effect_z(motion, base, _with(base, axes, q=1.0), draws)
+        unit = effect_z(motion, base, _with(base, axes, q=1.0), draws,
+                        rivals=catalog_columns(motion))
         q = z / unit
         z_expected = q * np.sqrt(walk_trace(dt, ref) / base["axes"][ax]["sigma2"])
         key = "q" if timed else "q_per_sample"
@@ -405,7 +409,7 @@ def _truth(c, seed, motion, base, spec, draws, params, size_note, stated) -> dic
     sized = c.kind == "catalog" or c.what in SCALED
     z_real = effect_z(motion, base, spec, draws) if sized else None
     z_beyond = None
-    if c.kind == "out_of_catalog" and sized:
+    if (c.kind == "out_of_catalog" and sized) or c.what == "bias_random_walk":
         z_beyond = effect_z(motion, base, spec, draws, rivals=catalog_columns(motion),
                             band=BAND if c.what == "flicker" else 0)
     if c.what in ("noise_level", "quantization"):
