@@ -13,7 +13,10 @@
     both sides of the comparison. (c) and (d) hold in ``validation/`` too;
 (f) no private name (``_x``, dunders excepted) crosses a file: neither ``from p import _x``
     (any layout, relative too) nor ``m._x`` on a project module bound by ``import p as m``,
-    ``import p.q`` or ``from p import m`` — what another file needs is public there.
+    ``import p.q`` or ``from p import m`` — what another file needs is public there;
+(g) the second, independent generator ``validation/independent/`` imports nothing of
+    ``validation`` outside itself (written from the physics alone, it must not share the first
+    generator's effects, designs or cases).
 
 Every import counts, also inside functions (a deferred import is still a dependency); only
 ``if TYPE_CHECKING:`` blocks are skipped (annotations, never executed). Edges of the module
@@ -32,7 +35,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 PACKAGES = ("bench", "calib")
 CALIB_FORBIDDEN = ("bench", "mujoco", "argparse", "matplotlib", "rerun")
-VALIDATION_SCORING = ("validation.score",)
+VALIDATION_SCORING = ("validation.score", "validation.independent.score")
 """The only modules of ``validation/`` that may import ``calib`` (they run the analysis)."""
 GENERATOR_FORBIDDEN = ("bench", "calib", *VALIDATION_SCORING)
 
@@ -237,6 +240,19 @@ def check_validation_imports(mods: dict[str, Module], root: Path) -> list[str]:
     return sorted(set(bad))
 
 
+INDEPENDENT = "validation.independent"
+
+
+def check_independent_imports(mods: dict[str, Module], root: Path) -> list[str]:
+    """(g) ``validation.independent`` imports no module of ``validation`` outside itself."""
+    bad = []
+    for mod in mods.values():
+        if _under(mod.name, INDEPENDENT):
+            bad += _flagged(mod, root, lambda n: _under(n, "validation")
+                            and n != "validation" and not _under(n, INDEPENDENT))
+    return sorted(set(bad))
+
+
 # --- the rules on the real tree -------------------------------------------------------------
 
 def _private(name: str) -> bool:
@@ -355,6 +371,14 @@ def test_validation_generators_import_neither_bench_nor_calib():
                      + "\n".join(bad))
     bad = check_dynamic_imports(mods, REPO) + check_cycles(mods, REPO)
     assert not bad, "\n".join(bad)
+
+
+def test_the_independent_generator_shares_nothing_with_the_first():
+    mods = scan(REPO, ("validation",))
+    assert f"{INDEPENDENT}.generate" in mods and f"{INDEPENDENT}.score" in mods
+    bad = check_independent_imports(mods, REPO)
+    assert not bad, ("validation/independent/ must not import the rest of validation/:\n"
+                     + "\n".join(bad))
 
 
 # --- each checker can fail: a synthetic tree ------------------------------------------------
@@ -495,3 +519,24 @@ def test_checker_f_finds_private_names_taken_from_another_file(tmp_path):
     allowed = {("bench/b.py", "calib.core", "_hidden")}
     assert "bench/b.py:1 imports _hidden from calib.core" not in check_private_imports(
         mods, tmp_path, allowed)
+
+
+def test_checker_g_finds_imports_of_the_first_generator_in_the_independent_one(tmp_path):
+    _tree(tmp_path, {
+        "validation/__init__.py": "",
+        "validation/effects.py": "G = 9.8\n",
+        "validation/independent/__init__.py": "",
+        "validation/independent/physics.py": "from validation.effects import G\n",
+        "validation/independent/cases.py": "from . import physics\nfrom .. import effects\n",
+        "validation/independent/generate.py": "from validation.independent import cases\n",
+        "validation/independent/score.py": "import json\n",
+    })
+    mods = scan(tmp_path, ("validation",))
+    assert check_independent_imports(mods, tmp_path) == [
+        "validation/independent/cases.py:2 imports validation.effects",
+        "validation/independent/physics.py:1 imports validation.effects"]
+    # the scorer of the independent set is a scorer: generators may not import it
+    mods["validation.independent.generate"].imports.append(
+        ("validation.independent.score", (), 9))
+    assert check_validation_imports(mods, tmp_path) == [
+        "validation/independent/generate.py:9 imports validation.independent.score"]
