@@ -852,6 +852,12 @@ class MultiPosition3DFit(ResultMixin):
         return Calibration("multiposition", self.g, fits, self.n, joint=joint)
 
 
+def quantization_steps(acc: np.ndarray) -> np.ndarray:
+    """(k,) m/s²: :func:`quantization_step` of each column of readings ``acc`` (N, k)."""
+    acc = np.asarray(acc, dtype=float)
+    return np.array([quantization_step(acc[:, k]) for k in range(acc.shape[1])])
+
+
 def three_axis_applies(poses: Poses, g: float = G) -> str | None:
     """None when the 3-axis fit applies to ``poses`` (3 axes), else why not — the planar fit
     of the tilt plane is then the one to make (``calibrate`` chooses it and says why): fewer
@@ -1248,4 +1254,5 @@ __all__ = ["COND_REFUSE", "COND_WARN", "PARAM_NAMES_3D", "PLANE_FRACTION", "POSE
            "UNIDENTIFIED_STD", "MethodComparison", "MultiPosition3DFit", "MultiPositionFit",
            "OutOfPlaneWarning", "Poses", "compare_methods", "distinct_orientations",
            "fit_multiposition", "fit_multiposition3d", "in_plane", "multiposition_document",
-           "pose_statistics", "quantization_step", "three_axis_applies"]
+           "pose_statistics", "quantization_step", "quantization_steps",
+           "three_axis_applies"]
