@@ -309,3 +309,7 @@ def test_cli_three_variances_planar_fallback_and_plot(capsys, tmp_path):
     msg = one_line_error(capsys, "calibrate", seven, "--columns", "label=label", "--plot",
                          tmp_path / "f.png")
     assert "--plot" in msg and not (tmp_path / "f.png").exists()
+    # three variances where the 3-axis fit does not apply: refused, not silently cut to two
+    msg = one_line_error(capsys, "calibrate", csv, "--columns", "label=label",
+                         "--noise-var", "0.0025,0.0025,0.0025")
+    assert "three variances are for the 3-axis fit" in msg and "6 held poses" in msg

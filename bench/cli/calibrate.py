@@ -56,16 +56,21 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
     nv3 = None
     if args.noise_var is not None and len(args.noise_var.split(",")) == 3:
-        # σx²,σy²,σn²: the 3-axis fit's; the tilt plane's two serve the planar fits
+        # σx²,σy²,σn²: the 3-axis fit's; the tilt plane's two serve the planar fits. Each is
+        # checked by the same rules as a pair (positive, within the range the fit handles)
         parts = args.noise_var.split(",")
-        nv3 = np.concatenate([parse_variances(",".join(parts[:2])),
-                              parse_variances(f"{parts[2]},{parts[2]}")[:1]])
+        what = f"--noise-var {args.noise_var}"
+        nv3 = np.concatenate([parse_variances(",".join(parts[:2]), what),
+                              parse_variances(f"{parts[2]},{parts[2]}", what)[:1]])
         args.noise_var = ",".join(parts[:2])
     log = read_log_from_args(args, args.ensayo, expect="ensayo")
     nv = noise_var_from_args(args)
     args.nv3 = nv3
     if args.method == "multiposition" or (args.method is None and log.theta is None):
         return _multiposition(args, log, nv)
+    if nv3 is not None:
+        raise OptionError("--noise-var: three variances are for the 3-axis multi-position fit; "
+                          "the θ-based least squares fits the tilt plane: give σx²,σy²")
     if log.theta is None:
         raise OptionError(f"--method {args.method} needs the table angle, which {args.ensayo} "
                           "does not give: use --method multiposition (held poses, θ unknown) "
@@ -148,6 +153,10 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
         fit = warnings_to_stderr(lambda: fit_multiposition3d(
             poses3, args.nv3, args.g, quantization=q, source=args.ensayo))
     else:
+        if args.nv3 is not None:
+            raise OptionError("--noise-var: three variances are for the 3-axis fit, which does "
+                              f"not apply here ({why_planar or 'the log has no third axis'}); "
+                              "give σx²,σy² for the planar fit")
         poses = pose_statistics(log.acc, pose, args.ensayo)
         fit = warnings_to_stderr(lambda: fit_multiposition(poses, nv, args.g, args.ensayo))
     comparison = None
