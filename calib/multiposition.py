@@ -38,6 +38,14 @@ set of poses symmetric about both axes, on which a family of ellipses fits) is r
 Not separable here, by construction: a different local g is absorbed by both scales; a tilt
 offset of the table does not exist (the angles are free); a misalignment between the two
 axes is not in the model and shows as lack of fit.
+
+Three axes (:func:`fit_multiposition3d`): a 3-axis IMU held in arbitrary orientations (a
+phone, a wrist sensor) — the log's third axis :attr:`calib.logs.ImuLog.acc_normal` — gives
+``‖(m̄_i − b) ⊘ (1 + s)‖ = g`` on the sphere, each pose's gravity direction a nuisance (two
+angles), bias and scale of all three axes from at least :data:`POSES_NEEDED_3D` = 7 poses
+whose directions span the sphere; quantized readings (raw counts) add ``q²/12`` to each pose
+mean's variance. Its first four parameters and their 4×4 block are the planar result's, so it
+gives the same :class:`calib.calibration.Calibration`.
 """
 
 from __future__ import annotations
