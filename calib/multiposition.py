@@ -714,7 +714,8 @@ class MultiPosition3DFit(ResultMixin):
     _UNITS = ("bias m/s²; scale dimensionless; directions unit vectors; directions_std rad; "
               "σ² (m/s²)²; quantization m/s²; residuals m/s²; g m/s²")
     JSON_UNITS = {
-        "params": "[m/s², 1, m/s², 1, m/s², 1]", "std": "[m/s², 1, m/s², 1, m/s², 1]",
+        "axes": "count", "params": "[m/s², 1, m/s², 1, m/s², 1]",
+        "std": "[m/s², 1, m/s², 1, m/s², 1]",
         "cov": "products of the params' units", "directions": "1 (unit vectors, x, y, n)",
         "directions_std": "rad", "residuals": "m/s²", "sigma2": "(m/s²)²",
         "sigma2_dof": "count", "quantization": "m/s²", "dof": "count", "chi2": "1",

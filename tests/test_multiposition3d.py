@@ -23,6 +23,7 @@ from calib.multiposition import (
     quantization_step,
     three_axis_applies,
 )
+from calib.units import missing_units
 from tests.cli import one_line_error, run
 from tests.reference.real_data import REAL_DIR, SPECS, pose_means
 
@@ -289,6 +290,7 @@ def test_ax3_calibrate_agrees_with_an_independent_fit(capsys):
     rc, out, err = run(capsys, "calibrate", AX3, *AX3_OPTS, "--json")
     assert rc == 0, err
     d = json.loads(out)
+    assert missing_units(d) == []
     fit = d["fit"]
     assert fit["axes"] == 3 and len(fit["params"]) == 6
     q = 4 / 256 * G
@@ -337,3 +339,23 @@ def test_cli_three_variances_planar_fallback_and_plot(capsys, tmp_path):
     msg = one_line_error(capsys, "calibrate", csv, "--columns", "label=label",
                          "--noise-var", "0.0025,0.0025,0.0025")
     assert "three variances are for the 3-axis fit" in msg and "6 held poses" in msg
+
+
+def test_every_reader_fills_acc_normal(tmp_path):
+    """CSV, ROS 2 and ROS 1 bags and a .mat with --map, all from the same simulated 3-axis
+    log (tests/logfixtures.py): the third axis comes back as written (1e-12), signed by
+    --axes, and follows the held samples when θ comes from --poses."""
+    from tests import logfixtures as fx
+
+    _, _, acc, _, _ = fx.simulated()
+    paths = {"csv": fx.write_csv(tmp_path / "a.csv"), "ros2": fx.write_ros2(tmp_path / "b2"),
+             "ros1": fx.write_ros1(tmp_path / "x.bag"), "mat": fx.write_mat(tmp_path / "m.mat")}
+    for name, path in paths.items():
+        mapping = {"datos": "acc", "t": "time"} if name == "mat" else {}
+        log = read_log(path, LogOptions(mapping=mapping))
+        assert np.allclose(log.acc_normal, acc[:, 2], rtol=1e-12, atol=1e-12), name
+        log = read_log(path, LogOptions(mapping=mapping, axes=("-y", "z")))
+        assert np.allclose(log.acc_normal, -acc[:, 0], rtol=1e-12, atol=1e-12), name
+        held = read_log(path, LogOptions(mapping=mapping, poses=tuple(fx.ANGLES_DEG),
+                                         angle_unit="deg"))
+        assert held.acc_normal.shape == (held.n,) and held.n < acc.shape[0], name
