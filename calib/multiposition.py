@@ -417,11 +417,12 @@ class OutOfPlaneWarning(UserWarning):
     """Poses left out of the multi-position fit because gravity is not in their tilt plane."""
 
 
-def distinct_orientations(poses: Poses, sigma2: np.ndarray) -> int:
+def distinct_orientations(poses: Poses, sigma2: np.ndarray, mean_var=0.0) -> int:
     """Number of distinct orientations among the poses: poses whose means differ by less
-    than :data:`SAME_POSE_STD` std of their difference on both axes (``σ_a² (1/n_i +
-    1/n_j)``) are merged (single linkage). Repeating an orientation adds samples, not
-    geometry."""
+    than :data:`SAME_POSE_STD` std of their difference on every axis (``σ_a² (1/n_i +
+    1/n_j) + 2·mean_var_a``; ``mean_var`` (m/s²)², a variance every pose mean has whatever
+    n, e.g. quantization's q²/12) are merged (single linkage). Repeating an orientation adds
+    samples, not geometry."""
     P = poses.count
     parent = list(range(P))
 
@@ -433,7 +434,7 @@ def distinct_orientations(poses: Poses, sigma2: np.ndarray) -> int:
     inv_n = 1.0 / poses.n
     for i in range(P):
         for j in range(i + 1, P):
-            sd = np.sqrt(sigma2 * (inv_n[i] + inv_n[j]))
+            sd = np.sqrt(sigma2 * (inv_n[i] + inv_n[j]) + 2 * np.asarray(mean_var))
             if np.all(np.abs(poses.means[i] - poses.means[j]) < SAME_POSE_STD * sd):
                 parent[root(j)] = root(i)
     return len({root(i) for i in range(P)})
@@ -1053,7 +1054,7 @@ def fit_multiposition3d(
         if sigma2.shape != (3,) or np.any(~np.isfinite(sigma2)) or np.any(sigma2 <= 0):
             raise ValueError(f"noise variances must be three positive numbers, got {noise_var}")
         source_s2 = "given"
-    distinct = distinct_orientations(poses, sigma2)
+    distinct = distinct_orientations(poses, sigma2, q**2 / 12)
     if distinct < POSES_NEEDED_3D:
         raise NotIdentifiableError(
             f"{where}the {P} poses hold only {distinct} distinct orientation"

@@ -18,6 +18,7 @@ from calib.multiposition import (
     POSES_NEEDED_3D,
     MultiPosition3DFit,
     Poses,
+    distinct_orientations,
     fit_multiposition3d,
     pose_statistics,
     quantization_step,
@@ -359,3 +360,17 @@ def test_every_reader_fills_acc_normal(tmp_path):
         held = read_log(path, LogOptions(mapping=mapping, poses=tuple(fx.ANGLES_DEG),
                                          angle_unit="deg"))
         assert held.acc_normal.shape == (held.n,) and held.n < acc.shape[0], name
+
+
+def test_a_repeated_orientation_on_a_lattice_counts_once():
+    """Seven poses, the 7th the 1st again, its mean half a quantization step away (where a
+    lattice puts it): with q²/12 in each mean's variance the two are one orientation (6
+    distinct: refused); with noise alone they would pass as distinct."""
+    q = 4 / 256 * G
+    u = unit(SIX + [SIX[0]])
+    means = model(TRUTH, u)
+    means[6, 1] += 0.5 * q
+    poses = Poses(np.arange(7), np.full(7, 3000), means, np.full((7, 3), 1.0))
+    with pytest.raises(NotIdentifiableError, match="only 6 distinct orientations"):
+        fit_multiposition3d(poses, SIGMA2, quantization=[q, q, q])
+    assert distinct_orientations(poses, SIGMA2) == 7
