@@ -50,7 +50,8 @@ class LackOfFit(ResultMixin):
 
     Attributes
     ----------
-    axis : "x", "y", or "xy" for the joint test of the multi-position fit.
+    axis : "x", "y", or "xy" / "xyn" for the joint test of the planar / 3-axis
+        multi-position fit.
     groups : c, number of groups (poses) with data.
     ss_lack_of_fit, ss_pure_error : the two sums of squares, (m/s²)²; for ``axis = "xy"``
         whitened (each residual divided by its std), dimensionless.
@@ -95,7 +96,8 @@ class LackOfFit(ResultMixin):
 
     def summary(self) -> str:
         """One line: the statistic, its dof, p and the pure-error variance."""
-        pe = ("" if self.axis == "xy" or self.dof_pure_error <= 0 else
+        # the joint tests ("xy", "xyn" of the 3-axis fit) are whitened: no σ² in m/s² to print
+        pe = ("" if self.axis in ("xy", "xyn") or self.dof_pure_error <= 0 else
               f"; pure-error σ² = {self.sigma2_pure_error:.4g} (m/s²)² "
               f"(dof {self.dof_pure_error})")
         return f"axis {self.axis}: lack of fit {self._stat_text()} ({self.groups} poses){pe}"

@@ -3,7 +3,8 @@ reads readings (``calibrate``, ``gap``, ``trajectory``, ``fuse``, ``noise``, ``i
 
 A log becomes an :class:`ImuLog`: the two tilt-plane axes in m/s² (after ``--axes`` picked and
 signed them from a 3-axis IMU), optional sample times, optional table angle θ (rad), optional
-held-pose labels and optional gyro rate about the tilt axis, plus a provenance record (source
+held-pose labels, optional gyro rate about the tilt axis and, for a 3-axis log, the third
+axis (``acc_normal``, along the tilt axis), plus a provenance record (source
 name and sha256, format, column mapping, units, detected segments) that ``tiltbench import``
 writes beside the course files.
 
@@ -131,6 +132,12 @@ class ImuLog:
     pose : (N,) int, held-pose label per sample (0, 1, …; -1 while moving), or None when no
         poses were given or detected.
     gyro : (N,) float, rad/s, rate about the tilt axis, or None.
+    acc_normal : (N,) float, m/s², the log's third acceleration axis — the one not in
+        ``--axes``, signed as the tilt axis ``n = â × b̂`` so that (x, y, normal) is
+        right-handed (``--axes x,y`` keeps ``+z``; ``--axes -y,z`` keeps ``-x``) — or None when
+        the log has only the two axes (course files). The 3-axis multi-position calibration
+        (:func:`calib.multiposition.fit_multiposition3d`) uses it; the provenance's
+        ``normal_axis`` names the column.
     source : str — the file name, for messages.
     provenance : dict — source name and sha256, format, mapping, units, segments (JSON-able).
     """
@@ -140,6 +147,7 @@ class ImuLog:
     theta: np.ndarray | None = None
     pose: np.ndarray | None = None
     gyro: np.ndarray | None = None
+    acc_normal: np.ndarray | None = None
     source: str = "<memory>"
     provenance: dict[str, Any] = field(default_factory=dict)
     course: Any = field(default=None, repr=False, compare=False)
@@ -147,7 +155,7 @@ class ImuLog:
     read by the course reader: :meth:`to_ensayo` / :meth:`to_acel` return it unchanged."""
 
     def __post_init__(self) -> None:
-        for name in ("acc", "t", "theta", "gyro"):
+        for name in ("acc", "t", "theta", "gyro", "acc_normal"):
             value = getattr(self, name)
             if value is not None:
                 arr = np.array(value, dtype=float)
@@ -459,6 +467,19 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
             _check_saturation(raw, raw.acc[axis], what, path, factor, g)
     acc = np.column_stack([(-1.0 if spec.startswith("-") else 1.0) * raw.acc[a] * factor
                            for spec, a in acc_cols])
+    # the third axis, signed as the tilt axis â × b̂: (x, y, normal) right-handed
+    normal_spec = tilt_axis(tuple(options.axes))
+    normal_axis = normal_spec.lstrip("-")
+    acc_normal, normal_from = None, None
+    if normal_axis in raw.acc:
+        what = f"column '{raw.mapping.get(normal_axis, normal_axis)}'"
+        # finite values only; not the saturation check: the commands that read the tilt
+        # plane alone must not start refusing a log for an axis they ignore (a flat board's
+        # z sits still at +g); the 3-axis fit's lack-of-fit test shows a clipped pose
+        _check_finite(raw, raw.acc[normal_axis], what, path)
+        sign = -1.0 if normal_spec.startswith("-") else 1.0
+        acc_normal = sign * raw.acc[normal_axis] * factor
+        normal_from = f"{'-' if sign < 0 else ''}{raw.mapping.get(normal_axis, normal_axis)}"
     n = acc.shape[0]
     if n < 3:
         raise DataError(f"{path}: only {n} samples; at least 3 are needed")
@@ -506,6 +527,7 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         "mapping": dict(raw.mapping),
         "axes": list(options.axes),
         "tilt_axis": tilt_axis(tuple(options.axes)),
+        "normal_axis": normal_from,
         "units": {"acc": unit, "acc_to_m_s2": factor, "g": g,
                   "sensitivity_counts_per_g": options.sensitivity,
                   "gyro": g_unit if gyro is not None else None, "gyro_from": gyro_from,
@@ -518,7 +540,8 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
     }
     if raw.fmt == "mat" and options.units is None:
         prov["units"]["acc_note"] = "the course variable's unit (m/s²)"
-    log = ImuLog(acc=acc, t=t, theta=theta, gyro=gyro, source=where, provenance=prov)
+    log = ImuLog(acc=acc, t=t, theta=theta, gyro=gyro, acc_normal=acc_normal, source=where,
+                 provenance=prov)
     return _poses(log, raw, options, path)
 
 
@@ -526,6 +549,7 @@ def _sub(log: ImuLog, keep: np.ndarray, theta: np.ndarray, pose: np.ndarray,
          prov: dict) -> ImuLog:
     return ImuLog(acc=log.acc[keep], t=None if log.t is None else log.t[keep], theta=theta,
                   pose=pose, gyro=None if log.gyro is None else log.gyro[keep],
+                  acc_normal=None if log.acc_normal is None else log.acc_normal[keep],
                   source=log.source, provenance=prov)
 
 
@@ -545,7 +569,7 @@ def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         if raw.label is not None:
             pose, _ = _labels(raw.label)
         return ImuLog(acc=log.acc, t=log.t, theta=log.theta, pose=pose, gyro=log.gyro,
-                      source=log.source, provenance=prov)
+                      acc_normal=log.acc_normal, source=log.source, provenance=prov)
     if raw.label is not None:
         pose, values = _labels(raw.label)
         prov["poses"] = {"source": f"label column '{raw.mapping.get('label', 'label')}'",
@@ -580,8 +604,8 @@ def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
                             "import output)")
         angles = list(options.poses)
     if angles is None:
-        return ImuLog(acc=log.acc, t=log.t, pose=pose, gyro=log.gyro, source=log.source,
-                      provenance=prov)
+        return ImuLog(acc=log.acc, t=log.t, pose=pose, gyro=log.gyro,
+                      acc_normal=log.acc_normal, source=log.source, provenance=prov)
     rad = _angles(angles, options.angle_unit)
     keep = pose >= 0
     theta = rad[pose[keep]]

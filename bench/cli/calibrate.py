@@ -4,7 +4,10 @@
 OLS or joint WLS), with the lack-of-fit test and the pure-error σ² when poses or θ values
 repeat (:mod:`calib.lackoffit`). θ unknown with held poses, or ``--method multiposition``:
 :func:`calib.multiposition.fit_multiposition`, compared with the least squares when θ is
-known. The log is read with the shared log options (:mod:`bench.cli.logopts`).
+known; a 3-axis log (``ImuLog.acc_normal``) whose poses turn the normal axis, 7 or more, gets
+:func:`calib.multiposition.fit_multiposition3d` instead (bias and scale of all three axes;
+``--noise-var`` then takes three variances). The log is read with the shared log options
+(:mod:`bench.cli.logopts`).
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from bench.cli.options import (
     check_level,
     check_positive,
     noise_var_from_args,
+    parse_variances,
 )
 from bench.cli.output import (
     check_finite,
@@ -48,10 +52,25 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         raise OptionError("--rrd records the θ-based fit; it is not available with "
                           "--method multiposition (use --plot)")
     refuse_overwrite([args.plot, args.rrd, args.save], args.force)
+    import numpy as np
+
+    nv3 = None
+    if args.noise_var is not None and len(args.noise_var.split(",")) == 3:
+        # σx²,σy²,σn²: the 3-axis fit's; the tilt plane's two serve the planar fits. Each is
+        # checked by the same rules as a pair (positive, within the range the fit handles)
+        parts = args.noise_var.split(",")
+        what = f"--noise-var {args.noise_var}"
+        nv3 = np.concatenate([parse_variances(",".join(parts[:2]), what),
+                              parse_variances(f"{parts[2]},{parts[2]}", what)[:1]])
+        args.noise_var = ",".join(parts[:2])
     log = read_log_from_args(args, args.ensayo, expect="ensayo")
     nv = noise_var_from_args(args)
+    args.nv3 = nv3
     if args.method == "multiposition" or (args.method is None and log.theta is None):
         return _multiposition(args, log, nv)
+    if nv3 is not None:
+        raise OptionError("--noise-var: three variances are for the 3-axis multi-position fit; "
+                          "the θ-based least squares fits the tilt plane: give σx²,σy²")
     if log.theta is None:
         raise OptionError(f"--method {args.method} needs the table angle, which {args.ensayo} "
                           "does not give: use --method multiposition (held poses, θ unknown) "
@@ -93,14 +112,19 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 def _multiposition(args: argparse.Namespace, log, nv) -> int:
     """θ unknown (or ``--method multiposition``): the gravity-norm fit on the held poses,
     compared with the θ-based least squares when θ is known."""
+    import numpy as np
+
     from calib.calibration import calibrate
     from calib.input_rules import DataError
     from calib.lackoffit import LOF_ALPHA, groups_from
     from calib.multiposition import (
         compare_methods,
         fit_multiposition,
+        fit_multiposition3d,
         multiposition_document,
         pose_statistics,
+        quantization_steps,
+        three_axis_applies,
     )
 
     chosen = "given" if args.method == "multiposition" else "automatic: θ unknown"
@@ -112,8 +136,29 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
         raise DataError(f"{args.ensayo}: no held poses to calibrate from ({why}); the "
                         "multi-position method needs the sensor held still in at least 4 "
                         "orientations (a log with held poses, or --poses with their angles)")
-    poses = pose_statistics(log.acc, pose, args.ensayo)
-    fit = warnings_to_stderr(lambda: fit_multiposition(poses, nv, args.g, args.ensayo))
+    three, why_planar = False, None
+    if log.acc_normal is not None:
+        acc3 = np.column_stack([log.acc, log.acc_normal])
+        poses3 = pose_statistics(acc3, pose, args.ensayo)
+        why_planar = three_axis_applies(poses3, args.g)
+        three = why_planar is None
+    if three:
+        if nv is not None and args.nv3 is None:
+            raise OptionError("the 3-axis fit needs three noise variances, --noise-var "
+                              "σx²,σy²,σn² (or none: estimated within the poses)")
+        if args.plot:
+            raise OptionError("--plot draws the planar multi-position fit; the 3-axis fit "
+                              "has no figure yet (drop --plot)")
+        q = quantization_steps(acc3[pose >= 0])
+        fit = warnings_to_stderr(lambda: fit_multiposition3d(
+            poses3, args.nv3, args.g, quantization=q, source=args.ensayo))
+    else:
+        if args.nv3 is not None:
+            raise OptionError("--noise-var: three variances are for the 3-axis fit, which does "
+                              f"not apply here ({why_planar or 'the log has no third axis'}); "
+                              "give σx²,σy² for the planar fit")
+        poses = pose_statistics(log.acc, pose, args.ensayo)
+        fit = warnings_to_stderr(lambda: fit_multiposition(poses, nv, args.g, args.ensayo))
     comparison = None
     if log.theta is not None:
         ls = warnings_to_stderr(lambda: calibrate(log.to_ensayo(), nv, "ols", args.g,
@@ -131,15 +176,22 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
     lof = fit.lack_of_fit
     if lof is not None and lof.misses(LOF_ALPHA):
         print(f"warning: {lof.warning_line()}", file=sys.stderr)
+    if why_planar is not None:
+        print(f"note: planar fit of the tilt plane ({', '.join(args.axes.split(','))}); not "
+              f"the 3-axis fit: {why_planar}", file=sys.stderr)
     if args.json:
         print_json(doc)
         return 0
-    if nv is None:
+    if (args.nv3 if three else nv) is None:
         print(f"note: noise variances not given; estimated from the scatter within the "
               f"{fit.poses.count} poses (pure error, dof {fit.sigma2_dof}; intervals use "
               "Student t)", file=sys.stderr)
     print(args.ensayo)
-    print(f"method: multiposition ({chosen})")
+    if three:
+        normal = log.provenance.get("normal_axis") or "the third axis"
+        print(f"method: multiposition, 3 axes ({chosen}); normal axis n = {normal}")
+    else:
+        print(f"method: multiposition ({chosen})")
     print(fit.summary(args.level))
     if comparison is not None:
         print("-- compared with the θ-based least squares (per-axis OLS, same readings)")
