@@ -34,7 +34,16 @@ check                     statistic and reference distribution under the model
                           the bias in place of the named effects: its likelihood ratio over
                           them against χ²(extra parameters), Bonferroni over the search
                           (:func:`_rivals`)
+``gap_noise``             the gap after (:func:`calib.diagnostics.gap_measure` of the final
+                          residuals) against the **stated** noise: ``Σr²/σ² ~ χ²(dof)``,
+                          two-sided (not where a noise level is named: its σ² is the model's)
+``gap_signatures``        the gap after's largest signature z, Bonferroni over its
+                          signatures (``GapMeasure.max_signature_p``)
 ========================  ==================================================================
+
+The last two make the verdict and the per-axis consistency one judgement: an axis is
+consistent (``adequacy.consistent``) exactly when every check on it passes, so "explained" and
+"nothing detected" are never stated beside a gap after that is not consistent with noise.
 
 Family-wise error: every check with a p-value is run at ``α_check = family_alpha / m`` with m
 the number of such checks on the run (Bonferroni), so on a run that the model describes the
@@ -53,7 +62,7 @@ from scipy import linalg as sla
 from scipy import stats
 
 from calib.conventions import AXES
-from calib.diagnostics import Lattice, ljung_box_logp
+from calib.diagnostics import GapMeasure, Lattice, chi2_two_sided_logp, ljung_box_logp
 from calib.effects import Extensions, ModelState, effect
 from calib.gap.selection import walk_cost
 
@@ -502,11 +511,38 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
                  f"m/s²) than by {' + '.join(named)}: a shape the catalog does not have")
 
 
+def _gap_noise(gm: GapMeasure, sigma2: float, axis: str) -> Check | None:
+    """The gap after's χ² against the stated noise, two-sided (the yardstick's first half)."""
+    if gm.dof <= 0:
+        return None
+    chi2 = float(gm.chi2_dof * gm.dof)
+    logp = chi2_two_sided_logp(chi2, gm.dof)
+    return Check("gap_noise", axis, float(gm.chi2_dof), logp, f"chi2({gm.dof}) / dof, two-sided",
+                 float(np.sqrt(max(gm.chi2_dof, 0.0) * sigma2)), "m/s²",
+                 f"the residual on {axis} after the named effects has {gm.chi2_dof:.3g} × the "
+                 f"stated noise variance (rms {np.sqrt(max(gm.chi2_dof, 0.0) * sigma2):.3g} "
+                 f"m/s² for a stated σ = {np.sqrt(sigma2):.3g} m/s²)")
+
+
+def _gap_signatures(gm: GapMeasure, axis: str) -> Check | None:
+    """The gap after's largest signature z, Bonferroni over its signatures."""
+    if not gm.n_signatures:
+        return None
+    logp = float(np.log(min(max(gm.max_signature_p, 1e-300), 1.0)))
+    return Check("gap_signatures", axis, float(gm.max_signature_z), logp,
+                 f"max |z| of {gm.n_signatures} signatures (Bonferroni)",
+                 float(gm.max_signature_z), "σ",
+                 f"the gap after on {axis} still shows the signature {gm.worst} "
+                 f"(z = {gm.max_signature_z:.3g})")
+
+
 # --------------------------------------------------------------------------- battery
 
 def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
                 lattice: list[Lattice], innovations: dict[int, np.ndarray],
-                family_alpha: float = ADEQUACY_ALPHA) -> Battery:
+                family_alpha: float = ADEQUACY_ALPHA,
+                gaps: dict[str, GapMeasure] | None = None,
+                extra: list[Check] | None = None) -> Battery:
     """Run every applicable check on both axes of the final model (module docstring).
 
     Parameters
@@ -517,6 +553,11 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
     lattice : the lattice found on each axis' readings.  innovations : axis index → the
         walk filter's normalised innovations (random-walk axes).
     family_alpha : family-wise false-alarm probability of the battery.
+    gaps : axis → the gap after (``gap_measure`` of ``residuals`` against the stated noise):
+        adds ``gap_noise`` and ``gap_signatures``.
+    extra : checks made elsewhere with their own p-values (the walk's own battery,
+        :mod:`calib.gap.walk`; the mechanisms, :mod:`calib.gap.mechanisms`), judged at the
+        same Bonferroni level.
     """
     run = ext.run
     checks: list[Check] = []
@@ -545,7 +586,13 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
         if st.q > 0:
             found.append(_walk_whiteness(innovations[k], axis))
         found.append(_rivals(ext, state, k, run.sigma2))
+        if gaps is not None and axis in gaps:
+            if not st.noise_free:
+                found.append(_gap_noise(gaps[axis], float(run.sigma2[k]) + st.lsb**2 / 12.0,
+                                        axis))
+            found.append(_gap_signatures(gaps[axis], axis))
         checks += [c for c in found if c is not None]
+    checks += list(extra or ())
     m = len(checks)
     alpha_check = family_alpha / max(m, 1)
     log_a = float(np.log(alpha_check))
