@@ -54,6 +54,7 @@ Every check has a p-value; ``rival_shapes`` runs only where effects are named.
 
 from __future__ import annotations
 
+from copy import copy
 from dataclasses import dataclass
 from math import comb
 
@@ -148,7 +149,7 @@ class Battery:
 
 # --------------------------------------------------------------------- column tests (GLS)
 
-class _AxisSpace:
+class AxisSpace:
     """The whitened system of one axis of the final model, to test added columns.
 
     ``yw, H`` from :meth:`Extensions.axis_system` (differenced and whitened with the model's
@@ -164,6 +165,49 @@ class _AxisSpace:
         self.qh, _ = np.linalg.qr(h)
         self.rw = yw - self.qh @ (self.qh.T @ yw)
         self.ext, self.st = ext, st
+
+    def without(self, z: np.ndarray) -> AxisSpace:
+        """A copy whose residual has the columns of z projected out as well (to look for
+        what is left once z is in the model)."""
+        z = np.asarray(z, dtype=float).reshape(z.shape[0], -1)
+        zw = self.ext.whiten(self.st, z)
+        zp = zw - self.qh @ (self.qh.T @ zw)
+        out = copy(self)
+        coef = np.linalg.lstsq(zp, self.rw, rcond=None)[0]
+        out.rw = self.rw - zp @ coef
+        return out
+
+    def scan(self, make, grid) -> np.ndarray:
+        """ΔRSS of each column block ``make(g)`` (N, c) of a grid, batched: the blocks are
+        whitened together and each projected off the model (batched QR); a block of rank < c
+        counts its independent part (its ΔRSS is then the least-squares one, by QR of the
+        projected block). Use :meth:`test` on the best for its rank and coefficients."""
+        grid = list(grid)
+        out = np.zeros(len(grid))
+        if not grid:
+            return out
+        chunk = max(1, int(3e6 // (self.rw.size * 4)))
+        for a in range(0, len(grid), chunk):
+            blocks = [np.asarray(make(g), dtype=float) for g in grid[a:a + chunk]]
+            blocks = [b.reshape(b.shape[0], -1) for b in blocks]
+            c = blocks[0].shape[1]
+            z = np.concatenate(blocks, axis=1)
+            zw = self.ext.whiten(self.st, z)
+            zp = zw - self.qh @ (self.qh.T @ zw)
+            if c == 1:  # one column: ΔRSS = (zᵀr)²/‖z‖², no factorisation needed
+                nz = np.einsum("ng,ng->g", zp, zp)
+                ok = nz > (COLLINEAR_TOL * np.linalg.norm(zw, axis=0)) ** 2
+                out[a:a + len(blocks)] = np.where(ok, (zp.T @ self.rw) ** 2
+                                                  / np.maximum(nz, 1e-300), 0.0)
+                continue
+            stack = zp.reshape(zp.shape[0], len(blocks), c).transpose(1, 0, 2)
+            q, r = np.linalg.qr(stack)
+            d = np.abs(np.diagonal(r, axis1=1, axis2=2))
+            norms = np.linalg.norm(stack, axis=1)
+            ok = d > COLLINEAR_TOL * np.maximum(norms, 1e-300)
+            proj = np.einsum("gnc,n->gc", q, self.rw) * ok
+            out[a:a + len(blocks)] = np.sum(proj * proj, axis=1)
+        return out
 
     def test(self, z: np.ndarray) -> tuple[float, int, np.ndarray] | None:
         """(ΔRSS, rank, coefficients of the columns of z in their own units) or None."""
@@ -186,7 +230,7 @@ class _AxisSpace:
         return float(proj @ proj), rank, coef
 
 
-def _chi2_check(space: _AxisSpace, z: np.ndarray, name: str, axis: str
+def _chi2_check(space: AxisSpace, z: np.ndarray, name: str, axis: str
                 ) -> tuple[float, int, np.ndarray, float] | None:
     out = space.test(z)
     if out is None:
@@ -201,7 +245,7 @@ def _ordinal(j: int) -> str:
     return {1: "1st", 2: "2nd", 3: "3rd"}.get(j, f"{j}th")
 
 
-def _harmonics(space: _AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
+def _harmonics(space: AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
     cols = [f(j * tita) for j in HARMONICS for f in (np.cos, np.sin)]
     res = _chi2_check(space, np.column_stack(cols), "harmonics", axis)
     if res is None:
@@ -215,7 +259,7 @@ def _harmonics(space: _AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
                  f"(harmonics {HARMONICS[0]}–{HARMONICS[-1]} tested)")
 
 
-def _fisher_g_logp(g: float, m: int) -> float:
+def fisher_g_logp(g: float, m: int) -> float:
     """log P(max periodogram ordinate / sum > g) for white Gaussian noise (Fisher 1929)."""
     p = 0.0
     for j in range(1, int(min(m, np.floor(1.0 / g))) + 1):
@@ -226,7 +270,7 @@ def _fisher_g_logp(g: float, m: int) -> float:
     return float(np.log(min(max(p, 1e-300), 1.0)))
 
 
-def _peak(space: _AxisSpace, run, min_cycles: float = 0.5
+def spectral_peak(space: AxisSpace, run, min_cycles: float = 0.5
           ) -> tuple[float, float, int, float, np.ndarray] | None:
     """Largest periodogram ordinate of the whitened residual: (g, log p, m, period, columns).
 
@@ -260,11 +304,11 @@ def _peak(space: _AxisSpace, run, min_cycles: float = 0.5
         fit = space.test(columns(f))
         if fit is not None and fit[0] > best:
             best_f, best = float(f), fit[0]
-    return g, _fisher_g_logp(g, m), m, span / best_f, columns(best_f)
+    return g, fisher_g_logp(g, m), m, span / best_f, columns(best_f)
 
 
-def _periodic(space: _AxisSpace, run, axis: str) -> Check | None:
-    peak = _peak(space, run)
+def _periodic(space: AxisSpace, run, axis: str) -> Check | None:
+    peak = spectral_peak(space, run)
     if peak is None:
         return None
     g, logp, m, period, cols = peak
@@ -319,15 +363,15 @@ def _step(z: np.ndarray, scale: float, run, axis: str) -> Check | None:
                  f"after {where}")
 
 
-def _legendre_in_time(run, degrees: tuple[int, ...]) -> np.ndarray:
+def legendre_in_time(run, degrees: tuple[int, ...]) -> np.ndarray:
     """(N, len(degrees)) Legendre polynomials ``P_d(x)`` of time mapped onto x ∈ [-1, 1]."""
     tc = run.tcol
     x = 2.0 * (tc - tc[0]) / max(float(tc[-1] - tc[0]), 1e-300) - 1.0
     return np.column_stack([np.polynomial.legendre.Legendre.basis(d)(x) for d in degrees])
 
 
-def _trend(space: _AxisSpace, run, axis: str) -> Check | None:
-    cols = _legendre_in_time(run, (2, 3, 4))
+def _trend(space: AxisSpace, run, axis: str) -> Check | None:
+    cols = legendre_in_time(run, (2, 3, 4))
     res = _chi2_check(space, cols, "trend", axis)
     if res is None:
         return None
@@ -356,7 +400,7 @@ def _variance(z: np.ndarray, order: np.ndarray, name: str, what: str, axis: str,
                  f"{sd.max():.3g} m/s² over {len(groups)} groups")
 
 
-def _direction(tita: np.ndarray) -> np.ndarray | None:
+def motion_direction(tita: np.ndarray) -> np.ndarray | None:
     """+1 after an upward move, -1 after a downward one (held samples keep the last)."""
     d = np.sign(np.diff(tita, prepend=tita[0]))
     if not (np.any(d > 0) and np.any(d < 0)):
@@ -369,8 +413,8 @@ def _direction(tita: np.ndarray) -> np.ndarray | None:
     return out if frac >= 0.05 else None
 
 
-def _hysteresis(space: _AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
-    d = _direction(tita)
+def _hysteresis(space: AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
+    d = motion_direction(tita)
     if d is None:
         return None
     res = _chi2_check(space, d[:, None], "hysteresis", axis)
@@ -383,7 +427,7 @@ def _hysteresis(space: _AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
                  f"{2.0 * coef[0]:+.3g} m/s²)")
 
 
-def _rate(space: _AxisSpace, run, axis: str) -> Check | None:
+def _rate(space: AxisSpace, run, axis: str) -> Check | None:
     if run.omega is None or np.ptp(run.omega) <= 1e-9:
         return None
     w = np.asarray(run.omega)
@@ -397,7 +441,7 @@ def _rate(space: _AxisSpace, run, axis: str) -> Check | None:
                  f"over the run's rates)")
 
 
-def _timing(space: _AxisSpace, ext: Extensions, st, k: int, axis: str) -> Check | None:
+def _timing(space: AxisSpace, ext: Extensions, st, k: int, axis: str) -> Check | None:
     """A delay between θ and the readings that changes during the run (clock drift, a
     varying lag): the lag's column ``LPF_τ(A_r)`` slope ``dA_r/dt`` times Legendre P1, P2 of
     time, added to the model (timed runs only): ``χ²(≤ 2)``."""
@@ -408,7 +452,7 @@ def _timing(space: _AxisSpace, ext: Extensions, st, k: int, axis: str) -> Check 
     rate = np.gradient(a, run.t)  # dA/dt, m/s³: a delay δ changes the reading by -δ·dA/dt
     if np.ptp(rate) <= 1e-9:
         return None
-    cols = rate[:, None] * _legendre_in_time(run, (1, 2))
+    cols = rate[:, None] * legendre_in_time(run, (1, 2))
     res = _chi2_check(space, cols, "timing", axis)
     if res is None:
         return None
@@ -469,8 +513,8 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
     lr_named = ext.nll(reduced) - ext.nll(state)
     cost = sum(walk_cost(ext, st) if n == "bias_random_walk" else float(effect(n).n_free)
                for n in named)
-    space = _AxisSpace(ext, reduced, k)
-    poly_cols = _legendre_in_time(run, (1, 2, 3, 4))
+    space = AxisSpace(ext, reduced, k)
+    poly_cols = legendre_in_time(run, (1, 2, 3, 4))
     shapes: list[tuple[float, str, float]] = []  # (log p, what, size)
 
     def add(fit, n_par: int, searched: int, what: str, size: float) -> None:
@@ -489,7 +533,7 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
     poly = None if walk else space.test(poly_cols)
     if poly is not None:
         add(poly, poly[1], 1, "a polynomial in time", float(np.ptp(poly_cols @ poly[2])))
-    peak = _peak(space, run, min_cycles=1.5 if walk else 0.5)
+    peak = spectral_peak(space, run, min_cycles=1.5 if walk else 0.5)
     if peak is not None:
         fit = space.test(peak[4])
         unit_t = "s" if run.time_unit == "s" else "samples"
@@ -568,7 +612,7 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
         # rounding coarser than the noise makes the residual's distribution discrete and
         # peaked (mostly 0, sometimes ± lsb): the Gaussian tail checks do not apply
         coarse = st.lsb > np.sqrt(st.sigma2)
-        space = _AxisSpace(ext, state, k)
+        space = AxisSpace(ext, state, k)
         found = [
             _harmonics(space, run.tita, axis),
             _periodic(space, run, axis),

@@ -14,8 +14,10 @@ from calib.effects.catalog import REFINED
 from calib.gap.adequacy import ADEQUACY_ALPHA, Battery, run_battery
 from calib.gap.confusions import _confusions, merge_tilt, prefer_less_assuming
 from calib.gap.estimates import _Reporter
+from calib.gap.mechanisms import mechanism_checks
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
 from calib.gap.selection import _try, candidate_list, initial_state, select
+from calib.gap.walk import WALK_CHECKS, WalkReview, review_walk
 from calib.io import Ensayo
 
 
@@ -79,9 +81,22 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     effects = _named_effects(ext, rep, state, lattice)
     before, after, resid_before, resid_after, fitted = _gaps(ext, rep, state, nominal)
     final = _final_model(ext, rep, state, gains)
+    reviews = {k: review_walk(ext, state, k, rep.walk_input(k), rep.innov[k], stated)
+               for k in range(2) if state.axes[k].q > 0}
     battery = run_battery(ext, state, resid_after, lattice, rep.innov, adequacy_alpha,
-                          gaps=_battery_gaps(ext, state, after, resid_after))
-    verdict = ("unexplained" if battery.failed else "explained" if effects
+                          gaps=_battery_gaps(ext, state, after, resid_after),
+                          extra=[c for r in reviews.values() for c in r.checks]
+                          + [c for k in range(2) for c in mechanism_checks(
+                              ext, state, k, lattice[k].lsb if lattice[k].found else 0.0)])
+    reviews = {k: r.with_failed(tuple(c.name for c in battery.failed
+                                      if c.axis == r.axis and c.name in WALK_CHECKS))
+               for k, r in reviews.items()}
+    drifting = [r for r in reviews.values() if not r.earned]
+    # a walk that did not earn its place is not named (it stays in the model meanwhile)
+    effects = [e for e in effects if not (e.name == "bias_random_walk"
+                                          and any(r.axis == e.axis for r in drifting))]
+    unexplained = [r.signature() for r in drifting] + [c.signature() for c in battery.failed]
+    verdict = ("unexplained" if unexplained else "explained" if effects
                else "nothing_detected")
     if verdict == "unexplained":
         effects = [replace(e, tentative=True) for e in effects]
@@ -98,8 +113,8 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         residuals_before=resid_before, residuals_after=resid_after, fitted=fitted,
         needs_timing=tuple(needs_timing), criterion=criterion, steps=tuple(steps), g=float(g),
         noise_var=(float(stated[0]), float(stated[1])), verdict=verdict,
-        unexplained=tuple(c.signature() for c in battery.failed),
-        adequacy=_adequacy(battery, after, state, float(family_alpha)))
+        unexplained=tuple(unexplained),
+        adequacy=_adequacy(battery, drifting, reviews))
 
 
 def _battery_gaps(ext: Extensions, state: ModelState, after: dict[str, GapMeasure],
@@ -120,14 +135,17 @@ def _battery_gaps(ext: Extensions, state: ModelState, after: dict[str, GapMeasur
     return out
 
 
-def _adequacy(battery: Battery, after: dict[str, GapMeasure], state: ModelState,
-              family_alpha: float) -> dict:
+def _adequacy(battery: Battery, drifting: list[WalkReview], reviews: dict[int, WalkReview]
+              ) -> dict:
     """The battery as a dict, plus per axis whether the gap after is consistent with noise:
-    every check on the axis passed — the battery holds the gap after's χ² against the stated
-    noise and its signatures (``gap_noise``, ``gap_signatures``), so this is the verdict's
-    own judgement, never a second one that could contradict it."""
+    every check on the axis passed and no walk on it failed to earn its place — the battery
+    holds the gap after's χ² against the stated noise and its signatures (``gap_noise``,
+    ``gap_signatures``), so this is the verdict's own judgement, never a second one that
+    could contradict it. ``walk``: the review of each named walk (:mod:`calib.gap.walk`)."""
     out = battery.to_dict()
-    out["consistent"] = {a: bool(battery.axis_passed(a)) for a in AXES}
+    drift = {r.axis for r in drifting}
+    out["consistent"] = {a: bool(battery.axis_passed(a) and a not in drift) for a in AXES}
+    out["walk"] = [reviews[k].to_dict() for k in sorted(reviews)]
     return out
 
 

@@ -125,6 +125,11 @@ class _Reporter:
             mean = mean + val("sin_tilt") * ext.tilt_column(k, st)
         return mean
 
+    def walk_input(self, k: int) -> np.ndarray:
+        """Readings of axis k minus the final model's mean without its bias, m/s² (what the
+        random walk filter follows: ``e_k = b_k + v_k``)."""
+        return self.run.datos[:, k] - self._mean(k, self.names, self.params, with_bias=False)
+
     def mean(self, k: int) -> np.ndarray:
         return self._mean(k, self.names, self.params)
 
