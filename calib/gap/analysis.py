@@ -17,6 +17,7 @@ from calib.gap.estimates import _Reporter
 from calib.gap.mechanisms import mechanism_checks
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
 from calib.gap.selection import _try, candidate_list, initial_state, select
+from calib.gap.sponges import review_sponges
 from calib.gap.walk import WALK_CHECKS, WalkReview, review_walk
 from calib.io import Ensayo
 
@@ -76,6 +77,7 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     steps = list(sel.steps)
     state = prefer_less_assuming(ext, sel.state, stated, sel.candidates, steps)
     state = merge_tilt(ext, state, stated, sel.candidates, steps)
+    state, sponges = review_sponges(ext, state, lattice, float(np.log(sel.alpha_step)))
 
     rep = _Reporter(ext, state, lattice)
     effects = _named_effects(ext, rep, state, lattice)
@@ -114,7 +116,7 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         needs_timing=tuple(needs_timing), criterion=criterion, steps=tuple(steps), g=float(g),
         noise_var=(float(stated[0]), float(stated[1])), verdict=verdict,
         unexplained=tuple(unexplained),
-        adequacy=_adequacy(battery, drifting, reviews))
+        adequacy={**_adequacy(battery, drifting, reviews), "sponges": sponges})
 
 
 def _battery_gaps(ext: Extensions, state: ModelState, after: dict[str, GapMeasure],

@@ -476,7 +476,7 @@ def path_checks(ext: Extensions, e: np.ndarray, innov: np.ndarray, sigma2: float
     return out
 
 
-def _gls_nll(de: np.ndarray, dx: np.ndarray, sigma2: float, r: np.ndarray) -> float:
+def gls_nll(de: np.ndarray, dx: np.ndarray, sigma2: float, r: np.ndarray) -> float:
     """-2 log L (no 2π) of ``Δe = ΔX β + Δ(b + v)`` with β profiled: whitened by the
     banded Cholesky factor of ``Σ_Δ`` (``Σ_Δ = UᵀU``; ``Uᵀ w = ·`` is a bidiagonal solve)."""
     c = sla.cholesky_banded(_banded(sigma2, r))
@@ -489,11 +489,11 @@ def _gls_nll(de: np.ndarray, dx: np.ndarray, sigma2: float, r: np.ndarray) -> fl
     return float(2.0 * np.sum(np.log(c[1])) + res @ res)
 
 
-def _walk_nll(de: np.ndarray, dx: np.ndarray, sigma2: float, dt: np.ndarray, q0: float
+def walk_nll(de: np.ndarray, dx: np.ndarray, sigma2: float, dt: np.ndarray, q0: float
               ) -> float:
-    """:func:`_gls_nll` minimised over the walk's q (bounded search on log q around q0)."""
+    """:func:`gls_nll` minimised over the walk's q (bounded search on log q around q0)."""
     def f(lq: float) -> float:
-        return _gls_nll(de, dx, sigma2, np.exp(2.0 * lq) * dt)
+        return gls_nll(de, dx, sigma2, np.exp(2.0 * lq) * dt)
 
     res = optimize.minimize_scalar(f, bounds=(np.log(q0) - 8.0, np.log(q0) + 4.0),
                                    method="bounded", options={"xatol": 1e-4})
@@ -524,10 +524,10 @@ def rival_check(ext: Extensions, e: np.ndarray, sigma2: float, q: float, k: int,
     base = np.diff(run.a_ref[:, k])[:, None]
     if fixed_q:
         def nll(dx):
-            return _gls_nll(de, dx, sigma2, q * q * dt)
+            return gls_nll(de, dx, sigma2, q * q * dt)
     else:
         def nll(dx):
-            return _walk_nll(de, dx, sigma2, dt, q)
+            return walk_nll(de, dx, sigma2, dt, q)
     nll0 = nll(base)
     best = None
     for r in winners[:NESTED_TOP]:
