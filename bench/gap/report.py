@@ -376,6 +376,11 @@ class GapReport:
                 f"replay: {self.replay.mode} ({self.replay.reason}); timing: {self.timing}"]
         if self.replay.mode == "sweep":
             out.append(f"  replay tracks the measured encoder to {self.tracking_error:.2g} rad")
+        profile = dict(getattr(self.analysis, "criterion", None) or {}).get("profile") or {}
+        out += [f"from the sensor profile: {line}"
+                for line in profile.get("terms_from_profile", [])]
+        for s in self.adequacy.get("sponges", []):
+            out.append(f"{'named' if s['named'] else 'not named'}: {s['reason']}")
         units = effect_units()
         out.append("effects named:" if d["effects"] else "effects named: none")
         for e in d["effects"]:

@@ -511,7 +511,7 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
     for n in named:
         reduced = reduced.without(n, axis, stated)
     lr_named = ext.nll(reduced) - ext.nll(state)
-    cost = sum(walk_cost(ext, st) if n == "bias_random_walk" else float(effect(n).n_free)
+    cost = sum(walk_cost(ext, st, k) if n == "bias_random_walk" else float(effect(n).n_free)
                for n in named)
     space = AxisSpace(ext, reduced, k)
     poly_cols = legendre_in_time(run, (1, 2, 3, 4))

@@ -20,11 +20,12 @@ from calib.gap.selection import _try, candidate_list, initial_state, select
 from calib.gap.sponges import review_sponges
 from calib.gap.walk import WALK_CHECKS, WalkReview, review_walk
 from calib.io import Ensayo
+from calib.sensor_profile import SensorProfile
 
 
 def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = None,
-                family_alpha: float = 0.005, adequacy_alpha: float = ADEQUACY_ALPHA
-                ) -> GapAnalysis:
+                family_alpha: float = 0.005, adequacy_alpha: float = ADEQUACY_ALPHA,
+                sensor: SensorProfile | None = None) -> GapAnalysis:
     """Find where the nominal model and a measured calibration run disagree, name the effect.
 
     Parameters
@@ -38,6 +39,11 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         per sample.
     family_alpha : false-alarm probability of the whole selection on a run without any
         effect; the per-step threshold is ``family_alpha / m`` (Bonferroni over the m tests).
+    sensor : a sensor profile (``sensor.json``, :func:`calib.sensor_profile.load_profile`):
+        its ``rate_random_walk`` per axis states the bias random walk's q (m/s²/√s, the same
+        q): the walk's q is searched only inside the term's interval and it is charged no
+        parameter; an axis whose term is null has no walk candidate. Needs sample times.
+        Which terms came from the profile: ``criterion["profile"]``.
 
     Returns
     -------
@@ -73,6 +79,7 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
 
     lattice = [detect_lattice(run.datos[:, k]) for k in range(2)]
     candidates, needs_timing = candidate_list(run)
+    profile = _apply_profile(ext, sensor, candidates)
     sel = select(ext, initial_state(run, lattice), candidates, family_alpha)
     steps = list(sel.steps)
     state = prefer_less_assuming(ext, sel.state, stated, sel.candidates, steps)
@@ -107,6 +114,8 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
                          "structured candidate by AIC with its effective dof",
                  "family_alpha": float(family_alpha), "alpha_step": float(sel.alpha_step),
                  "n_tests": int(sel.n_tests), "adequacy_alpha": float(adequacy_alpha)}
+    if profile is not None:
+        criterion["profile"] = profile
     return GapAnalysis(
         effects=tuple(effects),
         not_identifiable=tuple(_confusions(ext, state, stated, sel.candidates,
@@ -117,6 +126,40 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         noise_var=(float(stated[0]), float(stated[1])), verdict=verdict,
         unexplained=tuple(unexplained),
         adequacy={**_adequacy(battery, drifting, reviews), "sponges": sponges})
+
+
+def _apply_profile(ext: Extensions, sensor: SensorProfile | None,
+                   candidates: list[tuple[str, str]]) -> dict | None:
+    """Take the walk's q from a sensor profile (``analyze_gap`` docs): set
+    ``ext.walk_bounds``, drop the walk candidate of an axis whose term is null, and say
+    which terms came from the profile."""
+    if sensor is None:
+        return None
+    terms = tuple(sensor.rate_random_walk or (None, None))
+    out: dict = {"rate_random_walk": {}, "terms_from_profile": [], "unit": "m/s²/√s"}
+    for k, a in enumerate(AXES):
+        term = terms[k] if k < len(terms) else None
+        if term is None:
+            if ("bias_random_walk", a) in candidates:
+                candidates.remove(("bias_random_walk", a))
+            out["rate_random_walk"][a] = None
+            out["terms_from_profile"].append(
+                f"bias_random_walk ({a}): not a candidate — the profile's rate_random_walk "
+                "is null (not resolved by its static log)")
+            continue
+        lo, hi = (float(v) for v in term.interval)
+        out["rate_random_walk"][a] = {"value": float(term.value), "interval": [lo, hi],
+                                      "level": float(term.level)}
+        if ext.run.time_unit != "s":
+            out["terms_from_profile"].append(
+                f"bias_random_walk ({a}): the profile's q is per √s and this run has no sample"
+                " times (t or --rate): the walk stays free")
+            continue
+        ext.walk_bounds[k] = (max(lo, 0.0), max(hi, lo, 0.0))
+        out["terms_from_profile"].append(
+            f"bias_random_walk ({a}): q within the profile's {100 * term.level:.3g} % interval "
+            f"[{lo:.4g}, {hi:.4g}] m/s²/√s (value {term.value:.4g}), charged 0 parameters")
+    return out
 
 
 def _battery_gaps(ext: Extensions, state: ModelState, after: dict[str, GapMeasure],

@@ -251,6 +251,8 @@ class GapAnalysis:
                f"Gap analysis: N = {self.residuals_before.shape[0]}, g = {self.g} m/s², "
                f"stated σ² = {self.noise_var[0]:.4g}, {self.noise_var[1]:.4g} (m/s²)²"]
         c = self.criterion
+        for line in (c.get("profile") or {}).get("terms_from_profile", []):
+            out.append(f"from the sensor profile: {line}")
         out.append(f"criterion: forward LR selection, family α = {c['family_alpha']:g}, "
                    f"{c['n_tests']} tests, per-step α = {c['alpha_step']:.3g} (Bonferroni); "
                    "structured effects first, a random walk only when it beats them")

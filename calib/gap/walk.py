@@ -199,10 +199,9 @@ class WalkReview:
 
 
 def walk_charge(ext: Extensions, k: int) -> float:
-    """Parameters a walk on axis k is charged: its q (1), or 0 when a sensor profile fixes q
-    (``ext.walk_bounds[k]`` a single value)."""
-    bounds = getattr(ext, "walk_bounds", {}).get(k)
-    return 0.0 if bounds is not None and bounds[0] == bounds[1] else 1.0
+    """Parameters a walk on axis k is charged: its q (1), or 0 when a sensor profile states
+    q (``ext.walk_bounds[k]``: measured, not fitted to these data)."""
+    return 0.0 if k in getattr(ext, "walk_bounds", {}) else 1.0
 
 
 # ----------------------------------------------------------------------------- rivals
@@ -559,7 +558,8 @@ def review_walk(ext: Extensions, state: ModelState, k: int, e: np.ndarray,
     charge = walk_charge(ext, k)
     found = rivals(ext, reduced, k)
     checks = path_checks(ext, e, innov, st.sigma2_eff, st.q, axis)
-    rc = rival_check(ext, e, st.sigma2_eff, st.q, k, found, lr - 2.0 * charge, charge == 0.0)
+    rc = rival_check(ext, e, st.sigma2_eff, st.q, k, found, lr - 2.0 * charge,
+                     k in getattr(ext, "walk_bounds", {}))
     if rc is not None:
         checks.append(rc)
     return WalkReview(axis, lr, charge, tuple(found), tuple(checks),
