@@ -85,6 +85,14 @@ def gap_units() -> dict[str, str]:
         "adequacy.family_alpha": "1", "adequacy.alpha_check": "1",
         "adequacy.checks.size": "@unit", "adequacy.checks.statistic": "1",
         "adequacy.checks.p_value": "1",
+        "adequacy.walk.lr": "1", "adequacy.walk.charge": "count",
+        "adequacy.walk.criterion": "1", "adequacy.walk.rivals.lr": "1",
+        "adequacy.walk.rivals.charge": "count", "adequacy.walk.rivals.criterion": "1",
+        "adequacy.walk.rivals.size": "m/s²",
+        "adequacy.sponges.statistic": "1", "adequacy.sponges.p_value": "1",
+        "criterion.profile.rate_random_walk.*.value": "m/s²/√s",
+        "criterion.profile.rate_random_walk.*.interval": "m/s²/√s",
+        "criterion.profile.rate_random_walk.*.level": "1",
     })
     return out
 

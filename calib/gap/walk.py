@@ -182,7 +182,8 @@ class WalkReview:
             size, stat = best.size, best.criterion - self.criterion
         else:
             why = "the random walk's own path fails " + ", ".join(self.failed)
-            size, stat = 0.0, float("nan")
+            failed = [c for c in self.checks if c.name in self.failed]
+            size, stat = (failed[0].size, failed[0].statistic) if failed else (0.0, 0.0)
         return {"axis": self.axis, "signature": "drifting_structure",
                 "reason": "drifting structure", "size": float(size), "unit": "m/s²",
                 "statistic": float(stat), "p_value": None,
