@@ -16,7 +16,10 @@ Sets
   (:data:`validation.designs.CLEAN_N` samples). ``kind = "clean"``.
 * :func:`out_of_catalog_cases` — effects the catalog does not have (polynomial, periodic,
   impulsive, step-like, hysteretic, timing, scale asymmetry, θ harmonics, flicker), each
-  on a design where it shows, scaled by the part no linear catalog column can absorb.
+  on a design where it shows, scaled by the part no linear catalog column can absorb; then
+  :func:`mechanism_cases` (issue 20): shapes a random walk could absorb (a transient, two
+  tones in time, a box, an error near 0 g) and mechanisms of the bench (ringing after stops,
+  vibration tied to the drive angle, a frozen output).
   ``kind = "out_of_catalog"``: the right answer is the verdict "unexplained".
 * :func:`validation_set` — all three (the set scored by ``python -m validation.score``).
 """
