@@ -202,7 +202,8 @@ def test_the_set_covers_the_catalog_the_designs_and_outside_effects(vset):
                 assert c.design == "mujoco_sweep"
     labels = {e["name"] for c in ooc for e in c.truth["effects"]}
     assert {"cubic", "periodic_bias", "spikes", "bias_step", "hysteresis",
-            "clock_drift"} <= labels
+            "clock_drift", "transient", "two_tone", "box", "zero_g", "ringing",
+            "drive_vibration", "frozen"} <= labels
     assert all(c.expected == () for c in ooc)
     assert {c.design for c in vset if c.kind == "clean"} == set(designs.DESIGNS)
     assert len({c.design for c in cat}) >= 8
@@ -215,6 +216,10 @@ def test_effect_sizes_land_in_their_stated_range(vset):
                 amp = np.abs(e["params"]["amplitude_sigma"])
                 assert amp.min() >= 8 and amp.max() <= 15
                 assert e["params"]["count"] == max(3, round(0.003 * c.n))
+                continue
+            if e["name"] == "frozen":  # size = sqrt(frozen samples), a whole number of them
+                assert e["params"]["length"] == round(e["target_sigma"] ** 2), c.id
+                assert np.isclose(e["size_sigma"] ** 2, e["params"]["length"]), c.id
                 continue
             lo, hi = vcases.EFFECTS[e["name"]].target_range
             assert lo - 1e-6 <= e["size_sigma"] <= hi + 1e-6, (c.id, e)

@@ -16,7 +16,10 @@ Sets
   (:data:`validation.designs.CLEAN_N` samples). ``kind = "clean"``.
 * :func:`out_of_catalog_cases` — effects the catalog does not have (polynomial, periodic,
   impulsive, step-like, hysteretic, timing, scale asymmetry, θ harmonics, flicker), each
-  on a design where it shows, scaled by the part no linear catalog column can absorb.
+  on a design where it shows, scaled by the part no linear catalog column can absorb; then
+  :func:`mechanism_cases` (issue 20): shapes a random walk could absorb (a transient, two
+  tones in time, a box, an error near 0 g) and mechanisms of the bench (ringing after stops,
+  vibration tied to the drive angle, a frozen output).
   ``kind = "out_of_catalog"``: the right answer is the verdict "unexplained".
 * :func:`validation_set` — all three (the set scored by ``python -m validation.score``).
 """
@@ -148,6 +151,39 @@ def _prep_step(spec, k, run, rng):
     return spec.with_axis(k, step=(0.0, int(rng.integers(int(0.3 * run.n), int(0.7 * run.n)))))
 
 
+def _prep_transient(spec, k, run, rng):
+    d = float(run.tcol[-1])
+    return spec.with_axis(k, transient=(0.0, float(rng.uniform(0.3, 0.7)) * d,
+                                        float(rng.uniform(0.03, 0.08)) * d))
+
+
+def _prep_two_tone(spec, k, run, rng):
+    d = float(run.tcol[-1])
+    p1 = float(rng.uniform(0.15, 0.35)) * d
+    return spec.with_axis(k, two_tone=(0.0, p1, p1 * float(rng.uniform(0.3, 0.45)),
+                                       float(rng.uniform(0, 2 * np.pi))))
+
+
+def _prep_box(spec, k, run, rng):
+    i1 = int(rng.integers(int(0.2 * run.n), int(0.5 * run.n)))
+    return spec.with_axis(k, box=(0.0, i1, i1 + int(rng.integers(int(0.1 * run.n),
+                                                                  int(0.3 * run.n)))))
+
+
+def _prep_zero_g(spec, k, run, rng):
+    return spec.with_axis(k, zero_g=(0.0, float(rng.uniform(0.5, 1.5))))
+
+
+def _prep_ringing(spec, k, run, rng):
+    return spec.with_axis(k, ringing=(0.0, float(rng.uniform(1.5, 5.0)),
+                                      float(rng.uniform(0.03, 0.1))))
+
+
+def _prep_drive(spec, k, run, rng):
+    order = float(rng.integers(2, 6)) + float(rng.uniform(0.3, 0.7))  # never an integer
+    return spec.with_axis(k, drive=(0.0, order, float(rng.uniform(0, 2 * np.pi))))
+
+
 def _prep_harmonic(order, phase):
     def prep(spec, k, run, rng):
         return spec.with_axis(k, harmonic=(0.0, order, phase))
@@ -198,6 +234,23 @@ EFFECTS: dict[str, EffectDef] = {e.name: e for e in [
     # N = 6000 for h ≤ 1 (both spectra grow without bound at low frequency), hence [8, 14]
     EffectDef("flicker", False, "flicker", "flicker", bracket=(1e-6, 1.0), signed=False,
               keys=("h", "h"), target_range=(8.0, 14.0)),
+    # mechanisms a bias random walk could otherwise absorb, and mechanisms of the drive
+    # (issue 20): each "beyond" the catalog's linear columns, like the ones above
+    EffectDef("transient", False, "transient", "beyond", bracket=(1e-3, 10.0),
+              keys=("amplitude", "amplitude"), prepare=_prep_transient),
+    EffectDef("two_tone", False, "two_tone", "beyond", bracket=(1e-3, 5.0),
+              keys=("amplitude", "amplitude"), prepare=_prep_two_tone),
+    EffectDef("box", False, "box", "beyond", bracket=(1e-3, 5.0),
+              keys=("amplitude", "amplitude"), prepare=_prep_box),
+    EffectDef("zero_g", False, "zero_g", "beyond", bracket=(1e-3, 10.0), signed=False,
+              keys=("amplitude", "amplitude"), prepare=_prep_zero_g),
+    EffectDef("ringing", False, "ringing", "beyond", bracket=(1e-3, 10.0),
+              keys=("amplitude", "amplitude"), prepare=_prep_ringing),
+    EffectDef("drive_vibration", False, "drive", "beyond", bracket=(1e-3, 5.0),
+              keys=("amplitude", "amplitude"), prepare=_prep_drive),
+    # frozen output: its size is sqrt(frozen samples) (each frozen sample lacks the noise a
+    # reading has: ≈ one σ² of evidence each), drawn in [8, 20] like the others
+    EffectDef("frozen", False, "frozen", "frozen", signed=False, keys=("length", "length")),
 ]}
 """Effect name → definition. Catalog names and keys are those of ``docs/effects.md``."""
 
@@ -274,6 +327,11 @@ def _scale(eff: EffectDef, run: Run, spec: Spec, k: int, target: float, draws: D
         return new, {"count": int(draws.spike_at.shape[1]),
                      "amplitude_sigma": [float(v) for v in draws.spike_sigma[k]],
                      "at": [int(v) for v in draws.spike_at[k]]}, size
+    if eff.size == "frozen":
+        length = int(round(target**2))
+        start = int(rng.integers(int(0.2 * run.n), int(0.8 * run.n) - length))
+        return (spec.with_axis(k, frozen=(start, length)),
+                {"start": start, "length": length}, float(np.sqrt(length)))
     if eff.size == "lever":
         if not run.mujoco:
             raise ValueError("lever_arm needs the MuJoCo sweep")
@@ -303,6 +361,13 @@ def _settings(eff: EffectDef, spec: Spec, k: int, run: Run) -> dict:
     if eff.field == "harmonic":
         _, order, phase = spec.axis(k).harmonic
         return {"order": int(order), "phase": float(phase)}
+    settings = {"transient": ("centre", "width"), "two_tone": ("period1", "period2", "phase"),
+                "box": ("first", "last"), "zero_g": ("width",),
+                "ringing": ("frequency", "damping"), "drive": ("order", "phase")}
+    if eff.field in settings:
+        return dict(zip(settings[eff.field], (float(v) for v in
+                                              getattr(spec.axis(k), eff.field)[1:]),
+                        strict=True))
     return {}
 
 
@@ -412,6 +477,21 @@ OUT_OF_CATALOG: tuple[tuple[str, str, str, int | None], ...] = (
 )
 """(effect, axis, design, N or None for the design's default) outside the catalog."""
 
+MECHANISMS: tuple[tuple[str, str, str, int | None], ...] = (
+    ("transient", "x", "full_turn", None), ("transient", "y", "several_turns", None),
+    ("two_tone", "y", "several_turns", 6000), ("two_tone", "x", "varying_rate", None),
+    ("box", "x", "several_turns", None), ("box", "y", "stop_and_go", None),
+    ("zero_g", "x", "full_turn", None), ("zero_g", "y", "held_poses", None),
+    ("ringing", "x", "stop_and_go", None), ("ringing", "y", "stop_and_go", None),
+    ("drive_vibration", "x", "several_turns", None), ("drive_vibration", "y", "varying_rate",
+                                                       None),
+    ("frozen", "x", "full_turn", None), ("frozen", "y", "overshoot", None),
+)
+"""(effect, axis, design, N) of issue 20: shapes a flexible term could absorb (a transient, two
+tones in time, a box, an error near 0 g) and mechanisms of the table (ringing after stops,
+vibration tied to the drive angle, a frozen output). Out of the catalog: the right answer is
+"unexplained". Drawn from their own seed group (4), so the older cases are unchanged."""
+
 
 def catalog_cases(seed: int = 0) -> list[Case]:
     """Every catalog effect on each of its axes (several designs) and the combinations."""
@@ -434,9 +514,17 @@ def clean_cases(count: int, seed: int = 0) -> list[Case]:
 
 
 def out_of_catalog_cases(seed: int = 0) -> list[Case]:
-    """Effects outside the catalog, each on a design where it is detectable in principle."""
-    return [build_case("out_of_catalog", design, [(name, axis)], _rng(seed, 3, i), n=n)
-            for i, (name, axis, design, n) in enumerate(OUT_OF_CATALOG)]
+    """Effects outside the catalog, each on a design where it is detectable in principle
+    (:data:`OUT_OF_CATALOG`, then :data:`MECHANISMS`)."""
+    return ([build_case("out_of_catalog", design, [(name, axis)], _rng(seed, 3, i), n=n)
+             for i, (name, axis, design, n) in enumerate(OUT_OF_CATALOG)]
+            + mechanism_cases(seed))
+
+
+def mechanism_cases(seed: int = 0) -> list[Case]:
+    """The cases of :data:`MECHANISMS` (out of the catalog)."""
+    return [build_case("out_of_catalog", design, [(name, axis)], _rng(seed, 4, i), n=n)
+            for i, (name, axis, design, n) in enumerate(MECHANISMS)]
 
 
 def validation_set(seed: int = 0, clean: int = 2 * len(designs.DESIGNS)) -> list[Case]:

@@ -132,6 +132,15 @@ class AxisSpec:
     θ, periodic (amplitude m/s², period s, phase rad) in time, step (amplitude m/s², sample
     index), hysteresis m/s² (+ while θ increases, - while it decreases), flicker h
     ((m/s²)²·rad per sample: density h/ω), spikes (scale of the drawn spikes, 0 = none).
+    Mechanisms (issue 20, outside the catalog): transient (amplitude m/s², centre s, width s)
+    a Gaussian bump of the bias in time; two_tone (amplitude m/s², period 1 s, period 2 s,
+    phase rad) two sinusoids in time (the second at 0.7 × the amplitude); box (amplitude
+    m/s², first sample, last sample) the bias jumps up and back down; zero_g (amplitude m/s²,
+    width m/s²) a dip ``-A·exp(-(a/w)²/2)`` of the reading near 0 g; ringing (amplitude m/s²,
+    frequency Hz, damping ratio) a damped oscillation after each stop of the table, signed by
+    the direction of the move that stopped; drive (amplitude m/s², order ν, phase rad) a
+    vibration ``A·sin(νθ + φ)`` tied to the drive angle at a non-integer order; frozen (first
+    sample, length) the output repeats one reading exactly for that many samples.
     """
 
     bias: float = 0.0
@@ -153,6 +162,13 @@ class AxisSpec:
     hysteresis: float = 0.0
     flicker: float = 0.0
     spikes: float = 0.0
+    transient: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    two_tone: tuple[float, float, float, float] = (0.0, 30.0, 11.0, 0.0)
+    box: tuple[float, int, int] = (0.0, 0, 0)
+    zero_g: tuple[float, float] = (0.0, 1.0)
+    ringing: tuple[float, float, float] = (0.0, 3.0, 0.05)
+    drive: tuple[float, float, float] = (0.0, 2.5, 0.0)
+    frozen: tuple[int, int] = (0, 0)
 
 
 @dataclass(frozen=True)
@@ -266,7 +282,49 @@ def mean_reading(run: Run, spec: Spec, axes=(0, 1)) -> np.ndarray:
             y = y + amp * (np.arange(run.n) >= at)
         if p.hysteresis:
             y = y + p.hysteresis * direction(run.omega)
+        y = y + _mechanisms(run, p, a)
         out[:, k] = y
+    return out
+
+
+def stops(run: Run, still: float = 1e-6) -> np.ndarray:
+    """Sample indices where the table comes to rest after moving (|ω| falls below
+    ``still`` rad/s), with the sign of the move that stopped: (m, 2) [index, ±1]."""
+    if run.omega is None:
+        return np.zeros((0, 2), dtype=int)
+    moving = np.abs(run.omega) > still
+    at = np.flatnonzero(moving[:-1] & ~moving[1:]) + 1
+    return np.column_stack([at, np.sign(run.omega[at - 1]).astype(int)])
+
+
+def _mechanisms(run: Run, p: AxisSpec, a: np.ndarray) -> np.ndarray:
+    """The deterministic mechanisms outside the catalog (AxisSpec docstring), m/s²."""
+    tcol = run.tcol
+    out = np.zeros(run.n)
+    amp, centre, width = p.transient
+    if amp:
+        out += amp * np.exp(-0.5 * ((tcol - centre) / width) ** 2)
+    amp, p1, p2, phase = p.two_tone
+    if amp:
+        out += amp * (np.sin(2.0 * np.pi * tcol / p1 + phase)
+                      + 0.7 * np.sin(2.0 * np.pi * tcol / p2 + 2.0 * phase + 1.0))
+    amp, i1, i2 = p.box
+    if amp:
+        idx = np.arange(run.n)
+        out += amp * ((idx >= i1) & (idx < i2))
+    amp, width = p.zero_g
+    if amp:
+        out -= amp * np.exp(-0.5 * (a / width) ** 2)
+    amp, freq, zeta = p.ringing
+    if amp:
+        w = 2.0 * np.pi * freq
+        wd = w * np.sqrt(1.0 - zeta**2)
+        for i, sign in stops(run):
+            tau = tcol[i:] - tcol[i]
+            out[i:] += sign * amp * np.exp(-zeta * w * tau) * np.sin(wd * tau)
+    amp, order, phase = p.drive
+    if amp:
+        out += amp * np.sin(order * run.tita + phase)
     return out
 
 
@@ -316,5 +374,8 @@ def readings(run: Run, spec: Spec, draws: Draws, noise_var) -> np.ndarray:
             out[:, k] += flicker(draws.flicker[:, k, :], p.flicker, run.n)
         if p.spikes:
             out[:, k] += p.spikes * draws.spikes(k, run.n, stated_sd)
+        start, length = p.frozen
+        if length:  # the output stage holds one reading (a stuck register / dropped updates)
+            out[start:start + length, k] = out[start, k]
         out[:, k] = quantize(out[:, k], p.lsb)
     return out

@@ -79,6 +79,9 @@ def _cmd_design(args: argparse.Namespace) -> int:
     if args.mc_grid == 1 or (args.mc_grid and args.runs == 0):
         raise OptionError(f"--mc-grid {args.mc_grid}: needs K >= 2 sizes and --runs >= 1 "
                           "(0: no grid)")
+    if not -0.5 < args.scale < 0.5:
+        raise OptionError(f"--scale {args.scale}: the sensor's scale factor must be within "
+                          "(-0.5, 0.5) (gain 1 + scale; e.g. -0.03 for a sensor reading 3 % low)")
     sizes = _sizes(args.size, allowed)
     nv = parse_variances(args.noise_var)
     if args.plot:
@@ -86,7 +89,7 @@ def _cmd_design(args: argparse.Namespace) -> int:
     exps = [Experiment(d, n, r) for d in designs for n in ns for r in rates]
     res = analyze_design(exps, effects, sizes, nv, args.alpha, args.axis, args.runs,
                          args.seed, mapper=mapper_from_args(args), progress=Progress("design"),
-                         mc_grid=args.mc_grid)
+                         mc_grid=args.mc_grid, gain=1.0 + args.scale)
     written = []
     if args.plot:
         from bench.figures.design import design_figure
@@ -120,6 +123,9 @@ def register(sub) -> None:
     q.add_argument("--runs", type=integer, default=10,
                    help="Monte Carlo runs per cell (0: analytic only)")
     q.add_argument("--seed", type=int, default=0, help="seed of the Monte Carlo runs")
+    q.add_argument("--scale", type=float, default=0.0,
+                   help="the sensor's scale factor s (gain 1 + s, e.g. from a calibration): "
+                        "the effects act through the gain, so the sizes include it")
     q.add_argument("--mc-grid", type=integer, default=0, metavar="K",
                    help="Monte Carlo effects: also run K sizes on a geometric grid of the "
                         "effect's strength, ×1/4 to ×4 around the asked size (saturation: "

@@ -72,8 +72,13 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     if args.rate is not None and ensayo.t is not None:
         print(f"warning: {args.ensayo} has sample times 't'; --rate {args.rate} is ignored",
               file=sys.stderr)
+    sensor = None
+    if args.sensor is not None:
+        from calib.sensor_profile import load_profile
+
+        sensor = load_profile(args.sensor)
     report = run_gap(ensayo, nv, g=args.g, rate=None if ensayo.t is not None else args.rate,
-                     report_dir=args.report, rrd=args.rrd, force=args.force,
+                     report_dir=args.report, rrd=args.rrd, force=args.force, sensor=sensor,
                      progress=lambda msg: print(f"[gap] {msg}", file=sys.stderr, flush=True))
     if args.json:
         print_json(report.to_dict())
@@ -99,6 +104,9 @@ def register(sub) -> None:
     p.add_argument("--report", help="write " + ", ".join(REPORT_FILES[:-1]) + " and "
                    f"{REPORT_FILES[-1]} into this directory")
     p.add_argument("--rrd", help="write a rerun recording of the residuals before/after")
+    p.add_argument("--sensor", help="sensor.json (tiltbench noise): the bias random walk's "
+                   "intensity q is taken from its rate_random_walk (within its interval, "
+                   "charged no parameter; no walk where it is null); needs sample times")
     add_force(p)
     add_log_options(p)
     p.set_defaults(handler=_cmd_gap)

@@ -93,13 +93,34 @@ class GapReport:
 
     @property
     def verdict(self) -> str:
-        """"explained", "unexplained" or "nothing_detected" (the analysis' verdict)."""
-        return str(getattr(self.analysis, "verdict", "nothing_detected"))
+        """"explained", "unexplained" or "nothing_detected": the analysis' verdict, except
+        that a verdict other than "unexplained" is never stated beside a re-simulated gap
+        after that is not consistent with noise (:meth:`gap_problems`): the report then says
+        "unexplained" and lists that gap as the signature (one verdict, never contradicting
+        the per-axis ``consistent``)."""
+        verdict = str(getattr(self.analysis, "verdict", "nothing_detected"))
+        if verdict != "unexplained" and any(self.gap_problems(a) for a in AXES):
+            return "unexplained"
+        return verdict
 
     @property
     def unexplained(self) -> list[dict]:
-        """The signatures that remain unexplained (verdict "unexplained"), one dict each."""
-        return [dict(u) for u in getattr(self.analysis, "unexplained", ())]
+        """The signatures that remain unexplained (verdict "unexplained"), one dict each:
+        the analysis' ones, and, when the re-simulated gap after is what fails, one per axis
+        (``signature`` "gap_after")."""
+        out = [dict(u) for u in getattr(self.analysis, "unexplained", ())]
+        if str(getattr(self.analysis, "verdict", "")) == "unexplained":
+            return out
+        for ax in AXES:
+            problems = self.gap_problems(ax)
+            if problems:
+                gm = self.gap_after[ax]
+                out.append({"axis": ax, "signature": "gap_after", "size": self.chi2_after(ax),
+                            "unit": "1", "statistic": float(gm.max_signature_z),
+                            "p_value": None,
+                            "description": f"the re-simulated gap after on {ax} is not "
+                                           "consistent with noise: " + "; ".join(problems)})
+        return out
 
     @property
     def adequacy(self) -> dict:
@@ -115,8 +136,17 @@ class GapReport:
                 + float(self.adequacy.get("family_alpha", 0.0)))
 
     def tentative(self) -> list[bool]:
-        """Per named effect (order of ``effects``): named, but the final model fails adequacy."""
-        return [bool(getattr(e, "tentative", False)) for e in self.analysis.effects]
+        """Per named effect (order of ``effects``): named, but the final model fails adequacy
+        (or the re-simulated gap after is not consistent with noise)."""
+        down = self.verdict == "unexplained"
+        return [down or bool(getattr(e, "tentative", False)) for e in self.analysis.effects]
+
+    @property
+    def consistency_alpha(self) -> float:
+        """Level of each consistency test of the re-simulated gap after: the adequacy
+        battery's per-check level (the same Bonferroni as the verdict's checks), else the
+        family α."""
+        return float(self.adequacy.get("alpha_check", self.family_alpha))
 
     def verdict_lines(self) -> list[str]:
         """The verdict in words: a headline, then one line per unexplained signature."""
@@ -149,16 +179,28 @@ class GapReport:
         return any(e.name in NOISE_EFFECTS and ax in e.axes for e in self.effects)
 
     def after_problems(self, ax: str) -> list[str]:
-        """Why the gap after on ``ax`` is not consistent with the stated noise (empty: it is)."""
-        gm, alpha = self.gap_after[ax], self.family_alpha
+        """Why the gap after on ``ax`` is not consistent with the stated noise (empty: it is):
+        the analysis' unexplained signatures on the axis, then :meth:`gap_problems`."""
+        mine = [str(u.get("description", u.get("signature", "?")))
+                for u in getattr(self.analysis, "unexplained", ())
+                if u.get("axis") in (ax, "both")]
+        out = []
+        if str(getattr(self.analysis, "verdict", "")) == "unexplained" and mine:
+            out.append(f"unexplained structure remains on {ax}: " + "; ".join(mine)
+                       + " (see verdict)")
+        return out + self.gap_problems(ax, mine)
+
+    def gap_problems(self, ax: str, mine: list[str] | None = None) -> list[str]:
+        """The re-simulated gap after on ``ax`` against the stated noise: χ²/dof outside its
+        two-sided band, or the largest signature above its threshold, each at
+        :attr:`consistency_alpha` (empty: consistent)."""
+        gm, alpha = self.gap_after[ax], self.consistency_alpha
         lo, hi = gm.chi2_band(alpha)
         chi2 = self.chi2_after(ax)
         out = []
-        mine = [str(u.get("description", u.get("signature", "?"))) for u in self.unexplained
-                if u.get("axis") in (ax, "both")]
-        if self.verdict == "unexplained" and mine:
-            out.append(f"unexplained structure remains on {ax}: " + "; ".join(mine)
-                       + " (see verdict)")
+        if mine is None:
+            mine = [u for u in getattr(self.analysis, "unexplained", ())
+                    if u.get("axis") in (ax, "both")]
         named_ok = self.noise_named(ax) and not mine and lo <= gm.chi2_dof <= hi
         # a named noise level that passed the adequacy battery (uniform in time and θ,
         # Gaussian) explains the excess over the stated σ²: χ² against it is the yardstick
@@ -278,9 +320,11 @@ class GapReport:
         """The ``tiltbench gap --json`` object (documented keys first; extras allowed)."""
         a = self.analysis.to_dict()
         effects = []
+        tentative = self.tentative()
         for i, e in enumerate(a.get("effects", [])):
             d = dict(e)
-            d["tentative"] = bool(d.get("tentative", False))
+            d["tentative"] = bool(d.get("tentative", False)) or (
+                i < len(tentative) and tentative[i])
             d["timing"] = CATALOG[d["name"]].timing if d["name"] in CATALOG else "no"
             if i in self.sysid:
                 d["sysid"] = self.sysid[i]
@@ -332,6 +376,11 @@ class GapReport:
                 f"replay: {self.replay.mode} ({self.replay.reason}); timing: {self.timing}"]
         if self.replay.mode == "sweep":
             out.append(f"  replay tracks the measured encoder to {self.tracking_error:.2g} rad")
+        profile = dict(getattr(self.analysis, "criterion", None) or {}).get("profile") or {}
+        out += [f"from the sensor profile: {line}"
+                for line in profile.get("terms_from_profile", [])]
+        for s in self.adequacy.get("sponges", []):
+            out.append(f"{'named' if s['named'] else 'not named'}: {s['reason']}")
         units = effect_units()
         out.append("effects named:" if d["effects"] else "effects named: none")
         for e in d["effects"]:

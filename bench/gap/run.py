@@ -35,6 +35,7 @@ from calib.conventions import AXES, G
 from calib.diagnostics import gap_measure
 from calib.gap import GapAnalysis, analyze_gap
 from calib.io import Ensayo
+from calib.sensor_profile import SensorProfile
 
 PathLike = str | os.PathLike
 Progress = Callable[[str], None] | None
@@ -43,7 +44,8 @@ Progress = Callable[[str], None] | None
 def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = G,
             rate: float | None = None, report_dir: PathLike | None = None,
             rrd: PathLike | None = None, force: bool = False, *,
-            family_alpha: float = 0.005, progress: Progress = None) -> GapReport:
+            family_alpha: float = 0.005, progress: Progress = None,
+            sensor: SensorProfile | None = None) -> GapReport:
     """Run the discrepancy workflow on a measured calibration run.
 
     Parameters
@@ -58,6 +60,8 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
     family_alpha : family-wise level of the detection and of "consistent with noise".
     progress : called with one line per step and its duration (e.g. a function printing to
         stderr); None: silent.
+    sensor : a sensor profile: the bias random walk's q comes from it
+        (:func:`calib.gap.analyze_gap`).
 
     Returns
     -------
@@ -70,7 +74,8 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
     tita = np.asarray(ensayo.tita, dtype=float)
 
     with _step(progress, f"analysing {ensayo.n} samples (calib.gap)…", "analysis done"):
-        analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate, family_alpha=family_alpha)
+        analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate, family_alpha=family_alpha,
+                               sensor=sensor)
 
     with _step(progress, None, "nominal re-simulation") as note:
         replay = make_replay(tita, t)

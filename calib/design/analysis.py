@@ -10,7 +10,7 @@ import numpy as np
 from calib.conventions import AXES, G, reference_accel
 from calib.design import grid as mcgrid
 from calib.design.experiments import Experiment
-from calib.design.montecarlo import Cell, fraction, run_cells
+from calib.design.montecarlo import Cell, fraction, right_name, run_cells
 from calib.design.pairs import PAIRS, pair_key, told_apart
 from calib.design.power import (
     critical,
@@ -85,12 +85,13 @@ class _Design:
         return out
 
 
-def _linear_row(d: _Design, name: str, size: float, axis: str) -> dict:
-    """Analytic power of one linear effect in one experiment (:mod:`calib.design.power`)."""
+def _linear_row(d: _Design, name: str, size: float, axis: str, gain: float = 1.0) -> dict:
+    """Analytic power of one linear effect in one experiment (:mod:`calib.design.power`):
+    the first selection step's, with the sensor gain 1 + scale multiplying the effect."""
     if not d.testable(name, axis):
         return {"testable": False}
     cols = d.columns(name, axis)
-    coef = coefficients(name, size, d.exp, axis)
+    coef = gain * coefficients(name, size, d.exp, axis)
     c = float(np.linalg.norm(coef))
     direction = coef / c if c > 0 else np.eye(coef.size)[-1]
     lam1 = noncentrality(d.basis, cols @ direction)
@@ -102,7 +103,7 @@ def _linear_row(d: _Design, name: str, size: float, axis: str) -> dict:
     sign = -1.0 if size < 0 else 1.0
     for p in LEVELS:
         cp = np.sqrt(lambda_for_power(p, df, crit) / lam1) if lam1 > 0 else np.inf
-        s = size_of(name, float(cp), d.exp) if np.isfinite(cp) else None
+        s = size_of(name, float(cp) / gain, d.exp) if np.isfinite(cp) else None
         row[f"size_{round(100 * p)}"] = None if s is None else sign * s
     return row
 
@@ -121,7 +122,13 @@ def _pair_linear(d: _Design, a: str, b: str, size: float, axis: str) -> dict:
 
 def _hits(res: list, name: str, axis: str) -> int:
     """Runs in which the gap named ``name`` on ``axis`` (or both axes)."""
-    return sum(any(n == name and a in (axis, "both") for n, a in named) for named, _ in res)
+    return sum(any(n == name and a in (axis, "both") for n, a in named) for named, *_ in res)
+
+
+def _right(res: list, name: str, axis: str) -> int:
+    """Runs in which the whole workflow named exactly the right effect, verdict "explained"
+    (:func:`calib.design.montecarlo.right_name`)."""
+    return sum(right_name(named, conf, verdict, name, axis) for named, conf, verdict in res)
 
 
 def _grid_row(s: np.ndarray, f: np.ndarray, sizes: list[float],
@@ -159,7 +166,7 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
                    family_alpha: float = 0.005, axis: str = "x", runs: int = 20,
                    seed: int = 0, g: float = G, mapper: Mapper | None = None,
                    progress: Callable[[str], None] | None = None,
-                   mc_grid: int = 0) -> DesignResult:
+                   mc_grid: int = 0, gain: float = 1.0) -> DesignResult:
     """Power of the gap detection for each experiment and effect, and of the pairs.
 
     Parameters
@@ -174,6 +181,14 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
     mc_grid : K ≥ 2: each Monte Carlo cell is also run at K sizes on a geometric grid of the
         effect's strength around the asked size (:mod:`calib.design.grid`; the same noise
         streams at every size), giving its 80 % / 95 % sizes; 0: the asked size only.
+    gain : the sensor's gain 1 + scale (the effects act through it: a sensor reading 3 %
+        low needs a 3 % larger effect for the same power); the stated sizes include it.
+
+    With ``runs`` > 0 every testable cell, the linear effects included, is also run through
+    the whole workflow (:func:`calib.gap.analyze_gap` on readings made from the effect's
+    physics): ``right_name`` is the fraction of runs where it names exactly the right effect
+    with the verdict "explained" (ties listed as not identifiable count), next to ``power``
+    (linear: the first step's analytic power; Monte Carlo: named on its axis).
 
     Returns
     -------
@@ -195,6 +210,8 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
     nv = np.asarray(noise_var, dtype=float)
     if nv.shape != (2,) or np.any(~np.isfinite(nv)) or np.any(nv <= 0):
         raise ValueError(f"noise_var must be two positive variances, got {noise_var!r}")
+    if not (np.isfinite(gain) and gain > 0):
+        raise ValueError(f"gain (1 + scale) must be positive, got {gain}")
     if not ALPHA_MIN <= family_alpha < 1:
         raise ValueError(f"family_alpha must be in [{ALPHA_MIN:g}, 1), got {family_alpha}")
     if axis not in AXES:
@@ -217,20 +234,28 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
     for i, d in enumerate(designs):
         for name in effects:
             if name in LINEAR:
-                table[name]["per_experiment"][i] = _linear_row(d, name, sizes[name], axis)
+                row = _linear_row(d, name, sizes[name], axis, gain)
+                table[name]["per_experiment"][i] = row
+                if runs and row["testable"]:
+                    cells.append(Cell(d.exp, name, float(sizes[name]), axis, (nv[0], nv[1]),
+                                      g, family_alpha, gain))
+                    where.append((i, name))
             elif name == "lowpass_lag" and not d.exp.timed:
                 table[name]["per_experiment"][i] = {"testable": False}
             elif runs == 0:
                 table[name]["per_experiment"][i] = {"testable": True, "power": None}
             else:
                 cells.append(Cell(d.exp, name, float(sizes[name]), axis, (nv[0], nv[1]), g,
-                                  family_alpha))
+                                  family_alpha, gain))
                 where.append((i, name))
     # grid cells (mc_grid): cell j's sizes share its spawn key (j,), so run r draws the same
     # noise at every size; the factor 1 of an odd K is cell j itself
     extra, keys, grids = [], [(j,) for j in range(len(cells))], []
     f = mcgrid.factors(mc_grid) if mc_grid else np.ones(0)
     for j, c in enumerate(cells if mc_grid else []):
+        if c.name in LINEAR:  # analytic sizes: no grid
+            grids.append(None)
+            continue
         s0 = mcgrid.strength(c.name, c.size, nv, axis, g)
         def to_size(x, c=c):
             return mcgrid.size_from(c.name, x, c.size, nv, axis, g)
@@ -254,7 +279,13 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
                              keys=keys)
     mc = {}
     for j, ((i, name), res) in enumerate(zip(where, outcomes[:len(cells)], strict=True)):
-        row = {"testable": True, **fraction(_hits(res, name, axis), runs)}
+        right = {f"right_name{k[5:]}": v
+                 for k, v in fraction(_right(res, name, axis), runs).items() if k != "runs"}
+        if name in LINEAR:  # the analytic first-step row, and the whole workflow's
+            table[name]["per_experiment"][i].update({**right, "runs": int(runs)})
+            mc[(i, name)] = res
+            continue
+        row = {"testable": True, **fraction(_hits(res, name, axis), runs), **right}
         if mc_grid:
             s, ids, at, to_size = grids[j]
             row.update(_grid_row(s, f, at, to_size,
@@ -272,7 +303,8 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
             if entry["method"] == "analytic":
                 row = _pair_linear(d, a, b, sizes[a], axis)
             elif (i, a) in mc:
-                ok = sum(told_apart(a, b, axis, named, conf) for named, conf in mc[(i, a)])
+                ok = sum(told_apart(a, b, axis, named, conf)
+                         for named, conf, _ in mc[(i, a)])
                 row = {"testable": True, **fraction(ok, runs)}
             else:
                 row = {"testable": False}
@@ -284,6 +316,7 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
                      "nominal_std": d.nominal})
     settings = {"family_alpha": float(family_alpha), "noise_var": [float(v) for v in nv],
                 "axis": axis, "runs": int(runs), "seed": int(seed), "g": float(g),
+                "gain": float(gain),
                 "ambiguity_lr": float(AMBIGUITY_LR)}
     if mc_grid:
         settings.update({"mc_grid": int(mc_grid), "mc_span": mcgrid.SPAN})

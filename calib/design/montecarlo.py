@@ -34,10 +34,12 @@ class Cell:
     noise_var: tuple[float, float]
     g: float
     family_alpha: float
+    gain: float = 1.0
 
 
-def _run_chunk(task: tuple[Cell, list[np.random.SeedSequence]]) -> list[tuple[list, list]]:
-    """(named (name, axis) pairs, not-identifiable name lists) of each run of a chunk."""
+def _run_chunk(task: tuple[Cell, list[np.random.SeedSequence]]
+               ) -> list[tuple[list, list, str]]:
+    """(named (name, axis) pairs, not-identifiable name lists, verdict) of each run."""
     from calib.gap import analyze_gap
 
     cell, seeds = task
@@ -45,17 +47,17 @@ def _run_chunk(task: tuple[Cell, list[np.random.SeedSequence]]) -> list[tuple[li
     for ss in seeds:
         rng = np.random.default_rng(ss)
         y = readings(cell.exp, cell.name, cell.size, cell.axis, np.array(cell.noise_var),
-                     cell.g, rng)
+                     cell.g, rng, cell.gain)
         ens = Ensayo(tita=cell.exp.theta(), datos=y, t=cell.exp.times(), source="<design>")
         res = analyze_gap(ens, list(cell.noise_var), cell.g, family_alpha=cell.family_alpha)
         out.append(([(e.name, e.axis) for e in res.effects],
-                    [list(d["names"]) for d in res.not_identifiable]))
+                    [list(d["names"]) for d in res.not_identifiable], str(res.verdict)))
     return out
 
 
 def run_cells(cells: list[Cell], runs: int, seed: int, mapper: Mapper | None = None,
               progress=None, keys: list[tuple[int, ...]] | None = None
-              ) -> list[list[tuple[list, list]]]:
+              ) -> list[list[tuple[list, list, str]]]:
     """The runs of every cell (cell i uses spawn key ``keys[i]``, default (i,)), mapped in
     chunks of :data:`CHUNK` runs. ``progress(done, total)`` counts chunks.
 
@@ -85,3 +87,20 @@ def fraction(hits: int, runs: int) -> dict:
     lo, hi = clopper_pearson(hits, runs)
     return {"power": float(p), "power_std": float(np.sqrt(p * (1.0 - p) / runs)),
             "power_ci95": [lo, hi], "runs": int(runs)}
+
+
+def right_name(named: list, not_identifiable: list, verdict: str, name: str, axis: str
+               ) -> bool:
+    """Did the whole workflow name the right effect? The verdict is "explained" and the
+    named set is exactly ``{(name, axis)}`` (axis "both" for tilt_offset), or a single other
+    effect that a ``not_identifiable`` entry lists together with it (the documented ties:
+    tilt offset / equal misalignments, lag / rotation at a constant rate)."""
+    want = (name, "both" if name == "tilt_offset" else axis)
+    got = {(n, a) for n, a in named}
+    if verdict != "explained" or len(got) != 1:
+        return False
+    (n, a), = got
+    if (n, a) == want:
+        return True
+    return any(name in names and n in names for names in not_identifiable) and \
+        (a == want[1] or "both" in (a, want[1]))

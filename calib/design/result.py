@@ -115,6 +115,10 @@ class DesignResult(ResultMixin):
                       "effects.*.per_experiment.grid.powers_monotone": "1",
                       "effects.*.per_experiment.grid.runs": "count",
                       "effects.*.per_experiment.*.bracket_power_ci95": "1"})
+        u.update({"effects.*.per_experiment.right_name": "1",
+                  "effects.*.per_experiment.right_name_std": "1",
+                  "effects.*.per_experiment.right_name_ci95": "1",
+                  "settings.gain": "1"})
         u.update({"effects.*.per_experiment.power": "1",
                   "effects.*.per_experiment.power_std": "1",
                   "effects.*.per_experiment.power_ci95": "1",
@@ -154,8 +158,12 @@ class DesignResult(ResultMixin):
                 f"({e['n_tests']} tests); std bias x {ns['x']['bias']:.3g} m/s², "
                 f"scale x {ns['x']['scale']:.3g}, bias y {ns['y']['bias']:.3g} m/s², "
                 f"scale y {ns['y']['scale']:.3g}")
-        lines += ["", f"{'effect (size)':<40} {'exp':>4} {'power':>18} "
-                      f"{'80 % power at':>16} {'95 % power at':>16}"]
+        lines += ["", f"Sizes for a sensor gain 1 + scale = {s.get('gain', 1.0):g}. power: "
+                      "the first selection step (linear: analytic); right name: the whole "
+                      "workflow names exactly this effect, verdict explained (Monte Carlo of "
+                      "analyze_gap, exact 95 % interval).",
+                  f"{'effect (size)':<40} {'exp':>4} {'power':>18} {'right name':>18} "
+                  f"{'80 % power at':>16} {'95 % power at':>16}"]
         for name, e in self.effects.items():
             head = f"{name} {e['axis']} ({_size(e['size'], e['unit'])})"
             for i, r in enumerate(e["per_experiment"]):
@@ -163,7 +171,11 @@ class DesignResult(ResultMixin):
                     pw = "not testable"
                 else:
                     pw = _power(r)
-                lines.append(f"{head if i == 0 else '':<40} [{i}] {pw:>18} "
+                rn = "—"
+                if "right_name" in r:
+                    lo, hi = r["right_name_ci95"]
+                    rn = f"{100 * r['right_name']:.0f} % [{100 * lo:.0f}, {100 * hi:.0f}]"
+                lines.append(f"{head if i == 0 else '':<40} [{i}] {pw:>18} {rn:>18} "
                              f"{_mc_size(r, 80, e['unit']):>16} "
                              f"{_mc_size(r, 95, e['unit']):>16}")
         lines += _grid_notes(self.effects, s["runs"])

@@ -16,7 +16,8 @@ lever_arm            pos_z (m), pos_x = 0          x: (0, pos_z) on (ω², α); 
 =================== ============================= =========================================
 
 (a gain ``1 + s`` multiplies every coefficient: λ scales by ``(1 + s)²``, ±6 % for the
-course's |s| ≈ 0.03). The Monte Carlo effects act on the reading of ``axis``:
+course's |s| ≈ 0.03; ``analyze_design(gain=…)`` includes it, so the sizes it states are those
+of the sensor with that gain). The Monte Carlo effects act on the reading of ``axis``:
 ``lowpass_lag`` ``LPF_τ(A_r)`` (:func:`calib.filters.lowpass`), ``saturation``
 ``clip(A_r, ±L)``, ``bias_random_walk`` ``+ Σ q·√Δt·w_k`` (Δt the sample period), ``noise_level``
 white noise of variance ``size`` instead of the stated σ², ``quantization`` readings rounded
@@ -29,6 +30,7 @@ import numpy as np
 
 from calib.conventions import AXES, EFFECTS, reference_accel
 from calib.design.experiments import Experiment
+from calib.diagnostics import angular_rates
 from calib.filters import lowpass
 
 LINEAR: tuple[str, ...] = ("misalignment", "tilt_offset", "nonlinearity_k2", "cross_axis",
@@ -72,10 +74,38 @@ def size_of(name: str, c: float, exp: Experiment) -> float | None:
     return float(c)
 
 
+def _linear_signal(exp: Experiment, name: str, size: float, axis: str, g: float
+                   ) -> np.ndarray:
+    """(N, 2) the specific force along the sensitive axes with a linear effect at ``size``
+    (the physics, not the model's columns: the Monte Carlo of the whole workflow)."""
+    th = exp.theta()
+    a_r = reference_accel(th, g)
+    k = AXES.index(axis)
+    y = a_r.copy()
+    if name == "misalignment":
+        y[:, k] = reference_accel(th + size, g)[:, k]
+    elif name == "tilt_offset":
+        y = reference_accel(th + size, g)
+    elif name == "nonlinearity_k2":
+        y[:, k] = a_r[:, k] + size * a_r[:, k] ** 2
+    elif name == "cross_axis":
+        y[:, k] = a_r[:, k] + size * a_r[:, k] * a_r[:, 1 - k]
+    elif name == "bias_drift":
+        tc = exp.times() - exp.times()[0] if exp.timed else np.arange(exp.n) * exp.period
+        y[:, k] = a_r[:, k] + size * tc
+    elif name == "lever_arm":  # pos_z on the hinge normal: tangential α·z on x, ω²·z on y
+        w, al = angular_rates(th, exp.times())
+        y[:, k] = a_r[:, k] + size * (al if k == 0 else w * w)
+    return y
+
+
 def readings(exp: Experiment, name: str | None, size: float, axis: str,
-             noise_var: np.ndarray, g: float, rng: np.random.Generator) -> np.ndarray:
-    """Synthetic readings (N, 2), m/s², with the Monte Carlo effect ``name`` on ``axis``
-    (module docstring); ``name`` None: the nominal sensor."""
+             noise_var: np.ndarray, g: float, rng: np.random.Generator,
+             gain: float = 1.0) -> np.ndarray:
+    """Synthetic readings (N, 2), m/s², with the effect ``name`` on ``axis`` (module
+    docstring; a linear one by its physics, :func:`_linear_signal`); ``name`` None: the
+    nominal sensor. ``gain`` = 1 + scale of the sensor multiplies the specific force (the
+    effects act through it, as in the gap's model)."""
     th = exp.theta()
     a_r = reference_accel(th, g)
     k = AXES.index(axis)
@@ -84,10 +114,13 @@ def readings(exp: Experiment, name: str | None, size: float, axis: str,
     if name == "noise_level":
         std[k] = np.sqrt(size)
     y = a_r.copy()
-    if name == "lowpass_lag":
+    if name in LINEAR:
+        y = _linear_signal(exp, name, size, axis, g)
+    elif name == "lowpass_lag":
         y[:, k] = lowpass(a_r[:, k], exp.times(), size)
     elif name == "saturation":
         y[:, k] = np.clip(a_r[:, k], -size, size)
+    y = gain * y
     noise = rng.standard_normal(a_r.shape) * std
     y = y + noise
     if name == "bias_random_walk":

@@ -135,6 +135,9 @@ class Extensions:
 
     def __init__(self, run: RunData, gains: np.ndarray) -> None:
         self.run = run
+        self.walk_bounds: dict[int, tuple[float, float]] = {}
+        """Axis index → (low, high) of a random walk's q stated by a sensor profile (``gap
+        --sensor``): the walk's q is searched only there and it is charged no parameter."""
         self.gains = np.asarray(gains, dtype=float)
         self._nll_cache = _LRU(16384)    # (state, reml) -> float
         self._fit_cache = _LRU(16)       # state -> _Fit

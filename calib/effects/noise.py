@@ -42,7 +42,9 @@ class BiasRandomWalk(BoundaryEffect):
                 window: float | None = None) -> tuple[float, float]:
         """REML of the random-walk intensity q of axis k (others fixed): (q, REML -2 log L).
 
-        Searched on ``log(q²·Δt/σ²)``, the walk-to-noise variance ratio per step."""
+        Searched on ``log(q²·Δt/σ²)``, the walk-to-noise variance ratio per step; within
+        ``ext.walk_bounds[k]`` = (low, high) when a sensor profile states q (``gap
+        --sensor``: its interval; a single value when low = high)."""
         st = state.axes[k]
         s2 = st.sigma2_eff
         dtm = float(np.median(ext.run.dt_walk))
@@ -52,6 +54,13 @@ class BiasRandomWalk(BoundaryEffect):
             q = float(np.sqrt(np.exp(lk) * s2 / dtm))
             return ext.safe_nll(state.with_axis(k, replace(st, q=q)), reml=True)
 
+        bounds = getattr(ext, "walk_bounds", {}).get(k)
+        if bounds is not None:  # a sensor profile gives q (its interval): not free
+            lo, hi = (np.log(b * b * dtm / s2) for b in bounds)
+            if hi - lo < 1e-9:
+                return float(bounds[0]), f(lo)
+            lk, val = minimise(f, np.linspace(lo, hi, 7))
+            return float(np.sqrt(np.exp(lk) * s2 / dtm)), val
         if window is None:
             grid = np.linspace(np.log(0.01 / n**2), 0.0, 18)
         else:

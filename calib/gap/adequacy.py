@@ -34,7 +34,16 @@ check                     statistic and reference distribution under the model
                           the bias in place of the named effects: its likelihood ratio over
                           them against χ²(extra parameters), Bonferroni over the search
                           (:func:`_rivals`)
+``gap_noise``             the gap after (:func:`calib.diagnostics.gap_measure` of the final
+                          residuals) against the **stated** noise: ``Σr²/σ² ~ χ²(dof)``,
+                          two-sided (not where a noise level is named: its σ² is the model's)
+``gap_signatures``        the gap after's largest signature z, Bonferroni over its
+                          signatures (``GapMeasure.max_signature_p``)
 ========================  ==================================================================
+
+The last two make the verdict and the per-axis consistency one judgement: an axis is
+consistent (``adequacy.consistent``) exactly when every check on it passes, so "explained" and
+"nothing detected" are never stated beside a gap after that is not consistent with noise.
 
 Family-wise error: every check with a p-value is run at ``α_check = family_alpha / m`` with m
 the number of such checks on the run (Bonferroni), so on a run that the model describes the
@@ -45,6 +54,7 @@ Every check has a p-value; ``rival_shapes`` runs only where effects are named.
 
 from __future__ import annotations
 
+from copy import copy
 from dataclasses import dataclass
 from math import comb
 
@@ -53,7 +63,7 @@ from scipy import linalg as sla
 from scipy import stats
 
 from calib.conventions import AXES
-from calib.diagnostics import Lattice, ljung_box_logp
+from calib.diagnostics import GapMeasure, Lattice, chi2_two_sided_logp, ljung_box_logp
 from calib.effects import Extensions, ModelState, effect
 from calib.gap.selection import walk_cost
 
@@ -139,7 +149,7 @@ class Battery:
 
 # --------------------------------------------------------------------- column tests (GLS)
 
-class _AxisSpace:
+class AxisSpace:
     """The whitened system of one axis of the final model, to test added columns.
 
     ``yw, H`` from :meth:`Extensions.axis_system` (differenced and whitened with the model's
@@ -155,6 +165,49 @@ class _AxisSpace:
         self.qh, _ = np.linalg.qr(h)
         self.rw = yw - self.qh @ (self.qh.T @ yw)
         self.ext, self.st = ext, st
+
+    def without(self, z: np.ndarray) -> AxisSpace:
+        """A copy whose residual has the columns of z projected out as well (to look for
+        what is left once z is in the model)."""
+        z = np.asarray(z, dtype=float).reshape(z.shape[0], -1)
+        zw = self.ext.whiten(self.st, z)
+        zp = zw - self.qh @ (self.qh.T @ zw)
+        out = copy(self)
+        coef = np.linalg.lstsq(zp, self.rw, rcond=None)[0]
+        out.rw = self.rw - zp @ coef
+        return out
+
+    def scan(self, make, grid) -> np.ndarray:
+        """ΔRSS of each column block ``make(g)`` (N, c) of a grid, batched: the blocks are
+        whitened together and each projected off the model (batched QR); a block of rank < c
+        counts its independent part (its ΔRSS is then the least-squares one, by QR of the
+        projected block). Use :meth:`test` on the best for its rank and coefficients."""
+        grid = list(grid)
+        out = np.zeros(len(grid))
+        if not grid:
+            return out
+        chunk = max(1, int(3e6 // (self.rw.size * 4)))
+        for a in range(0, len(grid), chunk):
+            blocks = [np.asarray(make(g), dtype=float) for g in grid[a:a + chunk]]
+            blocks = [b.reshape(b.shape[0], -1) for b in blocks]
+            c = blocks[0].shape[1]
+            z = np.concatenate(blocks, axis=1)
+            zw = self.ext.whiten(self.st, z)
+            zp = zw - self.qh @ (self.qh.T @ zw)
+            if c == 1:  # one column: ΔRSS = (zᵀr)²/‖z‖², no factorisation needed
+                nz = np.einsum("ng,ng->g", zp, zp)
+                ok = nz > (COLLINEAR_TOL * np.linalg.norm(zw, axis=0)) ** 2
+                out[a:a + len(blocks)] = np.where(ok, (zp.T @ self.rw) ** 2
+                                                  / np.maximum(nz, 1e-300), 0.0)
+                continue
+            stack = zp.reshape(zp.shape[0], len(blocks), c).transpose(1, 0, 2)
+            q, r = np.linalg.qr(stack)
+            d = np.abs(np.diagonal(r, axis1=1, axis2=2))
+            norms = np.linalg.norm(stack, axis=1)
+            ok = d > COLLINEAR_TOL * np.maximum(norms, 1e-300)
+            proj = np.einsum("gnc,n->gc", q, self.rw) * ok
+            out[a:a + len(blocks)] = np.sum(proj * proj, axis=1)
+        return out
 
     def test(self, z: np.ndarray) -> tuple[float, int, np.ndarray] | None:
         """(ΔRSS, rank, coefficients of the columns of z in their own units) or None."""
@@ -177,7 +230,7 @@ class _AxisSpace:
         return float(proj @ proj), rank, coef
 
 
-def _chi2_check(space: _AxisSpace, z: np.ndarray, name: str, axis: str
+def _chi2_check(space: AxisSpace, z: np.ndarray, name: str, axis: str
                 ) -> tuple[float, int, np.ndarray, float] | None:
     out = space.test(z)
     if out is None:
@@ -192,7 +245,7 @@ def _ordinal(j: int) -> str:
     return {1: "1st", 2: "2nd", 3: "3rd"}.get(j, f"{j}th")
 
 
-def _harmonics(space: _AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
+def _harmonics(space: AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
     cols = [f(j * tita) for j in HARMONICS for f in (np.cos, np.sin)]
     res = _chi2_check(space, np.column_stack(cols), "harmonics", axis)
     if res is None:
@@ -206,7 +259,7 @@ def _harmonics(space: _AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
                  f"(harmonics {HARMONICS[0]}–{HARMONICS[-1]} tested)")
 
 
-def _fisher_g_logp(g: float, m: int) -> float:
+def fisher_g_logp(g: float, m: int) -> float:
     """log P(max periodogram ordinate / sum > g) for white Gaussian noise (Fisher 1929)."""
     p = 0.0
     for j in range(1, int(min(m, np.floor(1.0 / g))) + 1):
@@ -217,7 +270,7 @@ def _fisher_g_logp(g: float, m: int) -> float:
     return float(np.log(min(max(p, 1e-300), 1.0)))
 
 
-def _peak(space: _AxisSpace, run, min_cycles: float = 0.5
+def spectral_peak(space: AxisSpace, run, min_cycles: float = 0.5
           ) -> tuple[float, float, int, float, np.ndarray] | None:
     """Largest periodogram ordinate of the whitened residual: (g, log p, m, period, columns).
 
@@ -251,11 +304,11 @@ def _peak(space: _AxisSpace, run, min_cycles: float = 0.5
         fit = space.test(columns(f))
         if fit is not None and fit[0] > best:
             best_f, best = float(f), fit[0]
-    return g, _fisher_g_logp(g, m), m, span / best_f, columns(best_f)
+    return g, fisher_g_logp(g, m), m, span / best_f, columns(best_f)
 
 
-def _periodic(space: _AxisSpace, run, axis: str) -> Check | None:
-    peak = _peak(space, run)
+def _periodic(space: AxisSpace, run, axis: str) -> Check | None:
+    peak = spectral_peak(space, run)
     if peak is None:
         return None
     g, logp, m, period, cols = peak
@@ -310,15 +363,15 @@ def _step(z: np.ndarray, scale: float, run, axis: str) -> Check | None:
                  f"after {where}")
 
 
-def _legendre_in_time(run, degrees: tuple[int, ...]) -> np.ndarray:
+def legendre_in_time(run, degrees: tuple[int, ...]) -> np.ndarray:
     """(N, len(degrees)) Legendre polynomials ``P_d(x)`` of time mapped onto x ∈ [-1, 1]."""
     tc = run.tcol
     x = 2.0 * (tc - tc[0]) / max(float(tc[-1] - tc[0]), 1e-300) - 1.0
     return np.column_stack([np.polynomial.legendre.Legendre.basis(d)(x) for d in degrees])
 
 
-def _trend(space: _AxisSpace, run, axis: str) -> Check | None:
-    cols = _legendre_in_time(run, (2, 3, 4))
+def _trend(space: AxisSpace, run, axis: str) -> Check | None:
+    cols = legendre_in_time(run, (2, 3, 4))
     res = _chi2_check(space, cols, "trend", axis)
     if res is None:
         return None
@@ -347,7 +400,7 @@ def _variance(z: np.ndarray, order: np.ndarray, name: str, what: str, axis: str,
                  f"{sd.max():.3g} m/s² over {len(groups)} groups")
 
 
-def _direction(tita: np.ndarray) -> np.ndarray | None:
+def motion_direction(tita: np.ndarray) -> np.ndarray | None:
     """+1 after an upward move, -1 after a downward one (held samples keep the last)."""
     d = np.sign(np.diff(tita, prepend=tita[0]))
     if not (np.any(d > 0) and np.any(d < 0)):
@@ -360,8 +413,8 @@ def _direction(tita: np.ndarray) -> np.ndarray | None:
     return out if frac >= 0.05 else None
 
 
-def _hysteresis(space: _AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
-    d = _direction(tita)
+def _hysteresis(space: AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
+    d = motion_direction(tita)
     if d is None:
         return None
     res = _chi2_check(space, d[:, None], "hysteresis", axis)
@@ -374,7 +427,7 @@ def _hysteresis(space: _AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
                  f"{2.0 * coef[0]:+.3g} m/s²)")
 
 
-def _rate(space: _AxisSpace, run, axis: str) -> Check | None:
+def _rate(space: AxisSpace, run, axis: str) -> Check | None:
     if run.omega is None or np.ptp(run.omega) <= 1e-9:
         return None
     w = np.asarray(run.omega)
@@ -388,7 +441,7 @@ def _rate(space: _AxisSpace, run, axis: str) -> Check | None:
                  f"over the run's rates)")
 
 
-def _timing(space: _AxisSpace, ext: Extensions, st, k: int, axis: str) -> Check | None:
+def _timing(space: AxisSpace, ext: Extensions, st, k: int, axis: str) -> Check | None:
     """A delay between θ and the readings that changes during the run (clock drift, a
     varying lag): the lag's column ``LPF_τ(A_r)`` slope ``dA_r/dt`` times Legendre P1, P2 of
     time, added to the model (timed runs only): ``χ²(≤ 2)``."""
@@ -399,7 +452,7 @@ def _timing(space: _AxisSpace, ext: Extensions, st, k: int, axis: str) -> Check 
     rate = np.gradient(a, run.t)  # dA/dt, m/s³: a delay δ changes the reading by -δ·dA/dt
     if np.ptp(rate) <= 1e-9:
         return None
-    cols = rate[:, None] * _legendre_in_time(run, (1, 2))
+    cols = rate[:, None] * legendre_in_time(run, (1, 2))
     res = _chi2_check(space, cols, "timing", axis)
     if res is None:
         return None
@@ -458,10 +511,10 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
     for n in named:
         reduced = reduced.without(n, axis, stated)
     lr_named = ext.nll(reduced) - ext.nll(state)
-    cost = sum(walk_cost(ext, st) if n == "bias_random_walk" else float(effect(n).n_free)
+    cost = sum(walk_cost(ext, st, k) if n == "bias_random_walk" else float(effect(n).n_free)
                for n in named)
-    space = _AxisSpace(ext, reduced, k)
-    poly_cols = _legendre_in_time(run, (1, 2, 3, 4))
+    space = AxisSpace(ext, reduced, k)
+    poly_cols = legendre_in_time(run, (1, 2, 3, 4))
     shapes: list[tuple[float, str, float]] = []  # (log p, what, size)
 
     def add(fit, n_par: int, searched: int, what: str, size: float) -> None:
@@ -480,7 +533,7 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
     poly = None if walk else space.test(poly_cols)
     if poly is not None:
         add(poly, poly[1], 1, "a polynomial in time", float(np.ptp(poly_cols @ poly[2])))
-    peak = _peak(space, run, min_cycles=1.5 if walk else 0.5)
+    peak = spectral_peak(space, run, min_cycles=1.5 if walk else 0.5)
     if peak is not None:
         fit = space.test(peak[4])
         unit_t = "s" if run.time_unit == "s" else "samples"
@@ -502,11 +555,38 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
                  f"m/s²) than by {' + '.join(named)}: a shape the catalog does not have")
 
 
+def _gap_noise(gm: GapMeasure, sigma2: float, axis: str) -> Check | None:
+    """The gap after's χ² against the stated noise, two-sided (the yardstick's first half)."""
+    if gm.dof <= 0:
+        return None
+    chi2 = float(gm.chi2_dof * gm.dof)
+    logp = chi2_two_sided_logp(chi2, gm.dof)
+    return Check("gap_noise", axis, float(gm.chi2_dof), logp, f"chi2({gm.dof}) / dof, two-sided",
+                 float(np.sqrt(max(gm.chi2_dof, 0.0) * sigma2)), "m/s²",
+                 f"the residual on {axis} after the named effects has {gm.chi2_dof:.3g} × the "
+                 f"stated noise variance (rms {np.sqrt(max(gm.chi2_dof, 0.0) * sigma2):.3g} "
+                 f"m/s² for a stated σ = {np.sqrt(sigma2):.3g} m/s²)")
+
+
+def _gap_signatures(gm: GapMeasure, axis: str) -> Check | None:
+    """The gap after's largest signature z, Bonferroni over its signatures."""
+    if not gm.n_signatures:
+        return None
+    logp = float(np.log(min(max(gm.max_signature_p, 1e-300), 1.0)))
+    return Check("gap_signatures", axis, float(gm.max_signature_z), logp,
+                 f"max |z| of {gm.n_signatures} signatures (Bonferroni)",
+                 float(gm.max_signature_z), "σ",
+                 f"the gap after on {axis} still shows the signature {gm.worst} "
+                 f"(z = {gm.max_signature_z:.3g})")
+
+
 # --------------------------------------------------------------------------- battery
 
 def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
                 lattice: list[Lattice], innovations: dict[int, np.ndarray],
-                family_alpha: float = ADEQUACY_ALPHA) -> Battery:
+                family_alpha: float = ADEQUACY_ALPHA,
+                gaps: dict[str, GapMeasure] | None = None,
+                extra: list[Check] | None = None) -> Battery:
     """Run every applicable check on both axes of the final model (module docstring).
 
     Parameters
@@ -517,6 +597,11 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
     lattice : the lattice found on each axis' readings.  innovations : axis index → the
         walk filter's normalised innovations (random-walk axes).
     family_alpha : family-wise false-alarm probability of the battery.
+    gaps : axis → the gap after (``gap_measure`` of ``residuals`` against the stated noise):
+        adds ``gap_noise`` and ``gap_signatures``.
+    extra : checks made elsewhere with their own p-values (the walk's own battery,
+        :mod:`calib.gap.walk`; the mechanisms, :mod:`calib.gap.mechanisms`), judged at the
+        same Bonferroni level.
     """
     run = ext.run
     checks: list[Check] = []
@@ -527,7 +612,7 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
         # rounding coarser than the noise makes the residual's distribution discrete and
         # peaked (mostly 0, sometimes ± lsb): the Gaussian tail checks do not apply
         coarse = st.lsb > np.sqrt(st.sigma2)
-        space = _AxisSpace(ext, state, k)
+        space = AxisSpace(ext, state, k)
         found = [
             _harmonics(space, run.tita, axis),
             _periodic(space, run, axis),
@@ -545,7 +630,13 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
         if st.q > 0:
             found.append(_walk_whiteness(innovations[k], axis))
         found.append(_rivals(ext, state, k, run.sigma2))
+        if gaps is not None and axis in gaps:
+            if not st.noise_free:
+                found.append(_gap_noise(gaps[axis], float(run.sigma2[k]) + st.lsb**2 / 12.0,
+                                        axis))
+            found.append(_gap_signatures(gaps[axis], axis))
         checks += [c for c in found if c is not None]
+    checks += list(extra or ())
     m = len(checks)
     alpha_check = family_alpha / max(m, 1)
     log_a = float(np.log(alpha_check))

@@ -14,14 +14,18 @@ from calib.effects.catalog import REFINED
 from calib.gap.adequacy import ADEQUACY_ALPHA, Battery, run_battery
 from calib.gap.confusions import _confusions, merge_tilt, prefer_less_assuming
 from calib.gap.estimates import _Reporter
+from calib.gap.mechanisms import mechanism_checks
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
 from calib.gap.selection import _try, candidate_list, initial_state, select
+from calib.gap.sponges import review_sponges
+from calib.gap.walk import WALK_CHECKS, WalkReview, review_walk
 from calib.io import Ensayo
+from calib.sensor_profile import SensorProfile
 
 
 def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = None,
-                family_alpha: float = 0.005, adequacy_alpha: float = ADEQUACY_ALPHA
-                ) -> GapAnalysis:
+                family_alpha: float = 0.005, adequacy_alpha: float = ADEQUACY_ALPHA,
+                sensor: SensorProfile | None = None) -> GapAnalysis:
     """Find where the nominal model and a measured calibration run disagree, name the effect.
 
     Parameters
@@ -35,6 +39,11 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         per sample.
     family_alpha : false-alarm probability of the whole selection on a run without any
         effect; the per-step threshold is ``family_alpha / m`` (Bonferroni over the m tests).
+    sensor : a sensor profile (``sensor.json``, :func:`calib.sensor_profile.load_profile`):
+        its ``rate_random_walk`` per axis states the bias random walk's q (m/s²/√s, the same
+        q): the walk's q is searched only inside the term's interval and it is charged no
+        parameter; an axis whose term is null has no walk candidate. Needs sample times.
+        Which terms came from the profile: ``criterion["profile"]``.
 
     Returns
     -------
@@ -70,17 +79,33 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
 
     lattice = [detect_lattice(run.datos[:, k]) for k in range(2)]
     candidates, needs_timing = candidate_list(run)
+    profile = _apply_profile(ext, sensor, candidates)
     sel = select(ext, initial_state(run, lattice), candidates, family_alpha)
     steps = list(sel.steps)
     state = prefer_less_assuming(ext, sel.state, stated, sel.candidates, steps)
     state = merge_tilt(ext, state, stated, sel.candidates, steps)
+    state, sponges = review_sponges(ext, state, lattice, float(np.log(sel.alpha_step)))
 
     rep = _Reporter(ext, state, lattice)
     effects = _named_effects(ext, rep, state, lattice)
     before, after, resid_before, resid_after, fitted = _gaps(ext, rep, state, nominal)
     final = _final_model(ext, rep, state, gains)
-    battery = run_battery(ext, state, resid_after, lattice, rep.innov, adequacy_alpha)
-    verdict = ("unexplained" if battery.failed else "explained" if effects
+    reviews = {k: review_walk(ext, state, k, rep.walk_input(k), rep.innov[k], stated)
+               for k in range(2) if state.axes[k].q > 0}
+    battery = run_battery(ext, state, resid_after, lattice, rep.innov, adequacy_alpha,
+                          gaps=_battery_gaps(ext, state, after, resid_after),
+                          extra=[c for r in reviews.values() for c in r.checks]
+                          + [c for k in range(2) for c in mechanism_checks(
+                              ext, state, k, lattice[k].lsb if lattice[k].found else 0.0)])
+    reviews = {k: r.with_failed(tuple(c.name for c in battery.failed
+                                      if c.axis == r.axis and c.name in WALK_CHECKS))
+               for k, r in reviews.items()}
+    drifting = [r for r in reviews.values() if not r.earned]
+    # a walk that did not earn its place is not named (it stays in the model meanwhile)
+    effects = [e for e in effects if not (e.name == "bias_random_walk"
+                                          and any(r.axis == e.axis for r in drifting))]
+    unexplained = [r.signature() for r in drifting] + [c.signature() for c in battery.failed]
+    verdict = ("unexplained" if unexplained else "explained" if effects
                else "nothing_detected")
     if verdict == "unexplained":
         effects = [replace(e, tentative=True) for e in effects]
@@ -89,6 +114,8 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
                          "structured candidate by AIC with its effective dof",
                  "family_alpha": float(family_alpha), "alpha_step": float(sel.alpha_step),
                  "n_tests": int(sel.n_tests), "adequacy_alpha": float(adequacy_alpha)}
+    if profile is not None:
+        criterion["profile"] = profile
     return GapAnalysis(
         effects=tuple(effects),
         not_identifiable=tuple(_confusions(ext, state, stated, sel.candidates,
@@ -97,26 +124,74 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         residuals_before=resid_before, residuals_after=resid_after, fitted=fitted,
         needs_timing=tuple(needs_timing), criterion=criterion, steps=tuple(steps), g=float(g),
         noise_var=(float(stated[0]), float(stated[1])), verdict=verdict,
-        unexplained=tuple(c.signature() for c in battery.failed),
-        adequacy=_adequacy(battery, after, state, float(family_alpha)))
+        unexplained=tuple(unexplained),
+        adequacy={**_adequacy(battery, drifting, reviews), "sponges": sponges})
 
 
-def _adequacy(battery: Battery, after: dict[str, GapMeasure], state: ModelState,
-              family_alpha: float) -> dict:
-    """The battery as a dict, plus per axis whether the gap after is consistent with noise:
-    every check passed, and the χ² against the stated noise in its band, or a named noise
-    level (its excess variance then passed the battery: uniform in time and θ, Gaussian)."""
-    out = battery.to_dict()
-    out["consistent"] = {
-        a: bool(battery.axis_passed(a) and (
-            state.axes[k].noise_free
-            or _within(after[a].chi2_dof, after[a].chi2_band(family_alpha))))
-        for k, a in enumerate(AXES)}
+def _apply_profile(ext: Extensions, sensor: SensorProfile | None,
+                   candidates: list[tuple[str, str]]) -> dict | None:
+    """Take the walk's q from a sensor profile (``analyze_gap`` docs): set
+    ``ext.walk_bounds``, drop the walk candidate of an axis whose term is null, and say
+    which terms came from the profile."""
+    if sensor is None:
+        return None
+    terms = tuple(sensor.rate_random_walk or (None, None))
+    out: dict = {"rate_random_walk": {}, "terms_from_profile": [], "unit": "m/s²/√s"}
+    for k, a in enumerate(AXES):
+        term = terms[k] if k < len(terms) else None
+        if term is None:
+            if ("bias_random_walk", a) in candidates:
+                candidates.remove(("bias_random_walk", a))
+            out["rate_random_walk"][a] = None
+            out["terms_from_profile"].append(
+                f"bias_random_walk ({a}): not a candidate — the profile's rate_random_walk "
+                "is null (not resolved by its static log)")
+            continue
+        lo, hi = (float(v) for v in term.interval)
+        out["rate_random_walk"][a] = {"value": float(term.value), "interval": [lo, hi],
+                                      "level": float(term.level)}
+        if ext.run.time_unit != "s":
+            out["terms_from_profile"].append(
+                f"bias_random_walk ({a}): the profile's q is per √s and this run has no sample"
+                " times (t or --rate): the walk stays free")
+            continue
+        ext.walk_bounds[k] = (max(lo, 0.0), max(hi, lo, 0.0))
+        out["terms_from_profile"].append(
+            f"bias_random_walk ({a}): q within the profile's {100 * term.level:.3g} % interval "
+            f"[{lo:.4g}, {hi:.4g}] m/s²/√s (value {term.value:.4g}), charged 0 parameters")
     return out
 
 
-def _within(x: float, band: tuple[float, float]) -> bool:
-    return band[0] <= x <= band[1]
+def _battery_gaps(ext: Extensions, state: ModelState, after: dict[str, GapMeasure],
+                  resid_after: np.ndarray) -> dict[str, GapMeasure]:
+    """The gap after as the battery judges it: against the stated noise, except on an axis
+    with a named noise level, whose signatures are measured with the named σ² (its χ² is
+    the noise level's own business, and the battery checks that excess for uniformity)."""
+    run = ext.run
+    out = dict(after)
+    for k, a in enumerate(AXES):
+        st = state.axes[k]
+        if st.noise_free:
+            out[a] = gap_measure(resid_after[:, k], run.tita, st.sigma2_eff,
+                                 model_lsb=st.lsb if st.lsb > 0 else None,
+                                 n_params=ext.n_params(state, k), t=run.t,
+                                 other_ref=run.a_ref[:, 1 - k], own_ref=run.a_ref[:, k],
+                                 readings=run.datos[:, k])
+    return out
+
+
+def _adequacy(battery: Battery, drifting: list[WalkReview], reviews: dict[int, WalkReview]
+              ) -> dict:
+    """The battery as a dict, plus per axis whether the gap after is consistent with noise:
+    every check on the axis passed and no walk on it failed to earn its place — the battery
+    holds the gap after's χ² against the stated noise and its signatures (``gap_noise``,
+    ``gap_signatures``), so this is the verdict's own judgement, never a second one that
+    could contradict it. ``walk``: the review of each named walk (:mod:`calib.gap.walk`)."""
+    out = battery.to_dict()
+    drift = {r.axis for r in drifting}
+    out["consistent"] = {a: bool(battery.axis_passed(a) and a not in drift) for a in AXES}
+    out["walk"] = [reviews[k].to_dict() for k in sorted(reviews)]
+    return out
 
 
 def _named_effects(ext: Extensions, rep: _Reporter, state: ModelState, lattice: list[Lattice]

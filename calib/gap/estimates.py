@@ -125,6 +125,11 @@ class _Reporter:
             mean = mean + val("sin_tilt") * ext.tilt_column(k, st)
         return mean
 
+    def walk_input(self, k: int) -> np.ndarray:
+        """Readings of axis k minus the final model's mean without its bias, m/s² (what the
+        random walk filter follows: ``e_k = b_k + v_k``)."""
+        return self.run.datos[:, k] - self._mean(k, self.names, self.params, with_bias=False)
+
     def mean(self, k: int) -> np.ndarray:
         return self._mean(k, self.names, self.params)
 
@@ -140,6 +145,21 @@ class _Reporter:
             return (y - m1) * np.sqrt(s2 / var)
         return y - mu
 
+    def unclipped_mean(self, k: int) -> np.ndarray:
+        """The mean reading of axis k with the saturation's clip of ``A_r`` undone (what the
+        output would read before it rails), m/s²."""
+        st = self.state.axes[k]
+        mu = self.mean(k)
+        if not np.isfinite(st.limit):
+            return mu
+        gain = 1.0 + self.value(f"{AXES[k]}.scale")
+        a = self.run.a_ref[:, k]
+        return mu + gain * (a - np.clip(a, -st.limit, st.limit))
+
     def cov_of(self, *names: str) -> np.ndarray:
         idx = [self.names.index(n) for n in names]
         return self.cov[np.ix_(idx, idx)]
+
+
+Reporter = _Reporter
+"""Public name of the final fit (:class:`_Reporter`), for the modules that refit a model."""

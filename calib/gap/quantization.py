@@ -27,3 +27,34 @@ def quantized_moments(mu: np.ndarray, sigma2: float, lsb: float
         m2 += p * level * level
     return m1, np.maximum(m2 - m1 * m1, 1e-300)
 
+
+
+def clipped_moments(mu: np.ndarray, sigma2: float, lo: float, hi: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and variance of ``clip(μ + v, lo, hi)``, v ~ N(0, σ²), per sample (an output that
+    rails: clipped after the noise). With ``α = (lo - μ)/σ``, ``β = (hi - μ)/σ``::
+
+        E  = lo·Φ(α) + hi·(1 - Φ(β)) + μ·(Φ(β) - Φ(α)) + σ·(φ(α) - φ(β))
+        E2 = lo²·Φ(α) + hi²·(1 - Φ(β)) + μ²·(Φβ - Φα) + 2μσ·(φα - φβ)
+             + σ²·((Φβ - Φα) + αφ(α) - βφ(β))
+    """
+    s = float(np.sqrt(sigma2))
+    mu = np.asarray(mu, dtype=float)
+    a, b = (lo - mu) / s, (hi - mu) / s
+    pa, pb = stats.norm.cdf(a), stats.norm.sf(b)
+    da, db = stats.norm.pdf(a), stats.norm.pdf(b)
+    mid = 1.0 - pa - pb
+    m1 = lo * pa + hi * pb + mu * mid + s * (da - db)
+    m2 = (lo * lo * pa + hi * hi * pb + mu * mu * mid + 2.0 * mu * s * (da - db)
+          + sigma2 * (mid + a * da - b * db))
+    return m1, np.maximum(m2 - m1 * m1, 1e-12 * sigma2)
+
+
+def rails(y: np.ndarray, min_count: int = 3) -> tuple[float, float] | None:
+    """(low, high) rails of an output that clips after its noise: the smallest and largest
+    readings, each repeated exactly at least ``min_count`` times (a continuous reading never
+    repeats); None when neither end is a rail (a side that is not is ±inf)."""
+    y = np.asarray(y, dtype=float)
+    lo = float(y.min()) if int(np.sum(y == y.min())) >= min_count else -np.inf
+    hi = float(y.max()) if int(np.sum(y == y.max())) >= min_count else np.inf
+    return None if (lo == -np.inf and hi == np.inf) else (lo, hi)

@@ -85,6 +85,14 @@ def gap_units() -> dict[str, str]:
         "adequacy.family_alpha": "1", "adequacy.alpha_check": "1",
         "adequacy.checks.size": "@unit", "adequacy.checks.statistic": "1",
         "adequacy.checks.p_value": "1",
+        "adequacy.walk.lr": "1", "adequacy.walk.charge": "count",
+        "adequacy.walk.criterion": "1", "adequacy.walk.rivals.lr": "1",
+        "adequacy.walk.rivals.charge": "count", "adequacy.walk.rivals.criterion": "1",
+        "adequacy.walk.rivals.size": "m/s²",
+        "adequacy.sponges.statistic": "1", "adequacy.sponges.p_value": "1",
+        "criterion.profile.rate_random_walk.*.value": "m/s²/√s",
+        "criterion.profile.rate_random_walk.*.interval": "m/s²/√s",
+        "criterion.profile.rate_random_walk.*.level": "1",
     })
     return out
 
@@ -251,6 +259,8 @@ class GapAnalysis:
                f"Gap analysis: N = {self.residuals_before.shape[0]}, g = {self.g} m/s², "
                f"stated σ² = {self.noise_var[0]:.4g}, {self.noise_var[1]:.4g} (m/s²)²"]
         c = self.criterion
+        for line in (c.get("profile") or {}).get("terms_from_profile", []):
+            out.append(f"from the sensor profile: {line}")
         out.append(f"criterion: forward LR selection, family α = {c['family_alpha']:g}, "
                    f"{c['n_tests']} tests, per-step α = {c['alpha_step']:.3g} (Bonferroni); "
                    "structured effects first, a random walk only when it beats them")

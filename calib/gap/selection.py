@@ -85,8 +85,11 @@ on top, the AIC of a fitted smoother)."""
 MAX_STEPS = 10
 
 
-def walk_cost(ext: Extensions, st: AxisState) -> float:
-    """Parameters a random walk on an axis with state ``st`` is charged (:data:`WALK_CHARGE`)."""
+def walk_cost(ext: Extensions, st: AxisState, k: int | None = None) -> float:
+    """Parameters a random walk on axis k (state ``st``) is charged (:data:`WALK_CHARGE`);
+    0 when a sensor profile states its q (``ext.walk_bounds``: measured, not fitted)."""
+    if k is not None and k in getattr(ext, "walk_bounds", {}):
+        return 0.0
     if WALK_CHARGE == "edf":
         return walk_effective_dof(st.sigma2_eff, st.q, ext.run.dt_walk)
     return 1.0
@@ -198,7 +201,7 @@ def _flexible_choice(ext: Extensions, trials: list[Trial], log_alpha: float
         k = AXES.index(t.axis)
         st = t.state.axes[k]
         edf = walk_effective_dof(st.sigma2_eff, st.q, ext.run.dt_walk)
-        crit = t.lr - 2.0 * walk_cost(ext, st)
+        crit = t.lr - 2.0 * walk_cost(ext, st, k)
         rivals = [(s.lr - 2.0 * effect(s.name).n_free, s.name) for s in trials
                   if s.name not in FLEXIBLE and s.name != "noise_level"
                   and s.axis in (t.axis, "both")]
@@ -260,7 +263,7 @@ def _flexible_swap(ext: Extensions, state: ModelState, candidates: list[tuple[st
         sw = walk.axes[k]
         edf = walk_effective_dof(sw.sigma2_eff, sw.q, ext.run.dt_walk)
         c_named = ext.nll(state) + 2.0 * sum(effect(n).n_free for n in named)
-        c_walk = ext.nll(walk) + 2.0 * walk_cost(ext, sw)
+        c_walk = ext.nll(walk) + 2.0 * walk_cost(ext, sw, k)
         note = {"walk_in_place_of": named, "axis": axis, "edf": edf,
                 "criterion_named": c_named, "criterion_walk": c_walk,
                 "accepted": bool(c_walk < c_named)}

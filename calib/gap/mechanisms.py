@@ -1,0 +1,201 @@
+"""Mechanisms of a real bench the catalog does not have, looked for on the final model.
+
+Three checks per axis, each with a p-value, judged in the adequacy battery
+(:func:`calib.gap.adequacy.run_battery`, Bonferroni over the battery at its family α): a
+failure makes the verdict "unexplained" and says what the mechanism is in words (none of them
+is a catalog effect, so none is ever named).
+
+``ringing``
+    A lightly damped mode excited when the table stops (timed runs with holds). After each
+    stop ``i`` (θ held after moving, ``s_i`` the sign of the move that stopped) the columns
+    ``Σ_i s_i·e^{-ζω τ_i}·(cos ω_d τ_i, sin ω_d τ_i)`` and the same unsigned (``τ_i`` the time
+    since the stop, within the hold; ``ω_d = ω·sqrt(1 - ζ²)``) are added to the final model
+    (GLS in its whitened space, :class:`calib.gap.adequacy.AxisSpace`): ``ΔRSS ~ χ²(4)``,
+    maximised over a grid of frequencies and damping ratios, Bonferroni over the grid. Reported:
+    frequency, damping ratio, initial amplitude (the damped-mode fit on the segments after the
+    stops).
+``drive_angle``
+    A vibration tied to the drive: ``cos νθ, sin νθ`` at a non-integer order ν (a gear or belt
+    ratio; the integer orders are harmonics of θ, the catalog's and the ``harmonics`` check's),
+    searched on a grid of ν, ``ΔRSS ~ χ²(2)``, Bonferroni over the grid; with timing also
+    the same columns times ``|ω|/max|ω|`` (a vibration growing with the drive speed).
+``frozen``
+    The output repeating one value exactly (a stuck register, dropped updates): the longest
+    run of identical consecutive readings, L samples. With white noise of std σ rounded to a
+    step ``lsb`` (0: not rounded), one level has probability at most
+    ``p = 2Φ(lsb/2σ) - 1``, so ``P(some run ≥ L) ≤ N·p^{L-1}`` (union bound over the start;
+    exactly 0 without rounding for L ≥ 2). Runs at the axis' extreme readings are left to
+    saturation (an output stuck at its rail is a clipped reading).
+
+Why by hand: these are the shapes of this bench; no library tests a damped mode after the
+stops of a measured encoder or a frozen output against a rounded Gaussian's repeat law.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+from calib.conventions import AXES
+from calib.effects import Extensions, ModelState
+from calib.gap.adequacy import AxisSpace, Check
+
+RING_FREQS = np.geomspace(0.5, 25.0, 24)
+"""Frequencies (Hz) of the ringing grid (those below the Nyquist frequency / 2 are used)."""
+
+RING_DAMPING = (0.02, 0.05, 0.1, 0.2, 0.4)
+"""Damping ratios ζ of the ringing grid."""
+
+MIN_HOLD = 5
+"""Fewest held samples after a stop for it to count."""
+
+DRIVE_ORDERS = (0.5, 12.0)
+"""Range of the orders ν of the drive-angle grid, spaced by half a cycle over the run's
+angle range (``0.5/turns``, between 0.02 and 0.25); the integers are excluded."""
+"""Orders ν of the drive-angle grid (integers excluded)."""
+
+
+def drive_orders(turns: float) -> np.ndarray:
+    """The non-integer orders ν searched for a run covering ``turns`` turns."""
+    step = float(np.clip(0.5 / max(turns, 1e-9), 0.02, 0.25))
+    v = np.arange(DRIVE_ORDERS[0], DRIVE_ORDERS[1] + 1e-9, step)
+    return v[np.abs(v - np.round(v)) > min(0.02, step / 2)]
+
+
+def stops(run) -> list[tuple[int, int, float]]:
+    """(first held sample, end of the hold, sign of the move that stopped) of each stop:
+    θ moving, then held (equal consecutive θ) for at least :data:`MIN_HOLD` samples."""
+    d = np.diff(run.tita)
+    held = np.concatenate([[False], d == 0.0])
+    out = []
+    i = 1
+    n = run.n
+    while i < n:
+        if held[i] and not held[i - 1] and i >= 2:
+            j = i
+            while j < n and held[j]:
+                j += 1
+            if j - i >= MIN_HOLD:
+                out.append((i, j, float(np.sign(run.tita[i] - run.tita[i - 2]) or 1.0)))
+            i = j
+        else:
+            i += 1
+    return out
+
+
+def _ring_columns(run, hold: list[tuple[int, int, float]], f: float, zeta: float
+                  ) -> np.ndarray:
+    z = np.zeros((run.n, 4))
+    w = 2.0 * np.pi * f
+    wd = w * np.sqrt(1.0 - zeta**2)
+    for i, j, s in hold:
+        tau = run.t[i - 1:j] - run.t[i - 1]  # from the last moving sample
+        env = np.exp(-zeta * w * tau)
+        c, si = env * np.cos(wd * tau), env * np.sin(wd * tau)
+        z[i - 1:j, 0] += s * c
+        z[i - 1:j, 1] += s * si
+        z[i - 1:j, 2] += c
+        z[i - 1:j, 3] += si
+    return z
+
+
+def ringing(space: AxisSpace, run, axis: str) -> Check | None:
+    """The damped mode after the stops (module docstring)."""
+    if run.t is None:
+        return None
+    hold = stops(run)
+    if not hold:
+        return None
+    h = float(np.median(np.diff(run.t)))
+    grid = [(f, z) for f in RING_FREQS if f < 0.25 / h for z in RING_DAMPING]
+    if not grid:
+        return None
+    f, z = grid[int(np.argmax(space.scan(lambda fz: _ring_columns(run, hold, *fz), grid)))]
+    fit = space.test(_ring_columns(run, hold, f, z))
+    if fit is None:
+        return None
+    stat, dof, coef = fit
+    logp = min(0.0, float(np.log(len(grid)) + stats.chi2.logsf(stat, dof)))
+    amp = float(max(np.hypot(coef[0], coef[1]), np.hypot(coef[2], coef[3])))
+    return Check("ringing", axis, stat, logp, f"chi2({dof}) × {len(grid)} (f, ζ)", amp, "m/s²",
+                 f"ringing after the stops on {axis}: a damped oscillation of {f:.3g} Hz "
+                 f"(damping ratio {z:.2g}), {amp:.3g} m/s² at the stop, after each of "
+                 f"{len(hold)} stops — a lightly damped mode of the table or the mount")
+
+
+def drive_angle(space: AxisSpace, run, axis: str) -> Check | None:
+    """A vibration at a non-integer order of the drive angle (module docstring)."""
+    th = run.tita
+    turns = float(np.ptp(th)) / (2.0 * np.pi)
+    orders = [v for v in drive_orders(turns) if v * turns >= 1.5]
+    if not orders:
+        return None
+    speed = None
+    if run.omega is not None and np.ptp(np.abs(run.omega)) > 1e-9:
+        speed = np.abs(run.omega) / max(float(np.max(np.abs(run.omega))), 1e-300)
+    variants = [("", 1.0)] + ([] if speed is None else
+                              [(" growing with the drive speed", speed[:, None])])
+    grid = [(v, label, w) for label, w in variants for v in orders]
+    tests = len(grid)
+
+    def cols(g):
+        return np.column_stack([np.cos(g[0] * th), np.sin(g[0] * th)]) * g[2]
+
+    g = grid[int(np.argmax(space.scan(cols, grid)))]
+    fit = space.test(cols(g))
+    if fit is None:
+        return None
+    stat, dof, coef = fit
+    v, label = g[0], g[1]
+    logp = min(0.0, float(np.log(tests) + stats.chi2.logsf(stat, dof)))
+    amp = float(np.hypot(*coef[:2]))
+    return Check("drive_angle", axis, stat, logp, f"chi2({dof}) × {tests} orders", amp, "m/s²",
+                 f"a vibration tied to the drive on {axis}: order {v:.3g} of θ (not a harmonic;"
+                 f" a gear or belt ratio){label}, {amp:.3g} m/s²")
+
+
+def frozen(readings: np.ndarray, sigma2: float, lsb: float, run, axis: str) -> Check | None:
+    """The longest run of identical consecutive readings (module docstring)."""
+    y = np.asarray(readings, dtype=float)
+    n = y.size
+    if n < 3:
+        return None
+    same = np.diff(y) == 0.0
+    rails = (y[1:] == y.max()) | (y[1:] == y.min())
+    same &= ~rails
+    if not np.any(same):
+        return None
+    # longest run of True in `same` (L - 1 repeats: L identical samples)
+    edges = np.diff(np.concatenate([[0], same.astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    longest = int(np.max(ends - starts))
+    where = int(starts[np.argmax(ends - starts)])
+    # the readings' resolution: the model's step, or the finest change seen (data written
+    # with few decimals are rounded even when no lattice was named): never below it
+    moves = np.abs(np.diff(y))
+    lsb = max(lsb, float(moves[moves > 0].min()) if np.any(moves > 0) else 0.0)
+    p = float(2.0 * stats.norm.cdf(lsb / (2.0 * np.sqrt(sigma2))) - 1.0) if lsb > 0 else 0.0
+    logp = 0.0 if p >= 1.0 else (
+        -np.inf if p <= 0.0 else min(0.0, float(np.log(n) + longest * np.log(p))))
+    logp = max(logp, -745.0)  # a finite log p: exp() of it is still a float (0)
+    when = f"t = {run.tcol[where]:.4g} s" if run.time_unit == "s" else f"sample {where}"
+    total = int(np.sum(ends - starts + 1))
+    return Check("frozen", axis, float(longest + 1), logp,
+                 f"longest run of identical readings, P ≤ N·p^(L-1), p = {p:.3g}",
+                 float(longest + 1), "samples",
+                 f"the output on {axis} is frozen: {longest + 1} identical readings in a row "
+                 f"from {when} ({total} repeated samples in all; zero local variance) — a stuck "
+                 "output or dropped updates")
+
+
+def mechanism_checks(ext: Extensions, state: ModelState, k: int, lattice_lsb: float = 0.0
+                     ) -> list[Check]:
+    """The three checks on axis k of the final model (those that apply to this run);
+    ``lattice_lsb`` the step of the lattice found on the readings (0: none)."""
+    axis = AXES[k]
+    st = state.axes[k]
+    run = ext.run
+    space = AxisSpace(ext, state, k)
+    found = [ringing(space, run, axis), drive_angle(space, run, axis),
+             frozen(run.datos[:, k], st.sigma2, max(st.lsb, lattice_lsb), run, axis)]
+    return [c for c in found if c is not None]

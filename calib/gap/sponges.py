@@ -1,0 +1,114 @@
+"""No sponge names on structured runs: a noise level or a walk beside saturation or quantization.
+
+Saturation and quantization change the *distribution* of the reading, not only its mean: an
+output that rails (clipped after its noise) reads exactly the limit, with no spread, and a
+coarsely rounded reading has a variance that depends on where the mean falls between two
+levels (Sheppard's lsb²/12 is then wrong). The selection's likelihood (Gaussian, constant σ²)
+sees both as "less (or more) noise here" and names ``noise_level`` or ``bias_random_walk``
+beside them — sponge names for what the structured effect does.
+
+Rule (issue 20, item 4): on an axis where saturation or quantization is named, a noise level
+or a walk stays named **only if it still wins after them**: the model without it is refitted,
+the readings are standardised by the *exact* moments of the structured effect
+(for an output that rails — readings repeated exactly at the smallest or largest value,
+:func:`calib.gap.quantization.rails` — the readings away from the rails, whose mean is more
+than 4σ inside them, by the stated noise; :func:`calib.gap.quantization.quantized_moments`
+for a lattice), and its own test is made again on them at the selection's per-step α:
+
+* ``noise_level``: ``Σz² ~ χ²(n - p)`` two-sided;
+* ``bias_random_walk``: the walk's likelihood ratio on z (q profiled, the differenced local
+  level of :mod:`calib.gap.walk`) against ``½χ²₀ + ½χ²₁``.
+
+When it does not pass, it is dropped (the structured effect explains that part) and the
+report says why (``adequacy["sponges"]``, one entry per decision, kept or dropped, with the
+statistic).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+from calib.conventions import AXES
+from calib.diagnostics import Lattice, chi2_two_sided_logp
+from calib.effects import Extensions, ModelState
+from calib.gap.estimates import Reporter
+from calib.gap.quantization import quantized_moments, rails
+from calib.gap.walk import gls_nll, walk_nll
+
+SPONGES = ("noise_level", "bias_random_walk")
+LN2 = float(np.log(2.0))
+
+
+def standardized(rep: Reporter, k: int) -> tuple[np.ndarray, str]:
+    """Readings of axis k standardised by the exact moments of the structured effect of the
+    model in ``rep`` (no noise level, no walk): (z, what was used)."""
+    st = rep.state.axes[k]
+    y = rep.run.datos[:, k]
+    rail = rails(y) if np.isfinite(st.limit) else None
+    if rail is not None:
+        # readings at a rail carry no noise; next to it the reading is a truncated normal:
+        # the samples whose mean is within 4σ of a rail are left out, the rest are Gaussian
+        mu = rep.unclipped_mean(k)
+        s = float(np.sqrt(st.sigma2_eff))
+        keep = (mu > rail[0] + 4.0 * s) & (mu < rail[1] - 4.0 * s) & (y > rail[0]) & (y < rail[1])
+        return ((y - mu) / s)[keep], (f"the stated noise on the {int(keep.sum())} readings "
+                                      "away from the rails (the output clips after its noise)")
+    if st.lsb > 0:
+        m1, var = quantized_moments(rep.mean(k), st.sigma2, st.lsb)
+        return (y - m1) / np.sqrt(var), f"the exact moments of a reading rounded to {st.lsb:.4g}"
+    mu = rep.mean(k)
+    return (y - mu) / np.sqrt(st.sigma2_eff), "the stated noise"
+
+
+def review_sponges(ext: Extensions, state: ModelState, lattice: list[Lattice],
+                   log_alpha: float) -> tuple[ModelState, list[dict]]:
+    """Apply the rule of the module docstring; returns the model and one note per decision."""
+    stated = ext.run.sigma2
+    notes: list[dict] = []
+    for k, axis in enumerate(AXES):
+        st = state.axes[k]
+        structured = [n for n, on in (("saturation", np.isfinite(st.limit)),
+                                      ("quantization", st.lsb > 0)) if on]
+        sponges = [n for n in SPONGES if st.has(n)]
+        if not structured or not sponges:
+            continue
+        reduced = state
+        for n in sponges:
+            reduced = reduced.without(n, axis, stated)
+        reduced = ext.refine(reduced)
+        rep = Reporter(ext, reduced, lattice)
+        z, how = standardized(rep, k)
+        dof = max(z.size - ext.n_params(reduced, k), 1)
+        keep = []
+        for n in sponges:
+            if n == "noise_level":
+                stat = float(z @ z)
+                logp = chi2_two_sided_logp(stat, dof)
+                what = f"Σz²/dof = {stat / dof:.4g} (χ²({dof}), two-sided)"
+            else:
+                dz = np.diff(z)
+                base = np.diff(ext.run.a_ref[:, k])[:, None]
+                q0 = max(st.q / np.sqrt(st.sigma2_eff), 1e-6)
+                dt = np.asarray(ext.run.dt_walk, dtype=float)
+                lr = max(gls_nll(dz, base, 1.0, 0.0 * dt) - walk_nll(dz, base, 1.0, dt, q0),
+                         0.0)
+                stat = lr
+                logp = float(-LN2 + stats.chi2.logsf(lr, 1)) if lr > 0 else 0.0
+                what = f"LR = {lr:.4g} (½χ²₀ + ½χ²₁)"
+            wins = logp < log_alpha
+            notes.append({"name": n, "axis": axis, "beside": structured, "named": bool(wins),
+                          "statistic": float(stat), "p_value": float(np.exp(logp)),
+                          "reason": (f"{n} on {axis} {'still wins' if wins else 'does not win'}"
+                                     f" after {' and '.join(structured)}: on the readings "
+                                     f"standardised by {how}, {what}, p = {np.exp(logp):.3g} "
+                                     f"{'<' if wins else '≥'} the per-step α")})
+            if wins:
+                keep.append(n)
+        if len(keep) < len(sponges):
+            new = state
+            for n in sponges:
+                if n not in keep:
+                    new = new.without(n, axis, stated)
+            state = ext.refine(new)
+    return state, notes

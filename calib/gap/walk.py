@@ -1,0 +1,567 @@
+"""Does a named bias random walk earn its place? Generic rivals and a battery on its own path.
+
+A random walk can follow almost any slow residual: a transient, a jump, a box, two tones in
+time, an error near 0 g, a vibration of the drive — and the residuals *after* it are then
+white, so the adequacy battery on them sees nothing. Two things are asked of a walk the
+selection named on an axis before it may explain anything (issue 20, item 1):
+
+1. **It beats generic rivals of comparable flexibility by the same charged likelihood.** With
+   the walk removed (the other named effects kept, their linear parameters refitted), each
+   rival shape is added to the axis' whitened system (:class:`calib.gap.adequacy.AxisSpace`);
+   its gain ``LR_r`` in ``-2 log L`` is compared with the walk's ``LR_w`` (marginal
+   likelihood: the path integrated out) by AIC: the walk keeps its place only when
+   ``LR_w - 2·c_w > LR_r - 2·c_r`` for every rival, ``c`` the parameters charged — for a
+   rival its coefficients **plus every searched location or frequency** (a searched
+   frequency, a step's place, a bump's centre and width count one each), for the walk its q
+   (1; 0 when q is fixed by a sensor profile, :mod:`calib.gap.walk` docs below). Rivals:
+
+   ==================  ===========================================================  ======
+   rival               columns (in time unless said)                                charge
+   ==================  ===========================================================  ======
+   ``polynomial``      Legendre P1 … P3 of time                                     3
+   ``sinusoid``        cos, sin at the periodogram peak (refined)                   3
+   ``two_sinusoids``   the two strongest peaks                                      6
+   ``direction``       direction of the last motion (±1)                            1
+   ``step``            one step of the bias, at the best of a grid of places        2
+   ``two_steps``       two steps (greedy on the grid, then the first re-placed)     4
+   ``bump``            a Gaussian bump, centre and width on a grid                  3
+   ``near_zero_g``     ``exp(-(A_r/w)²/2)`` of the axis' own reference, w on a grid 2
+   ``drive_angle``     cos νθ, sin νθ at a searched non-integer order ν             3
+   ==================  ===========================================================  ======
+
+2. **Its own path passes a battery.** With the linear parameters at their final values,
+   ``e = y - mean`` (no bias) is a local-level model ``e_k = b_k + v_k``: ``Δe`` has the
+   tridiagonal covariance ``Σ_Δ = σ² T + diag(r)``, ``r_k = q² Δt_k``. Checks (each a
+   p-value, judged in the adequacy battery at its Bonferroni level: family α over the whole
+   battery):
+
+   * ``walk_normality`` — D'Agostino-Pearson K² of the filter's normalised innovations
+     (N(0, 1), independent under the model): ``χ²(2)``;
+   * ``walk_whiteness`` — Ljung-Box of the innovations (:mod:`calib.gap.adequacy`);
+   * ``walk_period`` — Fisher's g of the innovations' periodogram (exact for white noise);
+   * ``walk_jump`` — the largest standardised smoothed increment ("auxiliary residual",
+     Harvey & Koopman 1992, de Jong & Penzer 1998) ``u_k = (Σ_Δ⁻¹Δe)_k / sqrt((Σ_Δ⁻¹)_kk)``,
+     exactly N(0, 1) each under the model: ``P(max|u| > x) ≤ m·2Φ(-x)`` (Bonferroni over the
+     m increments; the extreme-value law of correlated normals is below it);
+   * ``walk_stationarity`` — q fitted separately on the two halves of the run against one q
+     for both (the increments' variance ratio between halves, by likelihood):
+     ``LR ~ χ²(1)``.
+
+A walk that loses to a rival or fails a check is **not named**: the verdict is "unexplained"
+with a ``drifting_structure`` entry (reason "drifting structure") that says what the drift
+looks like in words (the winning rival's shape, or the failed check's: "a step of 0.12 m/s² at
+t = 41 s", "an oscillation of 0.3 Hz, 0.05 m/s²"). A rival that wins is never named either: it
+is not in the catalog. The walk stays in the model while the other effects are estimated (it
+keeps them from bending to the drift), so their estimates are reported, tentative.
+
+A sensor profile (``gap --sensor``) fixes q: the walk is then part of the known noise, not a
+free explanation, and is charged 0 parameters (:func:`walk_charge`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy import linalg as sla
+from scipy import optimize, stats
+
+from calib.conventions import AXES
+from calib.effects import Extensions, ModelState
+from calib.gap.adequacy import (
+    AxisSpace,
+    Check,
+    fisher_g_logp,
+    legendre_in_time,
+    motion_direction,
+    spectral_peak,
+)
+from calib.gap.flexibility import tridiagonal_inverse_diagonal
+from calib.gap.mechanisms import drive_orders
+
+GRID = 120
+"""Places on the grid of the step, two-step and bump rivals."""
+
+WIDTHS = (0.01, 0.03, 0.08, 0.2)
+"""Widths of the bump rival, fractions of the run."""
+
+ZERO_G_WIDTHS = (0.3, 0.6, 1.2, 2.4)
+"""Widths w (m/s²) of the near-0 g rival ``exp(-(A_r/w)²/2)``."""
+
+WALK_CHECKS = ("walk_normality", "walk_whiteness", "walk_period", "walk_jump",
+               "walk_stationarity", "walk_rivals")
+
+NESTED_TOP = 3
+"""Rivals (those beating the walk by AIC, best first) tested on top of it."""
+"""The battery checks on a walk's own path (a failure: the walk is not named)."""
+
+DRIVE_ORDERS = (0.5, 12.0)
+"""Range of the orders ν of the drive-angle grid, spaced by half a cycle over the run's
+angle range (``0.5/turns``, between 0.02 and 0.25); the integers are excluded."""
+"""Orders ν of the drive-angle rival (the integers are skipped: harmonics of θ are the
+catalog's and the battery's)."""
+
+
+@dataclass(frozen=True)
+class Rival:
+    """One rival shape in place of the walk: its gain in -2 log L, its charge, its words."""
+
+    name: str
+    lr: float
+    charge: float
+    size: float
+    description: str
+    cols: np.ndarray | None = field(default=None, compare=False, repr=False)
+    searched: int = 1
+    """How many shapes of this family were searched (grid places × frequencies …)."""
+
+    @property
+    def criterion(self) -> float:
+        """AIC gain ``LR - 2·charge`` (larger is better)."""
+        return float(self.lr - 2.0 * self.charge)
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "lr": float(self.lr), "charge": float(self.charge),
+                "criterion": self.criterion, "size": float(self.size),
+                "description": self.description}
+
+
+@dataclass(frozen=True)
+class WalkReview:
+    """What :func:`review_walk` found on one axis.
+
+    axis : "x" or "y".  lr : the walk's gain in -2 log L (marginal).  charge : parameters
+    charged for it.  rivals : every rival tried.  checks : the battery on its own path
+    (judged in the adequacy battery).  profile : q came from a sensor profile.
+    """
+
+    axis: str
+    lr: float
+    charge: float
+    rivals: tuple[Rival, ...]
+    checks: tuple[Check, ...]
+    profile: bool = False
+    failed: tuple[str, ...] = field(default=())
+
+    @property
+    def criterion(self) -> float:
+        return float(self.lr - 2.0 * self.charge)
+
+    @property
+    def best_rival(self) -> Rival | None:
+        return max(self.rivals, key=lambda r: r.criterion, default=None)
+
+    @property
+    def rival_wins(self) -> bool:
+        """A rival beats the walk by AIC in its place **and** adds significantly on top of it
+        (the ``walk_rivals`` check failed in the battery)."""
+        return "walk_rivals" in self.failed
+
+    def with_failed(self, failed: tuple[str, ...]) -> WalkReview:
+        """The review with the names of its checks that failed in the battery."""
+        return replace(self, failed=tuple(failed))
+
+    @property
+    def earned(self) -> bool:
+        """The walk may explain: no rival beats it and its own path passed every check."""
+        return not self.rival_wins and not self.failed
+
+    def shape(self) -> str:
+        """The drift in words: the winning rival's shape, else the failed checks'."""
+        if self.rival_wins:
+            return self.best_rival.description
+        words = [c.description for c in self.checks if c.name in self.failed]
+        return "; ".join(words) or "a drift the walk does not describe"
+
+    def signature(self) -> dict:
+        """The ``unexplained`` entry of a walk that did not earn its place."""
+        best = self.best_rival
+        if self.rival_wins:
+            why = (f"{best.name} (AIC gain {best.criterion:.4g}) beats the random walk "
+                   f"({self.criterion:.4g}) and adds to it beyond chance")
+            size, stat = best.size, best.criterion - self.criterion
+        else:
+            why = "the random walk's own path fails " + ", ".join(self.failed)
+            failed = [c for c in self.checks if c.name in self.failed]
+            size, stat = (failed[0].size, failed[0].statistic) if failed else (0.0, 0.0)
+        return {"axis": self.axis, "signature": "drifting_structure",
+                "reason": "drifting structure", "size": float(size), "unit": "m/s²",
+                "statistic": float(stat), "p_value": None,
+                "description": f"drifting structure on {self.axis}: {self.shape()} "
+                               f"({why}; the random walk is not named)"}
+
+    def to_dict(self) -> dict:
+        return {"axis": self.axis, "lr": float(self.lr), "charge": float(self.charge),
+                "criterion": self.criterion, "profile": bool(self.profile),
+                "earned": bool(self.earned), "rival_wins": bool(self.rival_wins),
+                "failed_checks": list(self.failed),
+                "rivals": [r.to_dict() for r in sorted(self.rivals,
+                                                       key=lambda r: -r.criterion)]}
+
+
+def walk_charge(ext: Extensions, k: int) -> float:
+    """Parameters a walk on axis k is charged: its q (1), or 0 when a sensor profile states
+    q (``ext.walk_bounds[k]``: measured, not fitted to these data)."""
+    return 0.0 if k in getattr(ext, "walk_bounds", {}) else 1.0
+
+
+# ----------------------------------------------------------------------------- rivals
+
+def _where(run, i: int) -> str:
+    return f"t = {run.tcol[i]:.4g} s" if run.time_unit == "s" else f"sample {i}"
+
+
+def _time_unit(run) -> str:
+    return "s" if run.time_unit == "s" else "samples"
+
+
+def _best_on_grid(space: AxisSpace, make, grid) -> tuple[float, object, np.ndarray] | None:
+    """(ΔRSS, grid point, coefficients) of the best column block ``make(point)`` (the grid
+    scanned in one batch, :meth:`AxisSpace.scan`; the best refitted by :meth:`AxisSpace.test`)."""
+    grid = list(grid)
+    if not grid:
+        return None
+    gains = space.scan(make, grid)
+    g = grid[int(np.argmax(gains))]
+    fit = space.test(make(g))
+    return None if fit is None else (fit[0], g, fit[2])
+
+
+def _steps(space: AxisSpace, run) -> list[Rival]:
+    n = run.n
+    grid = np.unique(np.linspace(2, n - 3, GRID).astype(int))
+
+    def step(i):
+        return (np.arange(n) > i).astype(float)[:, None]
+
+    one = _best_on_grid(space, step, grid)
+    out = []
+    if one is None:
+        return out
+    i1 = int(one[1])
+    out.append(Rival("step", one[0], 2.0, abs(float(one[2][0])),
+                     f"a step of {float(one[2][0]):+.3g} m/s² at {_where(run, i1)}",
+                     step(i1), grid.size))
+    two = _best_on_grid(space, lambda i: np.column_stack([step(i1), step(i)]),
+                        grid[np.abs(grid - i1) > 1])
+    if two is None:
+        return out
+    i2 = int(two[1])
+    again = _best_on_grid(space, lambda i: np.column_stack([step(i), step(i2)]),
+                          grid[np.abs(grid - i2) > 1])
+    if again is not None and again[0] >= two[0]:
+        two, i1 = again, int(again[1])
+    (a, b), (first, second) = two[2], sorted([(i1, 0), (i2, 1)])
+    sizes = (float(two[2][first[1]]), float(two[2][second[1]]))
+    out.append(Rival("two_steps", two[0], 4.0, float(max(abs(a), abs(b))),
+                     f"two steps of the bias: {sizes[0]:+.3g} m/s² at "
+                     f"{_where(run, first[0])} and {sizes[1]:+.3g} m/s² at "
+                     f"{_where(run, second[0])}",
+                     np.column_stack([step(i1), step(i2)]), grid.size ** 2))
+    return out
+
+
+def _bump(space: AxisSpace, run) -> Rival | None:
+    tc = run.tcol - run.tcol[0]
+    span = float(tc[-1]) or 1.0
+    centres = np.linspace(0.0, span, GRID // 2)
+    grid = [(c, w * span) for w in WIDTHS for c in centres]
+    best = _best_on_grid(space, lambda cw: np.exp(-0.5 * ((tc - cw[0]) / cw[1]) ** 2)[:, None],
+                         grid)
+    if best is None:
+        return None
+    (c, w), amp = best[1], float(best[2][0])
+    unit = _time_unit(run)
+    return Rival("bump", best[0], 3.0, abs(amp),
+                 f"a transient of {amp:+.3g} m/s² around {_where(run, int(np.argmin(abs(tc - c))))}"
+                 f" (width {w:.3g} {unit})",
+                 np.exp(-0.5 * ((tc - c) / w) ** 2)[:, None], len(grid))
+
+
+def _sinusoids(space: AxisSpace, run) -> list[Rival]:
+    peak = spectral_peak(space, run)
+    if peak is None:
+        return []
+    cols1, period1 = peak[4], peak[3]
+    fit1 = space.test(cols1)
+    if fit1 is None:
+        return []
+    unit = _time_unit(run)
+
+    def words(period: float, amp: float) -> str:
+        if run.time_unit == "s":
+            return f"an oscillation of {1.0 / period:.3g} Hz (period {period:.4g} s), " \
+                   f"{amp:.3g} m/s²"
+        return f"an oscillation with period {period:.4g} {unit}, {amp:.3g} m/s²"
+
+    amp1 = float(np.hypot(*fit1[2]))
+    m = 2 * peak[2]  # Fourier frequencies, each refined between its neighbours
+    out = [Rival("sinusoid", fit1[0], 3.0, amp1, words(period1, amp1), cols1, m)]
+    # the second tone: the periodogram peak of what the first leaves
+    peak2 = spectral_peak(space.without(cols1), run)
+    if peak2 is None:
+        return out
+    cols = np.column_stack([cols1, peak2[4]])
+    fit = space.test(cols)
+    if fit is not None:
+        amp2 = float(np.hypot(*fit[2][2:4]))
+        out.append(Rival("two_sinusoids", fit[0], 6.0, max(amp1, amp2),
+                         "two oscillations: " + words(period1, amp1) + " and "
+                         + words(peak2[3], amp2), cols, m * m))
+    return out
+
+
+def _drive_angle(space: AxisSpace, run) -> Rival | None:
+    th = run.tita
+    turns = float(np.ptp(th)) / (2.0 * np.pi)
+    if turns < 0.5:
+        return None
+    orders = [v for v in drive_orders(turns) if v * turns >= 1.0]
+    best = _best_on_grid(space, lambda v: np.column_stack([np.cos(v * th), np.sin(v * th)]),
+                         orders)
+    if best is None:
+        return None
+    amp, v = float(np.hypot(*best[2])), float(best[1])
+    return Rival("drive_angle", best[0], 3.0, amp,
+                 f"a vibration tied to the drive angle: order {v:.3g} of θ (not a "
+                 f"harmonic), {amp:.3g} m/s²",
+                 np.column_stack([np.cos(v * th), np.sin(v * th)]), len(orders))
+
+
+def _near_zero_g(space: AxisSpace, ext: Extensions, k: int) -> Rival | None:
+    a = ext.run.a_ref[:, k]
+    best = _best_on_grid(space, lambda w: np.exp(-0.5 * (a / w) ** 2)[:, None], ZERO_G_WIDTHS)
+    if best is None:
+        return None
+    amp, w = float(best[2][0]), float(best[1])
+    return Rival("near_zero_g", best[0], 2.0, abs(amp),
+                 f"an error near 0 g on {AXES[k]}: {amp:+.3g} m/s² where the specific force "
+                 f"is within about {w:.2g} m/s² of zero",
+                 np.exp(-0.5 * (a / w) ** 2)[:, None], len(ZERO_G_WIDTHS))
+
+
+def rivals(ext: Extensions, reduced: ModelState, k: int) -> list[Rival]:
+    """Every rival shape on axis k of ``reduced`` (the model without the walk)."""
+    run = ext.run
+    space = AxisSpace(ext, reduced, k)
+    out: list[Rival] = []
+    poly = space.test(legendre_in_time(run, (1, 2, 3)))
+    if poly is not None:
+        cols = legendre_in_time(run, (1, 2, 3))
+        out.append(Rival("polynomial", poly[0], float(poly[1]),
+                         float(np.ptp(cols @ poly[2])),
+                         f"a smooth drift in time (polynomial, range "
+                         f"{float(np.ptp(cols @ poly[2])):.3g} m/s²)", cols, 1))
+    out += _sinusoids(space, run)
+    d = motion_direction(run.tita)
+    if d is not None:
+        fit = space.test(d[:, None])
+        if fit is not None:
+            out.append(Rival("direction", fit[0], 1.0, abs(2.0 * float(fit[2][0])),
+                             f"the reading depends on the direction of the last motion (up "
+                             f"minus down {2.0 * float(fit[2][0]):+.3g} m/s²)", d[:, None], 1))
+    out += _steps(space, run)
+    for r in (_bump(space, run), _near_zero_g(space, ext, k), _drive_angle(space, run)):
+        if r is not None:
+            out.append(r)
+    return out
+
+
+# ------------------------------------------------------------------ the walk's own path
+
+def _banded(sigma2: float, r: np.ndarray) -> np.ndarray:
+    """``Σ_Δ = σ² T + diag(r)`` in the upper banded form of ``scipy.linalg``."""
+    ab = np.empty((2, r.size))
+    ab[0, 0] = 0.0
+    ab[0, 1:] = -sigma2
+    ab[1] = 2.0 * sigma2 + r
+    return ab
+
+
+def _local_level_nll(de: np.ndarray, sigma2: float, r: np.ndarray) -> float:
+    """``log det Σ_Δ + Δeᵀ Σ_Δ⁻¹ Δe`` (-2 log L of the differenced local level, no 2π)."""
+    c = sla.cholesky_banded(_banded(sigma2, r))
+    x = sla.cho_solve_banded((c, False), de)
+    return float(2.0 * np.sum(np.log(c[1])) + de @ x)
+
+
+def _stationarity(de: np.ndarray, sigma2: float, dt: np.ndarray, q: float, run, axis: str
+                  ) -> Check | None:
+    """One q for both halves against one q each: LR ~ χ²(1)."""
+    m = de.size
+    if m < 40 or q <= 0:
+        return None
+    h = m // 2
+    parts = [(de[:h], dt[:h]), (de[h + 1:], dt[h + 1:])]
+    lo, hi = np.log(q) - 10.0, np.log(q) + 6.0
+
+    def nll(lq: float, part) -> float:
+        return _local_level_nll(part[0], sigma2, np.exp(2.0 * lq) * part[1])
+
+    def best(f) -> tuple[float, float]:
+        res = optimize.minimize_scalar(f, bounds=(lo, hi), method="bounded",
+                                       options={"xatol": 1e-4})
+        return float(res.x), float(res.fun)
+
+    both = best(lambda lq: nll(lq, parts[0]) + nll(lq, parts[1]))
+    each = [best(lambda lq, p=p: nll(lq, p)) for p in parts]
+    lr = max(both[1] - each[0][1] - each[1][1], 0.0)
+    q1, q2 = np.exp(each[0][0]), np.exp(each[1][0])
+    unit = "m/s²/√s" if run.time_unit == "s" else "m/s²/√sample"
+    mid = _where(run, h)
+    faster = "second" if q2 > q1 else "first"
+    return Check("walk_stationarity", axis, lr, float(stats.chi2.logsf(lr, 1)), "chi2(1)",
+                 float(abs(q2 - q1)), unit,
+                 f"the bias on {axis} moves faster in the {faster} half of the run (q = "
+                 f"{q1:.3g} before {mid}, {q2:.3g} after, {unit}): not a stationary walk, "
+                 "a drift confined to part of the run")
+
+
+def path_checks(ext: Extensions, e: np.ndarray, innov: np.ndarray, sigma2: float, q: float,
+                axis: str) -> list[Check]:
+    """The battery on the walk's own path (module docstring, 2.), without Ljung-Box."""
+    run = ext.run
+    dt = np.asarray(run.dt_walk, dtype=float)
+    r = q * q * dt
+    de = np.diff(np.asarray(e, dtype=float))
+    m = de.size
+    out: list[Check] = []
+    z = np.asarray(innov, dtype=float)[1:]
+    if z.size >= 20:
+        k2, p = stats.normaltest(z)
+        out.append(Check("walk_normality", axis, float(k2), float(np.log(max(p, 1e-300))),
+                         "D'Agostino-Pearson K², chi2(2)", float(stats.kurtosis(z)), "",
+                         f"the random walk on {axis} leaves non-Gaussian innovations "
+                         f"(skewness {stats.skew(z):.2g}, excess kurtosis "
+                         f"{stats.kurtosis(z):.2g}): the bias moves in jumps or bursts, not "
+                         "by a random walk's Gaussian steps"))
+        spec = np.abs(np.fft.rfft(z - z.mean())) ** 2
+        spec = spec[1:(z.size - 1) // 2 + 1]
+        if spec.size > 2 and spec.sum() > 0:
+            j = int(np.argmax(spec)) + 1
+            g = float(spec[j - 1] / spec.sum())
+            span = float(run.tcol[-1] - run.tcol[0]) * z.size / max(z.size - 1, 1)
+            period = span / j
+            words = (f"{1.0 / period:.3g} Hz (period {period:.4g} s)" if run.time_unit == "s"
+                     else f"period {period:.4g} samples")
+            out.append(Check("walk_period", axis, g, fisher_g_logp(g, spec.size),
+                             f"Fisher g over {spec.size} frequencies", float(period),
+                             _time_unit(run),
+                             f"the random walk on {axis} leaves a periodic component "
+                             f"({words}) in its innovations: an oscillation, not a walk"))
+    if m >= 3 and q > 0:
+        c = sla.cholesky_banded(_banded(sigma2, r))
+        x = sla.cho_solve_banded((c, False), de)
+        dinv = tridiagonal_inverse_diagonal(2.0 * sigma2 + r, -sigma2)
+        u = x / np.sqrt(dinv)
+        i = int(np.argmax(np.abs(u)))
+        umax = float(abs(u[i]))
+        logp = float(min(0.0, np.log(2.0 * m) + stats.norm.logsf(umax)))
+        # the smoothed bias b̂ = e - σ² Dᵀ Σ_Δ⁻¹ Δe, its change across the jump
+        v = np.zeros(m + 1)
+        v[:-1] -= x
+        v[1:] += x
+        b = np.asarray(e, dtype=float) - sigma2 * v
+        w = int(np.clip(np.sqrt(sigma2 / max(float(np.median(r)), 1e-300)), 1, max(m // 20, 1)))
+        jump = float(b[min(i + 1 + w, m)] - b[max(i - w, 0)])
+        out.append(Check("walk_jump", axis, umax, logp,
+                         f"max |auxiliary residual| of {m} N(0,1), Bonferroni", abs(jump),
+                         "m/s²",
+                         f"the bias on {axis} jumps by {jump:+.3g} m/s² at {_where(run, i + 1)}"
+                         f" ({umax:.3g} standard deviations of a walk step): a step, not a "
+                         "walk"))
+    st = _stationarity(de, sigma2, dt, q, run, axis)
+    if st is not None:
+        out.append(st)
+    return out
+
+
+def gls_nll(de: np.ndarray, dx: np.ndarray, sigma2: float, r: np.ndarray) -> float:
+    """-2 log L (no 2π) of ``Δe = ΔX β + Δ(b + v)`` with β profiled: whitened by the
+    banded Cholesky factor of ``Σ_Δ`` (``Σ_Δ = UᵀU``; ``Uᵀ w = ·`` is a bidiagonal solve)."""
+    c = sla.cholesky_banded(_banded(sigma2, r))
+    low = np.zeros_like(c)
+    low[0] = c[1]
+    low[1, :-1] = c[0, 1:]
+    w = sla.solve_banded((1, 0), low, np.column_stack([de, dx]))
+    coef = np.linalg.lstsq(w[:, 1:], w[:, 0], rcond=None)[0]
+    res = w[:, 0] - w[:, 1:] @ coef
+    return float(2.0 * np.sum(np.log(c[1])) + res @ res)
+
+
+def walk_nll(de: np.ndarray, dx: np.ndarray, sigma2: float, dt: np.ndarray, q0: float
+              ) -> float:
+    """:func:`gls_nll` minimised over the walk's q (bounded search on log q around q0)."""
+    def f(lq: float) -> float:
+        return gls_nll(de, dx, sigma2, np.exp(2.0 * lq) * dt)
+
+    res = optimize.minimize_scalar(f, bounds=(np.log(q0) - 8.0, np.log(q0) + 4.0),
+                                   method="bounded", options={"xatol": 1e-4})
+    return float(min(res.fun, f(np.log(q0))))
+
+
+def rival_check(ext: Extensions, e: np.ndarray, sigma2: float, q: float, k: int,
+                found: list[Rival], walk_criterion: float, fixed_q: bool) -> Check | None:
+    """Do the rivals that beat the walk by AIC add to it beyond chance? (the ``walk_rivals``
+    check).
+
+    Each such rival's columns are added **on top of** the walk (q refitted, unless a sensor
+    profile fixes it; the axis' own reference column refitted too; the other named effects
+    at their final values in ``e``): ``LR = -2 log L(walk) + 2 log L(walk + rival) ~ χ²(c)``
+    under the walk, c the rival's columns; its p-value is multiplied by the shapes searched
+    (:attr:`Rival.searched`) and by the number of rival families (Bonferroni). Under a true
+    walk this fails with probability ≤ the battery's per-check α — unlike the AIC comparison
+    in place alone, which a true walk loses most of the time (a Brownian path has most of its
+    energy in its few slowest modes, which two sinusoids or two steps capture).
+    """
+    winners = sorted((r for r in found if r.criterion >= walk_criterion
+                      and r.cols is not None), key=lambda r: -r.criterion)
+    if not winners:
+        return None
+    run = ext.run
+    dt = np.asarray(run.dt_walk, dtype=float)
+    de = np.diff(np.asarray(e, dtype=float))
+    base = np.diff(run.a_ref[:, k])[:, None]
+    if fixed_q:
+        def nll(dx):
+            return gls_nll(de, dx, sigma2, q * q * dt)
+    else:
+        def nll(dx):
+            return walk_nll(de, dx, sigma2, dt, q)
+    nll0 = nll(base)
+    best = None
+    for r in winners[:NESTED_TOP]:
+        dz = np.diff(r.cols, axis=0)
+        lr = max(nll0 - nll(np.column_stack([base, dz])), 0.0)
+        logp = min(0.0, float(np.log(len(found) * r.searched)
+                              + stats.chi2.logsf(lr, r.cols.shape[1])))
+        if best is None or logp < best[0]:
+            best = (logp, lr, r)
+    logp, lr, r = best
+    return Check("walk_rivals", AXES[k], lr, logp,
+                 f"LR of {r.name} on top of the walk, chi2({r.cols.shape[1]}) × "
+                 f"{len(found)}·{r.searched} shapes", r.size, "m/s²",
+                 f"{r.description}: it beats the random walk on {AXES[k]} by AIC in its place "
+                 f"and adds to it beyond chance (LR {lr:.4g} on top of the walk)")
+
+
+def review_walk(ext: Extensions, state: ModelState, k: int, e: np.ndarray,
+                innov: np.ndarray, stated: np.ndarray) -> WalkReview:
+    """Rivals and path battery for the walk named on axis k of ``state``.
+
+    e : (N,) readings minus the final model's mean without its bias, m/s².  innov : (N,) the
+    walk filter's normalised innovations.  stated : (2,) stated σ² (to remove the walk).
+    """
+    st = state.axes[k]
+    axis = AXES[k]
+    reduced = state.without("bias_random_walk", axis, stated)
+    lr = float(ext.nll(reduced) - ext.nll(state))
+    charge = walk_charge(ext, k)
+    found = rivals(ext, reduced, k)
+    checks = path_checks(ext, e, innov, st.sigma2_eff, st.q, axis)
+    rc = rival_check(ext, e, st.sigma2_eff, st.q, k, found, lr - 2.0 * charge,
+                     k in getattr(ext, "walk_bounds", {}))
+    if rc is not None:
+        checks.append(rc)
+    return WalkReview(axis, lr, charge, tuple(found), tuple(checks),
+                      profile=k in getattr(ext, "walk_bounds", {}))
