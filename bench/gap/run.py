@@ -24,12 +24,21 @@ import numpy as np
 
 from bench.effects import EffectSpec, apply_to_model
 from bench.gap.prediction import AxisPrediction, axis_term, fit_bias_scale, predict_axis
+from bench.gap.readout import AccelField, accel_field
 from bench.gap.recording import write_recording
-from bench.gap.replay import Replay, make_replay, simulate, timing
+from bench.gap.replay import (
+    MOTION_TOL,
+    Replay,
+    make_replay,
+    motion_sensordata,
+    record_motion,
+    simulate,
+    timing,
+)
 from bench.gap.report import GapReport
 from bench.gap.sysid import SYSID_EFFECTS, sysid_refine, sysid_usable
 from bench.gap.writers import check_outputs, write_report
-from bench.model import TableEdits
+from bench.model import ACC_SENSORS, ENCODER, TableEdits, tilt_table
 from bench.sensors import AxisErrors, SensorErrorModel
 from calib.conventions import AXES, G
 from calib.diagnostics import gap_measure
@@ -79,11 +88,12 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
         note(f" ({replay.mode})")
 
     effects, table_after, sensor_after, sysid_out = _extension(
-        analysis, replay, datos, noise_var, base, progress)
+        analysis, replay, datos, noise_var, base, nominal.accel, progress)
 
-    with _step(progress, None, "extended re-simulation"):
+    with _step(progress, None, "extended re-simulation") as note:
         after = _extended_gap(replay, effects, table_after, sensor_after, nominal, datos,
                               noise_var)
+        note(f" ({after.how})")
 
     report = GapReport(analysis=analysis, effects=tuple(effects), sysid=sysid_out,
                        replay=replay, tracking_error=nominal.tracking, noise_var=noise_var,
@@ -128,7 +138,8 @@ def _check_inputs(noise_var: Sequence[float] | np.ndarray, report_dir: PathLike 
 @dataclass(frozen=True)
 class _Nominal:
     """The nominal re-simulation: true specific force (N, 2) and encoder (N,), the encoder
-    tracking error (rad), per axis (bias, scale), residual (N, 2) and gap measure."""
+    tracking error (rad), per axis (bias, scale), residual (N, 2) and gap measure, and the
+    recorded motion's acceleration field (:class:`bench.gap.readout.AccelField`)."""
 
     a: np.ndarray
     enc: np.ndarray
@@ -136,13 +147,21 @@ class _Nominal:
     params: dict[str, tuple[float, float]]
     residual: np.ndarray
     gap: dict
+    accel: AccelField
 
 
 def _nominal_gap(replay: Replay, base: TableEdits, datos: np.ndarray, noise_var: np.ndarray
                  ) -> _Nominal:
-    """Simulate the nominal bench, fit bias and scale per axis, measure the gap."""
+    """Simulate the nominal bench, fit bias and scale per axis, measure the gap.
+
+    The replay is simulated once (:func:`bench.gap.replay.record_motion`); the nominal
+    readings are MuJoCo's sensors along it, read together with the probe accelerometers
+    that later give any edited table's readout (:func:`bench.gap.readout.accel_field`).
+    """
     tita, t = replay.tita, replay.t
-    a_nom, enc = simulate(replay, base)
+    accel = accel_field(record_motion(replay, base), base)
+    a_nom = np.column_stack([accel.column(ACC_SENSORS[a])[:, 0] for a in AXES])
+    enc = accel.column(ENCODER)[:, 0]
     tracking = float(np.max(np.abs(enc - tita))) if replay.mode == "sweep" else 0.0
     params, residual, gap = {}, np.empty_like(datos), {}
     for k, ax in enumerate(AXES):
@@ -152,7 +171,7 @@ def _nominal_gap(replay: Replay, base: TableEdits, datos: np.ndarray, noise_var:
         gap[ax] = gap_measure(r, tita, float(noise_var[k]), t,
                               other_ref=a_nom[:, 1 - k], own_ref=a_nom[:, k],
                               readings=datos[:, k], n_params=2)
-    return _Nominal(a_nom, enc, tracking, params, residual, gap)
+    return _Nominal(a_nom, enc, tracking, params, residual, gap, accel)
 
 
 def _effect_spec(est: Any) -> EffectSpec:
@@ -176,9 +195,10 @@ def _bench_model(effects: Sequence[EffectSpec], base: TableEdits
 
 
 def _extension(analysis: GapAnalysis, replay: Replay, datos: np.ndarray,
-               noise_var: np.ndarray, base: TableEdits, progress: Progress
+               noise_var: np.ndarray, base: TableEdits, accel: AccelField, progress: Progress
                ) -> tuple[list[EffectSpec], TableEdits, SensorErrorModel, dict[int, dict]]:
-    """The named effects in the bench model; physical ones refined by ``mujoco.sysid``.
+    """The named effects in the bench model; physical ones refined by ``mujoco.sysid``
+    (each candidate read along the recorded motion ``accel``, :mod:`bench.gap.sysid`).
 
     A refinement replaces the ``calib`` estimate when it lowered the cost and has finite
     intervals (:func:`bench.gap.sysid.sysid_usable`); when sysid fails, the reason is kept in
@@ -188,12 +208,12 @@ def _extension(analysis: GapAnalysis, replay: Replay, datos: np.ndarray,
     table_after, sensor_after = _bench_model(effects, base)
     if not any(e.name in SYSID_EFFECTS for e in effects):
         return effects, table_after, sensor_after, {}
-    with _step(progress, "refining physical effects by re-simulation (mujoco.sysid)…",
-               "sysid done"):
+    with _step(progress, "refining physical effects (mujoco.sysid)…", "sysid done"):
         sigma2 = np.array([sensor_after.axis(a).noise_var or noise_var[k]
                            for k, a in enumerate(AXES)])
         try:
-            sysid_out = sysid_refine(effects, replay, datos, sigma2, table_after, sensor_after)
+            sysid_out = sysid_refine(effects, replay, datos, sigma2, table_after, sensor_after,
+                                     accel=accel)
         except Exception as exc:  # the LS estimate stays usable; say why sysid did not run
             sysid_out = {i: {"error": f"{type(exc).__name__}: {exc}"}
                          for i, e in enumerate(effects) if e.name in SYSID_EFFECTS}
@@ -208,8 +228,8 @@ def _extension(analysis: GapAnalysis, replay: Replay, datos: np.ndarray,
 @dataclass(frozen=True)
 class _Extended:
     """The extended re-simulation: per axis prediction and gap, residual (N, 2), the
-    extended sensor model with its fitted bias and scale, χ²/dof against the stated noise
-    and how much the named effects change the simulated readings."""
+    extended sensor model with its fitted bias and scale, χ²/dof against the stated noise,
+    how much the named effects change the simulated readings and how MuJoCo was run."""
 
     predictions: dict[str, AxisPrediction]
     residual: np.ndarray
@@ -217,6 +237,26 @@ class _Extended:
     sensor: SensorErrorModel
     chi2_stated: dict[str, float]
     change: dict[str, dict[str, float]]
+    how: str
+
+
+def _extended_readings(replay: Replay, table_after: TableEdits, nominal: _Nominal
+                       ) -> tuple[np.ndarray, str]:
+    """MuJoCo's true specific force (N, 2) of the extended table, and how it was obtained.
+
+    The edited model is read by MuJoCo along the recorded motion (one batched rollout,
+    :func:`bench.gap.replay.motion_sensordata`: the same sensordata as re-simulating the run,
+    since site edits leave the motion unchanged); if it does not move as recorded (an edit
+    that changed the physics), the replay is re-simulated in full.
+    """
+    model, _ = tilt_table(table_after)
+    sd, _, step_error = motion_sensordata(nominal.accel.motion, model)
+    if step_error <= MOTION_TOL:
+        cols = [int(model.sensor(ACC_SENSORS[a]).adr[0]) for a in AXES]
+        return sd[:, cols], "MuJoCo along the recorded motion"
+    a_ext, _ = simulate(replay, table_after)
+    return a_ext, (f"full re-simulation: the extended model leaves the recorded motion by "
+                   f"{step_error:.1e}")
 
 
 def _extended_gap(replay: Replay, effects: Sequence[EffectSpec], table_after: TableEdits,
@@ -232,7 +272,8 @@ def _extended_gap(replay: Replay, effects: Sequence[EffectSpec], table_after: Ta
     Δ = extended − nominal simulated mean reading.
     """
     tita, t, a_nom = replay.tita, replay.t, nominal.a
-    a_ext, _ = simulate(replay, table_after) if effects else (a_nom, nominal.enc)
+    a_ext, how = (_extended_readings(replay, table_after, nominal) if effects
+                  else (a_nom, "nominal: nothing added"))
     preds, residual, gap, axes, chi2_stated, change = {}, np.empty_like(datos), {}, {}, {}, {}
     for k, ax in enumerate(AXES):
         stated = float(noise_var[k])
@@ -255,7 +296,7 @@ def _extended_gap(replay: Replay, effects: Sequence[EffectSpec], table_after: Ta
                       "norm_over_sigma": float(np.linalg.norm(delta) / np.sqrt(stated))}
         axes[ax] = AxisErrors(pred.bias, pred.scale, sigma2_k, sensor_after.axis(ax).terms)
     return _Extended(preds, residual, gap, SensorErrorModel(axes["x"], axes["y"]),
-                     chi2_stated, change)
+                     chi2_stated, change, how)
 
 
 def _write_outputs(report: GapReport, report_dir: PathLike | None, rrd: PathLike | None,
