@@ -23,13 +23,13 @@ history or interval) raises :class:`ReadoutUnsupportedError`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import mujoco
 import numpy as np
 
 from bench.gap.replay import Motion, motion_sensordata
-from bench.model import TABLE_BODY, TableEdits, edit_tilt_table, load_spec
+from bench.model import TABLE_BODY, TableEdits, edit_tilt_table, load_spec, tilt_table
 
 PROBE_SITES = ("probe_o", "probe_x", "probe_y", "probe_z")
 """Probe sites on the table body: at its origin and 1 m along its +x, +y, +z axes."""
@@ -70,7 +70,8 @@ class AccelField:
     """Specific force on the table along a recorded motion, in the table (body) frame.
 
     origin : (N, 3) f_b(0), m/s², at the samples.
-    gradient : (N, 3, 3) ∂f_b/∂r = α× + ω×ω×, 1/s² (column j: probe j − origin, per metre).
+    gradient : (3, N, 3) ∂f_b/∂r_j = (α× + ω×ω×)·e_j, 1/s² (probe j − origin, per metre),
+        stored by j so that ``origin + Σ_j gradient[j]·r_j`` runs on contiguous rows.
     sensordata : (N, nsensordata) the probe model's sensordata (its own sensors first: the
         nominal table's readings).
     state : (N, nstate) full-physics state at the samples (after the step read).
@@ -83,6 +84,18 @@ class AccelField:
     state: np.ndarray
     motion: Motion
     model: mujoco.MjModel
+    _mujoco: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def mujoco_read(self, table: TableEdits) -> tuple[mujoco.MjModel, np.ndarray, float]:
+        """The table ``table`` compiled, MuJoCo's sensordata (N, nsensordata) of it along the
+        motion and the step error (:func:`bench.gap.replay.motion_sensordata`). Kept per
+        table: the sysid confirmation and the extended gap read the same one."""
+        if table not in self._mujoco:
+            model, _ = tilt_table(table)
+            sd, _, step_error = motion_sensordata(self.motion, model)
+            self._mujoco.clear()  # one entry: the last table asked for
+            self._mujoco[table] = (model, sd, step_error)
+        return self._mujoco[table]
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -103,7 +116,7 @@ def accel_field(motion: Motion, table: TableEdits | None = None, threads: int = 
     cols = [sd[:, int(model.sensor(p).adr[0]):int(model.sensor(p).adr[0]) + 3]
             for p in PROBE_SITES]
     origin = cols[0]
-    gradient = np.stack([c - origin for c in cols[1:]], axis=2)  # / 1 m
+    gradient = np.stack([c - origin for c in cols[1:]])  # / 1 m
     return AccelField(origin, gradient, sd, state, motion, model)
 
 
@@ -144,7 +157,9 @@ def readout(field: AccelField, model: mujoco.MjModel) -> np.ndarray:
         if int(model.site_bodyid[site]) != table:
             raise ReadoutUnsupportedError(f"sensor {s.name!r}: its site is not on the table")
         pos, rot = _site_frame(model, data, site)
-        f_b = field.origin + field.gradient @ pos  # (N, 3), table frame
+        f_b = field.origin.copy()  # (N, 3), table frame
+        for j in np.flatnonzero(pos):
+            f_b += field.gradient[j] * pos[j]
         f_s = f_b @ rot  # row-wise R_bsᵀ·f_b
         cut = float(model.sensor_cutoff[i])
         out[:, adr:adr + dim] = np.clip(f_s, -cut, cut) if cut > 0 else f_s

@@ -1,7 +1,7 @@
 """The discrepancy workflow's run: :func:`run_gap`, in the steps of ``docs/gap.md``.
 
 1. the estimation side's analysis (:func:`calib.gap.analyze_gap`);
-2. the nominal re-simulation and its gap (:func:`_nominal_gap`);
+2. the nominal re-simulation and its gap (:func:`_nominal_gap`), alongside step 1;
 3. the extension: the named effects in the bench model, physical ones refined by
    ``mujoco.sysid`` (:func:`_extension`);
 4. the extended re-simulation and its gap (:func:`_extended_gap`);
@@ -15,6 +15,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -30,7 +31,6 @@ from bench.gap.replay import (
     MOTION_TOL,
     Replay,
     make_replay,
-    motion_sensordata,
     record_motion,
     simulate,
     timing,
@@ -38,7 +38,7 @@ from bench.gap.replay import (
 from bench.gap.report import GapReport
 from bench.gap.sysid import SYSID_EFFECTS, sysid_refine, sysid_usable
 from bench.gap.writers import check_outputs, write_report
-from bench.model import ACC_SENSORS, ENCODER, TableEdits, tilt_table
+from bench.model import ACC_SENSORS, ENCODER, TableEdits
 from bench.sensors import AxisErrors, SensorErrorModel
 from calib.conventions import AXES, G
 from calib.diagnostics import gap_measure
@@ -78,14 +78,19 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
     datos = np.asarray(ensayo.datos, dtype=float)
     tita = np.asarray(ensayo.tita, dtype=float)
 
-    with _step(progress, f"analysing {ensayo.n} samples (calib.gap)…", "analysis done"):
-        analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate, family_alpha=family_alpha)
-
-    with _step(progress, None, "nominal re-simulation") as note:
-        replay = make_replay(tita, t)
-        base = TableEdits(g=g)
-        nominal = _nominal_gap(replay, base, datos, noise_var)
-        note(f" ({replay.mode})")
+    base = TableEdits(g=g)
+    # The nominal re-simulation does not depend on the analysis: it runs alongside it on a
+    # second thread (mujoco.rollout and numpy's large operations release the GIL).
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        if progress is not None:
+            progress("simulating the nominal bench alongside the analysis…")
+        job = pool.submit(_timed, _nominal_run, tita, t, base, datos, noise_var)
+        with _step(progress, f"analysing {ensayo.n} samples (calib.gap)…", "analysis done"):
+            analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate,
+                                   family_alpha=family_alpha)
+        (replay, nominal), seconds = job.result()
+    if progress is not None:
+        progress(f"nominal re-simulation ({replay.mode}) done in {seconds:.1f} s")
 
     effects, table_after, sensor_after, sysid_out = _extension(
         analysis, replay, datos, noise_var, base, nominal.accel, progress)
@@ -120,6 +125,19 @@ def _step(progress: Progress, start: str | None, done: str
     yield detail.append
     if progress is not None:
         progress(f"{done}{''.join(detail)} in {time.perf_counter() - clock:.1f} s")
+
+
+def _timed(fn: Callable, *args: Any) -> tuple[Any, float]:
+    """``fn(*args)`` and its duration, s."""
+    clock = time.perf_counter()
+    return fn(*args), time.perf_counter() - clock
+
+
+def _nominal_run(tita: np.ndarray, t: np.ndarray | None, base: TableEdits, datos: np.ndarray,
+                 noise_var: np.ndarray) -> tuple[Replay, _Nominal]:
+    """The replay of the measured run and its nominal gap (:func:`_nominal_gap`)."""
+    replay = make_replay(tita, t)
+    return replay, _nominal_gap(replay, base, datos, noise_var)
 
 
 def _check_inputs(noise_var: Sequence[float] | np.ndarray, report_dir: PathLike | None,
@@ -249,8 +267,7 @@ def _extended_readings(replay: Replay, table_after: TableEdits, nominal: _Nomina
     since site edits leave the motion unchanged); if it does not move as recorded (an edit
     that changed the physics), the replay is re-simulated in full.
     """
-    model, _ = tilt_table(table_after)
-    sd, _, step_error = motion_sensordata(nominal.accel.motion, model)
+    model, sd, step_error = nominal.accel.mujoco_read(table_after)
     if step_error <= MOTION_TOL:
         cols = [int(model.sensor(ACC_SENSORS[a]).adr[0]) for a in AXES]
         return sd[:, cols], "MuJoCo along the recorded motion"

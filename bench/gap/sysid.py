@@ -47,7 +47,6 @@ from bench.gap.replay import (
     Replay,
     accel_columns,
     initial_state,
-    motion_sensordata,
     record_motion,
     replay_sensordata,
 )
@@ -242,9 +241,7 @@ def sysid_refine(effects: Sequence[EffectSpec], replay: Replay, datos: np.ndarra
         accel = accel_field(record_motion(replay, table), table)
     try:
         fit, projection = solve(_readout_rollout(accel))
-        optimum = pristine.copy()
-        edit_tilt_table(optimum, table_at(_split(target_effects, fit.xs)))
-        ok, check = confirm_readout(accel, optimum.compile())
+        ok, check = confirm_readout(accel, table_at(_split(target_effects, fit.xs)))
     except ReadoutUnsupportedError as exc:
         ok, check = False, f"kinematic readout not applicable ({exc})"
     if ok:
@@ -254,16 +251,18 @@ def sysid_refine(effects: Sequence[EffectSpec], replay: Replay, datos: np.ndarra
                     f"{check}: refitted by re-simulation")
 
 
-def confirm_readout(field: AccelField, model: mujoco.MjModel) -> tuple[bool, str]:
-    """Does MuJoCo read ``model`` along the recorded motion as the kinematic readout does?
+def confirm_readout(accel: AccelField, table: TableEdits) -> tuple[bool, str]:
+    """Does MuJoCo read the table ``table`` along the recorded motion as the kinematic
+    readout does?
 
-    One batched rollout (:func:`bench.gap.replay.motion_sensordata`): the model must move as
-    recorded (every recorded step reproduced within :data:`bench.gap.replay.MOTION_TOL`)
-    and its accelerometers must agree with :func:`bench.gap.readout.readout` within
-    :data:`bench.gap.readout.READOUT_TOL`. Returns (agreed, a sentence with the numbers).
+    One batched rollout (:meth:`bench.gap.readout.AccelField.mujoco_read`): the model must
+    move as recorded (every recorded step reproduced within
+    :data:`bench.gap.replay.MOTION_TOL`) and its accelerometers must agree with
+    :func:`bench.gap.readout.readout` within :data:`bench.gap.readout.READOUT_TOL`. Returns
+    (agreed, a sentence with the numbers).
     """
-    sd, _, step_error = motion_sensordata(field.motion, model)
-    diff = readout_error(field, model, sd)
+    model, sd, step_error = accel.mujoco_read(table)
+    diff = readout_error(accel, model, sd)
     ok = step_error <= MOTION_TOL and diff <= READOUT_TOL
     text = (f"kinematic readout vs MuJoCo's sensors at the optimum: largest difference "
             f"{diff:.1e} m/s² (limit {READOUT_TOL:g} m/s²)")
