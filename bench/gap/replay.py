@@ -162,6 +162,28 @@ def _hinge_basis(theta: np.ndarray, omega: np.ndarray, alpha: np.ndarray) -> np.
                             np.ones_like(theta)])
 
 
+def hinge_inverse_fit(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
+                      alpha: np.ndarray) -> np.ndarray | None:
+    """Coefficients (6,) of the closed-form inverse dynamics of :func:`inverse_dynamics` over
+    the run's (θ, ω, α), or None when the model is not of that form (checked on
+    ``mj_inverse``)."""
+    if model.nv != 1 or theta.size <= 48:
+        return None
+    rng = np.random.default_rng(0)  # probe states only; any draw gives the same coefficients
+    pick = rng.choice(theta.size, 48, replace=False)
+    w_max = max(1.0, float(np.max(np.abs(omega))))
+    a_max = max(1.0, float(np.max(np.abs(alpha))))
+    th = theta[pick]
+    om, al = rng.uniform(-w_max, w_max, 48), rng.uniform(-a_max, a_max, 48)
+    tau = _inverse_loop(model, th, om, al)
+    basis = _hinge_basis(th, om, al)
+    coef = np.linalg.lstsq(basis[:24], tau[:24], rcond=None)[0]
+    miss = np.max(np.abs(basis[24:] @ coef - tau[24:]))
+    if not miss <= INVERSE_CHECK_TOL * max(1.0, float(np.max(np.abs(tau)))):
+        return None
+    return coef
+
+
 def inverse_dynamics(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
                      alpha: np.ndarray) -> np.ndarray:
     """Joint torque τ (N·m) giving the hinge motion (θ rad, ω rad/s, α rad/s²), per entry.
@@ -178,23 +200,13 @@ def inverse_dynamics(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray
     gravity torque of a centre of mass off the axis, c the spring reference (Featherstone,
     *Rigid Body Dynamics Algorithms*, 2008, §3.2). The six coefficients are fitted by
     least squares to ``mj_inverse`` at 24 states drawn over the run's (θ, ω, α) and checked
-    at 24 others; if a check state disagrees by more than :data:`INVERSE_CHECK_TOL` of the
-    largest torque (another joint, a limit, a contact…), the per-step loop is used.
+    at 24 others (:func:`hinge_inverse_fit`); if a check state disagrees by more than
+    :data:`INVERSE_CHECK_TOL` of the largest torque (another joint, friction loss, a
+    limit…), the per-step loop is used.
     """
     theta, omega, alpha = (np.asarray(x, dtype=float) for x in (theta, omega, alpha))
-    if model.nv != 1 or theta.size <= 48:
-        return _inverse_loop(model, theta, omega, alpha)
-    rng = np.random.default_rng(0)  # probe states only; any draw gives the same coefficients
-    pick = rng.choice(theta.size, 48, replace=False)
-    w_max = max(1.0, float(np.max(np.abs(omega))))
-    a_max = max(1.0, float(np.max(np.abs(alpha))))
-    th = theta[pick]
-    om, al = rng.uniform(-w_max, w_max, 48), rng.uniform(-a_max, a_max, 48)
-    tau = _inverse_loop(model, th, om, al)
-    basis = _hinge_basis(th, om, al)
-    coef = np.linalg.lstsq(basis[:24], tau[:24], rcond=None)[0]
-    miss = np.max(np.abs(basis[24:] @ coef - tau[24:]))
-    if not miss <= INVERSE_CHECK_TOL * max(1.0, float(np.max(np.abs(tau)))):
+    coef = hinge_inverse_fit(model, theta, omega, alpha)
+    if coef is None:
         return _inverse_loop(model, theta, omega, alpha)
     return _hinge_basis(theta, omega, alpha) @ coef
 
