@@ -298,14 +298,16 @@ def test_sysid_starting_far_off_converges_on_a_sweep():
 # ------------------------------------------------- one motion, read for every candidate
 
 def _stop_and_go(rate: float) -> tuple[np.ndarray, np.ndarray]:
-    """θ(t) at ``rate`` Hz: a smooth ramp, a hold, a jump (a move not sampled), a ramp back.
-    At 80 Hz the samples fall between physics steps (1 ms): interpolated readings."""
+    """θ(t) at ``rate`` Hz: a smooth ramp and a hold, a jump (a move not sampled) to a
+    static pose, another jump, a ramp back. At 80 Hz the samples fall between physics steps
+    (1 ms): interpolated readings."""
     t = np.arange(0.0, 8.0, 1.0 / rate)
     s = np.clip(t / 3.0, 0.0, 1.0)
     tita = 1.2 * s * s * (3.0 - 2.0 * s)  # 0 → 1.2 rad in 3 s, at rest at both ends
-    late = t >= 4.5
-    u = np.clip((t - 4.5) / 3.0, 0.0, 1.0)
-    tita[late] = 2.0 - 1.5 * u[late] ** 2 * (3.0 - 2.0 * u[late])  # jump to 2.0, then back
+    tita[t >= 4.5] = 2.0  # held between two jumps: a static piece
+    late = t >= 5.5
+    u = np.clip((t - 5.5) / 2.5, 0.0, 1.0)
+    tita[late] = 2.4 - 1.5 * u[late] ** 2 * (3.0 - 2.0 * u[late])  # jump to 2.4, then back
     return tita, t
 
 
@@ -321,7 +323,8 @@ def test_recorded_motion_reads_an_edited_table_as_its_full_re_simulation(rate):
     reproduced exactly; the lean motion model integrates the full model's states exactly."""
     tita, t = _stop_and_go(rate)
     replay = make_replay(tita, t)
-    assert replay.mode == "sweep" and replay.jumps and replay.holds
+    assert replay.mode == "sweep" and len(replay.jumps) == 2 and replay.holds
+    assert [p.static for p in replay.pieces] == [False, True, False]
     motion = record_motion(replay, TableEdits())
     model, _ = tilt_table(EDITED)
     sd, state, step_error = motion_sensordata(motion, model)
