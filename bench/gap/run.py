@@ -95,7 +95,8 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
     effects, table_after, sensor_after, sysid_out = _extension(
         analysis, replay, datos, noise_var, base, nominal.accel, progress)
 
-    with _step(progress, None, "extended re-simulation") as note:
+    with _step(progress, "reading the extended table (MuJoCo)…",
+               "extended re-simulation") as note:
         after = _extended_gap(replay, effects, table_after, sensor_after, nominal, datos,
                               noise_var)
         note(f" ({after.how})")
