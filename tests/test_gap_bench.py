@@ -32,7 +32,13 @@ import pytest
 from bench.cli import main
 from bench.effects import EffectSpec, apply_effects, parse_effect_option
 from bench.gap import make_replay, replay_sensordata, run_gap, simulate, sysid_refine
-from bench.gap.readout import READOUT_TOL, accel_field, readout, readout_error
+from bench.gap.readout import (
+    READOUT_TOL,
+    ReadoutUnsupportedError,
+    accel_field,
+    readout,
+    readout_error,
+)
 from bench.gap.replay import (
     MOTION_TOL,
     hinge_inverse_fit,
@@ -42,6 +48,7 @@ from bench.gap.replay import (
 )
 from bench.model import (
     ACC_SENSORS,
+    ACC_SITES,
     ENCODER,
     TABLE_BODY,
     TILT_JOINT,
@@ -369,6 +376,20 @@ def test_kinematic_readout_equals_mujoco_sensors(edits):
         np.testing.assert_allclose(readout(field, model), sd, rtol=0, atol=READOUT_TOL)
     if edits.cutoff[0]:
         assert np.max(np.abs(sd[:, sensor_slice(model, ACC_SENSORS["x"]).start])) == 6.0
+
+
+def test_readout_refuses_a_sensor_it_does_not_reproduce():
+    """A sensor the readout has no formula for (here a gyro) is refused, not guessed: the
+    sysid then refits by re-simulation (``ReadoutUnsupportedError``)."""
+    import mujoco
+
+    run = _dataset([], "sine", 3)
+    field = accel_field(record_motion(make_replay(run.tita, run.t)))
+    spec = load_spec()
+    spec.add_sensor(name="gyro", type=mujoco.mjtSensor.mjSENS_GYRO,
+                    objtype=mujoco.mjtObj.mjOBJ_SITE, objname=ACC_SITES["x"])
+    with pytest.raises(ReadoutUnsupportedError, match="gyro"):
+        readout(field, spec.compile())
 
 
 def test_a_changed_physics_is_detected_and_re_simulated(monkeypatch):
