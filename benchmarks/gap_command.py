@@ -1,6 +1,6 @@
 """The whole ``tiltbench gap`` command on timed sweeps, next to the analysis alone.
 
-    python benchmarks/gap_command.py                    # or: make bench
+    python benchmarks/gap_command.py
     python benchmarks/gap_command.py --sizes 20001 60001 --repeat 3
 
 For each size N a timed sweep is generated in a temporary directory (``tiltbench generate
