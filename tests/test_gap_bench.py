@@ -31,14 +31,39 @@ import pytest
 
 from bench.cli import main
 from bench.effects import EffectSpec, apply_effects, parse_effect_option
-from bench.gap import make_replay, run_gap, simulate, sysid_refine
-from bench.model import TableEdits
+from bench.gap import make_replay, replay_sensordata, run_gap, simulate, sysid_refine
+from bench.gap.readout import (
+    READOUT_TOL,
+    ReadoutUnsupportedError,
+    accel_field,
+    readout,
+    readout_error,
+)
+from bench.gap.replay import (
+    MOTION_TOL,
+    hinge_inverse_fit,
+    inverse_dynamics,
+    motion_sensordata,
+    record_motion,
+)
+from bench.model import (
+    ACC_SENSORS,
+    ACC_SITES,
+    ENCODER,
+    TABLE_BODY,
+    TILT_JOINT,
+    TableEdits,
+    load_spec,
+    sensor_slice,
+    tilt_table,
+)
 from bench.sensors import SensorErrorModel
 from bench.tilt import (
     CalibrationConfig,
     SweepProfile,
     ThetaDesign,
     generate_calibration,
+    static_readings,
     write_calibration,
 )
 from calib.conventions import AXES, reference_accel
@@ -277,6 +302,171 @@ def test_sysid_starting_far_off_converges_on_a_sweep():
     assert out[0]["cost_end"] < out[0]["cost_start"]
 
 
+# ------------------------------------------------- one motion, read for every candidate
+
+def _stop_and_go(rate: float) -> tuple[np.ndarray, np.ndarray]:
+    """θ(t) at ``rate`` Hz: a smooth ramp and a hold, a jump (a move not sampled) to a
+    static pose, another jump, a ramp back. At 80 Hz the samples fall between physics steps
+    (1 ms): interpolated readings."""
+    t = np.arange(0.0, 8.0, 1.0 / rate)
+    s = np.clip(t / 3.0, 0.0, 1.0)
+    tita = 1.2 * s * s * (3.0 - 2.0 * s)  # 0 → 1.2 rad in 3 s, at rest at both ends
+    tita[t >= 4.5] = 2.0  # held between two jumps: a static piece
+    late = t >= 5.5
+    u = np.clip((t - 5.5) / 2.5, 0.0, 1.0)
+    tita[late] = 2.4 - 1.5 * u[late] ** 2 * (3.0 - 2.0 * u[late])  # jump to 2.4, then back
+    return tita, t
+
+
+EDITED = TableEdits(misalignment=(0.012, -0.02), tilt_offset=0.004,
+                    lever_arm=((0.25, -0.1), (-0.05, 0.3)))
+
+
+@pytest.mark.parametrize("rate", [100.0, 80.0])
+def test_recorded_motion_reads_an_edited_table_as_its_full_re_simulation(rate):
+    """Site edits leave the motion unchanged: MuJoCo reading the edited table at the steps of
+    the nominal motion gives the sensordata of re-simulating the whole run with it, bit for
+    bit (holds, a jump, samples between physics steps), and every recorded step is
+    reproduced exactly; the lean motion model integrates the full model's states exactly."""
+    tita, t = _stop_and_go(rate)
+    replay = make_replay(tita, t)
+    assert replay.mode == "sweep" and len(replay.jumps) == 2 and replay.holds
+    assert [p.static for p in replay.pieces] == [False, True, False]
+    motion = record_motion(replay, TableEdits())
+    model, _ = tilt_table(EDITED)
+    sd, state, step_error = motion_sensordata(motion, model)
+    sd_full, state_full = replay_sensordata([model], replay)
+    assert step_error == 0.0
+    np.testing.assert_array_equal(sd, sd_full[0])
+    np.testing.assert_array_equal(state, state_full[0])
+    if rate == 80.0:
+        assert np.any(motion.weight > 0)
+
+
+def test_recorded_static_poses_read_as_static_readings():
+    run = _dataset([], "positions", 0)
+    replay = make_replay(run.tita, None)
+    model, _ = tilt_table(EDITED)
+    sd, _, step_error = motion_sensordata(record_motion(replay), model)
+    a, enc = static_readings(run.tita, EDITED)
+    assert step_error == 0.0
+    np.testing.assert_array_equal(sd[:, [sensor_slice(model, ACC_SENSORS[ax]).start
+                                         for ax in AXES]], a)
+    np.testing.assert_array_equal(sd[:, sensor_slice(model, ENCODER).start], enc)
+
+
+@pytest.mark.parametrize("edits", [
+    TableEdits(),
+    EDITED,
+    TableEdits(misalignment=(0.3, 0.0), lever_arm=((0.4, 0.4), (0.0, 0.0)),
+               cutoff=(6.0, 5.0)),
+], ids=["nominal", "edited", "clipped"])
+def test_kinematic_readout_equals_mujoco_sensors(edits):
+    """The readout (probe field + site frame) is MuJoCo's accelerometer to rounding: ≤ 1e-9
+    m/s² on static poses and on a fast sweep with lever arms (centripetal and tangential
+    terms), sensor ``cutoff`` included. Both evaluate the same affine map of the site
+    position; the bound is READOUT_TOL, far above the ≈ 1e-14 m/s² of the rounding."""
+    model, _ = tilt_table(edits)
+    static = make_replay(np.linspace(-3.0, 9.0, 301), None)
+    sweep = _dataset([], "sine", 3)
+    for replay in (static, make_replay(sweep.tita, sweep.t)):
+        field = accel_field(record_motion(replay))
+        sd, _, _ = motion_sensordata(field.motion, model)
+        assert readout_error(field, model, sd) <= READOUT_TOL
+        np.testing.assert_allclose(readout(field, model), sd, rtol=0, atol=READOUT_TOL)
+    if edits.cutoff[0]:
+        assert np.max(np.abs(sd[:, sensor_slice(model, ACC_SENSORS["x"]).start])) == 6.0
+
+
+def test_readout_refuses_a_sensor_it_does_not_reproduce():
+    """A sensor the readout has no formula for (here a gyro) is refused, not guessed: the
+    sysid then refits by re-simulation (``ReadoutUnsupportedError``)."""
+    import mujoco
+
+    run = _dataset([], "sine", 3)
+    field = accel_field(record_motion(make_replay(run.tita, run.t)))
+    spec = load_spec()
+    spec.add_sensor(name="gyro", type=mujoco.mjtSensor.mjSENS_GYRO,
+                    objtype=mujoco.mjtObj.mjOBJ_SITE, objname=ACC_SITES["x"])
+    with pytest.raises(ReadoutUnsupportedError, match="gyro"):
+        readout(field, spec.compile())
+
+
+def test_a_changed_physics_is_detected_and_re_simulated(monkeypatch):
+    """A model that moves differently (here a damped hinge) does not reproduce the recorded
+    steps. The workflow then re-simulates the extended table in full (forced here: no
+    catalog edit changes the motion) and says so; the gap after is the same."""
+    run = _dataset(["misalignment:x:delta=0.03"], "updown", 4)
+    replay = make_replay(run.tita, run.t)
+    field = accel_field(record_motion(replay))
+    spec = load_spec()
+    spec.joint(TILT_JOINT).damping = [2.0, 0.0, 0.0]
+    _, _, step_error = motion_sensordata(field.motion, spec.compile())
+    assert step_error > MOTION_TOL
+    lines: list[str] = []
+    fast = run_gap(run.ensayo(), NOISE, 9.8, progress=lines.append).to_dict()
+    assert any("MuJoCo along the recorded motion" in line for line in lines)
+    monkeypatch.setattr("bench.gap.run.MOTION_TOL", -1.0)
+    lines.clear()
+    full = run_gap(run.ensayo(), NOISE, 9.8, progress=lines.append).to_dict()
+    assert any("full re-simulation" in line for line in lines)
+    assert full["gap_after"] == fast["gap_after"]  # the same MuJoCo readings, bit for bit
+
+
+def _mj_inverse(model, th, om, al) -> np.ndarray:
+    """Reference: ``mj_inverse`` once per state."""
+    import mujoco
+
+    data = mujoco.MjData(model)
+    out = np.empty(th.size)
+    for j in range(th.size):
+        data.qpos[0], data.qvel[0], data.qacc[0] = th[j], om[j], al[j]
+        mujoco.mj_inverse(model, data)
+        out[j] = data.qfrc_inverse[0]
+    return out
+
+
+def test_servo_command_closed_form_equals_mj_inverse():
+    """The closed-form inverse dynamics equals ``mj_inverse`` per state (1e-12 of the largest
+    torque) on the tilt table, and with a joint spring and a centre of mass off the axis; a
+    joint with friction loss (not of that form) is detected and computed by ``mj_inverse``
+    per step instead."""
+    rng = np.random.default_rng(7)
+    th, om, al = rng.uniform(-7, 7, 500), rng.uniform(-10, 10, 500), rng.uniform(-40, 40, 500)
+    plain = load_spec()
+    sprung = load_spec()
+    sprung.joint(TILT_JOINT).stiffness = [3.0, 0.0, 0.0]
+    sprung.joint(TILT_JOINT).springref = 0.2
+    sprung.body(TABLE_BODY).ipos = [0.05, 0.0, -0.02]
+    rough = load_spec()
+    rough.joint(TILT_JOINT).frictionloss = 0.5
+    for spec, closed_form in ((plain, True), (sprung, True), (rough, False)):
+        model = spec.compile()
+        assert (hinge_inverse_fit(model, th, om, al) is not None) == closed_form
+        want = _mj_inverse(model, th, om, al)
+        np.testing.assert_allclose(inverse_dynamics(model, th, om, al), want, rtol=0,
+                                   atol=1e-12 * np.max(np.abs(want)))
+
+
+def test_sysid_by_readout_equals_sysid_by_re_simulation(monkeypatch):
+    """The kinematic readout changes nothing in the fit: forcing the re-simulation path (the
+    readout's check made to fail) gives the same estimates within std/100 and the same std
+    within 1 %, and says why it re-simulated."""
+    run = _dataset(["lever_arm:x:pos_x=0.15,pos_z=-0.1"], "sine", 15)
+    replay = make_replay(run.tita, run.t)
+    start = [EffectSpec("lever_arm", "x", {"pos_x": 0.14, "pos_z": -0.09})]
+    table = TableEdits(lever_arm=((0.14, -0.09), (0.0, 0.0)))
+    args = (start, replay, run.datos, np.array(NOISE), table, SensorErrorModel())
+    fast = sysid_refine(*args)[0]
+    assert "readout" in fast["method"] and "m/s²" in fast["check"]
+    monkeypatch.setattr("bench.gap.sysid.READOUT_TOL", -1.0)
+    slow = sysid_refine(*args)[0]
+    assert "re-simulation" in slow["method"] and "re-simulation" in slow["check"]
+    for key in ("pos_x", "pos_z"):
+        assert abs(fast["params"][key] - slow["params"][key]) <= slow["std"][key] / 100
+        assert fast["std"][key] == pytest.approx(slow["std"][key], rel=0.01)
+
+
 # ---------------------------------------------------------------------------- CLI
 
 @pytest.fixture(scope="module")
@@ -299,7 +489,8 @@ def test_cli_json_is_one_object_with_the_documented_keys(misaligned_file, capsys
         assert {"chi2_dof", "max_signature_z"} <= set(d[gap]["x"])
     assert d["gap_after"]["x"]["consistent"] and not d["gap_before"]["x"]["consistent"]
     assert all(isinstance(i["names"], list) and i["reason"] for i in d["not_identifiable"])
-    assert "[gap]" in cap.err  # progress on stderr, never on stdout
+    assert "[gap " in cap.err  # progress on stderr, never on stdout
+    assert "readout" in e["sysid"]["method"] and "m/s²" in e["sysid"]["check"]
 
 
 def test_cli_report_files_and_recording(misaligned_file, tmp_path, capsys):

@@ -31,6 +31,7 @@ from bench.cli.options import (
     noise_var_from_args,
 )
 from bench.cli.output import print_files, print_json
+from bench.cli.progress import Progress
 
 EPILOG = """\
 the report starts with the verdict: explained | UNEXPLAINED (each signature that remains:
@@ -79,7 +80,7 @@ def _cmd_gap(args: argparse.Namespace) -> int:
         sensor = load_profile(args.sensor)
     report = run_gap(ensayo, nv, g=args.g, rate=None if ensayo.t is not None else args.rate,
                      report_dir=args.report, rrd=args.rrd, force=args.force, sensor=sensor,
-                     progress=lambda msg: print(f"[gap] {msg}", file=sys.stderr, flush=True))
+                     progress=Progress("gap"))
     if args.json:
         print_json(report.to_dict())
         return 0

@@ -137,19 +137,86 @@ def timing(ensayo_t: np.ndarray | None, n: int, rate: float | None) -> np.ndarra
     return None
 
 
-def _servo_command(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
-                   alpha: np.ndarray) -> np.ndarray:
-    """Servo command giving joint motion (θ, ω, α): inverse dynamics + the actuator law."""
+INVERSE_CHECK_TOL = 1e-9
+"""Largest disagreement, relative to the largest torque, between the closed-form inverse
+dynamics of :func:`inverse_dynamics` and ``mj_inverse`` at its check states; above it the
+per-step ``mj_inverse`` loop is used."""
+
+
+def _inverse_loop(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
+                  alpha: np.ndarray) -> np.ndarray:
+    """Joint torque of motion (θ, ω, α) by ``mj_inverse`` at every entry (≈ 3 µs each)."""
     data = mujoco.MjData(model)
-    gain = float(model.actuator_gainprm[0, 0])
-    b0, b1, b2 = (float(v) for v in model.actuator_biasprm[0, :3])
     q = int(model.joint(TILT_JOINT).qposadr[0])
     v = int(model.joint(TILT_JOINT).dofadr[0])
     tau = np.empty_like(theta)
-    for j in range(theta.size):  # mj_inverse ≈ 3 µs per step
+    for j in range(theta.size):
         data.qpos[q], data.qvel[v], data.qacc[v] = theta[j], omega[j], alpha[j]
         mujoco.mj_inverse(model, data)
         tau[j] = data.qfrc_inverse[v]
+    return tau
+
+
+def _hinge_basis(theta: np.ndarray, omega: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    return np.column_stack([alpha, omega, theta, np.sin(theta), np.cos(theta),
+                            np.ones_like(theta)])
+
+
+def hinge_inverse_fit(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
+                      alpha: np.ndarray) -> np.ndarray | None:
+    """Coefficients (6,) of the closed-form inverse dynamics of :func:`inverse_dynamics` over
+    the run's (θ, ω, α), or None when the model is not of that form (checked on
+    ``mj_inverse``)."""
+    if model.nv != 1 or theta.size <= 48:
+        return None
+    rng = np.random.default_rng(0)  # probe states only; any draw gives the same coefficients
+    pick = rng.choice(theta.size, 48, replace=False)
+    w_max = max(1.0, float(np.max(np.abs(omega))))
+    a_max = max(1.0, float(np.max(np.abs(alpha))))
+    th = theta[pick]
+    om, al = rng.uniform(-w_max, w_max, 48), rng.uniform(-a_max, a_max, 48)
+    tau = _inverse_loop(model, th, om, al)
+    basis = _hinge_basis(th, om, al)
+    coef = np.linalg.lstsq(basis[:24], tau[:24], rcond=None)[0]
+    miss = np.max(np.abs(basis[24:] @ coef - tau[24:]))
+    if not miss <= INVERSE_CHECK_TOL * max(1.0, float(np.max(np.abs(tau)))):
+        return None
+    return coef
+
+
+def inverse_dynamics(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
+                     alpha: np.ndarray) -> np.ndarray:
+    """Joint torque τ (N·m) giving the hinge motion (θ rad, ω rad/s, α rad/s²), per entry.
+
+    ``mj_inverse`` (``qfrc_inverse``) called once per physics step is exact but a Python
+    loop: ≈ 3 µs a step, 2 s for a 10-minute run at 1 kHz. MuJoCo has no batched inverse
+    dynamics, so this uses the closed form it computes for a model whose only degree of
+    freedom is one hinge about a fixed axis:
+
+        τ = M·α + D·ω + K·θ + a·sin θ + b·cos θ + c
+
+    M the inertia about the axis plus armature (constant: the body turns about that very
+    axis, so no Coriolis term either), D the joint damping, K the stiffness, a and b the
+    gravity torque of a centre of mass off the axis, c the spring reference (Featherstone,
+    *Rigid Body Dynamics Algorithms*, 2008, §3.2). The six coefficients are fitted by
+    least squares to ``mj_inverse`` at 24 states drawn over the run's (θ, ω, α) and checked
+    at 24 others (:func:`hinge_inverse_fit`); if a check state disagrees by more than
+    :data:`INVERSE_CHECK_TOL` of the largest torque (another joint, friction loss, a
+    limit…), the per-step loop is used.
+    """
+    theta, omega, alpha = (np.asarray(x, dtype=float) for x in (theta, omega, alpha))
+    coef = hinge_inverse_fit(model, theta, omega, alpha)
+    if coef is None:
+        return _inverse_loop(model, theta, omega, alpha)
+    return _hinge_basis(theta, omega, alpha) @ coef
+
+
+def servo_command(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
+                  alpha: np.ndarray) -> np.ndarray:
+    """Servo command giving joint motion (θ, ω, α): inverse dynamics + the actuator law."""
+    gain = float(model.actuator_gainprm[0, 0])
+    b0, b1, b2 = (float(v) for v in model.actuator_biasprm[0, :3])
+    tau = inverse_dynamics(model, theta, omega, alpha)
     return (tau - b0 - b1 * theta - b2 * omega) / gain
 
 
@@ -217,7 +284,7 @@ def _piece(model: mujoco.MjModel, tita: np.ndarray, t: np.ndarray, first: int, s
     nstep = int(rows[-1]) + 2
     ts = np.minimum(tt[0] + dt * np.arange(nstep), tt[-1])
     theta, omega, alpha = profile(tt, th, ts)
-    return Piece(first, stop, _servo_command(model, theta, omega, alpha), float(omega[0]),
+    return Piece(first, stop, servo_command(model, theta, omega, alpha), float(omega[0]),
                  rows, weights)
 
 
@@ -323,6 +390,140 @@ def replay_sensordata(models: Sequence[mujoco.MjModel], replay: Replay, threads:
             sd_out[i, p.first:p.stop] = sample_rows(p, sd[i])
             st_out[i, p.first:p.stop] = sample_rows(p, st[i])
     return sd_out, st_out
+
+
+def motion_model(table: TableEdits | None = None) -> mujoco.MjModel:
+    """The tilt table compiled for moving only: sensors off, and collision and constraint
+    solving off when the model has nothing they could act on (no colliding geom pair, no
+    limit, equality, tendon or friction loss). The integrated states are those of the full
+    model bit for bit (checked by the tests) at about half the cost of a step."""
+    model, _ = tilt_table(table)
+    off = mujoco.mjtDisableBit
+    flags = int(off.mjDSBL_SENSOR)
+    if model.npair == 0 and (not np.any(model.geom_contype) or not np.any(model.geom_conaffinity)):
+        flags |= int(off.mjDSBL_CONTACT)
+        if (model.neq == 0 and model.ntendon == 0 and not np.any(model.jnt_limited)
+                and not np.any(model.dof_frictionloss)):
+            flags |= int(off.mjDSBL_CONSTRAINT)
+    model.opt.disableflags |= flags
+    return model
+
+
+MOTION_TOL = 1e-12
+"""Largest difference (rad, rad/s) between the state a model reaches in a recorded step and
+the recorded one for that model to count as moving as recorded (same physics gives 0)."""
+
+
+@dataclass(frozen=True)
+class Motion:
+    """The replayed table motion, simulated once: the physics steps the samples read.
+
+    The catalog's physical effects move or turn the accelerometer sites, which have no
+    mass: they change what the sensors read, never how the table moves. So the replay is
+    simulated once (:func:`record_motion`) and any edited model is read at the recorded
+    steps (:func:`motion_sensordata`: one batched ``nstep = 1`` rollout from the state before
+    each step), which gives the same sensordata, bit for bit, as re-simulating the whole run
+    with that model (a rollout returns, for step j, the sensors computed in that step's
+    ``mj_forward``, i.e. at the state before it).
+
+    Attributes
+    ----------
+    state : (B, nstate) full-physics state before each recorded step.
+    control : (B,) servo command of that step, rad (a static pose: the pose itself).
+    after : (B, nstate) state after the step, as the nominal run recorded it.
+    lo, hi, weight : (N,) sample i reads ``(1 - w_i)·step[lo_i] + w_i·step[hi_i]``.
+    """
+
+    state: np.ndarray
+    control: np.ndarray
+    after: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    weight: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return int(self.lo.shape[0])
+
+
+def _static_steps(model: mujoco.MjModel, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """State before (at rest on each pose, servo target on it) and after one step."""
+    state0 = np.tile(initial_state(model, 0.0), (poses.size, 1))
+    # mjSTATE_FULLPHYSICS layout: [time, qpos (nq), qvel (nv), act, ...]
+    state0[:, 1 + int(model.joint(TILT_JOINT).qposadr[0])] = poses
+    st, _ = mujoco.rollout.rollout(model, mujoco.MjData(model), state0,
+                                   poses.reshape(-1, 1, 1), nstep=1)
+    return state0, st[:, 0]
+
+
+def record_motion(replay: Replay, table: TableEdits | None = None) -> Motion:
+    """Simulate the replayed motion once (:func:`motion_model` of ``table``'s physics).
+
+    Static poses (a static replay, or the constant pieces of a sweep) are one step at rest
+    each; a moving piece is one rollout of its servo command, of which the steps the samples
+    read (and the step after, where a sample falls between two) are kept.
+    """
+    model = motion_model(table)
+    n = replay.n
+    lo, hi, weight = np.zeros(n, dtype=int), np.zeros(n, dtype=int), np.zeros(n)
+    states, controls, afters = [], [], []
+    pieces = replay.pieces or (Piece(0, n),)
+    at = 0
+    static_at = np.concatenate([np.arange(p.first, p.stop) for p in pieces if p.static]
+                               + [np.zeros(0, dtype=int)])
+    if static_at.size:
+        poses, inverse = np.unique(replay.tita[static_at], return_inverse=True)
+        before, after = _static_steps(model, poses)
+        states.append(before)
+        afters.append(after)
+        controls.append(poses)
+        lo[static_at] = hi[static_at] = inverse
+        at = poses.size
+    for p in pieces:
+        if p.static:
+            continue
+        state0 = initial_state(model, replay.tita[p.first], p.qvel0)
+        st, _ = mujoco.rollout.rollout(model, mujoco.MjData(model), state0[None, :],
+                                       p.control.reshape(1, -1, 1), nstep=p.nstep)
+        st = st[0]
+        prior = np.vstack([state0[None, :], st[:-1]])  # the state step j starts from
+        nxt = np.minimum(p.rows + 1, p.nstep - 1)
+        steps, index = np.unique(np.r_[p.rows, nxt[p.weights > 0]], return_inverse=True)
+        states.append(prior[steps])
+        afters.append(st[steps])
+        controls.append(p.control[steps])
+        sl = slice(p.first, p.stop)
+        lo[sl] = at + index[:p.rows.size]
+        hi[sl] = lo[sl]
+        hi[np.arange(p.first, p.stop)[p.weights > 0]] = at + index[p.rows.size:]
+        weight[sl] = p.weights
+        at += steps.size
+    return Motion(np.vstack(states), np.concatenate(controls), np.vstack(afters), lo, hi,
+                  weight)
+
+
+def motion_sensordata(motion: Motion, model: mujoco.MjModel, threads: int = 2
+                      ) -> tuple[np.ndarray, np.ndarray, float]:
+    """``model`` read along the recorded motion: sensordata (N, nsensordata), state (N,
+    nstate) at the samples, and the largest difference between the state ``model`` reaches
+    in each recorded step and the recorded one (0 when ``model`` moves as recorded; the
+    sensordata are only those of a re-simulation when it is ~0).
+
+    One batched ``nstep = 1`` rollout over the recorded steps, split over ``threads``.
+    """
+    nb = motion.state.shape[0]
+    datas = [mujoco.MjData(model) for _ in range(max(1, min(threads, nb // 1000)))]
+    st, sd = mujoco.rollout.rollout(model, datas, motion.state,
+                                    motion.control.reshape(-1, 1, 1), nstep=1)
+    st, sd = st[:, 0], sd[:, 0]
+    step_error = float(np.max(np.abs(st - motion.after))) if nb else 0.0
+    w = motion.weight[:, None]
+
+    def at_samples(x: np.ndarray) -> np.ndarray:
+        lo, hi = x[motion.lo], x[motion.hi]
+        return np.where(w == 0.0, lo, (1.0 - w) * lo + w * hi)
+
+    return at_samples(sd), at_samples(st), step_error
 
 
 def simulate(replay: Replay, table: TableEdits | None = None

@@ -1,7 +1,7 @@
 """The discrepancy workflow's run: :func:`run_gap`, in the steps of ``docs/gap.md``.
 
 1. the estimation side's analysis (:func:`calib.gap.analyze_gap`);
-2. the nominal re-simulation and its gap (:func:`_nominal_gap`);
+2. the nominal re-simulation and its gap (:func:`_nominal_gap`), alongside step 1;
 3. the extension: the named effects in the bench model, physical ones refined by
    ``mujoco.sysid`` (:func:`_extension`);
 4. the extended re-simulation and its gap (:func:`_extended_gap`);
@@ -15,6 +15,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -24,12 +25,20 @@ import numpy as np
 
 from bench.effects import EffectSpec, apply_to_model
 from bench.gap.prediction import AxisPrediction, axis_term, fit_bias_scale, predict_axis
+from bench.gap.readout import AccelField, accel_field
 from bench.gap.recording import write_recording
-from bench.gap.replay import Replay, make_replay, simulate, timing
+from bench.gap.replay import (
+    MOTION_TOL,
+    Replay,
+    make_replay,
+    record_motion,
+    simulate,
+    timing,
+)
 from bench.gap.report import GapReport
 from bench.gap.sysid import SYSID_EFFECTS, sysid_refine, sysid_usable
 from bench.gap.writers import check_outputs, write_report
-from bench.model import TableEdits
+from bench.model import ACC_SENSORS, ENCODER, TableEdits
 from bench.sensors import AxisErrors, SensorErrorModel
 from calib.conventions import AXES, G
 from calib.diagnostics import gap_measure
@@ -73,22 +82,28 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
     datos = np.asarray(ensayo.datos, dtype=float)
     tita = np.asarray(ensayo.tita, dtype=float)
 
-    with _step(progress, f"analysing {ensayo.n} samples (calib.gap)…", "analysis done"):
-        analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate, family_alpha=family_alpha,
-                               sensor=sensor)
-
-    with _step(progress, None, "nominal re-simulation") as note:
-        replay = make_replay(tita, t)
-        base = TableEdits(g=g)
-        nominal = _nominal_gap(replay, base, datos, noise_var)
-        note(f" ({replay.mode})")
+    base = TableEdits(g=g)
+    # The nominal re-simulation does not depend on the analysis: it runs alongside it on a
+    # second thread (mujoco.rollout and numpy's large operations release the GIL).
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        if progress is not None:
+            progress("simulating the nominal bench alongside the analysis…")
+        job = pool.submit(_timed, _nominal_run, tita, t, base, datos, noise_var)
+        with _step(progress, f"analysing {ensayo.n} samples (calib.gap)…", "analysis done"):
+            analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate,
+                                   family_alpha=family_alpha, sensor=sensor)
+        (replay, nominal), seconds = job.result()
+    if progress is not None:
+        progress(f"nominal re-simulation ({replay.mode}) done in {seconds:.1f} s")
 
     effects, table_after, sensor_after, sysid_out = _extension(
-        analysis, replay, datos, noise_var, base, progress)
+        analysis, replay, datos, noise_var, base, nominal.accel, progress)
 
-    with _step(progress, None, "extended re-simulation"):
+    with _step(progress, "reading the extended table (MuJoCo)…",
+               "extended re-simulation") as note:
         after = _extended_gap(replay, effects, table_after, sensor_after, nominal, datos,
                               noise_var)
+        note(f" ({after.how})")
 
     report = GapReport(analysis=analysis, effects=tuple(effects), sysid=sysid_out,
                        replay=replay, tracking_error=nominal.tracking, noise_var=noise_var,
@@ -117,6 +132,19 @@ def _step(progress: Progress, start: str | None, done: str
         progress(f"{done}{''.join(detail)} in {time.perf_counter() - clock:.1f} s")
 
 
+def _timed(fn: Callable, *args: Any) -> tuple[Any, float]:
+    """``fn(*args)`` and its duration, s."""
+    clock = time.perf_counter()
+    return fn(*args), time.perf_counter() - clock
+
+
+def _nominal_run(tita: np.ndarray, t: np.ndarray | None, base: TableEdits, datos: np.ndarray,
+                 noise_var: np.ndarray) -> tuple[Replay, _Nominal]:
+    """The replay of the measured run and its nominal gap (:func:`_nominal_gap`)."""
+    replay = make_replay(tita, t)
+    return replay, _nominal_gap(replay, base, datos, noise_var)
+
+
 def _check_inputs(noise_var: Sequence[float] | np.ndarray, report_dir: PathLike | None,
                   rrd: PathLike | None, force: bool) -> np.ndarray:
     """The stated noise as a (2,) array; refuses existing outputs unless ``force``."""
@@ -133,7 +161,8 @@ def _check_inputs(noise_var: Sequence[float] | np.ndarray, report_dir: PathLike 
 @dataclass(frozen=True)
 class _Nominal:
     """The nominal re-simulation: true specific force (N, 2) and encoder (N,), the encoder
-    tracking error (rad), per axis (bias, scale), residual (N, 2) and gap measure."""
+    tracking error (rad), per axis (bias, scale), residual (N, 2) and gap measure, and the
+    recorded motion's acceleration field (:class:`bench.gap.readout.AccelField`)."""
 
     a: np.ndarray
     enc: np.ndarray
@@ -141,13 +170,21 @@ class _Nominal:
     params: dict[str, tuple[float, float]]
     residual: np.ndarray
     gap: dict
+    accel: AccelField
 
 
 def _nominal_gap(replay: Replay, base: TableEdits, datos: np.ndarray, noise_var: np.ndarray
                  ) -> _Nominal:
-    """Simulate the nominal bench, fit bias and scale per axis, measure the gap."""
+    """Simulate the nominal bench, fit bias and scale per axis, measure the gap.
+
+    The replay is simulated once (:func:`bench.gap.replay.record_motion`); the nominal
+    readings are MuJoCo's sensors along it, read together with the probe accelerometers
+    that later give any edited table's readout (:func:`bench.gap.readout.accel_field`).
+    """
     tita, t = replay.tita, replay.t
-    a_nom, enc = simulate(replay, base)
+    accel = accel_field(record_motion(replay, base), base)
+    a_nom = np.column_stack([accel.column(ACC_SENSORS[a])[:, 0] for a in AXES])
+    enc = accel.column(ENCODER)[:, 0]
     tracking = float(np.max(np.abs(enc - tita))) if replay.mode == "sweep" else 0.0
     params, residual, gap = {}, np.empty_like(datos), {}
     for k, ax in enumerate(AXES):
@@ -157,7 +194,7 @@ def _nominal_gap(replay: Replay, base: TableEdits, datos: np.ndarray, noise_var:
         gap[ax] = gap_measure(r, tita, float(noise_var[k]), t,
                               other_ref=a_nom[:, 1 - k], own_ref=a_nom[:, k],
                               readings=datos[:, k], n_params=2)
-    return _Nominal(a_nom, enc, tracking, params, residual, gap)
+    return _Nominal(a_nom, enc, tracking, params, residual, gap, accel)
 
 
 def _effect_spec(est: Any) -> EffectSpec:
@@ -181,9 +218,10 @@ def _bench_model(effects: Sequence[EffectSpec], base: TableEdits
 
 
 def _extension(analysis: GapAnalysis, replay: Replay, datos: np.ndarray,
-               noise_var: np.ndarray, base: TableEdits, progress: Progress
+               noise_var: np.ndarray, base: TableEdits, accel: AccelField, progress: Progress
                ) -> tuple[list[EffectSpec], TableEdits, SensorErrorModel, dict[int, dict]]:
-    """The named effects in the bench model; physical ones refined by ``mujoco.sysid``.
+    """The named effects in the bench model; physical ones refined by ``mujoco.sysid``
+    (each candidate read along the recorded motion ``accel``, :mod:`bench.gap.sysid`).
 
     A refinement replaces the ``calib`` estimate when it lowered the cost and has finite
     intervals (:func:`bench.gap.sysid.sysid_usable`); when sysid fails, the reason is kept in
@@ -193,12 +231,12 @@ def _extension(analysis: GapAnalysis, replay: Replay, datos: np.ndarray,
     table_after, sensor_after = _bench_model(effects, base)
     if not any(e.name in SYSID_EFFECTS for e in effects):
         return effects, table_after, sensor_after, {}
-    with _step(progress, "refining physical effects by re-simulation (mujoco.sysid)…",
-               "sysid done"):
+    with _step(progress, "refining physical effects (mujoco.sysid)…", "sysid done"):
         sigma2 = np.array([sensor_after.axis(a).noise_var or noise_var[k]
                            for k, a in enumerate(AXES)])
         try:
-            sysid_out = sysid_refine(effects, replay, datos, sigma2, table_after, sensor_after)
+            sysid_out = sysid_refine(effects, replay, datos, sigma2, table_after, sensor_after,
+                                     accel=accel)
         except Exception as exc:  # the LS estimate stays usable; say why sysid did not run
             sysid_out = {i: {"error": f"{type(exc).__name__}: {exc}"}
                          for i, e in enumerate(effects) if e.name in SYSID_EFFECTS}
@@ -213,8 +251,8 @@ def _extension(analysis: GapAnalysis, replay: Replay, datos: np.ndarray,
 @dataclass(frozen=True)
 class _Extended:
     """The extended re-simulation: per axis prediction and gap, residual (N, 2), the
-    extended sensor model with its fitted bias and scale, χ²/dof against the stated noise
-    and how much the named effects change the simulated readings."""
+    extended sensor model with its fitted bias and scale, χ²/dof against the stated noise,
+    how much the named effects change the simulated readings and how MuJoCo was run."""
 
     predictions: dict[str, AxisPrediction]
     residual: np.ndarray
@@ -222,6 +260,25 @@ class _Extended:
     sensor: SensorErrorModel
     chi2_stated: dict[str, float]
     change: dict[str, dict[str, float]]
+    how: str
+
+
+def _extended_readings(replay: Replay, table_after: TableEdits, nominal: _Nominal
+                       ) -> tuple[np.ndarray, str]:
+    """MuJoCo's true specific force (N, 2) of the extended table, and how it was obtained.
+
+    The edited model is read by MuJoCo along the recorded motion (one batched rollout,
+    :func:`bench.gap.replay.motion_sensordata`: the same sensordata as re-simulating the run,
+    since site edits leave the motion unchanged); if it does not move as recorded (an edit
+    that changed the physics), the replay is re-simulated in full.
+    """
+    model, sd, step_error = nominal.accel.mujoco_read(table_after)
+    if step_error <= MOTION_TOL:
+        cols = [int(model.sensor(ACC_SENSORS[a]).adr[0]) for a in AXES]
+        return sd[:, cols], "MuJoCo along the recorded motion"
+    a_ext, _ = simulate(replay, table_after)
+    return a_ext, (f"full re-simulation: the extended model leaves the recorded motion by "
+                   f"{step_error:.1e}")
 
 
 def _extended_gap(replay: Replay, effects: Sequence[EffectSpec], table_after: TableEdits,
@@ -237,7 +294,8 @@ def _extended_gap(replay: Replay, effects: Sequence[EffectSpec], table_after: Ta
     Δ = extended − nominal simulated mean reading.
     """
     tita, t, a_nom = replay.tita, replay.t, nominal.a
-    a_ext, _ = simulate(replay, table_after) if effects else (a_nom, nominal.enc)
+    a_ext, how = (_extended_readings(replay, table_after, nominal) if effects
+                  else (a_nom, "nominal: nothing added"))
     preds, residual, gap, axes, chi2_stated, change = {}, np.empty_like(datos), {}, {}, {}, {}
     for k, ax in enumerate(AXES):
         stated = float(noise_var[k])
@@ -260,7 +318,7 @@ def _extended_gap(replay: Replay, effects: Sequence[EffectSpec], table_after: Ta
                       "norm_over_sigma": float(np.linalg.norm(delta) / np.sqrt(stated))}
         axes[ax] = AxisErrors(pred.bias, pred.scale, sigma2_k, sensor_after.axis(ax).terms)
     return _Extended(preds, residual, gap, SensorErrorModel(axes["x"], axes["y"]),
-                     chi2_stated, change)
+                     chi2_stated, change, how)
 
 
 def _write_outputs(report: GapReport, report_dir: PathLike | None, rrd: PathLike | None,

@@ -1,10 +1,20 @@
-"""Refine the physical effects by re-simulation with ``mujoco.sysid``.
+"""Refine the physical effects with ``mujoco.sysid`` on the replayed experiment.
 
 One ``mujoco.sysid`` problem per run (:func:`sysid_refine`), built in steps: the parameters
 (:func:`_parameters`), the experiment as sysid sees it (:func:`_experiment`: model, control,
 measurements, rollout), the variable-projection residual (:class:`_Projection`), the
 optimization with its intervals (:func:`_optimize`) and the per-effect result
 (:func:`_results`).
+
+**Rollout.** The physical effects move or turn massless sensor sites: the table moves the
+same for every candidate. So the motion is simulated once (:func:`bench.gap.replay.
+record_motion`) and each candidate model is read along it by the kinematic readout
+(:func:`bench.gap.readout.readout`, ≈ 1 ms for 60 000 samples) instead of re-simulating the
+run for every optimizer step (≈ 2 s each at 60 000 samples). At the optimum MuJoCo reads the
+fitted model along the same motion (one batched rollout) and the two must agree within
+:data:`bench.gap.readout.READOUT_TOL`, the model must move as recorded; otherwise (or for a
+sensor the readout does not cover) the fit is redone by re-simulation
+(:func:`_replay_rollout`), and the entry's ``method`` and ``check`` say so.
 
 ``mujoco.sysid`` (the extra ``mujoco[sysid]``, ≈ 0.6 s to import with absl) is imported on
 first use through :func:`_sysid`, so importing :mod:`bench.gap` stays cheap.
@@ -24,7 +34,22 @@ import numpy as np
 
 from bench.effects import EffectSpec
 from bench.gap.prediction import additive_output, fit_bias_scale, response
-from bench.gap.replay import Replay, accel_columns, initial_state, replay_sensordata
+from bench.gap.readout import (
+    READOUT_TOL,
+    AccelField,
+    ReadoutUnsupportedError,
+    accel_field,
+    readout,
+    readout_error,
+)
+from bench.gap.replay import (
+    MOTION_TOL,
+    Replay,
+    accel_columns,
+    initial_state,
+    record_motion,
+    replay_sensordata,
+)
 from bench.model import TableEdits, edit_tilt_table, load_spec
 from bench.sensors import SensorErrorModel
 from calib.conventions import AXES
@@ -37,8 +62,10 @@ FD_STEP = 1e-4
 fall inside MuJoCo's compile-time "same frame" tolerance: a site rotated or moved by less
 than ~1e-6 from its body frame is compiled as the body frame, so its reading does not move."""
 
-METHOD = ("mujoco.sysid: re-simulation (Gauss-Newton, finite differences), "
-          "bias/scale projected out")
+METHOD = ("mujoco.sysid: kinematic readout of the simulated motion, confirmed by MuJoCo "
+          "(Gauss-Newton, finite differences), bias/scale projected out")
+METHOD_RESIM = ("mujoco.sysid: re-simulation (Gauss-Newton, finite differences), "
+                "bias/scale projected out")
 
 
 def _sysid() -> Any:
@@ -74,6 +101,16 @@ def _nominal_vector(e: EffectSpec) -> np.ndarray:
     if e.name == "lever_arm":
         return np.array([e.params.get("pos_x", 0.0), e.params.get("pos_z", 0.0)])
     return np.array([e.params["delta"]])
+
+
+def _split(target_effects: Sequence[EffectSpec], xs: np.ndarray) -> dict[str, np.ndarray]:
+    """Parameter name → its slice of the sysid vector ``xs`` (effects in order)."""
+    out, at = {}, 0
+    for e in target_effects:
+        size = _nominal_vector(e).size
+        out[_param_name(e)] = xs[at:at + size]
+        at += size
+    return out
 
 
 def _effect_params(e: EffectSpec, v: np.ndarray) -> dict[str, float]:
@@ -112,10 +149,35 @@ def _replay_rollout(replay: Replay) -> Callable:
     return rollout
 
 
+def _readout_rollout(field: AccelField) -> Callable:
+    """``mujoco.sysid`` custom rollout: each candidate read along the recorded motion by the
+    kinematic readout (:func:`bench.gap.readout.readout`); the state is the recorded one."""
+
+    def rollout(*, models: Sequence[mujoco.MjModel], datas: Sequence[mujoco.MjData],
+                control_signal: Sequence[Any], initial_states: Sequence[np.ndarray],
+                param_dicts: Any = None, rollout_signal_mapping: Any = None,
+                rollout_state_mapping: Any = None, ctrl_mapping: Any = None) -> list:
+        sysid = _sysid()
+        out = []
+        for model, ctrl, s0 in zip(models, control_signal, initial_states, strict=True):
+            state = field.state.copy()
+            state[:, 0] = ctrl.times  # mjSTATE_FULLPHYSICS: [time, qpos, ...]
+            out.append(sysid.SystemTrajectory(
+                model=model, control=ctrl,
+                sensordata=sysid.TimeSeries(ctrl.times, readout(field, model),
+                                            rollout_signal_mapping),
+                initial_state=np.asarray(s0, dtype=float),
+                state=sysid.TimeSeries(ctrl.times, state, rollout_state_mapping)))
+        return out
+
+    return rollout
+
+
 def sysid_refine(effects: Sequence[EffectSpec], replay: Replay, datos: np.ndarray,
                  sigma2: np.ndarray, table: TableEdits, sensor: SensorErrorModel,
-                 max_iters: int = 50, xtol: float = 1e-3) -> dict[int, dict]:
-    """Refine the physical effects by re-simulation with ``mujoco.sysid``.
+                 max_iters: int = 50, xtol: float = 1e-3, *, accel: AccelField | None = None
+                 ) -> dict[int, dict]:
+    """Refine the physical effects with ``mujoco.sysid`` on the replayed experiment.
 
     Parameters
     ----------
@@ -123,51 +185,90 @@ def sysid_refine(effects: Sequence[EffectSpec], replay: Replay, datos: np.ndarra
     replay : the re-run experiment.  datos : (N, 2) measured readings, m/s².
     sigma2 : (2,) noise variances of the residual weights, (m/s²)².
     table, sensor : the extended model (physical edits, sensor terms) the fit starts from.
+    accel : the recorded motion's :class:`bench.gap.readout.AccelField` (of ``table``'s
+        physics); None: recorded here (one simulation of the replay).
 
     Returns
     -------
     dict
         effect index → ``{"params", "std", "ci95_halfwidth", "bias", "scale", "iterations",
-        "cost_start", "cost_end", "method"}`` for every effect in :data:`SYSID_EFFECTS`.
+        "cost_start", "cost_end", "method", "check"}`` for every effect in
+        :data:`SYSID_EFFECTS`.
 
     Notes
     -----
     One ``mujoco.sysid`` problem: a ``Parameter`` per physical effect (δ of a misalignment or
     tilt offset, rad; (pos_x, pos_z) of a lever arm, m); the model is rebuilt for each
     candidate by editing a copy of the spec with :func:`bench.model.edit_tilt_table` (the
-    ``build_model`` hook); the rollout (``custom_rollout``) is the replay itself, static
-    poses and servo-replay pieces read at the samples (:func:`_replay_rollout`); the
-    residual (``modify_residual``) is
-    ``(data - bias - (1 + scale)·resp(a_sim) - drift) / σ`` on the affected axes, with bias
-    and scale solved linearly for every candidate (variable projection), so the optimizer
-    (``sysid.optimize``, Gauss-Newton with finite-difference Jacobians) sees only the
-    physical parameters. Intervals: ``sysid.calculate_intervals`` at the optimum.
+    ``build_model`` hook); the rollout (``custom_rollout``) reads each candidate along the
+    recorded motion (:func:`_readout_rollout`; module docstring: confirmed by MuJoCo at the
+    optimum, else redone by re-simulation, :func:`_replay_rollout`); the residual
+    (``modify_residual``) is ``(data - bias - (1 + scale)·resp(a_sim) - drift) / σ`` on the
+    affected axes, with bias and scale solved linearly for every candidate (variable
+    projection), so the optimizer (``sysid.optimize``, Gauss-Newton with finite-difference
+    Jacobians) sees only the physical parameters. Intervals: ``sysid.calculate_intervals``
+    at the optimum.
     """
     targets = [(i, e) for i, e in enumerate(effects) if e.name in SYSID_EFFECTS]
     if not targets:
         return {}
     target_effects = [e for _, e in targets]
     axes_k = sorted({AXES.index(a) for e in target_effects for a in e.axes})
-    params = _parameters(target_effects)
-    exp = _experiment(replay, datos, table)
-    projection = _Projection(exp, replay, datos, sensor, axes_k, sigma2)
     pristine = load_spec()
+
+    def table_at(x: dict[str, np.ndarray]) -> TableEdits:
+        return _table_with(table, target_effects, x)
 
     def build_model(p: Any, spec: mujoco.MjSpec) -> mujoco.MjModel:
         s = pristine.copy()
-        edit_tilt_table(s, _table_with(table, target_effects,
-                                       {k: p[k].value for k in p.keys()}))
+        edit_tilt_table(s, table_at({k: p[k].value for k in p.keys()}))
         return s.compile()
 
-    sysid = _sysid()
-    seq = sysid.ModelSequences("tilt_table", pristine.copy(), "replay", exp.state0,
-                               exp.control, exp.measured)
-    residual_fn = sysid.build_residual_fn(models_sequences=[seq], build_model=build_model,
-                                          modify_residual=projection.modify_residual,
-                                          custom_rollout=exp.custom_rollout,
-                                          resample_true=False, n_threads=1)
-    fit = _optimize(params, residual_fn, max_iters, xtol)
-    return _results(targets, fit, projection)
+    def solve(rollout: Callable) -> tuple[_Fit, _Projection]:
+        params = _parameters(target_effects)
+        exp = _experiment(replay, datos, table)
+        projection = _Projection(exp, replay, datos, sensor, axes_k, sigma2)
+        sysid = _sysid()
+        seq = sysid.ModelSequences("tilt_table", pristine.copy(), "replay", exp.state0,
+                                   exp.control, exp.measured)
+        residual_fn = sysid.build_residual_fn(models_sequences=[seq], build_model=build_model,
+                                              modify_residual=projection.modify_residual,
+                                              custom_rollout=rollout, resample_true=False,
+                                              n_threads=1)
+        return _optimize(params, residual_fn, max_iters, xtol), projection
+
+    if accel is None:
+        accel = accel_field(record_motion(replay, table), table)
+    try:
+        fit, projection = solve(_readout_rollout(accel))
+        ok, check = confirm_readout(accel, table_at(_split(target_effects, fit.xs)))
+    except ReadoutUnsupportedError as exc:
+        ok, check = False, f"kinematic readout not applicable ({exc})"
+    if ok:
+        return _results(targets, fit, projection, METHOD, check)
+    fit, projection = solve(_replay_rollout(replay))
+    return _results(targets, fit, projection, METHOD_RESIM,
+                    f"{check}: refitted by re-simulation")
+
+
+def confirm_readout(accel: AccelField, table: TableEdits) -> tuple[bool, str]:
+    """Does MuJoCo read the table ``table`` along the recorded motion as the kinematic
+    readout does?
+
+    One batched rollout (:meth:`bench.gap.readout.AccelField.mujoco_read`): the model must
+    move as recorded (every recorded step reproduced within
+    :data:`bench.gap.replay.MOTION_TOL`) and its accelerometers must agree with
+    :func:`bench.gap.readout.readout` within :data:`bench.gap.readout.READOUT_TOL`. Returns
+    (agreed, a sentence with the numbers).
+    """
+    model, sd, step_error = accel.mujoco_read(table)
+    diff = readout_error(accel, model, sd)
+    ok = step_error <= MOTION_TOL and diff <= READOUT_TOL
+    text = (f"kinematic readout vs MuJoCo's sensors at the optimum: largest difference "
+            f"{diff:.1e} m/s² (limit {READOUT_TOL:g} m/s²)")
+    if step_error > MOTION_TOL:
+        text += f"; the fitted model does not move as recorded (state off by {step_error:.1e})"
+    return ok, text
 
 
 def _parameters(target_effects: Sequence[EffectSpec]) -> Any:
@@ -189,7 +290,7 @@ class _Experiment:
     cols : sensordata columns of the x, y accelerometers.  mapping : sensor mapping.
     measured_full : (N, nsensordata) data in sensordata layout (accelerometer columns set).
     state0 : initial full-physics state.  control, measured : ``sysid.TimeSeries`` (control:
-    the measured θ per sample).  custom_rollout : :func:`_replay_rollout` of the replay.
+    the measured θ per sample).
     """
 
     cols: list[int]
@@ -198,7 +299,6 @@ class _Experiment:
     state0: np.ndarray
     control: Any
     measured: Any
-    custom_rollout: Callable
 
 
 def _experiment(replay: Replay, datos: np.ndarray, table: TableEdits) -> _Experiment:
@@ -216,7 +316,7 @@ def _experiment(replay: Replay, datos: np.ndarray, table: TableEdits) -> _Experi
     return _Experiment(
         cols, mapping, measured_full, initial_state(model0, float(replay.tita[0])),
         sysid.TimeSeries(index, replay.tita.reshape(-1, 1)),
-        sysid.TimeSeries(index, measured_full, mapping), _replay_rollout(replay))
+        sysid.TimeSeries(index, measured_full, mapping))
 
 
 @dataclass
@@ -302,8 +402,8 @@ def _optimize(params: Any, residual_fn: Callable, max_iters: int, xtol: float) -
                 int(len(result.extras.get("objective", []))) or None)
 
 
-def _results(targets: Sequence[tuple[int, EffectSpec]], fit: _Fit, projection: _Projection
-             ) -> dict[int, dict]:
+def _results(targets: Sequence[tuple[int, EffectSpec]], fit: _Fit, projection: _Projection,
+             method: str, check: str) -> dict[int, dict]:
     """Effect index → its refined parameters, std, half-widths and the fit's bookkeeping."""
     proj, axes_k = projection.projections, projection.axes_k
     out: dict[int, dict] = {}
@@ -314,7 +414,8 @@ def _results(targets: Sequence[tuple[int, EffectSpec]], fit: _Fit, projection: _
         at += size
         names = list(_effect_params(e, fit.xs[sl]))
         out[i] = {
-            "method": METHOD,
+            "method": method,
+            "check": check,
             "params": _effect_params(e, fit.xs[sl]),
             "std": dict(zip(names, (float(s) for s in fit.std[sl]), strict=True)),
             "ci95_halfwidth": dict(zip(names, (float(h) for h in fit.half[sl]), strict=True)),
