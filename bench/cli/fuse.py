@@ -98,14 +98,13 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
         traj, region = _dead_reckoning(args, acel, cal, candidates, p0, v0, noise_var, level,
                                        p0_std, v0_std)
         truth, true_path, true_heading = _truth(args)
-        # a turning run: the true heading and, on the figure too, the true path
+        # the true path (truth.json beside the data) on the figure; a turning run: its heading
         turning = {} if acel.gyro is None else {"true_heading": true_heading}
     if args.plot:
         from bench.figures.fusion import save_fusion_plot
 
         save_fusion_plot(args.plot, traj, region, res, fixes.pos[inside], level, letter,
-                         force=args.force, **turning,
-                         **({"true_path": true_path} if turning else {}))
+                         force=args.force, true_path=true_path, **turning)
     if args.rrd:
         from bench.record.fusion import record_fusion
 
