@@ -166,7 +166,7 @@ def test_calibration_figure_separates_fit_truth_and_ideal(large_errors):
 
 
 def test_calibration_binned_band_is_drawn_above_light_samples(large_errors):
-    """In every panel with samples, the binned mean and its ±2σ/√n band have a higher zorder
+    """In every panel with samples, the binned mean and its ±q·σ/√n band have a higher zorder
     than the scatter, and the scatter is light (alpha ≤ 0.3)."""
     cal, ensayo, truth = large_errors
     fig = calibration_axis_figure(cal, ensayo, "y", truth)
@@ -177,7 +177,7 @@ def test_calibration_binned_band_is_drawn_above_light_samples(large_errors):
         assert len(panels) == 4
         for ax in panels:
             scatter = next(ln for ln in ax.get_lines() if ln.get_linestyle() == "None")
-            band = [c for c in ax.collections if c.get_label().startswith("±2σ/√n")]
+            band = [c for c in ax.collections if c.get_label().startswith("95 % band")]
             binned = [ln for ln in ax.get_lines() if ln.get_label().startswith("binned mean")]
             assert len(band) == 1 and len(binned) == 1
             assert band[0].get_zorder() > scatter.get_zorder()
@@ -187,22 +187,37 @@ def test_calibration_binned_band_is_drawn_above_light_samples(large_errors):
         plt.close(fig)
 
 
-def test_calibration_text_box_states_std_as_the_command_line(large_errors):
-    """The box gives ± one std (the `std` column of `tiltbench calibrate`), says so, and
-    does not give the 95 % half-width instead."""
+def test_calibration_figure_states_one_level_everywhere(large_errors):
+    """Every band and the box are at the one level asked (issue 22): the box gives ± q·std
+    (the level-L half-width), the binned-mean band ± q·σ/√n with n defined, and the fitted
+    line carries its own band, ± q·sqrt([A_r 1] Cov [A_r 1]ᵀ)."""
     cal, ensayo, truth = large_errors
-    fig = calibration_axis_figure(cal, ensayo, "x", truth)
-    try:
-        f = cal.fits["x"]
-        std = dict(zip(f.param_names, f.std, strict=True))
-        box = next(t.get_text() for a in fig.axes for t in a.texts if "bias" in t.get_text())
-        assert "± 1 std" in box
-        assert f"± {std['bias']:.2g} m/s²" in box
-        assert f"± {std['scale']:.2g}" in box
-        half = f.quantile(0.95) * std["bias"]
-        assert f"± {half:.2g} m/s²" not in box
-    finally:
-        plt.close(fig)
+    for level in (0.95, 0.99):
+        fig = calibration_axis_figure(cal, ensayo, "x", truth, level=level)
+        try:
+            f = cal.fits["x"]
+            q = f.quantile(level)
+            half = dict(zip(f.param_names, q * f.std, strict=True))
+            box = next(t.get_text() for a in fig.axes for t in a.texts
+                       if "bias" in t.get_text())
+            assert f"± {half['bias']:.2g} m/s²" in box and f"± {half['scale']:.2g}" in box
+            assert f"{100 * level:g} % interval" in box
+            labels = [h for a in fig.axes for h in a.get_legend_handles_labels()[1]]
+            pct = f"{100 * level:g} %"
+            bands = [lab for lab in labels if "band" in lab]
+            assert bands and all(lab.startswith(pct) for lab in bands)
+            assert any("n = " in lab and "per bin" in lab for lab in bands)
+            ax = next(a for a in fig.axes if a.get_xlabel().startswith("A_rx"))
+            fit_band = next(c for c in ax.collections if "band of the LS fit" in c.get_label())
+            fit = _line(ax, "LS fit")
+            x = np.asarray(fit.get_xdata())
+            i, j = f.param_names.index("scale"), f.param_names.index("bias")
+            c = f.cov
+            want = q * np.sqrt(c[i, i] * x ** 2 + 2 * c[i, j] * x + c[j, j])
+            top = fit_band.get_paths()[0].vertices[:, 1].max()
+            assert top == pytest.approx(float(np.max(fit.get_ydata() + want)), rel=1e-9)
+        finally:
+            plt.close(fig)
 
 
 @pytest.fixture(scope="module")
