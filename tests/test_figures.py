@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -283,5 +284,118 @@ def test_nmin_figure_says_why_the_distances_rise(course_analysis):
         assert "rises with N" in ax.get_ylabel()
         notes = [t.get_text() for t in ax.texts]
         assert any("√N" in t and "crosses r" in t for t in notes), notes
+    finally:
+        plt.close(fig)
+
+
+# A unit: SI units and their powers and products, or a quantity stated dimensionless (a
+# probability, a count of degrees of freedom, "(1)", a z in std).
+UNIT = re.compile(r"m/s²|m/s|m²|\bm\b|\(s\)|\bs\b|rad|Hz|deg|dimensionless|dof|count|\(1\)|\(std\)")
+
+
+def _labels_carry_units(fig) -> list[str]:
+    """Every non-empty x/y label of every axes (subfigures too) names a unit; returns the
+    labels that do not."""
+    axes = list(fig.axes) + [a for sub in getattr(fig, "subfigs", []) for a in sub.axes]
+    labels = [lab for a in axes for lab in (a.get_xlabel(), a.get_ylabel()) if lab.strip()]
+    assert labels, "a figure without axis labels"
+    return [lab for lab in labels if not UNIT.search(lab)]
+
+
+@pytest.fixture(scope="module")
+def every_figure(course_analysis, small_cal):
+    """Each public figure function rendered from a result object (issue 22, part 4)."""
+    import bench.figures as figs
+    from bench import fusion_study
+    from calib.allan import characterize_noise
+    from calib.design import Experiment, analyze_design
+    from calib.fusion import fuse
+    from calib.multiposition import fit_multiposition, pose_statistics
+    from calib.runs import serial_map
+    from tests.test_multiposition import SIGMA2, samples
+
+    ana = course_analysis
+    cal, ensayo, truth = small_cal
+    tr = ana.traj
+    rng = np.random.default_rng(5)
+    fix_t = tr.t[::100]
+    fix_pos = tr.pos_corrected[::100] + 3.0 * rng.standard_normal((fix_t.size, 2))
+    acel = ana.acel
+    fused = fuse(acel.t, acel.aerr, fix_t, fix_pos, bias=ana.cal.bias, scale=ana.cal.scale,
+                 cal_cov=ana.cal.cov, noise_var=[0.25, 0.64], sigma_pos=3.0, p0=tr.p0,
+                 v0=tr.v0, p0_cov=0.0, v0_cov=0.0, smoother=True)
+    study = fusion_study.run_study(fusion_study.StudyConfig(
+        runs=2, seed=0, scenarios=fusion_study.SCENARIOS[:1]), serial_map)
+    design = analyze_design([Experiment("uniform", 401, 0.314)], ["tilt_offset", "saturation"],
+                            runs=4, mapper=serial_map)
+    noise = characterize_noise(rng.standard_normal((4096, 2)) * 0.01, 50.0)
+    mp = fit_multiposition(pose_statistics(*samples(rng, np.radians(np.arange(0, 360, 45)),
+                                                    200)), SIGMA2)
+    made = {
+        "calibration_axis_figure": lambda: figs.calibration_axis_figure(cal, ensayo, "x",
+                                                                        truth),
+        "calibration_figure": lambda: figs.calibration_figure(cal, ensayo, truth),
+        "parameters_figure": lambda: figs.parameters_figure(cal, truth),
+        "acceleration_figure": lambda: figs.acceleration_figure(tr),
+        "trajectory_figure": lambda: figs.trajectory_figure(tr, ana.region),
+        "uncertainty_growth_figure": lambda: figs.uncertainty_growth_figure(tr, ana.region,
+                                                                            ana.cal),
+        "nmin_figure": lambda: figs.nmin_figure(ana.region, ana.ensayo.n, ana.cal.g),
+        "fusion_figure": lambda: figs.fusion_figure(tr, ana.region, fused, fix_pos, 0.997,
+                                                    ana.region.decision,
+                                                    true_path=tr.pos_corrected),
+        "fusion_study_figure": lambda: figs.fusion_study_figure(study),
+        "design_figure": lambda: figs.design_figure(design),
+        "allan_figure": lambda: figs.allan_figure(noise),
+        "multiposition_figure": lambda: figs.multiposition_figure(mp),
+    }
+    return made
+
+
+def test_every_public_figure_renders_from_a_result_with_units(every_figure):
+    """Each function of ``bench.figures.FIGURES`` returns a Figure whose axis labels carry
+    their units."""
+    from matplotlib.figure import Figure
+
+    import bench.figures as figs
+
+    assert set(every_figure) == set(figs.FIGURES)
+    for name, make in every_figure.items():
+        fig = make()
+        try:
+            assert isinstance(fig, Figure), name
+            assert _labels_carry_units(fig) == [], name
+        finally:
+            plt.close(fig)
+
+
+def test_monte_carlo_figures_carry_their_95_percent_bars(every_figure):
+    """nmin: both probability curves have error bars, on a logit axis (nothing cut);
+    fusion-study: the RMS bars have error bars and the legend/title says 95 %; the fusion
+    figure draws the smoothed path and the truth."""
+    from matplotlib.container import BarContainer, ErrorbarContainer
+
+    fig = every_figure["nmin_figure"]()
+    try:
+        top, prob = fig.axes[:2]
+        assert "\n" not in top.get_title() and not top.patches  # one line, no shading
+        assert prob.get_yscale() == "logit"
+        bars = [c for c in prob.containers if isinstance(c, ErrorbarContainer)]
+        drawn = [c for c in bars if c.lines[0] is not None and len(c.lines[0].get_xdata())]
+        assert len(drawn) == 2 and all(c.has_yerr for c in drawn)
+        assert any("95 %" in lab for lab in prob.get_legend_handles_labels()[1])
+    finally:
+        plt.close(fig)
+    fig = every_figure["fusion_study_figure"]()
+    try:
+        rms = fig.axes[0]
+        assert "95 %" in rms.get_title()
+        assert [c for c in rms.containers if isinstance(c, BarContainer) and c.errorbar]
+    finally:
+        plt.close(fig)
+    fig = every_figure["fusion_figure"]()
+    try:
+        labels = fig.axes[0].get_legend_handles_labels()[1]
+        assert "RTS smoother" in labels and any("true path" in lab for lab in labels)
     finally:
         plt.close(fig)

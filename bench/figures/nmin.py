@@ -85,8 +85,8 @@ def nmin_figure(region: ArrivalRegion, n_data: int, g: float = G,
                            f"for {span}")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("calibration samples N (θ uniform over [0, 2π))")
-    ax.set_ylabel("Mahalanobis distance d(N) of a candidate from the estimate\n"
+    ax.set_xlabel("calibration samples N (count; θ uniform over [0, 2π))")
+    ax.set_ylabel("Mahalanobis distance d(N) (dimensionless) of a candidate\n"
                   "(rises with N: Σ_P(N) = A/N + B shrinks)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
@@ -136,8 +136,8 @@ def _probability_panel(ax, region: ArrivalRegion, model: PositionCovModel,
              if bottom <= t <= top]
     ax.set_yticks(ticks, [f"{t:g}" for t in ticks])
     ax.yaxis.set_minor_formatter(NullFormatter())
-    ax.set_xlabel("calibration samples N of a new calibration (θ uniform over [0, 2π))")
-    ax.set_ylabel(f"P(decision made and right = {truth}) (logit scale)")
+    ax.set_xlabel("calibration samples N of a new calibration (count; θ uniform over [0, 2π))")
+    ax.set_ylabel(f"P(decision made and right = {truth})\n(dimensionless, logit scale)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, loc="lower right")
     ax.set_title("P(decision made and right) against N: reaches L with this run given; cannot "
