@@ -97,8 +97,10 @@ class Progress:
         from tqdm import tqdm  # only on a terminal: start-up time of the other commands
 
         width = min(MAX_COLUMNS, _terminal_columns(self.stream))
+        # nrows given: tqdm otherwise asks the terminal, and a pseudo-terminal without a
+        # window reports 0 rows, which hides the bar
         return tqdm(total=total, desc=f"[{self.command}] {what}", unit=f" {what}",
-                    file=self.stream, ncols=width, leave=True, mininterval=0.2,
+                    file=self.stream, ncols=width, nrows=24, leave=True, mininterval=0.2,
                     smoothing=0.1)
 
     def _plain(self, done: int, total: int, what: str) -> None:
@@ -126,10 +128,14 @@ class Progress:
 
 
 def _terminal_columns(stream: IO[str]) -> int:
+    """Columns of the terminal behind ``stream`` (at least 40; unknown: 100)."""
     import os
     import shutil
 
     try:
-        return os.get_terminal_size(stream.fileno()).columns
+        cols = os.get_terminal_size(stream.fileno()).columns
     except (AttributeError, OSError, ValueError):
-        return shutil.get_terminal_size((MAX_COLUMNS, 24)).columns
+        cols = shutil.get_terminal_size((MAX_COLUMNS, 24)).columns
+    # a terminal that reports no size (0 columns: a pseudo-terminal without a window) would
+    # get an empty bar
+    return cols if cols >= 40 else MAX_COLUMNS
