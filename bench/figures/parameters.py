@@ -39,7 +39,7 @@ def parameters_figure(cal: Calibration, truth: Mapping | None = None, level: flo
         ax = axs[i]
         ax.errorbar([0], [est], yerr=[[q * std]], fmt="o", color="tab:blue", capsize=8,
                     label=f"estimate with its {100 * level:g} % interval (±{q:.3g} std)")
-        unit = "m/s²" if p == "bias" else "(dimensionless)"
+        unit = "m/s²" if p == "bias" else "(1)"  # (1): dimensionless, short enough to fit
         lo, hi = est - q * std, est + q * std
         text = f"estimate {est:.6g} {unit}\nstd {std:.3g} {unit}"
         if tp:
