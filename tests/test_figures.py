@@ -399,3 +399,30 @@ def test_monte_carlo_figures_carry_their_95_percent_bars(every_figure):
         assert "RTS smoother" in labels and any("true path" in lab for lab in labels)
     finally:
         plt.close(fig)
+
+
+def test_fuse_plot_gets_the_smoothed_path_and_the_truth_beside_the_data(tmp_path, capsys,
+                                                                       monkeypatch):
+    """``fuse --smoother --plot`` on a generated course set (truth.json beside acel.mat)
+    hands the figure the smoothed estimates and the true path, not only on turning runs."""
+    import bench.figures.fusion as fusion_fig
+    from tests.cli import run
+
+    seen = {}
+
+    def spy(path, *args, force=False, **kwargs):
+        seen["fused"], seen["kwargs"] = args[2], kwargs
+        return fusion_fig.save_figure(fusion_fig.fusion_figure(*args, **kwargs), path,
+                                      force=force)
+
+    monkeypatch.setattr(fusion_fig, "save_fusion_plot", spy)
+    d = tmp_path / "cs"
+    assert run(capsys, "generate", "course", "--seed", "3", "--out", d, "--gps")[0] == 0
+    rc, out, err = run(capsys, "fuse", "--acel", d / "acel.mat", "--gps", d / "gps.mat",
+                       "--puntos", d / "puntos.mat", "--datos", d / "datos.txt",
+                       "--ensayo", d / "ensayo.mat", "--smoother", "--plot", tmp_path / "f.png")
+    assert rc == 0, err
+    assert np.asarray(seen["fused"].smoothed).size > 0
+    true_path = seen["kwargs"]["true_path"]
+    assert true_path is not None and np.asarray(true_path).shape[1] == 2
+    assert_png(tmp_path / "f.png")
