@@ -206,13 +206,10 @@ class StudyResult(ResultMixin):
         """The terminal summary (every line ≤ 100 columns): RMS error per scenario and method,
         a mark where the stated covariance is inconsistent; the full table is
         :meth:`markdown` (``fusion-study.md``)."""
-        import textwrap
-
-        head = (f"Fusion comparison: {self.config['runs']} runs per scenario, seed "
-                f"{self.config['seed']}, course geometry (60 s), fixes σ = "
-                f"{self.config['gps_sigma']:g} m, initial σ {self.config['p0_std']:g} m / "
-                f"{self.config['v0_std']:g} m/s")
-        out = textwrap.wrap(head, 100)
+        out = [f"Fusion comparison: {self.config['runs']} runs per scenario, seed "
+               f"{self.config['seed']}, course geometry (60 s)",
+               f"fixes σ = {self.config['gps_sigma']:g} m per axis; initial σ "
+               f"{self.config['p0_std']:g} m, {self.config['v0_std']:g} m/s"]
         out.append("RMS error (m) along the path; * = the stated covariance is inconsistent "
                    "(mean NEES,")
         out.append("coverage or path NEES outside its band)")
