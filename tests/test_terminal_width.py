@@ -11,8 +11,6 @@ from __future__ import annotations
 import json
 import re
 
-import pytest
-
 from bench.cli.output import COLUMNS, FitColumns, fit_line
 from tests.cli import run
 
@@ -53,7 +51,6 @@ def test_fit_columns_passes_carriage_return_redraws_through():
     assert sink.getvalue() == "\r" + "#" * 120 + "a" * 60 + "\n    " + "b" * 60 + "\n"
 
 
-@pytest.mark.slow  # ~14 s: five commands on the course files
 def test_course_commands_fit(capsys, course_dir, tmp_path):
     d = course_dir
     common = ["--acel", d / "acel.mat", "--puntos", d / "puntos.mat", "--datos", d / "datos.txt"]
@@ -72,7 +69,6 @@ def test_course_commands_fit(capsys, course_dir, tmp_path):
         "bias_x": "m/s²", "scale_x": "1", "bias_y": "m/s²", "scale_y": "1"}
 
 
-@pytest.mark.slow  # ~10 s
 def test_readme_examples_fit(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     _fits(capsys, "examples", "ex")
