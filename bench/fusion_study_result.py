@@ -203,17 +203,32 @@ class StudyResult(ResultMixin):
         return lines
 
     def summary(self) -> str:
-        lines = self.table()
-        widths = [max(len(line[i]) for line in lines) for i in range(len(lines[0]))]
+        """The terminal summary (every line ≤ 100 columns): RMS error per scenario and method,
+        a mark where the stated covariance is inconsistent; the full table is
+        :meth:`markdown` (``fusion-study.md``)."""
         out = [f"Fusion comparison: {self.config['runs']} runs per scenario, seed "
-               f"{self.config['seed']}, course geometry (60 s), fixes σ = "
-               f"{self.config['gps_sigma']:g} m, initial σ {self.config['p0_std']:g} m / "
-               f"{self.config['v0_std']:g} m/s"]
-        for line in lines:
-            out.append("  ".join(c.ljust(w) for c, w in zip(line, widths, strict=True)))
-        out.append("NEES: final-position, 2 dof; OUT = outside the band (stated covariance "
-                   "inconsistent with the errors)")
-        out.append(PATH_NOTE)
+               f"{self.config['seed']}, course geometry (60 s)",
+               f"fixes σ = {self.config['gps_sigma']:g} m per axis; initial σ "
+               f"{self.config['p0_std']:g} m, {self.config['v0_std']:g} m/s"]
+        out.append("RMS error (m) along the path; * = the stated covariance is inconsistent "
+                   "(mean NEES,")
+        out.append("coverage or path NEES outside its band)")
+        cols = [m.replace("_", " ") for m in METHODS]
+        w0 = max(len(sc) for sc in [*self.scenarios, "scenario"])
+        out.append("  ".join(["scenario".ljust(w0), *(c.rjust(14) for c in cols)]))
+        for sc in self.scenarios:
+            by = {r.method: r for r in self.rows if r.scenario == sc}
+            cells = []
+            for m in METHODS:
+                r = by.get(m)
+                bad = r is not None and not (r.nees_ok and r.coverage_ok
+                                             and r.path_ok is not False)
+                cells.append("—".rjust(14) if r is None
+                             else (f"{r.rms_m:.3g}" + ("*" if bad else " ")).rjust(14))
+            out.append("  ".join([sc.ljust(w0), *cells]))
+        out.append("Final std (m), area (m²), NEES and coverage with their bands, path NEES: "
+                   "the written report")
+        out.append("(fusion-study.md).")
         return "\n".join(out)
 
     def markdown(self) -> str:

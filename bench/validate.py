@@ -619,13 +619,16 @@ class Validation(ResultMixin):
 
     def summary(self) -> str:
         pct = f"{100 * self.level:g}%"
-        lines = [f"{'parameter':<10}{'estimate':>14}{'true':>14}{'std':>12}{'z':>9}"
-                 f"{'|z|≤' + format(self.quantile, '.3f'):>11}"]
+        # units on every number: bias m/s², scale dimensionless ("1"), z in std units
+        lines = [f"{'parameter':<10}{'unit':>6}{'estimate':>14}{'true':>14}{'std':>12}"
+                 f"{'z (σ)':>9}{'|z|≤' + format(self.quantile, '.3f'):>11}"]
         for i, n in enumerate(self.names):
-            lines.append(f"{n:<10}{self.estimate[i]:>14.6g}{self.truth[i]:>14.6g}"
+            unit = "m/s²" if n.startswith("bias") else "1"
+            lines.append(f"{n:<10}{unit:>6}{self.estimate[i]:>14.6g}{self.truth[i]:>14.6g}"
                          f"{self.std[i]:>12.4g}{self.z[i]:>+9.2f}"
                          f"{'pass' if self.passed_each[i] else 'FAIL':>11}")
         lines.append(f"joint test: d² = {self.chi2:.3f} vs χ²₄({pct}) = {self.chi2_limit:.3f} "
+                     "(dimensionless) "
                      f"→ {'PASS' if self.chi2 <= self.chi2_limit else 'FAIL'}  (std: "
                      f"{self.std_source}"
                      + (f", θ from {self.theta_source}" if self.theta_source else "") + ")")

@@ -4,7 +4,6 @@ nothing, option values may be negative pairs. Small synthetic files; no MuJoCo r
 from __future__ import annotations
 
 import json
-import re
 
 import numpy as np
 import pytest
@@ -266,36 +265,6 @@ def test_record_entities_json_is_one_object(capsys, tmp_path, ensayo):
     assert all(set(e) == {"path", "pattern"} for e in obj["entities"])
     rc, text, _ = _run(capsys, "record", "entities", rrd)
     assert len(text.strip().splitlines()) == len(obj["entities"])
-
-
-def test_progress_lines_carriage_return_only_on_a_terminal():
-    import io
-
-    from bench.cli.progress import Progress
-
-    class Tty(io.StringIO):
-        def isatty(self) -> bool:
-            return True
-
-    log = io.StringIO()
-    p = Progress("generate class", log)
-    p("starting")
-    for k in range(1, 4):
-        p.count(k, 3, "course sets")
-    lines = log.getvalue().splitlines()
-    assert "\r" not in log.getvalue() and len(lines) == 4
-    assert all(re.match(r"^\[generate class +\d+\.\d s\] ", ln) for ln in lines)
-    assert [ln.split("] ")[1] for ln in lines[1:]] == [f"course sets {k}/3" for k in (1, 2, 3)]
-    term = Tty()
-    p = Progress("generate class", term)
-    for k in range(1, 4):
-        p.count(k, 3, "course sets")
-    p("done")
-    text = term.getvalue()
-    assert text.count("\r") == 3 and text.count("\n") == 2 and "course sets 3/3" in text
-    quiet = io.StringIO()
-    Progress("x", quiet, quiet=True)("nothing")
-    assert quiet.getvalue() == ""
 
 
 def test_class_count_flag_is_students(capsys, tmp_path):

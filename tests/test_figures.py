@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -166,7 +167,7 @@ def test_calibration_figure_separates_fit_truth_and_ideal(large_errors):
 
 
 def test_calibration_binned_band_is_drawn_above_light_samples(large_errors):
-    """In every panel with samples, the binned mean and its ±2σ/√n band have a higher zorder
+    """In every panel with samples, the binned mean and its ±q·σ/√n band have a higher zorder
     than the scatter, and the scatter is light (alpha ≤ 0.3)."""
     cal, ensayo, truth = large_errors
     fig = calibration_axis_figure(cal, ensayo, "y", truth)
@@ -177,7 +178,7 @@ def test_calibration_binned_band_is_drawn_above_light_samples(large_errors):
         assert len(panels) == 4
         for ax in panels:
             scatter = next(ln for ln in ax.get_lines() if ln.get_linestyle() == "None")
-            band = [c for c in ax.collections if c.get_label().startswith("±2σ/√n")]
+            band = [c for c in ax.collections if c.get_label().startswith("95 % band")]
             binned = [ln for ln in ax.get_lines() if ln.get_label().startswith("binned mean")]
             assert len(band) == 1 and len(binned) == 1
             assert band[0].get_zorder() > scatter.get_zorder()
@@ -187,22 +188,37 @@ def test_calibration_binned_band_is_drawn_above_light_samples(large_errors):
         plt.close(fig)
 
 
-def test_calibration_text_box_states_std_as_the_command_line(large_errors):
-    """The box gives ± one std (the `std` column of `tiltbench calibrate`), says so, and
-    does not give the 95 % half-width instead."""
+def test_calibration_figure_states_one_level_everywhere(large_errors):
+    """Every band and the box are at the one level asked (issue 22): the box gives ± q·std
+    (the level-L half-width), the binned-mean band ± q·σ/√n with n defined, and the fitted
+    line carries its own band, ± q·sqrt([A_r 1] Cov [A_r 1]ᵀ)."""
     cal, ensayo, truth = large_errors
-    fig = calibration_axis_figure(cal, ensayo, "x", truth)
-    try:
-        f = cal.fits["x"]
-        std = dict(zip(f.param_names, f.std, strict=True))
-        box = next(t.get_text() for a in fig.axes for t in a.texts if "bias" in t.get_text())
-        assert "± 1 std" in box
-        assert f"± {std['bias']:.2g} m/s²" in box
-        assert f"± {std['scale']:.2g}" in box
-        half = f.quantile(0.95) * std["bias"]
-        assert f"± {half:.2g} m/s²" not in box
-    finally:
-        plt.close(fig)
+    for level in (0.95, 0.99):
+        fig = calibration_axis_figure(cal, ensayo, "x", truth, level=level)
+        try:
+            f = cal.fits["x"]
+            q = f.quantile(level)
+            half = dict(zip(f.param_names, q * f.std, strict=True))
+            box = next(t.get_text() for a in fig.axes for t in a.texts
+                       if "bias" in t.get_text())
+            assert f"± {half['bias']:.2g} m/s²" in box and f"± {half['scale']:.2g}" in box
+            assert f"{100 * level:g} % interval" in box
+            labels = [h for a in fig.axes for h in a.get_legend_handles_labels()[1]]
+            pct = f"{100 * level:g} %"
+            bands = [lab for lab in labels if "band" in lab]
+            assert bands and all(lab.startswith(pct) for lab in bands)
+            assert any("n = " in lab and "per bin" in lab for lab in bands)
+            ax = next(a for a in fig.axes if a.get_xlabel().startswith("A_rx"))
+            fit_band = next(c for c in ax.collections if "band of the LS fit" in c.get_label())
+            fit = _line(ax, "LS fit")
+            x = np.asarray(fit.get_xdata())
+            i, j = f.param_names.index("scale"), f.param_names.index("bias")
+            c = f.cov
+            want = q * np.sqrt(c[i, i] * x ** 2 + 2 * c[i, j] * x + c[j, j])
+            top = fit_band.get_paths()[0].vertices[:, 1].max()
+            assert top == pytest.approx(float(np.max(fit.get_ydata() + want)), rel=1e-9)
+        finally:
+            plt.close(fig)
 
 
 @pytest.fixture(scope="module")
@@ -270,3 +286,143 @@ def test_nmin_figure_says_why_the_distances_rise(course_analysis):
         assert any("√N" in t and "crosses r" in t for t in notes), notes
     finally:
         plt.close(fig)
+
+
+# A unit: SI units and their powers and products, or a quantity stated dimensionless (a
+# probability, a count of degrees of freedom, "(1)", a z in std).
+UNIT = re.compile(r"m/s²|m/s|m²|\bm\b|\(s\)|\bs\b|rad|Hz|deg|dimensionless|dof|count|\(1\)|\(std\)")
+
+
+def _labels_carry_units(fig) -> list[str]:
+    """Every non-empty x/y label of every axes (subfigures too) names a unit; returns the
+    labels that do not."""
+    axes = list(fig.axes) + [a for sub in getattr(fig, "subfigs", []) for a in sub.axes]
+    labels = [lab for a in axes for lab in (a.get_xlabel(), a.get_ylabel()) if lab.strip()]
+    assert labels, "a figure without axis labels"
+    return [lab for lab in labels if not UNIT.search(lab)]
+
+
+@pytest.fixture(scope="module")
+def every_figure(course_analysis, small_cal):
+    """Each public figure function rendered from a result object (issue 22, part 4)."""
+    import bench.figures as figs
+    from bench import fusion_study
+    from calib.allan import characterize_noise
+    from calib.design import Experiment, analyze_design
+    from calib.fusion import fuse
+    from calib.multiposition import fit_multiposition, pose_statistics
+    from calib.runs import serial_map
+    from tests.test_multiposition import SIGMA2, samples
+
+    ana = course_analysis
+    cal, ensayo, truth = small_cal
+    tr = ana.traj
+    rng = np.random.default_rng(5)
+    fix_t = tr.t[::100]
+    fix_pos = tr.pos_corrected[::100] + 3.0 * rng.standard_normal((fix_t.size, 2))
+    acel = ana.acel
+    fused = fuse(acel.t, acel.aerr, fix_t, fix_pos, bias=ana.cal.bias, scale=ana.cal.scale,
+                 cal_cov=ana.cal.cov, noise_var=[0.25, 0.64], sigma_pos=3.0, p0=tr.p0,
+                 v0=tr.v0, p0_cov=0.0, v0_cov=0.0, smoother=True)
+    study = fusion_study.run_study(fusion_study.StudyConfig(
+        runs=2, seed=0, scenarios=fusion_study.SCENARIOS[:1]), serial_map)
+    design = analyze_design([Experiment("uniform", 401, 0.314)], ["tilt_offset", "saturation"],
+                            runs=4, mapper=serial_map)
+    noise = characterize_noise(rng.standard_normal((4096, 2)) * 0.01, 50.0)
+    mp = fit_multiposition(pose_statistics(*samples(rng, np.radians(np.arange(0, 360, 45)),
+                                                    200)), SIGMA2)
+    made = {
+        "calibration_axis_figure": lambda: figs.calibration_axis_figure(cal, ensayo, "x",
+                                                                        truth),
+        "calibration_figure": lambda: figs.calibration_figure(cal, ensayo, truth),
+        "parameters_figure": lambda: figs.parameters_figure(cal, truth),
+        "acceleration_figure": lambda: figs.acceleration_figure(tr),
+        "trajectory_figure": lambda: figs.trajectory_figure(tr, ana.region),
+        "uncertainty_growth_figure": lambda: figs.uncertainty_growth_figure(tr, ana.region,
+                                                                            ana.cal),
+        "nmin_figure": lambda: figs.nmin_figure(ana.region, ana.ensayo.n, ana.cal.g),
+        "fusion_figure": lambda: figs.fusion_figure(tr, ana.region, fused, fix_pos, 0.997,
+                                                    ana.region.decision,
+                                                    true_path=tr.pos_corrected),
+        "fusion_study_figure": lambda: figs.fusion_study_figure(study),
+        "design_figure": lambda: figs.design_figure(design),
+        "allan_figure": lambda: figs.allan_figure(noise),
+        "multiposition_figure": lambda: figs.multiposition_figure(mp),
+    }
+    return made
+
+
+def test_every_public_figure_renders_from_a_result_with_units(every_figure):
+    """Each function of ``bench.figures.FIGURES`` returns a Figure whose axis labels carry
+    their units."""
+    from matplotlib.figure import Figure
+
+    import bench.figures as figs
+
+    assert set(every_figure) == set(figs.FIGURES)
+    for name, make in every_figure.items():
+        fig = make()
+        try:
+            assert isinstance(fig, Figure), name
+            assert _labels_carry_units(fig) == [], name
+        finally:
+            plt.close(fig)
+
+
+def test_monte_carlo_figures_carry_their_95_percent_bars(every_figure):
+    """nmin: both probability curves have error bars, on a logit axis (nothing cut);
+    fusion-study: the RMS bars have error bars and the legend/title says 95 %; the fusion
+    figure draws the smoothed path and the truth."""
+    from matplotlib.container import BarContainer, ErrorbarContainer
+
+    fig = every_figure["nmin_figure"]()
+    try:
+        top, prob = fig.axes[:2]
+        assert "\n" not in top.get_title() and not top.patches  # one line, no shading
+        assert prob.get_yscale() == "logit"
+        bars = [c for c in prob.containers if isinstance(c, ErrorbarContainer)]
+        drawn = [c for c in bars if c.lines[0] is not None and len(c.lines[0].get_xdata())]
+        assert len(drawn) == 2 and all(c.has_yerr for c in drawn)
+        assert any("95 %" in lab for lab in prob.get_legend_handles_labels()[1])
+    finally:
+        plt.close(fig)
+    fig = every_figure["fusion_study_figure"]()
+    try:
+        rms = fig.axes[0]
+        assert "95 %" in rms.get_title()
+        assert [c for c in rms.containers if isinstance(c, BarContainer) and c.errorbar]
+    finally:
+        plt.close(fig)
+    fig = every_figure["fusion_figure"]()
+    try:
+        labels = fig.axes[0].get_legend_handles_labels()[1]
+        assert "RTS smoother" in labels and any("true path" in lab for lab in labels)
+    finally:
+        plt.close(fig)
+
+
+def test_fuse_plot_gets_the_smoothed_path_and_the_truth_beside_the_data(tmp_path, capsys,
+                                                                       monkeypatch):
+    """``fuse --smoother --plot`` on a generated course set (truth.json beside acel.mat)
+    hands the figure the smoothed estimates and the true path, not only on turning runs."""
+    import bench.figures.fusion as fusion_fig
+    from tests.cli import run
+
+    seen = {}
+
+    def spy(path, *args, force=False, **kwargs):
+        seen["fused"], seen["kwargs"] = args[2], kwargs
+        return fusion_fig.save_figure(fusion_fig.fusion_figure(*args, **kwargs), path,
+                                      force=force)
+
+    monkeypatch.setattr(fusion_fig, "save_fusion_plot", spy)
+    d = tmp_path / "cs"
+    assert run(capsys, "generate", "course", "--seed", "3", "--out", d, "--gps")[0] == 0
+    rc, out, err = run(capsys, "fuse", "--acel", d / "acel.mat", "--gps", d / "gps.mat",
+                       "--puntos", d / "puntos.mat", "--datos", d / "datos.txt",
+                       "--ensayo", d / "ensayo.mat", "--smoother", "--plot", tmp_path / "f.png")
+    assert rc == 0, err
+    assert np.asarray(seen["fused"].smoothed).size > 0
+    true_path = seen["kwargs"]["true_path"]
+    assert true_path is not None and np.asarray(true_path).shape[1] == 2
+    assert_png(tmp_path / "f.png")

@@ -43,6 +43,7 @@ from bench.cli import (  # noqa: E402
     validate,
 )
 from bench.cli.options import Parser, resolve_deferred  # noqa: E402
+from bench.cli.output import fit_columns  # noqa: E402
 
 COMMANDS = (generate, calibrate, trajectory, nmin, design, fuse, fusion_study, record, validate,
             gap, importlog, noise, demo, examples)
@@ -88,7 +89,8 @@ def main(argv: list[str] | None = None) -> int:
     resolve_deferred(args)
     warnings.showwarning = _warning_to_stderr
     try:
-        return int(args.handler(args) or 0)
+        with fit_columns(stdout=not getattr(args, "json", False)):  # lines ≤ 100 columns
+            return int(args.handler(args) or 0)
     except BrokenPipeError:  # output piped into `head`: not an error
         sys.stderr.close()
         return 0

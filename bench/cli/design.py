@@ -88,8 +88,9 @@ def _cmd_design(args: argparse.Namespace) -> int:
         refuse_overwrite([args.plot], args.force)
     exps = [Experiment(d, n, r) for d in designs for n in ns for r in rates]
     res = analyze_design(exps, effects, sizes, nv, args.alpha, args.axis, args.runs,
-                         args.seed, mapper=mapper_from_args(args), progress=Progress("design"),
-                         mc_grid=args.mc_grid, gain=1.0 + args.scale)
+                         args.seed, mapper=mapper_from_args(args),
+                         progress=Progress("design", quiet=args.quiet), mc_grid=args.mc_grid,
+                         gain=1.0 + args.scale)
     written = []
     if args.plot:
         from bench.figures.design import design_figure
@@ -134,6 +135,7 @@ def register(sub) -> None:
                         "the 80 %% / 95 %% sizes interpolated on the monotone fit (0: the "
                         "asked size only)")
     q.add_argument("--plot", default=None, metavar="F", help="power curves (.png or .svg)")
+    q.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     add_json(q)
     add_force(q)
     add_sweep_options(q)

@@ -77,15 +77,14 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     if args.plot or args.rrd:
         traj, region = dead_reckoning_region(acel, cal, candidates, **initial)
         truth, true_path, true_heading = _truth(args)
-        # a turning run: the true heading and, on the figure too, the true path
+        # the true path (truth.json beside the data) on the figure; a turning run: its heading
         extra = {"true_heading": true_heading} if turning else {}
     fused_pos = fixes.pos[fixes_inside(acel, fixes)]  # the fixes the filter used
     if args.plot:
         from bench.figures.fusion import save_fusion_plot
 
         save_fusion_plot(args.plot, traj, region, res.fusion, fused_pos, level,
-                         res.decision.letter, force=args.force, **extra,
-                         **({"true_path": true_path} if turning else {}))
+                         res.decision.letter, force=args.force, true_path=true_path, **extra)
     if args.rrd:
         from bench.record.fusion import record_fusion
 

@@ -442,7 +442,7 @@ def _cmd_class(args: argparse.Namespace) -> int:
         raise OptionError(f"--seed must be >= 0, got {args.seed}")
     if not args.prefix or "/" in args.prefix or "\\" in args.prefix:
         raise OptionError(f"--prefix must be a plain name, got {args.prefix!r}")
-    progress = Progress("generate class")
+    progress = Progress("generate class", quiet=args.quiet)
     res = generate_class(args.out, args.students, args.seed, args.force,
                          CourseConfig(noise_var=(float(nv[0]), float(nv[1]))), args.prefix,
                          lambda done, total: progress.count(done, total, "course sets"),
@@ -611,6 +611,7 @@ def _register_class(kinds) -> None:
     p.add_argument("--prefix", default="student", help="folder prefix (student_001, …)")
     p.add_argument("--noise-var", default=DEFAULT_NOISE,
                    help="noise variances x,y (m/s²)² of every set")
+    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     add_sweep_options(p)
     p.set_defaults(handler=_cmd_class)
 

@@ -59,7 +59,7 @@ def _cmd_nmin(args: argparse.Namespace) -> int:
                             f"--mc-n {max(mc_n)} --runs {args.runs}")
     cal = read_calibration_file(args)  # None: fit on --ensayo
     ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
-    prog = Progress("nmin")
+    prog = Progress("nmin", quiet=args.quiet)
     if cal is not None and ensayo is None and steps:
         prog(f"no --ensayo: the course subsampling (--steps) re-fits the calibration run's "
              f"samples, which {args.calibration} does not hold; skipped")
@@ -95,5 +95,6 @@ def register(sub) -> None:
     q.add_argument("--runs", type=integer, default=0,
                    help="synthetic runs per --mc-n N, vehicle noise redrawn (0: none)")
     q.add_argument("--seed", type=int, default=0, help="seed of the draws and synthetic runs")
+    q.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     add_sweep_options(q)
     q.set_defaults(handler=_cmd_nmin)

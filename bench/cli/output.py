@@ -1,17 +1,21 @@
 """What commands print and the checks they make on their outputs before any work.
 
 ``--json``: one JSON object on stdout and nothing else there (:func:`print_json`). Readable
-output names every file the command wrote (:func:`print_summary`, :func:`print_files`).
+output names every file the command wrote (:func:`print_summary`, :func:`print_files`) and
+fits 100 columns: ``main`` runs every command inside :func:`fit_columns`, which breaks a
+longer line at spaces with a hanging indent (error lines, printed after it, stay one line).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import sys
 import warnings
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import IO, Any, TypeVar
 
 T = TypeVar("T")
 
@@ -137,3 +141,91 @@ def warnings_to_stderr(fn: Callable[[], T]) -> T:
         print(f"warning: {w.message}", file=sys.stderr)
     return result
 
+
+
+#: widest line a command prints (a terminal of 100 columns; the README's promise).
+COLUMNS = 100
+
+
+def fit_line(line: str, width: int = COLUMNS) -> list[str]:
+    """``line`` as lines of at most ``width`` columns, broken at spaces, each continuation
+    indented 4 columns past the line's own indent. A line holding a word longer than the
+    width (a long path) is left whole: broken, the path would be unusable."""
+    if len(line) <= width:
+        return [line]
+    import textwrap
+
+    indent = line[:len(line) - len(line.lstrip(" "))]
+    parts = textwrap.wrap(line, width, subsequent_indent=indent + "    ", expand_tabs=False,
+                          replace_whitespace=False, break_long_words=False,
+                          break_on_hyphens=False)
+    return parts if parts and max(map(len, parts)) <= width else [line]
+
+
+class FitColumns(io.TextIOBase):
+    """A text stream that writes every complete line through :func:`fit_line`.
+
+    Installed on stdout and stderr around a command's work (:func:`fit_columns`), so every
+    readable line fits 100 columns whatever library text it prints. Writes holding a
+    carriage return (a progress bar redrawn in place, :mod:`bench.cli.progress`) pass
+    through unchanged, after any pending text.
+    """
+
+    def __init__(self, stream: IO[str], width: int = COLUMNS) -> None:
+        super().__init__()
+        self.stream = stream
+        self.width = width
+        self._pending = ""
+
+    def write(self, s: str) -> int:
+        if "\r" in s:
+            self._emit_pending()
+            self.stream.write(s)
+            return len(s)
+        text = self._pending + s
+        *lines, self._pending = text.split("\n")
+        if lines:
+            self.stream.write("".join(ln + "\n" for line in lines
+                                      for ln in fit_line(line, self.width)))
+        return len(s)
+
+    def _emit_pending(self) -> None:
+        if self._pending:
+            self.stream.write("\n".join(fit_line(self._pending, self.width)))
+            self._pending = ""
+
+    def flush(self) -> None:
+        self.stream.flush()
+
+    def close_pending(self) -> None:
+        """Write a last line that has no newline, and flush."""
+        self._emit_pending()
+        self.stream.flush()
+
+    def isatty(self) -> bool:
+        return bool(getattr(self.stream, "isatty", lambda: False)())
+
+    def fileno(self) -> int:
+        return self.stream.fileno()
+
+    def writable(self) -> bool:
+        return True
+
+
+@contextlib.contextmanager
+def fit_columns(stdout: bool = True) -> Iterator[None]:
+    """Within the block, stderr (and stdout unless ``stdout`` is False: ``--json`` output is
+    machine text and never re-wrapped) go through :class:`FitColumns`."""
+    saved = sys.stdout, sys.stderr
+    err = FitColumns(sys.stderr)
+    out = FitColumns(sys.stdout) if stdout else None
+    sys.stderr = err
+    if out is not None:
+        sys.stdout = out
+    try:
+        yield
+    finally:
+        sys.stdout, sys.stderr = saved
+        err.close_pending()
+        if out is not None:
+            out.close_pending()

@@ -9,12 +9,26 @@ from bench.cli.options import add_json
 from bench.cli.output import print_json
 
 
-def _flat(obj, prefix: str = "") -> list[tuple[str, object]]:
+def _flat(obj, prefix: str = "", key: str = "") -> list[tuple[str, str, object]]:
+    """``(path, key path, value)`` of every leaf: ``path`` joins keys and list indices with
+    ``/`` (as printed), ``key path`` joins keys only with ``.`` (as in a ``units`` map,
+    :mod:`calib.units`)."""
     if isinstance(obj, dict):
-        return [kv for k in sorted(obj) for kv in _flat(obj[k], f"{prefix}/{k}" if prefix else k)]
+        return [kv for k in sorted(obj) for kv in _flat(
+            obj[k], f"{prefix}/{k}" if prefix else k, f"{key}.{k}" if key else k)]
     if isinstance(obj, list):
-        return [kv for i, v in enumerate(obj) for kv in _flat(v, f"{prefix}/{i}")]
-    return [(prefix, obj)]
+        return [kv for i, v in enumerate(obj) for kv in _flat(v, f"{prefix}/{i}", key)]
+    return [(prefix, key, obj)]
+
+
+def _shown(value: object, unit: str | None) -> str:
+    """A leaf as printed: its repr, then its unit (none for text, counts and ratios)."""
+    text = repr(value)
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return text
+    if unit == "1":
+        return text + " (dimensionless)"
+    return text + (f" {unit}" if unit and unit not in ("count", "—") else "")
 
 
 def _cmd_read(args: argparse.Namespace) -> int:
@@ -24,13 +38,24 @@ def _cmd_read(args: argparse.Namespace) -> int:
     if args.json:
         print_json(data)
         return 0
+    from calib.units import UNITS_KEY, unit_of
+
     for root, tree in data.items():
         if tree is None:
             print(f"{root}: (not in the recording)")
             continue
-        print(f"{root}:")
-        for k, v in _flat(tree):
-            print(f"  {k} = {v!r}")
+        print(f"{root}:" + ("" if isinstance(tree, dict) and UNITS_KEY in tree else
+                            "  (no units map: numbers in SI, docs/units.md)"))
+        units = tree.get(UNITS_KEY, {}) if isinstance(tree, dict) else {}
+        body = {k: v for k, v in tree.items() if k != UNITS_KEY} if units else tree
+        seen: dict[str, int] = {}  # leaves so far per key path: the entry of a list unit
+        for path, key, v in _flat(body):
+            unit = unit_of(units, key)
+            k = seen[key] = seen.get(key, -1) + 1
+            if unit and unit.startswith("[") and unit.endswith("]"):  # one unit per entry
+                entries = unit[1:-1].split(", ")
+                unit = entries[k] if k < len(entries) else None
+            print(f"  {path} = {_shown(v, unit)}")
     return 0
 
 

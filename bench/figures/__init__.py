@@ -6,28 +6,35 @@ file extension, atomically (refusing to overwrite without ``force``). Dense scat
 rasterized in SVG so the files stay small. Metadata carrying dates is dropped so the same
 data give the same bytes.
 
-Figures (all quantities in SI units, angles in rad):
+Figures (all quantities in SI units, angles in rad). Every function takes result objects and
+returns the :class:`matplotlib.figure.Figure` (close it with ``plt.close(fig)``); every axis
+label carries its unit; every plotted estimate carries its uncertainty at one level per
+figure, said in the legend (docs/python-api.md, section 6):
 
-* :func:`calibration_axis_figure` — per axis: the sensor error A_m − A_r against A_r and
-  against θ, with the LS fit (scale·A_r + bias), the truth when known and the ideal sensor (0)
-  on a scale where a few per cent of scale and 0.1 m/s² of bias stand apart; the binned mean
-  and its ±2σ/√n band drawn over the light samples; estimates ± 1 std (as the command line);
-  under each, the residuals A_m − fit with ±σ, their binned mean and the χ²/dof.
-* :func:`parameters_figure` — the four estimates with their intervals at the level, next to
-  the true values (z-scores).
-* :func:`acceleration_figure` — the vehicle's measured, corrected (and true) accelerations.
-* :func:`trajectory_figure` — raw and corrected paths, candidates, the level-L region (shaded
-  ellipse), the course's 3σ box bound (a rectangle around each candidate) and the true arrival
-  on top (the ``trajectory --plot`` figure).
-* :func:`uncertainty_growth_figure` — ellipses growing along the corrected path and the
-  position standard deviation against time (calibration part and vehicle-noise part).
-* :func:`nmin_figure` — Mahalanobis distance of every candidate against the calibration size
-  N with the level-L threshold, the data's N, the design N and the a-posteriori range; it says
-  why the distances rise with N (Σ_P shrinks) and where the calibration-only curve of the
-  nearest candidate crosses the threshold.
+* :func:`calibration_axis_figure`, :func:`calibration_figure` (``Calibration``, ``Ensayo``) —
+  per axis: the sensor error A_m − A_r against A_r and θ, the LS fit with its confidence band,
+  the truth when known and the ideal sensor (0); the binned mean with its ±q·σ/√n band (n
+  samples per bin); estimates ± their level-L half-width; residuals with ±σ below.
+* :func:`parameters_figure` (``Calibration``) — the four estimates with their intervals at the
+  level, next to the true values (z-scores).
+* :func:`acceleration_figure` (``Trajectory``) — measured, corrected (with the 95 % band of its
+  binned mean) and true accelerations.
+* :func:`trajectory_figure` (``Trajectory``, ``ArrivalRegion``) — raw and corrected paths,
+  candidates, the level-L region, the course's 3σ box bound and the true arrival.
+* :func:`uncertainty_growth_figure` (``Trajectory``, ``ArrivalRegion``, ``Calibration``) —
+  ellipses along the corrected path and the position std against time.
+* :func:`nmin_figure` (``ArrivalRegion``) — Mahalanobis distances against the calibration
+  size N; P(decision made and right) against N with exact 95 % binomial bars.
+* :func:`fusion_figure` (``Trajectory``, ``ArrivalRegion``, ``FusionResult``) — dead
+  reckoning, fixes, the filtered (and smoothed) path, both regions, the truth when given.
+* :func:`fusion_study_figure` (``StudyResult``) — RMS error with 95 % χ² bars, stated std,
+  the outage panel, the NEES along the path.
+* :func:`design_figure` (``DesignResult``) — power against effect size (Monte Carlo points
+  with exact 95 % intervals).
+* :func:`allan_figure` (``NoiseCharacterization``), :func:`multiposition_figure`
+  (``MultiPositionFit``).
 
-One module per figure (``calibration``, ``parameters``, ``acceleration``, ``trajectory``,
-``uncertainty``, ``nmin``), ``save`` for writing and ``write`` for the figure sets; this package
+One module per figure, ``save`` for writing and ``write`` for the figure sets; this package
 selects the Agg backend and re-exports their public names (no module here imports from it).
 Binned means come from :func:`calib.binning.binned_mean`, the covariance along the run from
 :func:`calib.propagation.position_cov_along`.
@@ -40,12 +47,20 @@ import matplotlib
 matplotlib.use("Agg")  # before any module of this package imports pyplot
 
 from bench.figures.acceleration import acceleration_figure  # noqa: E402
+from bench.figures.allan import allan_figure, save_allan_plot  # noqa: E402
 from bench.figures.calibration import (  # noqa: E402
     AXIS_LABEL,
     FIGURE_BINS,
     calibration_axis_figure,
     calibration_figure,
     save_calibration_plot,
+)
+from bench.figures.design import design_figure  # noqa: E402
+from bench.figures.fusion import fusion_figure, save_fusion_plot  # noqa: E402
+from bench.figures.fusion_study import fusion_study_figure, save_fusion_study_plot  # noqa: E402
+from bench.figures.multiposition import (  # noqa: E402
+    multiposition_figure,
+    save_multiposition_plot,
 )
 from bench.figures.nmin import nmin_figure  # noqa: E402
 from bench.figures.parameters import parameters_figure  # noqa: E402
@@ -54,8 +69,16 @@ from bench.figures.trajectory import save_trajectory_plot, trajectory_figure  # 
 from bench.figures.uncertainty import uncertainty_growth_figure  # noqa: E402
 from bench.figures.write import write_calibration_figures, write_vehicle_figures  # noqa: E402
 
-__all__ = ["AXIS_LABEL", "DPI", "FIGURE_BINS", "FORMATS", "acceleration_figure",
-           "calibration_axis_figure", "calibration_figure", "nmin_figure",
-           "parameters_figure", "save_calibration_plot", "save_figure",
+#: every figure function: result object(s) in, :class:`matplotlib.figure.Figure` out.
+FIGURES = ("acceleration_figure", "allan_figure", "calibration_axis_figure",
+           "calibration_figure", "design_figure", "fusion_figure", "fusion_study_figure",
+           "multiposition_figure", "nmin_figure", "parameters_figure", "trajectory_figure",
+           "uncertainty_growth_figure")
+
+__all__ = ["AXIS_LABEL", "DPI", "FIGURES", "FIGURE_BINS", "FORMATS", "acceleration_figure",
+           "allan_figure", "calibration_axis_figure", "calibration_figure", "design_figure",
+           "fusion_figure", "fusion_study_figure", "multiposition_figure", "nmin_figure",
+           "parameters_figure", "save_allan_plot", "save_calibration_plot", "save_figure",
+           "save_fusion_plot", "save_fusion_study_plot", "save_multiposition_plot",
            "save_trajectory_plot", "trajectory_figure", "uncertainty_growth_figure",
            "write_calibration_figures", "write_vehicle_figures"]

@@ -1,5 +1,20 @@
 """Calibration figures: per axis, the sensor error A_m − A_r against A_r and θ with the LS fit,
-the truth (when known) and the ideal sensor; residuals A_m − fit below."""
+the truth (when known) and the ideal sensor; residuals A_m − fit below.
+
+Every band and interval of one figure is at the same level L (``level``, 95 % unless given),
+said in the legend and the title:
+
+* the fitted line ``scale·A_r + bias`` with its confidence band ``± q·std(line)``,
+  ``var(line) = [A_r 1] Cov [A_r 1]ᵀ`` (the fit's covariance, :class:`calib.ls.FitResult`);
+* the binned mean with ``± q·σ/√n``, n the samples per bin (equal-count bins) and σ the
+  per-sample noise std the fit used;
+* the estimates box: ``estimate ± q·std`` (the half-width of the level-L interval; the
+  command line prints std itself).
+
+``q`` is the fit's two-sided quantile (:meth:`calib.ls.FitResult.quantile`: normal when σ² is
+given, Student t when estimated). The residual panels also draw ±σ, the per-sample noise: a
+spread of the data, not the uncertainty of an estimate.
+"""
 
 from __future__ import annotations
 
@@ -40,13 +55,14 @@ VIEW_MARGIN = 1.6
 (the per-sample spread ±σ is shown in full in the residual panels below)."""
 
 
-def _estimates_box(ax, f, axis: str, tp: Mapping | None) -> None:
-    """Text box: bias and scale ± one standard deviation — the ``std`` column of
-    ``tiltbench calibrate`` (its interval columns are not repeated here) — and the truth."""
-    std = dict(zip(f.param_names, f.std, strict=True))
-    lines = [f"bias  = {f.param('bias'):.5g} ± {std['bias']:.2g} m/s²",
-             f"scale = {f.param('scale'):.5g} ± {std['scale']:.2g}",
-             f"(± 1 std, σ² {f.sigma2_source})"]
+def _estimates_box(ax, f, axis: str, tp: Mapping | None, level: float) -> None:
+    """Text box: bias and scale ± the half-width of their level-L interval (q·std), and the
+    truth."""
+    q = f.quantile(level)
+    half = dict(zip(f.param_names, q * f.std, strict=True))
+    lines = [f"bias  = {f.param('bias'):.5g} ± {half['bias']:.2g} m/s²",
+             f"scale = {f.param('scale'):.5g} ± {half['scale']:.2g} (dimensionless)",
+             f"(± half-width of the {_pct(level)} interval = {q:.3g} std; σ² {f.sigma2_source})"]
     if tp:
         lines.append(f"true: bias {tp[f'bias_{axis}']:.5g} m/s², "
                      f"scale {tp[f'scale_{axis}']:.5g}")
@@ -55,34 +71,54 @@ def _estimates_box(ax, f, axis: str, tp: Mapping | None) -> None:
             bbox={"facecolor": "white", "alpha": 0.9, "edgecolor": "0.7"})
 
 
-def _binned(ax, xv: np.ndarray, yv: np.ndarray, sigma: float, what: str) -> float:
-    """Binned mean of ``yv`` against ``xv`` with its ±2σ/√n band, above the scatter
-    (:data:`FIGURE_BINS` bins of equal counts, so n and the band are the same in every bin).
-    Returns the band half-width, m/s²."""
+def _pct(level: float) -> str:
+    return f"{100 * level:g} %"
+
+
+def _binned(ax, xv: np.ndarray, yv: np.ndarray, sigma: float, what: str, q: float,
+            level: float) -> float:
+    """Binned mean of ``yv`` against ``xv`` with its ±q·σ/√n band (level L), above the
+    scatter (:data:`FIGURE_BINS` bins of equal counts, so n and the band are the same in every
+    bin). Returns the band half-width, m/s²."""
     bx, by, _ = binned_mean(xv, yv, FIGURE_BINS)
-    half = 2.0 * sigma / np.sqrt(max(1.0, xv.size / FIGURE_BINS))
-    ax.fill_between(bx, by - half, by + half, label=f"±2σ/√n = ±{half:.2g} m/s²", **BAND_STYLE)
+    n = max(1, xv.size // FIGURE_BINS)
+    half = q * sigma / np.sqrt(n)
+    ax.fill_between(bx, by - half, by + half, label=f"{_pct(level)} band of the binned mean: "
+                    f"±{q:.3g}σ/√n = ±{half:.2g} m/s²\n(n = {n} samples per bin, σ the noise "
+                    "std)", **BAND_STYLE)
     ax.plot(bx, by, label=f"binned mean of {what} ({FIGURE_BINS} bins)", **BINNED_STYLE)
     return half
 
 
-def _residual_panel(rx, xv: np.ndarray, xlabel: str, resid: np.ndarray, sigma: float) -> None:
-    """Residuals A_m − fit against ``xv`` with the ±σ lines, the binned mean and its ±2σ/√n
-    band drawn over the samples."""
+def _line_band(f, a_r: np.ndarray, q: float) -> np.ndarray:
+    """Half-width q·std of the fitted line ``scale·A_r + bias`` at each ``a_r``, m/s²:
+    ``var = [A_r 1] Cov [A_r 1]ᵀ`` with Cov the fit's (scale, bias) covariance."""
+    i, j = f.param_names.index("scale"), f.param_names.index("bias")
+    c = np.asarray(f.cov, dtype=float)
+    var = c[i, i] * a_r ** 2 + 2.0 * c[i, j] * a_r + c[j, j]
+    return q * np.sqrt(np.clip(var, 0.0, None))
+
+
+def _residual_panel(rx, xv: np.ndarray, xlabel: str, resid: np.ndarray, sigma: float,
+                    q: float, level: float) -> None:
+    """Residuals A_m − fit against ``xv`` with the ±σ lines (per-sample noise), the binned
+    mean and its level-L band drawn over the samples."""
     rx.plot(xv, resid, label="residual A_m − fit", **SCATTER_STYLE)
     for sgn in (-1, 1):
         rx.axhline(sgn * sigma, color="tab:orange", lw=1.2, zorder=Z_IDEAL,
-                   label=f"±σ = ±{sigma:.3g} m/s²" if sgn > 0 else None)
+                   label=f"per-sample noise ±σ = ±{sigma:.3g} m/s²" if sgn > 0 else None)
     rx.axhline(0.0, color="k", lw=0.8, zorder=Z_IDEAL)
-    _binned(rx, xv, resid, sigma, "residual")
+    _binned(rx, xv, resid, sigma, "residual", q, level)
     rx.set_xlabel(xlabel)
     rx.set_ylabel("A_m − fit (m/s²)")
     rx.grid(True, alpha=0.3)
-    rx.legend(loc="upper right", fontsize=7, ncol=3, markerscale=6)
+    handles, labels = rx.get_legend_handles_labels()
+    labels = [lab.split("\n")[0].replace(" of the binned mean", "") for lab in labels]
+    rx.legend(handles, labels, loc="upper right", fontsize=7, ncol=2, markerscale=6)
 
 
 def _axis_panels(fig, cal: Calibration, ensayo: Ensayo, axis: str,
-                 truth: Mapping | None) -> None:
+                 truth: Mapping | None, level: float) -> None:
     """Draw the four panels of one axis into ``fig`` (a Figure or SubFigure).
 
     Top: the sensor error ``A_m − A_r`` (``= scale·A_r + bias`` in the model) against A_r and
@@ -98,8 +134,9 @@ def _axis_panels(fig, cal: Calibration, ensayo: Ensayo, axis: str,
     b, s = f.param("bias"), f.param("scale")
     resid = a_m - ((1.0 + s) * a_r + b)
     sigma = float(np.sqrt(f.sigma2))
+    q = f.quantile(level)
     tp = true_params(truth)
-    gs = fig.add_gridspec(3, 2, height_ratios=[0.32, 3, 1.4])
+    gs = fig.add_gridspec(3, 2, height_ratios=[0.6, 3, 1.4])
     key = fig.add_subplot(gs[0, :])  # the legend of both error panels, above them
     key.axis("off")
     order = np.argsort(theta, kind="stable")
@@ -107,11 +144,16 @@ def _axis_panels(fig, cal: Calibration, ensayo: Ensayo, axis: str,
         ax = fig.add_subplot(gs[1, col])
         ax.plot(xv, err, label=f"A_m{axis} − A_r{axis} per sample (N = {ensayo.n})",
                 **SCATTER_STYLE)
-        half = _binned(ax, xv, err, sigma, "A_m − A_r")
-        ar_line = np.array([a_r.min(), a_r.max()]) if col == 0 else a_r[order]
+        half = _binned(ax, xv, err, sigma, "A_m − A_r", q, level)
+        ar_line = np.linspace(a_r.min(), a_r.max(), 200) if col == 0 else a_r[order]
         x_line = ar_line if col == 0 else theta[order]
         fit_line = s * ar_line + b
+        band = _line_band(f, ar_line, q)
         ax.axhline(0.0, label="ideal sensor (A_m = A_r): 0", **IDEAL_STYLE)
+        ax.fill_between(x_line, fit_line - band, fit_line + band, color=FIT_STYLE["color"],
+                        alpha=0.35, lw=0, zorder=Z_FIT,
+                        label=f"{_pct(level)} confidence band of the LS fit\n"
+                              f"(±{q:.3g}·std of the line, ≤ {band.max():.2g} m/s²)")
         ax.plot(x_line, fit_line, label=f"LS fit: {s:+.4f}·A_r {b:+.4f} m/s²", **FIT_STYLE)
         lines = [fit_line]
         if tp:
@@ -126,14 +168,15 @@ def _axis_panels(fig, cal: Calibration, ensayo: Ensayo, axis: str,
         ax.set_ylabel(f"sensor error A_m{axis} − A_r{axis} (m/s²)")
         ax.grid(True, alpha=0.3)
         if col == 0:
-            key.legend(*ax.get_legend_handles_labels(), loc="center", ncol=3, fontsize=8,
+            key.legend(*ax.get_legend_handles_labels(), loc="center", ncol=2, fontsize=8,
                        markerscale=6, frameon=False)
-            _estimates_box(ax, f, axis, tp)
+            _estimates_box(ax, f, axis, tp, level)
         else:
             ax.text(0.01, 0.02, f"per-sample spread ±σ = ±{sigma:.2g} m/s² runs beyond this "
                     "view (see the residuals below)", transform=ax.transAxes, fontsize=7,
                     color="0.3", zorder=Z_TEXT)
-        _residual_panel(fig.add_subplot(gs[2, col], sharex=ax), xv, xlabel, resid, sigma)
+        _residual_panel(fig.add_subplot(gs[2, col], sharex=ax), xv, xlabel, resid, sigma, q,
+                        level)
 
 
 def calibration_axis_figure(cal: Calibration, ensayo: Ensayo, axis: str,
@@ -145,27 +188,26 @@ def calibration_axis_figure(cal: Calibration, ensayo: Ensayo, axis: str,
     ----------
     cal : the calibration.  ensayo : the run (θ rad, A_m m/s²).  axis : "x" or "y".
     truth : ``truth.json`` object (optional): the true error line is drawn dashed.
-    level : kept for the callers; the text box gives ± 1 std, as the command line's ``std``.
+    level : the level of every band and interval drawn (module docstring).
     """
-    del level  # the box states std, the same quantity as `tiltbench calibrate`
-    fig = plt.figure(figsize=(12, 7), constrained_layout=True)
-    _axis_panels(fig, cal, ensayo, axis, truth)
+    fig = plt.figure(figsize=(12, 7.5), constrained_layout=True)
+    _axis_panels(fig, cal, ensayo, axis, truth, level)
     fig.suptitle(title or f"Calibration, axis {AXIS_LABEL[axis]}: A_m − A_r = scale·A_r + bias"
-                 f" — χ²/dof = {cal.fits[axis].chi2_dof:.3f}")
+                 f" — χ²/dof = {cal.fits[axis].chi2_dof:.3f}; bands at {_pct(level)}")
     return fig
 
 
 def calibration_figure(cal: Calibration, ensayo: Ensayo, truth: Mapping | None = None,
                        level: float = 0.95) -> Figure:
     """Both axes in one figure (the ``calibrate --plot`` figure): per axis, the sensor error
-    A_m − A_r with the fit, truth and ideal lines against A_r and θ, residuals below."""
-    del level
-    fig = plt.figure(figsize=(12, 13), constrained_layout=True)
+    A_m − A_r with the fit, truth and ideal lines against A_r and θ, residuals below; every
+    band at ``level``."""
+    fig = plt.figure(figsize=(12, 14), constrained_layout=True)
     subs = fig.subfigures(2, 1)
     for k, a in enumerate(AXES):
-        _axis_panels(subs[k], cal, ensayo, a, truth)
+        _axis_panels(subs[k], cal, ensayo, a, truth, level)
         subs[k].suptitle(f"axis {AXIS_LABEL[a]}: A_m − A_r = scale·A_r + bias — "
-                         f"χ²/dof = {cal.fits[a].chi2_dof:.3f}")
+                         f"χ²/dof = {cal.fits[a].chi2_dof:.3f}; bands at {_pct(level)}")
     return fig
 
 

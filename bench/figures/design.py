@@ -67,11 +67,12 @@ def design_figure(res: DesignResult) -> Figure:
         ax.set_ylim(-0.03, 1.03)
         ax.set_title(f"{name} ({e['axis']}), {e['method']}", fontsize=9)
         ax.set_xlabel(f"size ({e['unit']})")
-        ax.set_ylabel("power")
+        ax.set_ylabel("power (probability, dimensionless)")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=6)
     for ax in axes.ravel()[len(names):]:
         ax.axis("off")
     fig.suptitle("Power of the gap detection vs effect size (dotted: 80 % and 95 %; dashed: "
-                 "the size asked)", fontsize=10)
+                 "the size asked)\nlines: analytic power (no Monte Carlo error); points: "
+                 "Monte Carlo power with its exact 95 % binomial interval", fontsize=10)
     return fig

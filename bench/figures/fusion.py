@@ -29,6 +29,7 @@ from calib.turning_trajectory import (
 )
 
 FUSED_COLOR = "tab:green"
+SMOOTHED_COLOR = "tab:orange"
 TRUE_COLOR = "black"
 
 
@@ -37,7 +38,8 @@ def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | 
                   *, candidates: Mapping | None = None, true_path: np.ndarray | None = None,
                   true_heading: tuple[np.ndarray, np.ndarray] | None = None) -> plt.Figure:
     """Dead-reckoned (corrected) path and its level-L region, the fixes (m), the filtered
-    path and the fused level-L region of the arrival, the candidates.
+    path (and the RTS smoothed one when ``fused`` holds it), the fused level-L region of the
+    arrival, the candidates, and the true path when ``true_path`` is given.
 
     Both regions are drawn at the same level, so their sizes compare directly: the fixes
     remove the integrated vehicle noise that dominates dead reckoning.
@@ -77,6 +79,11 @@ def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | 
     path = np.asarray(fused.estimates)[..., :2].reshape(-1, 2)
     ax.plot(path[:, 0], path[:, 1], color=FUSED_COLOR, lw=1.6, zorder=3,
             label="Kalman filter")
+    smoothed = np.asarray(fused.smoothed, dtype=float)
+    if smoothed.size:  # --smoother: the RTS path, every fix used both ways
+        sp = smoothed[..., :2].reshape(-1, 2)
+        ax.plot(sp[:, 0], sp[:, 1], color=SMOOTHED_COLOR, lw=1.4, ls="-.", zorder=3.2,
+                label="RTS smoother")
     if true_path is not None:
         tp = np.asarray(true_path, dtype=float)
         ax.plot(tp[:, 0], tp[:, 1], "--", color=TRUE_COLOR, lw=1.0, zorder=3.5,

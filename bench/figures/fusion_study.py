@@ -2,7 +2,15 @@
 std per method and scenario (log scale), the outage panel — the filter's stated per-axis
 std against time with the empirical RMS error of the runs — and the filter's mean position
 NEES along the path in the nominal and the mis-set scenarios, with the per-epoch Bonferroni
-band."""
+band.
+
+Monte Carlo numbers carry their 95 % interval (the one level of the figure's error bars and
+bands, said in the legends): the RMS error of R runs, whose mean square is, per run and axis,
+one χ² degree of freedom at least, gets ``[rms·sqrt(k/χ²_k(0.975)), rms·sqrt(k/χ²_k(0.025))]``
+with k = 2R (bars) — conservative: averaging along a run only narrows it; the outage panel's
+per-axis RMS at each t the same with k = R (band). Stated std come from the filter's P, not
+from the runs: no Monte Carlo error. The NEES band is the per-epoch Bonferroni band.
+"""
 
 from __future__ import annotations
 
@@ -10,8 +18,24 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.ticker import FormatStrFormatter, NullFormatter
 
 from bench.figures.save import FORMATS, save_figure
+
+MC_LEVEL = 0.95
+"""Level of every Monte Carlo interval drawn."""
+
+
+def rms_interval(rms: np.ndarray, k: int, level: float = MC_LEVEL) -> tuple[np.ndarray,
+                                                                            np.ndarray]:
+    """Two-sided level-L interval (lo, hi) of an RMS estimated from k independent squared
+    Gaussian terms: ``k·rms²/σ² ~ χ²_k`` (module docstring), m."""
+    from scipy.stats import chi2
+
+    rms = np.asarray(rms, dtype=float)
+    a = 1.0 - level
+    return (rms * np.sqrt(k / chi2.ppf(1 - a / 2, k)), rms * np.sqrt(k / chi2.ppf(a / 2, k)))
+
 
 METHOD_COLORS = {"dead_reckoning": "tab:blue", "fixes": "0.45", "filter": "tab:green",
                  "smoother": "tab:purple"}
@@ -30,20 +54,31 @@ def fusion_study_figure(result) -> plt.Figure:
     path_nees_panel(fig.add_subplot(gs[2, 1]), result, 4)
     x = np.arange(len(scen))
     w = 0.8 / len(METHODS)
-    for ax, key, title in ((axes[0], "rms_m", "RMS position error along the path (m)"),
-                           (axes[1], "final_std_m", "stated final-position std per axis (m)")):
+    runs = int(result.config["runs"])
+    for ax, key, title in ((axes[0], "rms_m", "RMS position error along the path (m), bars: "
+                            f"95 % χ² interval of {runs} runs"),
+                           (axes[1], "final_std_m", "stated final-position std per axis (m), "
+                            "from P: no Monte Carlo error")):
         for i, m in enumerate(METHODS):
-            vals = [getattr(result.row(s, m), key) for s in scen]
+            vals = np.array([getattr(result.row(s, m), key) for s in scen])
+            err = None
+            if key == "rms_m":  # a Monte Carlo estimate: its 95 % interval
+                lo, hi = rms_interval(vals, 2 * int(result.config["runs"]))
+                err = [vals - lo, hi - vals]
             ax.bar(x + (i - 1.5) * w, vals, w, color=METHOD_COLORS[m],
-                   label=m.replace("_", " "))
+                   label=m.replace("_", " "), yerr=err, capsize=1.5,
+                   error_kw={"elinewidth": 0.8, "ecolor": "0.15"})
             if key == "final_std_m":
                 for j, s in enumerate(scen):
                     if not result.row(s, m).nees_ok:
                         ax.annotate("✗", (x[j] + (i - 1.5) * w, vals[j]), ha="center",
                                     va="bottom", color="red", fontsize=11, weight="bold")
         ax.set_yscale("log")
+        ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
+        ax.yaxis.set_minor_formatter(NullFormatter())
+        ax.set_ylabel("m")
         ax.set_xticks(x, scen, rotation=30, ha="right", fontsize=8)
-        ax.set_title(title)
+        ax.set_title(title, fontsize=10)
         ax.grid(True, axis="y", which="both", alpha=0.3)
     axes[0].legend(ncol=4, fontsize=9)
     axes[1].text(0.01, 0.98, "✗ = mean NEES outside its χ² band (inconsistent)",
@@ -54,15 +89,18 @@ def fusion_study_figure(result) -> plt.Figure:
                 label="stated std (filter), per axis")
         ax.plot(result.outage_t, 3 * result.outage_std, color="tab:green", lw=1, ls="--",
                 label="3 × stated std")
+        lo, hi = rms_interval(result.outage_rms, runs)
+        ax.fill_between(result.outage_t, lo, hi, color="tab:orange", alpha=0.3, lw=0,
+                        label=f"95 % χ² interval of the RMS ({runs} runs)")
         ax.plot(result.outage_t, result.outage_rms, color="k", lw=1,
-                label=f"empirical RMS error per axis ({result.config['runs']} runs)")
+                label=f"empirical RMS error per axis ({runs} runs)")
         ax.axvspan(result.outage_start, result.outage_t[-1], color="0.85", zorder=0,
                    label="no fixes")
         ax.set_yscale("log")
         ax.legend(fontsize=8, loc="upper left")
     ax.set_xlabel("t (s)")
-    ax.set_ylabel("m")
-    ax.set_title("outage at the end: the region grows as predicted")
+    ax.set_ylabel("position error, per axis (m)")
+    ax.set_title("outage at the end: the region grows as predicted", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     fig.suptitle(f"Fusion comparison on the course geometry ({result.config['runs']} runs per "
                  "scenario)")

@@ -40,10 +40,13 @@ SIGNATURE_WORDS = {
     "accel": "angular acceleration (lever arm)",
 }
 """Signature names of :mod:`calib.diagnostics` in words, as the figure shows them."""
-CAPTION = ("Dots: residual data − simulation; red line: binned mean (72 bins); band: ±σ "
-           "(before: the stated σ; after: the σ of the model with the effects). χ²/dof ≈ 1 and "
-           "max |z| small mean noise only; max |z| is the largest z-score among the "
-           "patterns tested, named after it.")
+BINS = 72
+"""Bins of the binned mean (equal sample counts)."""
+CAPTION = ("Every ± in this figure is 1 std. Dots: residual data − simulation; red line: binned "
+           f"mean ({BINS} bins) with its ±σ/√n band (n samples per bin); orange band: ±σ, the "
+           "per-sample noise (before: the stated σ; after: the σ of the model with the "
+           "effects). χ²/dof ≈ 1 and max |z| small mean noise only; max |z| is the largest "
+           "z-score among the patterns tested, named after it only where it is beyond noise.")
 """The figure's caption: what the marks and numbers in the panel titles are."""
 
 
@@ -126,21 +129,29 @@ def gap_figure(report: GapReport) -> Figure:
                             else report.after[ax_name].sigma2)
             ax.plot(theta, res[:, k], ".", ms=1.5, color=(0.35, 0.55, 0.85) if j else
                     (0.55, 0.55, 0.55), alpha=0.6, rasterized=True, label="data − simulation")
-            cx, cy, _ = binned_mean(theta, res[:, k], 72)
-            ax.plot(cx, cy, "-", color=(0.85, 0.2, 0.15), lw=1.5, label="binned mean")
+            cx, cy, _ = binned_mean(theta, res[:, k], BINS)
+            n_bin = max(1, res.shape[0] // BINS)
+            half = sigma / np.sqrt(n_bin)  # 1 std of a bin's mean, the figure's one level
+            ax.fill_between(cx, cy - half, cy + half, color=(0.85, 0.2, 0.15), alpha=0.3, lw=0,
+                            zorder=3.5, label=f"binned mean ±σ/√n (n = {n_bin})")
+            ax.plot(cx, cy, "-", color=(0.85, 0.2, 0.15), lw=1.5, zorder=4,
+                    label="binned mean")
             ax.axhspan(-sigma, sigma, color=(0.95, 0.7, 0.2), alpha=0.25, label="±σ")
             for sign in (-1.0, 1.0):
                 ax.axhline(sign * sigma, color=(0.85, 0.55, 0.1), lw=1.0, ls="--", zorder=3)
             ax.axhline(0.0, color="k", lw=0.6)
             ok = (report.consistent("before" if which == "before" else "after")[ax_name])
             chi2 = gm.chi2_dof if which == "before" else report.chi2_after(ax_name)
+            # a pattern is named only where the panel shows structure beyond noise: on a
+            # consistent panel the largest z is what noise alone gives, not a finding
+            worst = (f": {signature_words(str(gm.worst))}" if not ok
+                     else " (no pattern beyond noise)")
             ax.set_title(f"{ax_name}, {which}: χ²/dof = {chi2:.3f} — "
                          f"{'consistent with noise' if ok else 'GAP: structure beyond noise'}\n"
-                         f"max |z| = {gm.max_signature_z:.1f}: "
-                         f"{signature_words(str(gm.worst))}", fontsize=9)
-            ax.set_ylabel(f"residual {ax_name}, m/s²")
+                         f"max |z| = {gm.max_signature_z:.1f}{worst}", fontsize=9)
+            ax.set_ylabel(f"residual {ax_name} (m/s²)")
             if k == 1:
-                ax.set_xlabel("θ (encoder), rad")
+                ax.set_xlabel("θ from the encoder (rad)")
             if k == 0 and j == 0:
                 ax.legend(loc="upper right", fontsize=7, markerscale=4)
         mine = [u for u in unexplained if u.get("axis") in (ax_name, "both")]
@@ -153,8 +164,10 @@ def gap_figure(report: GapReport) -> Figure:
              ha="left", fontsize=8, family="monospace",
              bbox={"boxstyle": "round", "facecolor": VERDICT_COLORS.get(
                  report.verdict, VERDICT_COLORS["nothing_detected"]), "edgecolor": "0.5"})
-    fig.suptitle(f"{signature_words(report.verdict_lines()[0])}\ngap before / after adding: "
-                 f"{effects_label(report)} (± 1 std)", fontsize=10,
+    # wrapped: several named effects with their estimates make a line wider than the page
+    fig.suptitle(_wrap(signature_words(report.verdict_lines()[0]), 135) + "\n"
+                 + _wrap(f"gap before / after adding: {effects_label(report)} (± 1 std)", 135),
+                 fontsize=10,
                  color=UNEXPLAINED_EDGE if report.verdict == "unexplained" else "k")
     return fig
 
