@@ -45,6 +45,13 @@ def test_numbers_within_rtol_pass_and_a_larger_change_is_named_with_its_size():
     assert "relative 1e-06" in msg and "0.0767" in msg
 
 
+def test_worst_margin_says_how_close_a_run_came_to_the_tolerance():
+    ref = {"o": {"v": [1.0, 2.0], "n": 3}}
+    got = {"o": {"v": [1.0, 2.0 * (1 + 0.5 * RTOL)], "n": 3}}
+    margin, where = snapshot.worst_margin(flatten(ref), flatten(got))
+    assert where == "o::/v" and margin == pytest.approx(0.5, rel=1e-3)
+
+
 def test_rounding_noise_below_the_floor_of_its_array_passes():
     """The issue's case: a covariance off-diagonal of −8.85e-19 beside variances of ~1e-5 is
     rounding noise; another machine's +3.1e-19 must pass, a real 1e-9 correlation not."""

@@ -441,6 +441,30 @@ def compare(ref: dict[str, Leaf], got: dict[str, Leaf]) -> list[str]:
     return out
 
 
+def worst_margin(ref: dict[str, Leaf], got: dict[str, Leaf]) -> tuple[float, str]:
+    """The largest ``|got − ref| / tolerance`` over the numbers compared (above 1 is a
+    difference) and where: how close a run came to the tolerance."""
+    worst, where = 0.0, ""
+    for k in sorted(set(ref) & set(got)):
+        r, g, scale = ref[k].value, got[k].value, ref[k].scale
+        if isinstance(r, Fingerprint):
+            if not isinstance(g, np.ndarray) or tuple(g.shape) != r.shape:
+                continue
+            r, g = r.sample, g.ravel()[r.index]
+        if not (isinstance(r, np.ndarray) and isinstance(g, np.ndarray)) or r.shape != g.shape \
+                or r.dtype.kind != "f":
+            continue
+        rf, gf = r.ravel(), g.astype(float).ravel()
+        ok = np.isfinite(rf) & np.isfinite(gf)
+        tol = RTOL * np.abs(rf[ok]) + FLOOR * scale
+        err = np.abs(gf[ok] - rf[ok])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where(err > 0, err / tol, 0.0)
+        if ratio.size and ratio.max() > worst:
+            worst, where = float(ratio.max()), k
+    return worst, where
+
+
 # ---- storing ----------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
@@ -572,6 +596,12 @@ def check(work: Path, course: Path = COURSE_DATA) -> list[str]:
     return compare(load(), flatten(collect(work, course)))
 
 
+def check_with_margin(work: Path, course: Path = COURSE_DATA) -> tuple[list[str], float, str]:
+    """:func:`check` and :func:`worst_margin` of the same run."""
+    ref, got = load(), flatten(collect(work, course))
+    return (compare(ref, got), *worst_margin(ref, got))
+
+
 def main(argv: list[str] | None = None) -> int:
     """``python tools/snapshot.py`` rewrites the reference; ``--check`` compares a fresh run
     with it instead (exit 1 and one line per difference when something changed). CI runs the
@@ -585,10 +615,11 @@ def main(argv: list[str] | None = None) -> int:
     sys.path.insert(0, str(REPO))
     with tempfile.TemporaryDirectory() as tmp:
         if argv:
-            diffs = check(Path(tmp))
+            diffs, margin, where = check_with_margin(Path(tmp))
             for d in diffs:
                 print(d)
-            print(f"snapshot: {len(diffs)} differences from {REFERENCE.name}", file=sys.stderr)
+            print(f"snapshot: {len(diffs)} differences from {REFERENCE.name}; closest to its "
+                  f"tolerance: {margin:.3g} of it at {where}", file=sys.stderr)
             return 1 if diffs else 0
         flat = flatten(collect(Path(tmp)))
     save(flat)
