@@ -59,9 +59,9 @@ RTOL = 1e-8
 """Relative tolerance on every number. Measured on an AMD EPYC (Zen 4) against the reference
 recorded there (OpenBLAS picks SkylakeX kernels): under ``OPENBLAS_CORETYPE`` Haswell/Zen the
 largest change is 7.4e-10 relative (a gap signature fitted on the lever-arm sweep), i.e. 0.07
-of the tolerance; Sandybridge passes; numpy's SIMD dispatch reduced to its baseline moves
-nothing by more than 1.4e-8 of the tolerance. 1e-8 stays far below the 4–6 digits any output
-is read at."""
+of the tolerance; under Sandybridge 0.15 of it (the same fit); with numpy's SIMD dispatch
+reduced to its baseline 1.4e-8 of it (``--check`` prints this margin). 1e-8 stays far below
+the 4–6 digits any output is read at."""
 FLOOR = 1e-12
 """Absolute floor relative to the array's scale: below 1e-12·max|array| a value is rounding
 noise (double precision carries ~16 digits; a difference of two equal computations, such as
