@@ -276,16 +276,36 @@ class DemoResult:
     data_dir: Path | None = None
     """Where the course files are once the demo is done (``OUT/data`` when generated: the
     files are written in a staging directory first, whose name must not reach the user)."""
+    recording_skipped: str | None = None
+    """Why ``demo.rrd`` was not written (``record=False``, or the ``rrd`` extra is missing);
+    None when it was."""
 
     def summary(self) -> str:
         return demo_summary(self)
 
 
-def _prepare(out: Path, force: bool, generate: bool, formats: tuple[str, ...]) -> list[str]:
+RRD_EXTRA_MISSING = ('rerun-sdk is not installed (the "rrd" extra: '
+                     'pip install "tiltbench[rrd]")')
+"""Why the recording is skipped on a core install."""
+
+
+def recording_available() -> bool:
+    """True if rerun-sdk (the ``rrd`` extra) can be imported — checked before any work, so a
+    core install runs the demo without the recording instead of failing at its last step."""
+    try:
+        import rerun  # noqa: F401  (the recording step imports it anyway)
+    except ImportError:
+        return False
+    return True
+
+
+def _prepare(out: Path, force: bool, generate: bool, formats: tuple[str, ...],
+             record: bool = True) -> list[str]:
     """Refuse existing outputs without ``force``; return the outputs (relative paths)."""
     from bench.course import COURSE_FILES
 
-    names = list(OUTPUT_NAMES) + [f"figures/{n}.{f}" for n in FIGURE_NAMES for f in formats]
+    names = [n for n in OUTPUT_NAMES if record or n != "demo.rrd"]
+    names += [f"figures/{n}.{f}" for n in FIGURE_NAMES for f in formats]
     if generate:
         names += [f"data/{n}" for n in COURSE_FILES]
     clash = [n for n in names if (out / n).exists()]
@@ -301,7 +321,8 @@ FIGURE_NAMES = ("calibration_x", "calibration_y", "parameters", "trajectory", "a
 
 
 def _step_labels(generate: bool, has_truth: bool, coverage: bool, seed: int,
-                 coverage_runs: int, formats: tuple[str, ...]) -> list[str]:
+                 coverage_runs: int, formats: tuple[str, ...],
+                 record: bool = True) -> list[str]:
     """The steps the demo will run, in order (their count is the ``total`` of ``k/total``)."""
     labels = [f"generating a course set with the MuJoCo bench (seed {seed})"] if generate else []
     labels.append("calibrating, correcting, integrating and deciding")
@@ -310,8 +331,10 @@ def _step_labels(generate: bool, has_truth: bool, coverage: bool, seed: int,
     if coverage:
         labels.append(f"coverage check: {coverage_runs} fresh calibrations, same design")
     labels.append("fusion with position fixes (Kalman filter)")
-    labels += [f"figures ({', '.join(formats)})", "rerun recording (written, then read back)",
-               "report"]
+    labels.append(f"figures ({', '.join(formats)})")
+    if record:
+        labels.append("rerun recording (written, then read back)")
+    labels.append("report")
     return labels
 
 
@@ -399,7 +422,7 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
              coverage_runs: int = COVERAGE_RUNS,
              progress: Callable[[str], None] | None = None,
              formats: tuple[str, ...] = FIGURE_FORMATS,
-             mapper: Mapper = serial_map) -> DemoResult:
+             mapper: Mapper = serial_map, record: bool = True) -> DemoResult:
     """Run the demo (module docstring); return what was written and computed.
 
     Parameters
@@ -415,6 +438,8 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
         silent); the command line passes :class:`bench.cli.progress.Progress`.
     formats : figure formats written side by side ("png", "svg").
     mapper : where the coverage check's runs execute (:mod:`calib.runs`; same numbers).
+    record : write and read back ``demo.rrd``. Without rerun-sdk (the ``rrd`` extra) the
+        recording is skipped and everything else written; ``recording_skipped`` says why.
     """
     from bench.validate import validate
 
@@ -426,7 +451,10 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
         raise ValueError(f"coverage_runs must be >= 0, got {coverage_runs}")
     if not formats or set(formats) - {"png", "svg"}:
         raise ValueError(f"figure formats must be png and/or svg, got {', '.join(formats)}")
-    owned = _prepare(out, force, generate, formats)
+    skipped = ("not asked for (--no-rrd)" if not record else
+               None if recording_available() else RRD_EXTRA_MISSING)
+    record = skipped is None
+    owned = _prepare(out, force, generate, formats, record)
     # The output directory is one set (calib.atomic.atomic_dir): everything is written to a
     # temporary directory beside OUT (`work`) and replaces OUT's outputs as a whole at the
     # end; an interrupted demo leaves the old outputs or the new ones, never a mix.
@@ -434,7 +462,7 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
         data_dir = work / "data" if generate else Path(course_data)
         has_truth = generate or (data_dir / "truth.json").exists()
         steps = _Steps(_step_labels(generate, has_truth, generate and coverage_runs > 0, seed,
-                                    coverage_runs, formats), progress)
+                                    coverage_runs, formats, record), progress)
         files: dict[str, Path] = {}
         truth = _Truth()
         if generate:
@@ -464,11 +492,13 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
             fusion = fusion_step(ana, truth.fixes, data_dir, seed if generate else None)
         with steps.step():
             _figures(work, ana, truth, formats, files, nmin)
-        with steps.step():
-            recovered = _recording(work, ana, truth, est, tj, files)
+        recovered = None
+        if record:
+            with steps.step():
+                recovered = _recording(work, ana, truth, est, tj, files)
         result = DemoResult(out, files, ana, truth.manifest, val, cov, nmin, recovered,
                             steps.times, 0.0, source, fusion,
-                            out / "data" if generate else Path(course_data))
+                            out / "data" if generate else Path(course_data), skipped)
         with steps.step():
             files["report.md"] = write_text(work / "report.md", report_markdown(result), True)
     result.files = {k: out / p.relative_to(work) for k, p in files.items()}
@@ -564,6 +594,8 @@ def demo_summary(res: DemoResult) -> str:
                 else "estimates and trajectory (no truth to record)")
         lines.append(f"Recording read back: {what} "
                      f"{'come back exactly' if res.recovered else 'DIFFER from what was written'}")
+    if res.recording_skipped:
+        lines.append(f"Recording (demo.rrd): skipped, {res.recording_skipped}")
     fl = _fusion_lines(res.fusion)
     if fl:
         lines += ["", *fl]
@@ -575,8 +607,9 @@ def demo_summary(res: DemoResult) -> str:
     for k in sorted(res.files):
         p = res.files[k]
         lines.append(f"  {p}  ({_size(p)})")
-    lines.append(f"\nDone in {res.elapsed:.1f} s. Open the recording with: "
-                 f"rerun {res.files.get('demo.rrd', '')}")
+    lines.append(f"\nDone in {res.elapsed:.1f} s." + (
+        f" Open the recording with: rerun {res.files['demo.rrd']}" if "demo.rrd" in res.files
+        else ""))
     return "\n".join(lines)
 
 
@@ -613,6 +646,8 @@ def report_markdown(res: DemoResult) -> str:
                f"(expected {c['level']:g}, binomial tolerance ±{c['tolerance']:.3f}): "
                f"{'consistent' if c['consistent'] else 'not consistent'}. Per parameter: "
                + ", ".join(f"{k} {v:.3f}" for k, v in c["pass_rate_each"].items()) + ".", ""]
+    if res.recording_skipped:
+        md += [f"Recording (`demo.rrd`): skipped, {res.recording_skipped}.", ""]
     md += ["## Trajectory and arrival decision", "", "```", ana.traj.summary(), r.summary(),
            "```", ""]
     if res.truth and "answer" in res.truth:

@@ -674,8 +674,16 @@ def check_static(acc: np.ndarray, rate: float, where: str, *, window: float = 1.
                             "pose: cut the log to a still stretch")
     out["max_shift"] = float(dev.max())
     out["max_var_ratio"] = float(ratio.max()) if np.isfinite(ratio).all() else float("inf")
-    for bad, what, limit in ((dev > shift, "mean is {v:.3g} m/s² above the lowest window mean",
-                              f"--static-shift {shift:g} m/s²"),
+    # A noisy sensor's window means scatter by σ/√w on their own: the range of nwin of them
+    # stays below (2·sqrt(2 ln nwin) + 3)·σ/√w except with probability ≲ 1e-3 (extreme-value
+    # bound of a Gaussian sample's range), so the shift limit is never below that floor.
+    floor = (2.0 * np.sqrt(2.0 * np.log(max(nwin, 2))) + 3.0) * np.sqrt(med_var / w)
+    limit_shift = np.maximum(shift, floor)
+    out["shift_noise_floor"] = [float(v) for v in floor]
+    for bad, what, limit in ((dev > limit_shift,
+                              "mean is {v:.3g} m/s² above the lowest window mean",
+                              f"--static-shift {shift:g} m/s², or the noise floor "
+                              f"{float(np.max(floor)):.3g} m/s² where larger"),
                              (ratio > var_ratio, "variance is {v:.3g}× the median window's",
                               f"--static-var-ratio {var_ratio:g}")):
         if bad.any():

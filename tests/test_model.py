@@ -2,12 +2,6 @@
 
 from __future__ import annotations
 
-import shutil
-import subprocess
-import sys
-import zipfile
-from pathlib import Path
-
 import mujoco
 import numpy as np
 import pytest
@@ -102,21 +96,3 @@ def test_batched_poses_equal_one_forward_per_pose_exactly():
         np.testing.assert_array_equal(a[i], data.sensordata[cols])
 
 
-def test_wheel_carries_the_models(tmp_path):
-    """A non-editable install has no models/ beside bench/: the wheel must carry the MJCF files."""
-    root = Path(__file__).resolve().parent.parent
-    src = tmp_path / "src"  # a copy, so the build leaves nothing in the checkout
-    src.mkdir()
-    for name in ("pyproject.toml", "README.md", "LICENSE"):
-        shutil.copy(root / name, src / name)
-    for name in ("bench", "calib", "models", "validation", "data", "docs"):  # every package dir
-        shutil.copytree(root / name, src / name, ignore=shutil.ignore_patterns("__pycache__"))
-    subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(tmp_path), str(src)],
-        check=True,
-        capture_output=True,
-    )
-    (wheel,) = tmp_path.glob("tiltbench-*.whl")
-    names = set(zipfile.ZipFile(wheel).namelist())
-    shipped = {f"bench/models/{p.name}" for p in (root / "models").glob("*.xml")}
-    assert shipped and shipped <= names

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from bench.cli.options import (
     Deferred,
@@ -75,7 +76,7 @@ def _result_json(res, ok: bool) -> dict:
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     from bench import limits
-    from bench.demo import run_demo  # start-up time of `tiltbench --help`
+    from bench.demo import recording_available, run_demo  # start-up time
 
     check_level(args.level)
     check_count(args.coverage_runs, "--coverage-runs", 0)
@@ -85,9 +86,13 @@ def _cmd_demo(args: argparse.Namespace) -> int:
                         + limits.synthetic_runs_bytes(20001, 0),
                         f"--coverage-runs {args.coverage_runs}")
     formats = ("png", "svg") if args.figures == "both" else (args.figures,)
+    if not args.no_rrd and not recording_available():  # said before the work, not after it
+        # one line within 100 columns: the rest of the reason is in the summary and report
+        print('tiltbench demo: note: no demo.rrd (pip install "tiltbench[rrd]"; --no-rrd: '
+              'no note)', file=sys.stderr)
     res = run_demo(args.out, args.seed, args.force, args.course_data, args.level,
                    args.coverage_runs, None if args.quiet else Progress("demo"),
-                   formats=formats, mapper=mapper_from_args(args))
+                   formats=formats, mapper=mapper_from_args(args), record=not args.no_rrd)
     ok = res.recovered is not False and (res.validation is None or res.validation.passed)
     if args.json:
         print_json(_result_json(res, ok))
@@ -117,6 +122,9 @@ def register(sub) -> None:
                    help="fresh synthetic calibrations in the coverage check (0: skip)")
     p.add_argument("--figures", choices=["png", "svg", "both"], default="both",
                    help="figure format(s) written to OUT/figures")
+    p.add_argument("--no-rrd", action="store_true",
+                   help="do not write the rerun recording demo.rrd (without rerun-sdk, the "
+                   "rrd extra, it is skipped anyway, with a one-line note)")
     add_sweep_options(p)
     add_json(p)
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")

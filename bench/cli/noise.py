@@ -93,7 +93,8 @@ def _cmd_noise(args: argparse.Namespace) -> int:
     print(result.summary())
     c = checked
     print(f"static check: {c['window']:g} s windows, largest mean shift {c['max_shift']:.3g} "
-          f"m/s² (limit {c['shift']:g}), largest variance ratio {c['max_var_ratio']:.3g} "
+          f"m/s² (limit {max([c['shift'], *c.get('shift_noise_floor', [])]):.3g} m/s²: "
+          f"{c['shift']:g} or the noise floor), largest variance ratio {c['max_var_ratio']:.3g} "
           f"(limit {c['var_ratio']:g})")
     print_files(written.values())
     return 0

@@ -150,8 +150,10 @@ COLUMNS = 100
 def fit_line(line: str, width: int = COLUMNS) -> list[str]:
     """``line`` as lines of at most ``width`` columns, broken at spaces, each continuation
     indented 4 columns past the line's own indent. A line holding a word longer than the
-    width (a long path) is left whole: broken, the path would be unusable."""
-    if len(line) <= width:
+    width (a long path), or a label and a path ("wrote: PATH"), is left whole: broken, the path
+    would be unusable or stand alone."""
+    words = line.split()
+    if len(line) <= width or (len(words) == 2 and "/" in words[1]):  # "wrote: PATH"
         return [line]
     import textwrap
 
