@@ -215,3 +215,21 @@ def test_cli_sensor_option(tmp_path, capsys):
     assert profile["rate_random_walk"]["y"] is None
     assert profile["rate_random_walk"]["x"]["interval"] == pytest.approx([0.8 * q, 1.25 * q])
     assert [e["name"] for e in out["effects"]] == ["bias_random_walk"]
+
+
+def test_sponge_review_beside_a_rail_clipped_after_the_noise_does_not_crash():
+    """An output clipped at one rail after its noise (an asymmetric clip): the sponge review
+    standardises only the readings away from the rail, and the walk's likelihood then steps
+    over the readings left out (found on the independent set: it raised a shape error)."""
+    from calib.conventions import G
+    from calib.gap import analyze_gap
+    from calib.io import validate_ensayo
+
+    rng = np.random.default_rng(20261126)
+    tita = rng.uniform(-np.pi, np.pi, 4001)
+    datos = np.column_stack([-G * np.sin(tita), -G * np.cos(tita)])
+    datos += rng.standard_normal(datos.shape) * np.sqrt([0.25, 0.64])
+    datos[:, 0] = np.minimum(datos[:, 0], 6.0)  # x rails at +6 m/s², after the noise
+    res = analyze_gap(validate_ensayo(tita, datos), [0.25, 0.64])
+    assert res.verdict in ("explained", "unexplained", "nothing_detected")
+    assert res.verdict != "nothing_detected"  # a clip this size is seen

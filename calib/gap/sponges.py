@@ -40,9 +40,10 @@ SPONGES = ("noise_level", "bias_random_walk")
 LN2 = float(np.log(2.0))
 
 
-def standardized(rep: Reporter, k: int) -> tuple[np.ndarray, str]:
+def standardized(rep: Reporter, k: int) -> tuple[np.ndarray, str, np.ndarray | None]:
     """Readings of axis k standardised by the exact moments of the structured effect of the
-    model in ``rep`` (no noise level, no walk): (z, what was used)."""
+    model in ``rep`` (no noise level, no walk): (z, what was used, the indices of the
+    readings kept, or None when all are)."""
     st = rep.state.axes[k]
     y = rep.run.datos[:, k]
     rail = rails(y) if np.isfinite(st.limit) else None
@@ -53,12 +54,14 @@ def standardized(rep: Reporter, k: int) -> tuple[np.ndarray, str]:
         s = float(np.sqrt(st.sigma2_eff))
         keep = (mu > rail[0] + 4.0 * s) & (mu < rail[1] - 4.0 * s) & (y > rail[0]) & (y < rail[1])
         return ((y - mu) / s)[keep], (f"the stated noise on the {int(keep.sum())} readings "
-                                      "away from the rails (the output clips after its noise)")
+                                      "away from the rails (the output clips after its noise)"
+                                      ), np.flatnonzero(keep)
     if st.lsb > 0:
         m1, var = quantized_moments(rep.mean(k), st.sigma2, st.lsb)
-        return (y - m1) / np.sqrt(var), f"the exact moments of a reading rounded to {st.lsb:.4g}"
+        return ((y - m1) / np.sqrt(var),
+                f"the exact moments of a reading rounded to {st.lsb:.4g}", None)
     mu = rep.mean(k)
-    return (y - mu) / np.sqrt(st.sigma2_eff), "the stated noise"
+    return (y - mu) / np.sqrt(st.sigma2_eff), "the stated noise", None
 
 
 def review_sponges(ext: Extensions, state: ModelState, lattice: list[Lattice],
@@ -78,7 +81,7 @@ def review_sponges(ext: Extensions, state: ModelState, lattice: list[Lattice],
             reduced = reduced.without(n, axis, stated)
         reduced = ext.refine(reduced)
         rep = Reporter(ext, reduced, lattice)
-        z, how = standardized(rep, k)
+        z, how, kept = standardized(rep, k)
         dof = max(z.size - ext.n_params(reduced, k), 1)
         keep = []
         for n in sponges:
@@ -88,9 +91,13 @@ def review_sponges(ext: Extensions, state: ModelState, lattice: list[Lattice],
                 what = f"Σz²/dof = {stat / dof:.4g} (χ²({dof}), two-sided)"
             else:
                 dz = np.diff(z)
-                base = np.diff(ext.run.a_ref[:, k])[:, None]
-                q0 = max(st.q / np.sqrt(st.sigma2_eff), 1e-6)
+                a_ref = ext.run.a_ref[:, k]
                 dt = np.asarray(ext.run.dt_walk, dtype=float)
+                if kept is not None:  # readings left out: the walk steps over them
+                    a_ref = a_ref[kept]
+                    dt = np.diff(np.concatenate([[0.0], np.cumsum(dt)])[kept])
+                base = np.diff(a_ref)[:, None]
+                q0 = max(st.q / np.sqrt(st.sigma2_eff), 1e-6)
                 lr = max(gls_nll(dz, base, 1.0, 0.0 * dt) - walk_nll(dz, base, 1.0, dt, q0),
                          0.0)
                 stat = lr
