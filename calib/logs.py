@@ -100,6 +100,10 @@ class LogOptions:
     window, min_hold : pose detector's window and minimum hold, s (samples without times);
         None: :mod:`calib.poses` defaults.
     detect : look for held poses when θ is unknown (False for a vehicle run).
+    theta_source : where θ comes from when the poses' angles are given: ``poses`` (the held
+        samples only, each at its pose's angle) or ``gyro`` (every sample, θ(t) integrated
+        from the gyro about the tilt axis and anchored to the poses' angles:
+        :func:`calib.gyro_angle.theta_from_gyro`).
     """
 
     fmt: str = "auto"
@@ -118,6 +122,7 @@ class LogOptions:
     window: float | None = None
     min_hold: float | None = None
     detect: bool = True
+    theta_source: str = "poses"
 
 
 @dataclass(frozen=True)
@@ -604,9 +609,14 @@ def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
                             "import output)")
         angles = list(options.poses)
     if angles is None:
+        if options.theta_source == "gyro":
+            raise DataError(f"{path}: --theta-source gyro anchors the integrated gyro to the "
+                            "held poses' angles: give them (--poses … or --label-angles …)")
         return ImuLog(acc=log.acc, t=log.t, pose=pose, gyro=log.gyro,
                       acc_normal=log.acc_normal, source=log.source, provenance=prov)
     rad = _angles(angles, options.angle_unit)
+    if options.theta_source == "gyro":
+        return _theta_from_gyro(log, pose, rad, prov, options, path)
     keep = pose >= 0
     theta = rad[pose[keep]]
     prov["samples"] = dict(prov["samples"], kept=int(keep.sum()))
@@ -618,6 +628,29 @@ def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
     if options.angle_unit is None:
         _degrees_check(out.theta, out.acc, path, "the pose angles")
     return out
+
+
+def _theta_from_gyro(log: ImuLog, pose: np.ndarray | None, rad: np.ndarray, prov: dict,
+                     options: LogOptions, path: Path) -> ImuLog:
+    """Every sample kept, θ(t) integrated from the gyro and anchored to the poses' angles
+    (:mod:`calib.gyro_angle`); the provenance says how, with the closure errors."""
+    from calib.gyro_angle import theta_from_gyro
+
+    if log.gyro is None:
+        note = prov["units"].get("gyro_note")
+        raise DataError(f"{path}: --theta-source gyro needs a gyro about the tilt axis "
+                        f"{prov['tilt_axis']} (from --axes); "
+                        + (note if note else "the log has none (--columns gyro=…)"))
+    g = prov["units"]["g"]
+    res = theta_from_gyro(log.t, log.gyro, pose, rad, acc=log.acc, g=g, where=str(path),
+                          gyro_from=prov["units"].get("gyro_from") or "gyro")
+    prov["theta"] = res.summary()
+    prov["theta_from_gyro"] = res.to_dict(with_theta=False)
+    prov["units"]["theta"] = "rad (integrated gyro)"
+    prov["pose_angles_rad"] = rad.tolist()
+    prov["samples"] = dict(prov["samples"], kept=log.n)
+    return ImuLog(acc=log.acc, t=log.t, theta=res.theta, pose=pose, gyro=log.gyro,
+                  acc_normal=log.acc_normal, source=log.source, provenance=prov)
 
 
 def _degrees_check(theta: np.ndarray, acc: np.ndarray, path: Path, what: str) -> None:

@@ -4,7 +4,7 @@ command line in-process (tests/cli.py), in a temporary directory:
     real log → import → noise (a static stretch) + calibrate --save cal.json
              → noise --calibration cal.json --save sensor.json
              → generate calibration --sensor sensor.json --theta-from <the import's ensayo.mat>
-             → gap of the real run (its twin simulated by gap) → design for that sensor
+             → gap of the real run (and, for the real log, of its twin) → design for that sensor
 
 Which log runs the loop is one constant per case (:data:`REAL` — a shipped real log — and
 :data:`MULTIPOSE`), so a better log is one line to change. Each step's output is checked
@@ -12,19 +12,19 @@ Which log runs the loop is one constant per case (:data:`REAL` — a shipped rea
 without the code under test where one exists:
 
 * the real log (``data/real/yei-3space-z-flip.csv``, a YEI 3-Space sensor flat, turned over,
-  flat again): per-pose means, stds, the time column and the 1/4096 g step of
-  ``tests/reference/real_data.py`` (plain csv + numpy) and its README. The log turns one
-  axis over (two orientations, 180° apart), so the tilt plane's x axis never sees gravity
-  change: ``calibrate`` and ``gap`` refuse in one line naming ``scale_x`` — what this log
-  cannot resolve. The loop goes on with what it does identify (the y axis by per-axis least
-  squares, x's bias from its mean) as the twin's calibration; its static stretch is 1.45 s,
-  so only the white noise is resolved (bias instability and random walk: upper bounds).
-  What the twin lacks is then shown by the lack-of-fit F test per axis (calib.lackoffit),
-  real run against twin: the real x axis reads differently flat and turned over (a tilt
-  offset or misalignment of ≈ 0.5°), which neither the model nor its twin has.
+  flat again, with a gyro): per-pose means, stds, the time column and the 1/4096 g step of
+  ``tests/reference/real_data.py`` (plain csv + numpy) and its README. Its held poses are 180°
+  apart only, so with θ from the poses the tilt plane's x axis never sees gravity change and
+  ``calibrate`` refuses naming ``scale_x``; with ``--theta-source gyro`` (θ(t) of every sample
+  integrated from the gyro about the tilt axis, :mod:`calib.gyro_angle`) the turns sweep θ and
+  both axes are identifiable. The run is then a timed sweep turned by hand: ``gap`` of it
+  (``--sensor``: the profile's terms) finds what the twin lacks — whatever it finds, the real
+  residuals are far beyond the sensor's noise (taps, the hand's accelerations), while ``gap``
+  of the twin (the same θ, the profile's noise and quantization, the fitted calibration) finds
+  nothing it was not simulated with.
 * the multi-pose stand-in (``tests/logfixtures.py``: five held poses, white noise 0.02 m/s²
-  per sample at 100 Hz, no bias or scale error) until a real multi-pose log ships: every
-  step runs; references are its known truth.
+  per sample at 100 Hz, no bias or scale error): every step runs; references are its known
+  truth.
 
 Tolerances: estimates are compared with a reference within 4 of their stated std (a normal
 estimate leaves that band with probability 6e-5; seeds are fixed, so the outcome is
@@ -42,7 +42,7 @@ import numpy as np
 import pytest
 import scipy.io
 
-from calib.lackoffit import lack_of_fit
+from calib.gyro_angle import CLOSURE_BOUND_DEG
 from calib.ls import fit_axis
 from tests import logfixtures as fx
 from tests.cli import one_line_error, run
@@ -55,30 +55,35 @@ K = 4.0  # band, in stated std, for an estimate against its reference
 @dataclass(frozen=True)
 class LoopLog:
     """One log through the loop: where it is, how it is read, the poses' angles in order of
-    occurrence (deg), the data rows of one static stretch ``[start, stop)`` for ``noise``,
-    and whether a tilt-plane calibration is identifiable from it."""
+    occurrence (deg) and where θ comes from, the data rows of one static stretch
+    ``[start, stop)`` for ``noise``, and whether ``gap`` takes the noise and the walk from the
+    sensor profile (``--noise-var`` N²·fs, ``--sensor``) and runs on the twin too."""
 
     path: Path
     read: tuple[str, ...]
     poses: tuple[str, ...]
     still: tuple[int, int]
-    calibratable: bool
+    gap_from_profile: bool
 
 
 REAL = LoopLog(
     path=ref.REAL_DIR / "yei-3space-z-flip.csv",
     read=("--units", "g", "--gyro-unit", "rad/s", "--axes", "x,-z"),
-    # six holds of at least 0.5 s: flat, flat, turned over, turned over, flat, flat
-    poses=("--min-hold", "0.5", "--poses", "0,0,180,180,0,0", "--angle-unit", "deg"),
-    still=(1090, 1250),  # the reference's z_down pose (data/real/README.md)
-    calibratable=False,
+    # six holds of at least 0.5 s: flat, flat, turned over, turned over, flat, flat; θ of
+    # every sample from the gyro about the tilt axis, anchored to them
+    poses=("--min-hold", "0.5", "--poses", "0,0,180,180,0,0", "--angle-unit", "deg",
+           "--theta-source", "gyro"),
+    # the reference's z_down pose (data/real/README.md): the quietest hold, resting on the
+    # table; the longest (rows 2158–2592) is held by hand, its x noise 4× larger
+    still=(1090, 1250),
+    gap_from_profile=True,
 )
 MULTIPOSE = LoopLog(
     path=Path("log.csv"),  # written by the fixture below, inside the test's tmp dir
     read=(),
     poses=("--poses", ",".join(f"{a:g}" for a in fx.ANGLES_DEG), "--angle-unit", "deg"),
     still=fx.simulated()[4][0],
-    calibratable=True,
+    gap_from_profile=False,
 )
 
 
@@ -101,8 +106,7 @@ def _units_present(doc: dict) -> None:
 
 
 def loop(capsys, log: LoopLog, d: Path) -> dict:
-    """Run the loop in ``d``; return every step's parsed output. Steps the log cannot
-    support (``calibratable`` False) are checked to refuse in one line naming ``scale_x``."""
+    """Run the loop in ``d``; return every step's parsed output."""
     out = {}
     # 1. import: the course files plus the provenance
     text, _ = _ok(capsys, "import", log.path, *log.read, *log.poses, "--out", d / "imp",
@@ -116,47 +120,41 @@ def loop(capsys, log: LoopLog, d: Path) -> dict:
     text, _ = _ok(capsys, "noise", still, *log.read, "--json")
     out["noise"] = json.loads(text)
     _units_present(out["noise"])
-    # 3. calibrate, or what this log cannot identify
-    if log.calibratable:
-        text, _ = _ok(capsys, "calibrate", ensayo, "--save", d / "cal.json", "--json")
-        _units_present(json.loads(text))
-        out["calibrate"] = json.loads((d / "cal.json").read_text())
-        cal = ["--calibration", d / "cal.json"]
-        twin_cal: list[str] = []
-    else:
-        line = one_line_error(capsys, "calibrate", ensayo, "--save", d / "cal.json")
-        assert "cannot identify scale_x" in line and not (d / "cal.json").exists()
-        out["calibrate"] = line
-        cal = []
-        # what the log does identify, as the twin's calibration: y by per-axis LS; x never
-        # sees gravity change (A_rx = 0), so its mean reading is its bias, its scale unknown
-        mat = scipy.io.loadmat(ensayo)
-        fy = fit_axis(mat["tita"].ravel(), mat["datos"][:, 1], "y", g=G)
-        out["fit_y"] = fy
-        bias_x = float(mat["datos"][:, 0].mean())
-        bias_y, scale_y = (float(v) for v in fy.params)
-        twin_cal = [f"--bias={bias_x!r},{bias_y!r}", f"--scale=0,{scale_y!r}"]
+    # 3. calibrate
+    text, _ = _ok(capsys, "calibrate", ensayo, "--save", d / "cal.json", "--plot",
+                  d / "cal.png", "--json")
+    out["calibrate_json"] = json.loads(text)
+    _units_present(out["calibrate_json"])
+    out["calibrate"] = json.loads((d / "cal.json").read_text())
+    assert (d / "cal.png").exists()
     # 4. the sensor profile
-    _ok(capsys, "noise", still, *log.read, *cal, "--save", d / "sensor.json")
+    _ok(capsys, "noise", still, *log.read, "--calibration", d / "cal.json", "--save",
+        d / "sensor.json", "--plot", d / "allan.png")
     out["sensor"] = json.loads((d / "sensor.json").read_text())
+    assert (d / "allan.png").exists()
     # 5. its twin: the same θ, sample for sample
     _ok(capsys, "generate", "calibration", "--sensor", d / "sensor.json", "--theta-from",
-        ensayo, *twin_cal, "--seed", "19", "--out", d / "twin")
+        ensayo, "--seed", "19", "--out", d / "twin")
     out["twin_truth"] = json.loads((d / "twin" / "truth.json").read_text())
     out["twin"] = scipy.io.loadmat(d / "twin" / "ensayo.mat")
-    # 6. gap of the real run (gap simulates its twin with the fitted parameters). When
-    # `gap --sensor` lands, pass "--sensor", d / "sensor.json" here: the walk's intensity
-    # then comes from the profile (issue 19, item 7) and the report says so.
-    if log.calibratable:
-        text, _ = _ok(capsys, "gap", ensayo, "--report", d / "gap", "--json")
-        out["gap"] = json.loads(text)
-    else:
-        line = one_line_error(capsys, "gap", ensayo, "--report", d / "gap",
-                              ignore=("note:", "[gap]"))
-        assert "cannot identify scale_x" in line and not (d / "gap").exists()
-    # 7. design for that sensor: its per-sample noise variance (N²·fs) on each axis
     fs = out["sensor"]["sample_rate"]
     nv = [w["value"] ** 2 * fs for w in out["sensor"]["white_noise_density"]]
+    # 6. gap of the real run (gap simulates its own twin with the fitted parameters); with
+    # the profile: its per-sample noise N²·fs and (--sensor) its walk, and gap of the twin
+    if log.gap_from_profile:
+        noise = [f"--noise-var={float(nv[0])!r},{float(nv[1])!r}"]
+        text, _ = _ok(capsys, "gap", ensayo, *noise, "--sensor", d / "sensor.json",
+                      "--report", d / "gap", "--json")
+        out["gap"] = json.loads(text)
+        text, _ = _ok(capsys, "gap", d / "twin" / "ensayo.mat", *noise, "--json")
+        out["gap_twin"] = json.loads(text)
+        _units_present(out["gap_twin"])
+    else:
+        text, _ = _ok(capsys, "gap", ensayo, "--report", d / "gap", "--json")
+        out["gap"] = json.loads(text)
+    _units_present(out["gap"])
+    assert (d / "gap" / "gap.md").exists() and (d / "gap" / "gap.png").exists()
+    # 7. design for that sensor: its per-sample noise variance (N²·fs) on each axis
     n = out["twin"]["datos"].shape[0]
     text, _ = _ok(capsys, "design", f"--noise-var={float(nv[0])!r},{float(nv[1])!r}", "--designs",
                   "held,uniform", "--n", str(n), "--runs", "0", "--json")
@@ -197,17 +195,30 @@ def _check_common(out: dict, log: LoopLog, fs_ref: float, sigma_ref: tuple[float
         assert got["scale"] == pytest.approx(math.sqrt(nv[i] / (n / 2)) / G, rel=0.02)
 
 
+@pytest.mark.slow  # ~15 s: two gap analyses of 2715 samples, one report
 def test_twin_loop_on_the_shipped_real_log(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     log = REAL
+    # θ from the poses alone (held samples at 0 and 180°): x never sees gravity change
+    _ok(capsys, "import", log.path, *log.read, *log.poses[:-2], "--out", tmp_path / "held")
+    line = one_line_error(capsys, "calibrate", tmp_path / "held" / "ensayo.mat")
+    assert "cannot identify scale_x" in line
     out = loop(capsys, log, tmp_path)
     prov = out["import"]["provenance"]
     assert prov["source"]["name"] == log.path.name and prov["units"]["acc_to_m_s2"] == G
     assert len(prov["poses"]["detection"]["segments"]) == 6
-    # independent references for the static stretch: plain csv + numpy
+    # every sample kept, at the log's own times (independent reference: plain csv + numpy)
     spec = ref.SPECS[log.path.name]
     _, rows = ref.read_rows(log.path)
-    t = np.array(rows)[log.still[0]:log.still[1], spec.time_column] * spec.time_to_s
+    t_all = np.array(rows)[:, spec.time_column] * spec.time_to_s
+    real = scipy.io.loadmat(Path(out["import"]["files"][0]))
+    assert prov["samples"]["kept"] == prov["samples"]["read"] == len(rows)
+    assert np.allclose(real["t"].ravel(), t_all, rtol=0, atol=1e-12)
+    gyro = prov["theta_from_gyro"]
+    assert np.all(np.abs(gyro["closure_deg"]) < CLOSURE_BOUND_DEG)
+    assert "linear in time" in gyro["correction"]
+    # the static stretch: rate and std against the reference
+    t = t_all[log.still[0]:log.still[1]]
     fs_ref = (t.size - 1) / (t[-1] - t[0])
     pose = ref.pose_means(log.path, g_unit=G)["poses"]["z_down"]
     assert (pose["start"], pose["stop"]) == log.still
@@ -220,36 +231,40 @@ def test_twin_loop_on_the_shipped_real_log(capsys, tmp_path, monkeypatch):
     # the YEI's "Raw" accelerometer steps by 1/4096 g (data/real/README.md)
     for step in sensor["quantization_step"]:
         assert abs(step - G / 4096) < 1e-9
-    assert sensor["calibration"] is None  # nothing calibrated the x axis
-    # the y axis against the independent six-position computation (y = -z)
+    # calibrate: the turns make both axes identifiable — the design [1, A_r] of each axis
+    # (columns scaled to unit length) is well conditioned; from the holds alone x's is singular
+    cal = out["calibrate"]
+    assert sensor["calibration"]["params"] == pytest.approx(cal["params"], rel=1e-12)
+    th = real["tita"].ravel()
+    for a_r in (-G * np.sin(th), -G * np.cos(th)):
+        h = np.c_[np.ones_like(th), a_r]
+        assert np.linalg.cond(h / np.linalg.norm(h, axis=0)) < 10
+    # the y axis against the independent six-position computation (y = -z), within the
+    # combined std (calibrate's σ² is estimated from a hand-turned sweep: wide, honest)
+    params = dict(zip(cal["param_names"], cal["params"], strict=True))
+    std = dict(zip(cal["param_names"], cal["std"], strict=True))
     z = ref.six_position(log.path, g=G, g_unit=G)["axes"]["z"]
-    fy = out["fit_y"]
-    assert abs(fy.params[0] + z["bias"]) <= K * math.hypot(fy.std[0], z["bias_std"])
-    assert abs(fy.params[1] - z["scale"]) <= K * math.hypot(fy.std[1], z["scale_std"])
-    # the twin holds the real bias/scale: its y fit lands on them within its own std
+    assert abs(params["bias_y"] + z["bias"]) <= K * math.hypot(std["bias_y"], z["bias_std"])
+    assert abs(params["scale_y"] - z["scale"]) <= K * math.hypot(std["scale_y"], z["scale_std"])
+    # the twin holds the calibration: its fit lands on it within its own std
     twin = out["twin"]
-    ft = fit_axis(twin["tita"].ravel(), twin["datos"][:, 1], "y", g=G)
-    assert abs(ft.params[0] - fy.params[0]) <= K * ft.std[0]
-    assert abs(ft.params[1] - fy.params[1]) <= K * ft.std[1]
-    # what the twin lacks (gap cannot run here; the lack-of-fit F test says it per axis):
-    # the real x reads differently flat and turned over, the model (A_rx = 0 in both) and
-    # its twin do not; y is consistent on both
-    real = scipy.io.loadmat(Path(out["import"]["files"][0]))
-    groups = real["pose"].ravel()
-    for name, mat in (("real", real), ("twin", twin)):
-        x = mat["datos"][:, 0]
-        lof_x = lack_of_fit(x - x.mean(), groups, 1, "x")  # model: bias only (A_rx = 0)
-        fit = fit_axis(mat["tita"].ravel(), mat["datos"][:, 1], "y", g=G)
-        lof_y = lack_of_fit(fit.residuals, groups, 2, "y")
-        out[f"lof_{name}"] = (lof_x, lof_y)
-    (real_x, real_y), (twin_x, twin_y) = out["lof_real"], out["lof_twin"]
-    assert real_x.p_value < 1e-10 and twin_x.p_value > 1e-3
-    assert real_y.p_value > 1e-3 and twin_y.p_value > 1e-3
-    # the size of the miss, from the reference's own pose means: half the x difference
-    # between flat and turned over is g·sin δ, a tilt offset / misalignment of δ ≈ 0.5°
-    means = ref.pose_means(log.path, g_unit=G)["poses"]
-    half = 0.5 * (means["z_down"]["mean"]["x"] - means["z_up"]["mean"]["x"])
-    assert 0.05 < half < 0.12  # m/s²: δ = asin(half / g) between 0.3° and 0.7°
+    for i, axis in enumerate("xy"):
+        ft = fit_axis(twin["tita"].ravel(), twin["datos"][:, i], axis, g=G)
+        assert abs(ft.params[0] - params[f"bias_{axis}"]) <= K * ft.std[0], axis
+        assert abs(ft.params[1] - params[f"scale_{axis}"]) <= K * ft.std[1], axis
+    # gap: the real run took the profile's terms; its residuals are far beyond the sensor's
+    # noise (the hand's motion and taps), the twin's are not, and the twin shows nothing it
+    # was not simulated with (its quantization at most)
+    gap, gap_twin = out["gap"], out["gap_twin"]
+    assert gap["analysis"]["criterion"]["profile"]["terms_from_profile"]
+    assert gap["verdict"] in ("nothing_detected", "explained", "unexplained")
+    assert gap_twin["verdict"] in ("nothing_detected", "explained")
+    assert gap_twin["unexplained"] == [] and gap_twin["consistent_after"]
+    assert {e["name"] for e in gap_twin["effects"]} <= {"quantization"}
+    for axis in "xy":
+        before, twin_before = gap["gap_before"][axis], gap_twin["gap_before"][axis]
+        assert twin_before["chi2_dof"] < 1.5
+        assert before["chi2_dof"] > 100 * twin_before["chi2_dof"], axis
 
 
 @pytest.mark.slow  # ~10 s: gap's search and report

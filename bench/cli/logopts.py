@@ -9,8 +9,10 @@ the acceleration unit (``m/s2``, ``g``, ``mg``, ``counts`` with ``--sensitivity`
 g); ``--gyro-unit`` the gyro's; ``--angle-unit`` states θ's unit; ``--map`` maps course
 variable names to a ``.mat`` file's (``tita=angle,datos=acc``); ``--poses`` gives each held
 pose's angle in order, ``--label-angles`` each label's; ``--static-window`` and
-``--min-hold`` tune the pose detector; ``--allow-gaps`` / ``--allow-saturation`` accept what
-is refused by default. The command's ``--g`` (when it has one) converts g, mg and counts.
+``--min-hold`` tune the pose detector; ``--theta-source gyro`` integrates the gyro about the
+tilt axis for θ(t) of every sample, anchored to the poses' angles; ``--allow-gaps`` /
+``--allow-saturation`` accept what is refused by default. The command's ``--g`` (when it has
+one) converts g, mg and counts.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from bench.cli.options import OptionError, parse_floats
 FORMATS = ("auto", "course", "csv", "phyphox", "sensorlogger", "rosbag", "mat")
 ACCEL_UNITS = ("m/s2", "g", "mg", "counts")
 GYRO_UNITS = ("rad/s", "deg/s")
+THETA_SOURCES = ("poses", "gyro")
 
 
 def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
@@ -50,6 +53,10 @@ def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
                        "--angle-unit deg); without it, poses found in the log keep θ unknown")
         g.add_argument("--label-angles", help="angle of each value of the label column, e.g. "
                        "1=0,2=90 (in --angle-unit)")
+        g.add_argument("--theta-source", choices=THETA_SOURCES, default="poses",
+                       help="θ from the poses' angles (poses: the held samples only) or from "
+                       "the gyro about the tilt axis integrated over time and anchored to "
+                       "them (gyro: every sample, a timed sweep; closure errors printed)")
         g.add_argument("--static-window", type=float, metavar="S", help="pose detector's "
                        "window, s (samples if the log has no times; if not given 0.5 s / 25)")
         g.add_argument("--min-hold", type=float, metavar="S", help="shortest held pose, s "
@@ -118,6 +125,7 @@ def log_options_from_args(args: argparse.Namespace):
         gyro_unit=getattr(args, "gyro_unit", None),
         allow_gaps=bool(getattr(args, "allow_gaps", False)),
         allow_saturation=bool(getattr(args, "allow_saturation", False)),
+        theta_source=getattr(args, "theta_source", "poses"),
         window=_positive(getattr(args, "static_window", None), "--static-window"),
         min_hold=_positive(getattr(args, "min_hold", None), "--min-hold"))
 
@@ -138,4 +146,6 @@ def read_log_from_args(args: argparse.Namespace, path: str, expect: str | None =
         kept = log.provenance.get("held_samples_only")
         print(f"note: {path}: {count} held pose(s) detected; {poses['thresholds']}"
               f"{'; ' + kept if kept else ''}", file=sys.stderr)
+    if "theta_from_gyro" in log.provenance:
+        print(f"note: {path}: θ {log.provenance['theta']}", file=sys.stderr)
     return log
