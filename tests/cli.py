@@ -22,7 +22,12 @@ def one_line_error(capsys, *argv, prefix: str = "tiltbench ",
     assert rc == 2, err
     assert out == ""
     assert "Traceback" not in err
-    lines = [ln for ln in err.strip().splitlines() if not ln.startswith(ignore or ("\0",))]
+    lines, skipping = [], False
+    for ln in err.strip().splitlines():
+        # an ignored line and its continuation lines (wrapped at 100 columns, indented)
+        skipping = ln.startswith(ignore or ("\0",)) or (skipping and ln.startswith("    "))
+        if not skipping:
+            lines.append(ln)
     assert len(lines) == 1, err
     assert lines[0].startswith(prefix) and "error:" in lines[0]
     return lines[0]
