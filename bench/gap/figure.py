@@ -41,6 +41,10 @@ SIGNATURE_WORDS = {
 }
 """Signature names of :mod:`calib.diagnostics` in words, as the figure shows them."""
 BINS = 72
+BOX_LINES = 14
+"""Lines of the verdict box under the caption; the rest is counted and left to gap.md."""
+PANEL_ITEMS, PANEL_CHARS = 6, 78
+"""Unexplained items listed on an "after" panel, and their width in characters."""
 """Bins of the binned mean (equal sample counts)."""
 CAPTION = ("Every ± in this figure is 1 std. Dots: residual data − simulation; red line: binned "
            f"mean ({BINS} bins) with its ±σ/√n band (n samples per bin); orange band: ±σ, the "
@@ -69,7 +73,7 @@ def _param_text(name: str, key: str, value: float, std: float | None) -> str:
 
 
 def effects_label(report: GapReport) -> str:
-    """One line naming the effects added, their estimates ± std and units (figure title)."""
+    """One line naming the effects added, their estimates ± std and units (verdict box)."""
     effects = report.to_dict().get("effects", [])
     if not effects:
         return "no effect named"
@@ -81,12 +85,26 @@ def effects_label(report: GapReport) -> str:
 
 
 def verdict_box_text(report: GapReport) -> str:
-    """The figure's bottom box: the verdict (and each unexplained signature), then per axis
-    whether the gap shrank and why not."""
+    """The figure's bottom box: the effects added with their estimates, the verdict (and each
+    unexplained signature), then per axis whether the gap shrank and why not."""
     d = report.to_dict()
-    lines = report.verdict_lines()
+    lines = [f"added: {effects_label(report)} (± 1 std)", *report.verdict_lines()]
     lines += [f"{ax}: gap {shrink_word(sh)} — {sh['reason']}" for ax, sh in d["shrink"].items()]
-    return "\n".join(_wrap(signature_words(line), 150) for line in lines)
+    wrapped = [w for line in lines for w in _wrap(signature_words(line), 150).split("\n")]
+    # the box holds about a dozen lines below the caption: the rest is in gap.md
+    return "\n".join(_capped(wrapped, BOX_LINES, "lines (the whole text: gap.md, or --json)"))
+
+
+def _shorten(text: str, width: int) -> str:
+    """``text`` cut to ``width`` characters with an ellipsis (the whole text is in gap.md)."""
+    return text if len(text) <= width else text[:width - 1].rstrip() + "…"
+
+
+def _capped(lines: list[str], most: int, more: str) -> list[str]:
+    """At most ``most`` lines; the rest counted in one last line naming where they are."""
+    if len(lines) <= most:
+        return lines
+    return lines[:most - 1] + [f"… and {len(lines) - most + 1} more {more}"]
 
 
 def _wrap(line: str, width: int) -> str:
@@ -165,8 +183,13 @@ def gap_figure(report: GapReport) -> Figure:
              bbox={"boxstyle": "round", "facecolor": VERDICT_COLORS.get(
                  report.verdict, VERDICT_COLORS["nothing_detected"]), "edgecolor": "0.5"})
     # wrapped: several named effects with their estimates make a line wider than the page
-    fig.suptitle(_wrap(signature_words(report.verdict_lines()[0]), 135) + "\n"
-                 + _wrap(f"gap before / after adding: {effects_label(report)} (± 1 std)", 135),
+    # two lines at most: the verdict and what was added (estimates ± std in the box and
+    # gap.md; a title that grew with every named effect ran off the page)
+    names = [f"{e.name} ({e.axis}{', tentative' if report.verdict == 'unexplained' else ''})"
+             for e in report.effects]
+    added = ", ".join(names) if names else "no effect named"
+    fig.suptitle(_shorten(signature_words(report.verdict_lines()[0]), 120) + "\n"
+                 + _shorten(f"gap before / after adding: {added}", 120),
                  fontsize=10,
                  color=UNEXPLAINED_EDGE if report.verdict == "unexplained" else "k")
     return fig
@@ -177,9 +200,10 @@ def _mark_unexplained(ax: Axes, signatures: list[dict]) -> None:
     for spine in ax.spines.values():
         spine.set_edgecolor(UNEXPLAINED_EDGE)
         spine.set_linewidth(2.0)
-    text = "unexplained:\n" + "\n".join(
-        signature_words(f"{u.get('description', u.get('signature', '?'))}")
-        for u in signatures)
+    items = [_shorten(signature_words(f"{u.get('description', u.get('signature', '?'))}"),
+                      PANEL_CHARS) for u in signatures]
+    more = "(in the box below and gap.md)"
+    text = "unexplained:\n" + "\n".join(_capped(items, PANEL_ITEMS, more))
     ax.text(0.01, 0.98, text, transform=ax.transAxes, va="top", ha="left", fontsize=7.5,
             color=UNEXPLAINED_EDGE, zorder=5,
             bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.85,
