@@ -303,22 +303,9 @@ def private_imports(mods: dict[str, Module], root: Path) -> list[tuple[str, str,
     return out
 
 
-PRIVATE_ALLOWED = {
-    # owned by the gap work, to be removed (calib/gap; calib/design reaches into it)
-    ("calib/design/analysis.py", "calib.gap.selection", "_first_step"),
-    ("calib/gap/__init__.py", "calib.gap.random_walk", "_q_curvature_std"),
-    ("calib/gap/__init__.py", "calib.gap.random_walk", "_q_profile_interval"),
-    ("calib/gap/__init__.py", "calib.gap.random_walk", "_q_uncertainty"),
-    ("calib/gap/analysis.py", "calib.gap.confusions", "_confusions"),
-    ("calib/gap/analysis.py", "calib.gap.estimates", "_Reporter"),
-    ("calib/gap/analysis.py", "calib.gap.selection", "_try"),
-    ("calib/gap/confusions.py", "calib.gap.selection", "_drop"),
-    ("calib/gap/confusions.py", "calib.gap.selection", "_try"),
-    ("calib/gap/estimates.py", "calib.gap.random_walk", "_q_uncertainty"),
-    ("calib/gap/prediction.py", "calib.gap.estimates", "_Reporter"),
-}
-"""(importing file, module, name) still allowed by rule (f), each listed: owned by the gap
-work, to be removed. An entry that no longer occurs fails too (the list only shrinks)."""
+PRIVATE_ALLOWED: frozenset[tuple[str, str, str]] = frozenset()
+"""(importing file, module, name) still allowed by rule (f): none. An entry that no longer
+occurs would fail too (the list only shrinks)."""
 
 
 def check_private_imports(mods: dict[str, Module], root: Path,

@@ -22,7 +22,7 @@ from calib.design.result import DesignResult
 from calib.design.signals import LINEAR, SIMULATED, coefficients, size_of, size_unit
 from calib.effects import AxisState, Extensions, ModelState, RunData, effect
 from calib.gap.confusions import AMBIGUITY_LR
-from calib.gap.selection import LATTICE_TESTS, _first_step, candidate_list
+from calib.gap.selection import LATTICE_TESTS, candidate_list, first_step
 from calib.ls import fit_axis
 from calib.proportion import clopper_pearson
 from calib.runs import Mapper
@@ -51,7 +51,7 @@ class _Design:
         cands, _ = candidate_list(self.run)
         state = ModelState((AxisState(sigma2=float(noise_var[0])),
                             AxisState(sigma2=float(noise_var[1]))))
-        _, untestable = _first_step(self.ext, state, cands)
+        _, untestable = first_step(self.ext, state, cands)
         self.candidates = [c for c in cands if c not in untestable]
         self.n_tests = len(self.candidates) + LATTICE_TESTS
         self.alpha_step = family_alpha / self.n_tests

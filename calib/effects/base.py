@@ -144,7 +144,7 @@ class Effect:
 
     def estimate(self, fit, axis: str) -> tuple[dict, dict]:
         """Catalog parameters and their std (keys and units of ``info``) from the final fit
-        (:class:`calib.gap.estimates._Reporter`)."""
+        (:class:`calib.gap.estimates.Reporter`)."""
         raise ValueError(self.name)
 
     def interval(self, fit, axis: str, params: dict) -> dict:

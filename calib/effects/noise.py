@@ -70,7 +70,7 @@ class BiasRandomWalk(BoundaryEffect):
         return float(np.sqrt(np.exp(lk) * s2 / dtm)), val
 
     def std(self, fit, k: int) -> float:
-        """From the REML profile interval (:func:`calib.gap.random_walk._q_uncertainty`)."""
+        """From the REML profile interval (:func:`calib.gap.random_walk.q_uncertainty`)."""
         return fit.q_uncertainty(k)[0]
 
     def _key(self, fit) -> str:

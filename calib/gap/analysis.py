@@ -12,11 +12,11 @@ from calib.diagnostics import GapMeasure, Lattice, detect_lattice, gap_measure
 from calib.effects import Extensions, ModelState, RunData, effect
 from calib.effects.catalog import REFINED
 from calib.gap.adequacy import ADEQUACY_ALPHA, Battery, run_battery
-from calib.gap.confusions import _confusions, merge_tilt, prefer_less_assuming
-from calib.gap.estimates import _Reporter
+from calib.gap.confusions import merge_tilt, not_identifiable, prefer_less_assuming
+from calib.gap.estimates import Reporter
 from calib.gap.mechanisms import mechanism_checks
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
-from calib.gap.selection import _try, candidate_list, initial_state, select
+from calib.gap.selection import candidate_list, initial_state, select, try_test
 from calib.gap.sponges import review_sponges
 from calib.gap.walk import WALK_CHECKS, WalkReview, review_walk
 from calib.io import Ensayo
@@ -86,7 +86,7 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     state = merge_tilt(ext, state, stated, sel.candidates, steps)
     state, sponges = review_sponges(ext, state, lattice, float(np.log(sel.alpha_step)))
 
-    rep = _Reporter(ext, state, lattice)
+    rep = Reporter(ext, state, lattice)
     effects = _named_effects(ext, rep, state, lattice)
     before, after, resid_before, resid_after, fitted = _gaps(ext, rep, state, nominal)
     final = _final_model(ext, rep, state, gains)
@@ -118,7 +118,7 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         criterion["profile"] = profile
     return GapAnalysis(
         effects=tuple(effects),
-        not_identifiable=tuple(_confusions(ext, state, stated, sel.candidates,
+        not_identifiable=tuple(not_identifiable(ext, state, stated, sel.candidates,
                                            sel.untestable)),
         gap_before=before, gap_after_fit=after, nominal=nominal, final=final,
         residuals_before=resid_before, residuals_after=resid_after, fitted=fitted,
@@ -194,7 +194,7 @@ def _adequacy(battery: Battery, drifting: list[WalkReview], reviews: dict[int, W
     return out
 
 
-def _named_effects(ext: Extensions, rep: _Reporter, state: ModelState, lattice: list[Lattice]
+def _named_effects(ext: Extensions, rep: Reporter, state: ModelState, lattice: list[Lattice]
                    ) -> list[EffectEstimate]:
     """Each effect of the final model: estimate ± std, drop-one statistic, interval."""
     effects = []
@@ -202,7 +202,7 @@ def _named_effects(ext: Extensions, rep: _Reporter, state: ModelState, lattice: 
         e = effect(name)
         params, std = e.estimate(rep, axis)
         if e.lr_tested:
-            t = _try(ext, state.without(name, axis, ext.run.sigma2), name, axis)
+            t = try_test(ext, state.without(name, axis, ext.run.sigma2), name, axis)
             stat, p = (t.lr, t.p_value) if t is not None else (float("nan"), float("nan"))
         else:  # the lattice test of step 0: number of levels, its p-value
             lat = lattice[AXES.index(axis)]
@@ -212,7 +212,7 @@ def _named_effects(ext: Extensions, rep: _Reporter, state: ModelState, lattice: 
     return effects
 
 
-def _gaps(ext: Extensions, rep: _Reporter, state: ModelState, nominal: Calibration
+def _gaps(ext: Extensions, rep: Reporter, state: ModelState, nominal: Calibration
           ) -> tuple[dict[str, GapMeasure], dict[str, GapMeasure], np.ndarray, np.ndarray,
                      np.ndarray]:
     """Gap of the nominal and of the extended model per axis, their residuals, the fit."""
@@ -234,7 +234,7 @@ def _gaps(ext: Extensions, rep: _Reporter, state: ModelState, nominal: Calibrati
     return before, after, resid_before, resid_after, fitted
 
 
-def _final_model(ext: Extensions, rep: _Reporter, state: ModelState, gains: np.ndarray
+def _final_model(ext: Extensions, rep: Reporter, state: ModelState, gains: np.ndarray
                  ) -> ExtendedModel:
     """The extended model: linear parameters with covariance, nonlinear ones ± std."""
     nonlinear = {}
