@@ -146,7 +146,7 @@ def replicate(job: tuple[str, int, int, float, str, float | None, bool]) -> dict
     if candidates and effect == "walk":
         from calib.gap import q_curvature_std, q_profile_interval
 
-        run = RunData.build(th, y, STATED, G)
+        run = RunData.build(th, y, G)
         ext = Extensions(run, np.asarray(res.final.gains))
         state = res.final.state
         q = state.axes[0].q

@@ -487,7 +487,7 @@ def _walk_whiteness(innov: np.ndarray, axis: str) -> Check:
                  "random walk")
 
 
-def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> Check | None:
+def _rivals(ext: Extensions, state: ModelState, k: int) -> Check | None:
     """The named effects of one axis against few-parameter shapes outside the catalog.
 
     The named set of axis k (its per-axis effects but the noise level and quantization; a
@@ -509,7 +509,7 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
     run = ext.run
     reduced = state
     for n in named:
-        reduced = reduced.without(n, axis, stated)
+        reduced = reduced.without(n, axis)
     lr_named = ext.nll(reduced) - ext.nll(state)
     cost = sum(walk_cost(ext, st, k) if n == "bias_random_walk" else float(effect(n).n_free)
                for n in named)
@@ -629,11 +629,10 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
         ]
         if st.q > 0:
             found.append(_walk_whiteness(innovations[k], axis))
-        found.append(_rivals(ext, state, k, run.sigma2))
+        found.append(_rivals(ext, state, k))
         if gaps is not None and axis in gaps:
             if not st.noise_free:
-                found.append(_gap_noise(gaps[axis], float(run.sigma2[k]) + st.lsb**2 / 12.0,
-                                        axis))
+                found.append(_gap_noise(gaps[axis], st.sigma2_stated + st.lsb**2 / 12.0, axis))
             found.append(_gap_signatures(gaps[axis], axis))
         checks += [c for c in found if c is not None]
     checks += list(extra or ())

@@ -37,8 +37,8 @@ def assumptions(name: str) -> tuple[bool, bool, int]:
     return (EFFECTS[name].timing == "yes", name in FLEXIBLE, effect(name).n_free)
 
 
-def prefer_less_assuming(ext: Extensions, state: ModelState, stated: np.ndarray,
-                         candidates: list[tuple[str, str]], steps: list[dict]) -> ModelState:
+def prefer_less_assuming(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]],
+                         steps: list[dict]) -> ModelState:
     """Ties: a named effect that another candidate explains within ``AMBIGUITY_LR`` (AIC
     penalised) is replaced by that candidate when it assumes less (:func:`assumptions`),
     e.g. a one-axis rotation instead of a low-pass lag on a constant-rate sweep. The pair is
@@ -47,7 +47,7 @@ def prefer_less_assuming(ext: Extensions, state: ModelState, stated: np.ndarray,
         if name in ("quantization", "noise_level") or not state.has(name, axis):
             continue
         nll_final = ext.nll(state)
-        base = state.without(name, axis, stated)
+        base = state.without(name, axis)
         named = state.effects()
         alternatives = [(n, a) for n, a in candidates if (n, a) not in named and n != name
                         and n != "noise_level" and n not in FLEXIBLE and a == axis
@@ -71,8 +71,8 @@ def prefer_less_assuming(ext: Extensions, state: ModelState, stated: np.ndarray,
     return state
 
 
-def merge_tilt(ext: Extensions, state: ModelState, stated: np.ndarray,
-               candidates: list[tuple[str, str]], steps: list[dict]) -> ModelState:
+def merge_tilt(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]],
+               steps: list[dict]) -> ModelState:
     """A tilt offset δ_t with a misalignment δ_a of one axis is the same rotation as a
     misalignment δ_t of the other axis when δ_a ≈ -δ_t: one parameter instead of two. When
     that simpler model fits within the ambiguity margin (AIC-penalised), it is named."""
@@ -84,8 +84,7 @@ def merge_tilt(ext: Extensions, state: ModelState, stated: np.ndarray,
     other = AXES[1 - AXES.index(mis[0])]
     if ("misalignment", other) not in candidates:
         return state
-    base = (state.without("tilt_offset", "both", stated)
-            .without("misalignment", mis[0], stated))
+    base = state.without("tilt_offset", "both").without("misalignment", mis[0])
     t = try_test(ext, base, "misalignment", other)
     if t is None:
         return state
@@ -99,8 +98,8 @@ def merge_tilt(ext: Extensions, state: ModelState, stated: np.ndarray,
     return state
 
 
-def not_identifiable(ext: Extensions, state: ModelState, stated: np.ndarray,
-                candidates: list[tuple[str, str]], untestable: dict) -> list[dict]:
+def not_identifiable(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]],
+                     untestable: dict) -> list[dict]:
     """``not_identifiable`` entries (see the module docstring).
 
     Swap test: for each named effect, every other candidate is fitted *in its place*; when
@@ -141,7 +140,7 @@ def not_identifiable(ext: Extensions, state: ModelState, stated: np.ndarray,
     for name, axis in named:
         if name in ("quantization", "noise_level"):
             continue
-        base = state.without(name, axis, stated)
+        base = state.without(name, axis)
         alternatives = [(n, a) for n, a in candidates if (n, a) not in named and n != name
                         and n != "noise_level" and (a == axis or "both" in (a, axis))]
         for alt, alt_axis in alternatives:

@@ -29,8 +29,7 @@ def predict(analysis: GapAnalysis, tita: np.ndarray, t: np.ndarray | None = None
     """
     final = analysis.final
     tita = np.asarray(tita, dtype=float)
-    run = RunData.build(tita, np.zeros((tita.size, 2)), analysis.noise_var, analysis.g, t,
-                        rate)
+    run = RunData.build(tita, np.zeros((tita.size, 2)), analysis.g, t, rate)
     for k, a in enumerate(AXES):
         st = final.state.axes[k]
         needs = any(effect(n).needs_times_to_predict(final.time_unit) for n in st.effects())

@@ -152,11 +152,10 @@ def try_test(ext: Extensions, state: ModelState, name: str, axis: str,
 
 # --------------------------------------------------------------------------- steps
 
-def initial_state(run: RunData, lattice: list[Lattice]) -> ModelState:
-    """Step 0: the nominal model at the stated σ², with the lattice of each axis if found."""
-    return ModelState(tuple(AxisState(sigma2=float(run.sigma2[k]),
-                                      lsb=lattice[k].lsb if lattice[k].found else 0.0)
-                            for k in range(2)))
+def initial_state(noise_var, lattice: list[Lattice]) -> ModelState:
+    """Step 0: the nominal model at the stated σ² (checked by
+    :func:`calib.effects.stated_variances`), with the lattice of each axis if found."""
+    return ModelState.nominal(noise_var, [lat.lsb if lat.found else 0.0 for lat in lattice])
 
 
 def candidate_list(run: RunData) -> tuple[list[tuple[str, str]], tuple[str, ...]]:
@@ -243,7 +242,6 @@ def _flexible_swap(ext: Extensions, state: ModelState, candidates: list[tuple[st
                    log_alpha: float, steps: list[dict]) -> ModelState:
     """Per axis: the structured effects named there against a walk in their place (AIC, the
     walk charged its effective dof); the walk is kept only when its own test passes."""
-    stated = ext.run.sigma2
     for k, axis in enumerate(AXES):
         st = state.axes[k]
         named = [n for n in st.effects() if n not in ("noise_level", "quantization")]
@@ -251,7 +249,7 @@ def _flexible_swap(ext: Extensions, state: ModelState, candidates: list[tuple[st
             continue
         reduced = state
         for n in named:
-            reduced = reduced.without(n, axis, stated)
+            reduced = reduced.without(n, axis)
         t = try_test(ext, reduced, "bias_random_walk", axis)
         if t is None or t.logp >= log_alpha:
             continue
@@ -269,15 +267,15 @@ def _flexible_swap(ext: Extensions, state: ModelState, candidates: list[tuple[st
     return state
 
 
-def _backward(ext: Extensions, state: ModelState, stated: np.ndarray, log_alpha: float,
-              steps: list[dict]) -> ModelState:
+def _backward(ext: Extensions, state: ModelState, log_alpha: float, steps: list[dict]
+              ) -> ModelState:
     """One backward pass: drop what the later additions made unnecessary."""
     for name, axis in state.effects():
         if not effect(name).lr_tested:
             continue
-        t = try_test(ext, state.without(name, axis, stated), name, axis)
+        t = try_test(ext, state.without(name, axis), name, axis)
         if t is not None and t.logp >= log_alpha:
-            state = ext.refine(state.without(name, axis, stated))
+            state = ext.refine(state.without(name, axis))
             steps.append({"removed": [name, axis], "p_value": t.p_value})
     return state
 
@@ -302,5 +300,5 @@ def select(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]]
         trials = [t for t in (try_test(ext, swapped, n, a, memo)
                               for n, a in _remaining(swapped, candidates)) if t is not None]
         state = _forward(ext, swapped, trials, candidates, log_alpha, steps, memo)
-    state = _backward(ext, state, ext.run.sigma2, log_alpha, steps)
+    state = _backward(ext, state, log_alpha, steps)
     return Selection(state, candidates, untestable, n_tests, alpha_step, tuple(steps))

@@ -546,15 +546,15 @@ def rival_check(ext: Extensions, e: np.ndarray, sigma2: float, q: float, k: int,
 
 
 def review_walk(ext: Extensions, state: ModelState, k: int, e: np.ndarray,
-                innov: np.ndarray, stated: np.ndarray) -> WalkReview:
+                innov: np.ndarray) -> WalkReview:
     """Rivals and path battery for the walk named on axis k of ``state``.
 
     e : (N,) readings minus the final model's mean without its bias, m/s².  innov : (N,) the
-    walk filter's normalised innovations.  stated : (2,) stated σ² (to remove the walk).
+    walk filter's normalised innovations.
     """
     st = state.axes[k]
     axis = AXES[k]
-    reduced = state.without("bias_random_walk", axis, stated)
+    reduced = state.without("bias_random_walk", axis)
     lr = float(ext.nll(reduced) - ext.nll(state))
     charge = walk_charge(ext, k)
     found = rivals(ext, reduced, k)
