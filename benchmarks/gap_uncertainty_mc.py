@@ -144,14 +144,14 @@ def replicate(job: tuple[str, int, int, float, str, float | None, bool]) -> dict
     if key in e.interval:
         out["interval"] = [float(v) for v in e.interval[key]]
     if candidates and effect == "walk":
-        from calib.gap import _q_curvature_std, _q_profile_interval
+        from calib.gap import q_curvature_std, q_profile_interval
 
-        run = RunData.build(th, y, STATED, G)
+        run = RunData.build(th, y, G)
         ext = Extensions(run, np.asarray(res.final.gains))
         state = res.final.state
         q = state.axes[0].q
-        curv = _q_curvature_std(ext, state, 0)
-        lo, hi = _q_profile_interval(ext, state, 0)
+        curv = q_curvature_std(ext, state, 0)
+        lo, hi = q_profile_interval(ext, state, 0)
         sf = _fisher_std_logq(ext, state, 0)
         sc = curv / q
         out["cand"] = {

@@ -10,11 +10,25 @@ import inspect
 import numpy as np
 import pytest
 
+import calib.effects.base as base_module
 import calib.effects.engine as engine
-import calib.effects.state as state_module
 from calib.conventions import EFFECT_NAMES, EFFECTS, G
-from calib.effects import CATALOG, REGISTRY, AxisState, Effect, ModelState, effect, register
+from calib.effects import (
+    CATALOG,
+    REGISTRY,
+    AxisState,
+    Effect,
+    Extensions,
+    FinalFit,
+    Likelihood,
+    ModelState,
+    RunData,
+    effect,
+    register,
+    stated_variances,
+)
 from calib.gap import analyze_gap
+from calib.gap.estimates import Reporter
 from calib.io import Ensayo
 
 
@@ -43,7 +57,7 @@ def test_a_second_registration_fails():
 
 
 def test_engine_and_states_name_no_effect():
-    for module in (engine, state_module):
+    for module in (engine, base_module):
         code = inspect.getsource(module)
         code = "\n".join(line for line in code.splitlines()
                          if not line.lstrip().startswith(("#", '"', "*")))
@@ -52,7 +66,7 @@ def test_engine_and_states_name_no_effect():
 
 
 def test_add_remove_round_trip_per_axis_effects():
-    st = AxisState(sigma2=0.01)
+    st = AxisState(sigma2_stated=0.01)
     values = {"lowpass_lag": 0.05, "saturation": 9.0, "bias_random_walk": 1e-3,
               "noise_level": 0.02}
     for e in CATALOG:
@@ -60,7 +74,7 @@ def test_add_remove_round_trip_per_axis_effects():
             continue
         added = e.add(st, values.get(e.name))
         assert e.present(added) and added.effects() == (e.name,)
-        assert e.remove(added, 0.01) == st
+        assert e.remove(added) == st
 
 
 def test_estimates_use_catalog_keys():
@@ -80,3 +94,45 @@ def test_estimates_use_catalog_keys():
     state = res.final.state
     assert isinstance(state, ModelState)
     assert state.effects() == [(e.name, e.axis) for e in res.effects]
+
+
+def _members(proto) -> list[str]:
+    """Public names a protocol declares: its methods and its annotated attributes."""
+    return sorted({n for n in vars(proto) if not n.startswith("_")}
+                  | set(getattr(proto, "__annotations__", {})))
+
+
+def test_engine_and_final_fit_implement_the_protocols_the_effects_use():
+    """The effects are typed against ``Likelihood`` and ``FinalFit`` (calib.effects.base), not
+    against the classes: every member is there, with the protocol's parameter names."""
+    rng = np.random.default_rng(3)
+    th = np.linspace(-3.0, 3.0, 400)
+    y = np.column_stack([-G * np.sin(th), -G * np.cos(th)]) + 0.1 * rng.standard_normal((400, 2))
+    ext = Extensions(RunData.build(th, y, G), np.ones(2))
+    rep = Reporter(ext, ModelState.nominal([0.01, 0.01]))
+    for proto, impl in ((Likelihood, ext), (FinalFit, rep)):
+        members = _members(proto)
+        assert len(members) >= 7, members
+        for name in members:
+            assert hasattr(impl, name), (proto.__name__, name)
+            want = getattr(proto, name, None)
+            if callable(want):
+                got = inspect.signature(getattr(type(impl), name)).parameters
+                assert list(got) == list(inspect.signature(want).parameters), name
+
+
+def test_the_stated_noise_has_one_form_and_one_check():
+    """σ² is stated once (AxisState.sigma2_stated) and checked once (stated_variances);
+    the noise level puts an estimate beside it and removing it leaves the statement."""
+    state = ModelState.nominal([0.25, 0.64])
+    assert [st.sigma2_stated for st in state.axes] == [0.25, 0.64]
+    assert not hasattr(RunData, "sigma2") and "noise_var" not in inspect.signature(
+        RunData.build).parameters
+    free = state.with_axis(1, effect("noise_level").add(state.axes[1], 0.7))
+    assert free.axes[1].sigma2 == 0.7 and free.axes[1].noise_free
+    assert free.axes[1].sigma2_stated == 0.64
+    assert free.without("noise_level", "y") == state
+    np.testing.assert_array_equal(stated_variances(np.diag([0.25, 0.64])), [0.25, 0.64])
+    for bad in ([0.25], [0.25, -1.0], [np.nan, 1.0], [[1.0, 2.0, 3.0]]):
+        with pytest.raises(ValueError, match="two positive variances"):
+            ModelState.nominal(bad)

@@ -37,8 +37,8 @@ from scipy import stats
 from calib.calibration import calibrate
 from calib.conventions import AXES
 from calib.diagnostics import detect_lattice, gap_measure, hinge_levels
-from calib.effects import AxisState, Extensions, ModelState, RunData, lowpass
-from calib.gap import _q_uncertainty, analyze_gap, predict
+from calib.effects import Extensions, ModelState, RunData, lowpass
+from calib.gap import analyze_gap, predict, q_uncertainty
 from calib.io import Ensayo, read_ensayo
 
 G = 9.8
@@ -358,14 +358,14 @@ def _walk_run(i: int):
 
 def _walk_replicate(i: int) -> tuple[float, float, float, float]:
     """q̂, std, interval of run i through analyze_gap's own path when the walk is named:
-    the nominal gains, the REML test of the walk on x, ``refine``, ``_q_uncertainty``
+    the nominal gains, the REML test of the walk on x, ``refine``, ``q_uncertainty``
     (selection skipped for speed; the test checks on run 0 that this is what it reports)."""
     th, y, _ = _walk_run(i)
-    ext = Extensions(RunData.build(th, y, STATED, G),
+    ext = Extensions(RunData.build(th, y, G),
                      1.0 + calibrate(Ensayo(th, y), STATED, "ols", G).scale)
-    state = ModelState(tuple(AxisState(sigma2=s) for s in STATED))
+    state = ModelState.nominal(STATED)
     state = ext.refine(ext.test(state, "bias_random_walk", "x").state)
-    std, (lo, hi) = _q_uncertainty(ext, state, 0)
+    std, (lo, hi) = q_uncertainty(ext, state, 0)
     return state.axes[0].q, std, lo, hi
 
 

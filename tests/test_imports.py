@@ -6,7 +6,8 @@
     ``argparse``;
 (c) no ``importlib`` / ``__import__`` in ``bench`` or ``calib`` (dynamic imports would hide
     edges from these checks);
-(d) no import circles between modules;
+(d) no import circles between modules, ``if TYPE_CHECKING:`` imports included: a tie needed
+    only for annotations is still a tie in the design (type against a protocol instead);
 (e) the generator modules of ``validation/`` (every module but the scorer,
     :data:`VALIDATION_SCORING`) import neither ``bench`` nor ``calib`` nor the scorer: the
     validation set is written from the physics, so the bench's effect code cannot appear on
@@ -19,7 +20,8 @@
     generator's effects, designs or cases).
 
 Every import counts, also inside functions (a deferred import is still a dependency); only
-``if TYPE_CHECKING:`` blocks are skipped (annotations, never executed). Edges of the module
+``if TYPE_CHECKING:`` blocks are skipped by (a), (b), (e) and (g) (annotations, never
+executed); (d) and (f) count them too. Edges of the module
 graph: ``import a.b`` → ``a.b``; ``from p import n`` → ``p.n`` when that is a module, else
 ``p`` (its ``__init__``); relative imports are resolved first. Each checker is also run on a
 small synthetic tree below, so a check that can never fail would show.
@@ -47,6 +49,8 @@ class Module:
     is_package: bool
     imports: list[tuple[str, tuple[str, ...], int]] = field(default_factory=list)
     """(imported module, names taken from it by ``from … import``, line)."""
+    typing_imports: list[tuple[str, tuple[str, ...], int]] = field(default_factory=list)
+    """The same, for the imports inside ``if TYPE_CHECKING:`` blocks."""
     dynamic: list[tuple[str, int]] = field(default_factory=list)
     """Uses of ``importlib`` / ``__import__`` (what, line)."""
     tree: ast.Module | None = None
@@ -67,6 +71,14 @@ def _walk(node: ast.AST):
             continue
         yield child
         yield from _walk(child)
+
+
+def _typing_blocks(node: ast.AST):
+    """Every node inside the bodies of ``if TYPE_CHECKING:`` blocks below ``node``."""
+    for sub in ast.walk(node):
+        if isinstance(sub, ast.If) and _is_type_checking(sub.test):
+            for stmt in sub.body:
+                yield from ast.walk(stmt)
 
 
 def _resolve(mod: Module, node: ast.ImportFrom) -> str:
@@ -107,6 +119,12 @@ def scan(root: Path, packages: tuple[str, ...] = PACKAGES) -> dict[str, Module]:
                 mod.dynamic.append((node.id, node.lineno))
             elif isinstance(node, ast.Attribute) and node.attr == "__import__":
                 mod.dynamic.append(("__import__", node.lineno))
+        for node in _typing_blocks(tree):
+            if isinstance(node, ast.Import):
+                mod.typing_imports += [(a.name, (), node.lineno) for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                mod.typing_imports.append((_resolve(mod, node),
+                                           tuple(a.name for a in node.names), node.lineno))
     return mods
 
 
@@ -158,11 +176,12 @@ def check_dynamic_imports(mods: dict[str, Module], root: Path) -> list[str]:
                    for m in mods.values() for what, line in m.dynamic})
 
 
-def import_graph(mods: dict[str, Module]) -> dict[str, set[str]]:
-    """Module → modules it imports (only modules of the scanned packages)."""
+def import_graph(mods: dict[str, Module], typing: bool = True) -> dict[str, set[str]]:
+    """Module → modules it imports (only modules of the scanned packages); ``typing``: with
+    the imports of ``if TYPE_CHECKING:`` blocks."""
     graph: dict[str, set[str]] = {name: set() for name in mods}
     for mod in mods.values():
-        for target, names, _ in mod.imports:
+        for target, names, _ in mod.imports + (mod.typing_imports if typing else []):
             if names:
                 for n in names:
                     sub = f"{target}.{n}"
@@ -223,9 +242,10 @@ def strongly_connected(graph: dict[str, set[str]]) -> list[list[str]]:
     return out
 
 
-def check_cycles(mods: dict[str, Module], root: Path) -> list[str]:
-    """(d) every strongly connected component of more than one module, with its files."""
-    graph = import_graph(mods)
+def check_cycles(mods: dict[str, Module], root: Path, typing: bool = True) -> list[str]:
+    """(d) every strongly connected component of more than one module, with its files
+    (``typing``: ``if TYPE_CHECKING:`` imports count, as rule (d) asks)."""
+    graph = import_graph(mods, typing)
     return sorted(
         "circle: " + ", ".join(str(mods[n].path.relative_to(root)) for n in comp)
         for comp in strongly_connected(graph) if len(comp) > 1)
@@ -303,22 +323,9 @@ def private_imports(mods: dict[str, Module], root: Path) -> list[tuple[str, str,
     return out
 
 
-PRIVATE_ALLOWED = {
-    # owned by the gap work, to be removed (calib/gap; calib/design reaches into it)
-    ("calib/design/analysis.py", "calib.gap.selection", "_first_step"),
-    ("calib/gap/__init__.py", "calib.gap.random_walk", "_q_curvature_std"),
-    ("calib/gap/__init__.py", "calib.gap.random_walk", "_q_profile_interval"),
-    ("calib/gap/__init__.py", "calib.gap.random_walk", "_q_uncertainty"),
-    ("calib/gap/analysis.py", "calib.gap.confusions", "_confusions"),
-    ("calib/gap/analysis.py", "calib.gap.estimates", "_Reporter"),
-    ("calib/gap/analysis.py", "calib.gap.selection", "_try"),
-    ("calib/gap/confusions.py", "calib.gap.selection", "_drop"),
-    ("calib/gap/confusions.py", "calib.gap.selection", "_try"),
-    ("calib/gap/estimates.py", "calib.gap.random_walk", "_q_uncertainty"),
-    ("calib/gap/prediction.py", "calib.gap.estimates", "_Reporter"),
-}
-"""(importing file, module, name) still allowed by rule (f), each listed: owned by the gap
-work, to be removed. An entry that no longer occurs fails too (the list only shrinks)."""
+PRIVATE_ALLOWED: frozenset[tuple[str, str, str]] = frozenset()
+"""(importing file, module, name) still allowed by rule (f): none. An entry that no longer
+occurs would fail too (the list only shrinks)."""
 
 
 def check_private_imports(mods: dict[str, Module], root: Path,
@@ -448,14 +455,44 @@ def test_checker_d_finds_circles_through_deferred_and_package_imports(tmp_path):
         "bench/p/q.py": "from . import helper\n",                     # relative, to __init__
         "bench/z.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
                       "    from bench.w import W\n",
-        "bench/w.py": "from bench.z import TYPE_CHECKING\n",          # guarded: no circle
+        "bench/w.py": "from bench.z import TYPE_CHECKING\n",          # guarded: still a circle
         "calib/a.py": "from calib.b import x\n",
         "calib/b.py": "x = 1\n",
     })
     assert check_cycles(mods, tmp_path) == [
         "circle: bench/p/__init__.py, bench/p/q.py",
+        "circle: bench/w.py, bench/z.py",
         "circle: bench/x.py, bench/y.py",
     ]
+
+
+def test_checker_d_finds_circles_that_only_annotations_close(tmp_path):
+    """The 9-file shape that calib/effects had: a plugin typed against the engine that imports
+    it (typing only), through a registry module; a protocol below both breaks it."""
+    mods = _tree(tmp_path, {
+        "calib/fx/__init__.py": "",
+        "calib/fx/engine.py": "from calib.fx import catalog\n",
+        "calib/fx/catalog.py": "import calib.fx.plugin\n",
+        "calib/fx/plugin.py": """
+            from __future__ import annotations
+            import typing
+            from calib.fx.base import Effect
+            if typing.TYPE_CHECKING:
+                from calib.fx.engine import Engine
+            """,
+        "calib/fx/base.py": "from typing import Protocol\nclass Effect: ...\n",
+        "calib/ok/__init__.py": "",
+        "calib/ok/protocols.py": "from typing import Protocol\nclass Likelihood(Protocol): ...\n",
+        "calib/ok/plugin.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                              "    from calib.ok.protocols import Likelihood\n",
+        "calib/ok/engine.py": "import calib.ok.plugin\nimport calib.ok.protocols\n",
+    })
+    assert check_cycles(mods, tmp_path, typing=False) == []  # what rule (d) saw before
+    assert check_cycles(mods, tmp_path) == [
+        "circle: calib/fx/catalog.py, calib/fx/engine.py, calib/fx/plugin.py"]
+    # the typing edge is recorded where it is, and the other rules still skip it
+    assert [t for t, _, _ in mods["calib.fx.plugin"].typing_imports] == ["calib.fx.engine"]
+    assert "calib.fx.engine" not in [t for t, _, _ in mods["calib.fx.plugin"].imports]
 
 
 def test_checker_e_finds_bench_calib_and_scorer_imports_in_validation_generators(tmp_path):

@@ -16,7 +16,7 @@ CHECKED = ["calib/kalman.py", "calib/fusion.py", "calib/fusion_turning.py",
            "calib/numerics.py", *sorted(str(p.relative_to(REPO))
                                         for p in (REPO / "calib" / "nmin").glob("*.py")),
            "bench/cli/fuse.py", "bench/cli/nmin.py", "bench/record/fusion.py",
-           "bench/validate.py", "bench/limits.py"]
+           "bench/validate.py", "bench/validate_inputs.py", "bench/limits.py"]
 
 
 def long_signatures(source: str, name: str) -> list[str]:

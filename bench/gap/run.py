@@ -42,6 +42,7 @@ from bench.model import ACC_SENSORS, ENCODER, TableEdits
 from bench.sensors import AxisErrors, SensorErrorModel
 from calib.conventions import AXES, G
 from calib.diagnostics import gap_measure
+from calib.effects import stated_variances
 from calib.gap import GapAnalysis, analyze_gap
 from calib.io import Ensayo
 from calib.sensor_profile import SensorProfile
@@ -148,9 +149,7 @@ def _nominal_run(tita: np.ndarray, t: np.ndarray | None, base: TableEdits, datos
 def _check_inputs(noise_var: Sequence[float] | np.ndarray, report_dir: PathLike | None,
                   rrd: PathLike | None, force: bool) -> np.ndarray:
     """The stated noise as a (2,) array; refuses existing outputs unless ``force``."""
-    noise_var = np.asarray(noise_var, dtype=float).reshape(-1)
-    if noise_var.shape != (2,) or np.any(~np.isfinite(noise_var)) or np.any(noise_var <= 0):
-        raise ValueError(f"noise_var must be two positive variances (x, y), got {noise_var}")
+    noise_var = stated_variances(noise_var)  # the one check of the statement (calib.effects)
     if report_dir is not None and not force:
         check_outputs(report_dir, rrd)
     elif rrd is not None and not force and Path(rrd).exists():

@@ -20,9 +20,9 @@ from calib.design.power import (
 )
 from calib.design.result import DesignResult
 from calib.design.signals import LINEAR, SIMULATED, coefficients, size_of, size_unit
-from calib.effects import AxisState, Extensions, ModelState, RunData, effect
+from calib.effects import AxisState, Extensions, ModelState, RunData, effect, stated_variances
 from calib.gap.confusions import AMBIGUITY_LR
-from calib.gap.selection import LATTICE_TESTS, _first_step, candidate_list
+from calib.gap.selection import LATTICE_TESTS, candidate_list, first_step
 from calib.ls import fit_axis
 from calib.proportion import clopper_pearson
 from calib.runs import Mapper
@@ -46,12 +46,11 @@ class _Design:
         self.sig = np.sqrt(noise_var)
         rng = np.random.default_rng(0)  # placeholder readings: testability needs columns only
         datos = a_r + rng.standard_normal(a_r.shape) * self.sig
-        self.run = RunData.build(th, datos, noise_var, g, t)
+        self.run = RunData.build(th, datos, g, t)
         self.ext = Extensions(self.run, np.ones(2))
         cands, _ = candidate_list(self.run)
-        state = ModelState((AxisState(sigma2=float(noise_var[0])),
-                            AxisState(sigma2=float(noise_var[1]))))
-        _, untestable = _first_step(self.ext, state, cands)
+        state = ModelState.nominal(noise_var)
+        _, untestable = first_step(self.ext, state, cands)
         self.candidates = [c for c in cands if c not in untestable]
         self.n_tests = len(self.candidates) + LATTICE_TESTS
         self.alpha_step = family_alpha / self.n_tests
@@ -207,9 +206,7 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
     """
     say = progress or (lambda _msg: None)
     sizes = {**DEFAULT_SIZES, **dict(sizes or {})}
-    nv = np.asarray(noise_var, dtype=float)
-    if nv.shape != (2,) or np.any(~np.isfinite(nv)) or np.any(nv <= 0):
-        raise ValueError(f"noise_var must be two positive variances, got {noise_var!r}")
+    nv = stated_variances(noise_var)
     if not (np.isfinite(gain) and gain > 0):
         raise ValueError(f"gain (1 + scale) must be positive, got {gain}")
     if not ALPHA_MIN <= family_alpha < 1:

@@ -60,7 +60,10 @@ of the reading stays white.
 
 Layout (one job per module; an effect is one small object, registered once)
 ---------------------------------------------------------------------------
-* :mod:`~calib.effects.base`     — the :class:`Effect` protocol, :func:`register`, ``Trial``.
+* :mod:`~calib.effects.base`     — the contract: :class:`Effect`, :func:`register`, ``Trial``,
+  the model states ``AxisState``, ``ModelState`` (the stated σ² lives there, checked once by
+  :func:`stated_variances`), and the protocols the effects are typed against
+  (``Likelihood``: the engine; ``FinalFit``: the final fit).
 * :mod:`~calib.effects.linear`   — misalignment, nonlinearity_k2, cross_axis, bias_drift,
   lever_arm (design columns).
 * :mod:`~calib.effects.tilt`     — tilt_offset (one column shared by both axes).
@@ -68,9 +71,11 @@ Layout (one job per module; an effect is one small object, registered once)
 * :mod:`~calib.effects.noise`    — bias_random_walk, noise_level, quantization.
 * :mod:`~calib.effects.gravity`  — gravity_mismatch (never in a model).
 * :mod:`~calib.effects.catalog`  — the registry, complete and in catalog order.
-* :mod:`~calib.effects.run`, :mod:`~calib.effects.state` — ``RunData``; ``AxisState``,
-  ``ModelState``.
+* :mod:`~calib.effects.run`      — ``RunData`` (θ, readings, times; no statement of noise).
 * :mod:`~calib.effects.engine`   — :class:`Extensions`, generic: it asks the effect objects.
+
+Dependencies point one way (no circle, typing-only ones included): run ← base ← effect
+modules ← catalog ← engine.
 
 A new effect: add its row to ``calib.conventions.EFFECTS`` (name, keys, units, timing), write
 one :class:`Effect` subclass decorated with ``@register`` in the module of its family (or a
@@ -79,15 +84,28 @@ state does not have yet, add that field to :class:`AxisState`.
 """
 
 from calib.conventions import EFFECT_NAMES, NEEDS_TIMING, PER_SAMPLE_UNITS
-from calib.effects.base import REGISTRY, SIGN_P, Effect, Trial, UntestableError, register
-from calib.effects.catalog import CATALOG, LINEAR_COLUMNS, PHYSICAL_COLUMNS, effect
+from calib.effects.base import (
+    REGISTRY,
+    SIGN_P,
+    AxisState,
+    Effect,
+    FinalFit,
+    Likelihood,
+    ModelState,
+    Trial,
+    UntestableError,
+    effect,
+    register,
+    stated_variances,
+)
+from calib.effects.catalog import CATALOG, LINEAR_COLUMNS, PHYSICAL_COLUMNS
 from calib.effects.engine import COND_MAX, Extensions
 from calib.effects.run import RunData
-from calib.effects.state import AxisState, ModelState
 from calib.filters import lowpass
 
 __all__ = [
     "EFFECT_NAMES", "NEEDS_TIMING", "PER_SAMPLE_UNITS", "LINEAR_COLUMNS", "PHYSICAL_COLUMNS",
     "SIGN_P", "COND_MAX", "AxisState", "ModelState", "RunData", "Trial", "Extensions",
     "UntestableError", "lowpass", "Effect", "REGISTRY", "CATALOG", "register", "effect",
+    "Likelihood", "FinalFit", "stated_variances",
 ]

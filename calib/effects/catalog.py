@@ -13,12 +13,12 @@ import calib.effects.noise  # noqa: F401
 import calib.effects.response  # noqa: F401
 import calib.effects.tilt  # noqa: F401
 from calib.conventions import EFFECT_NAMES
-from calib.effects.base import REGISTRY, Effect
+from calib.effects.base import REGISTRY, Effect, registered
 
 if set(REGISTRY) != set(EFFECT_NAMES):
     raise ImportError(f"effect registry {sorted(REGISTRY)} != vocabulary {sorted(EFFECT_NAMES)}")
 
-CATALOG: tuple[Effect, ...] = tuple(REGISTRY[n] for n in EFFECT_NAMES)
+CATALOG: tuple[Effect, ...] = registered()
 """Every effect object, in the catalog's order."""
 
 REFINED: tuple[Effect, ...] = tuple(sorted((e for e in CATALOG if e.refine_rank is not None),
@@ -36,10 +36,3 @@ PHYSICAL_COLUMNS: tuple[str, ...] = tuple(
     e.name for e in CATALOG if e.coefficients and e.info.physical)
 """Columns that act on the true specific force, so they pass through the sensor's low-pass."""
 
-
-def effect(name: str) -> Effect:
-    """The registered object of a catalog effect."""
-    try:
-        return REGISTRY[name]
-    except KeyError:
-        raise ValueError(f"unknown extension {name!r}") from None

@@ -1,6 +1,6 @@
 """The likelihood of any model of the catalog on one run (:class:`Extensions`).
 
-Generic: the effects in a model are read from its :class:`~calib.effects.state.ModelState`
+Generic: the effects in a model are read from its :class:`~calib.effects.base.ModelState`
 and every effect-specific step (design columns, tests, profiles, refinement) is asked of the
 registered effect objects (:mod:`calib.effects.catalog`). Equations: package docstring.
 
@@ -59,10 +59,9 @@ from scipy import fft
 from scipy import linalg as sla
 from scipy.linalg import lapack
 
-from calib.effects.base import Trial, UntestableError
-from calib.effects.catalog import CATALOG, REFINED, SHARED, effect
+from calib.effects.base import AxisState, ModelState, Trial, UntestableError, effect
+from calib.effects.catalog import CATALOG, REFINED, SHARED
 from calib.effects.run import RunData
-from calib.effects.state import AxisState, ModelState
 from calib.filters import lowpass
 from calib.ls import FitResult, NotIdentifiableError, fit_linear
 from calib.numerics import equilibrated_cond as _equilibrated_cond

@@ -2,12 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-from calib.effects.base import Effect, register
-
-if TYPE_CHECKING:
-    from calib.effects.state import ModelState
+from calib.effects.base import Effect, ModelState, register
 
 
 @register

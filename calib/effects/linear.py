@@ -16,17 +16,22 @@ Test: σ² known, so ``LR = Δχ² ~ χ²(k)`` exactly, k the number of columns.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import stats
 
 from calib.conventions import AXES, EFFECT_NAMES
-from calib.effects.base import SIGN_P, Effect, Trial, UntestableError, register
-
-if TYPE_CHECKING:
-    from calib.effects.engine import Extensions
-    from calib.effects.state import AxisState, ModelState
+from calib.effects.base import (
+    SIGN_P,
+    AxisState,
+    Effect,
+    FinalFit,
+    Likelihood,
+    ModelState,
+    Trial,
+    UntestableError,
+    register,
+)
 
 
 def ratio(c: float, s: float, cov2: np.ndarray) -> tuple[float, float]:
@@ -50,10 +55,10 @@ class LinearEffect(Effect):
         order = [n for n in EFFECT_NAMES if n in set(st.linear) | {self.name}]
         return replace(st, linear=tuple(order))
 
-    def remove(self, st: AxisState, stated_sigma2: float) -> AxisState:
+    def remove(self, st: AxisState) -> AxisState:
         return replace(st, linear=tuple(n for n in st.linear if n != self.name))
 
-    def test(self, ext: Extensions, state: ModelState, axis: str) -> Trial:
+    def test(self, ext: Likelihood, state: ModelState, axis: str) -> Trial:
         k = AXES.index(axis)
         nll0 = ext.nll(state)
         new = state.with_axis(k, self.add(state.axes[k]))
@@ -63,7 +68,7 @@ class LinearEffect(Effect):
         return Trial(self.name, axis, new, lr, float(stats.chi2.logsf(lr, df)), nll1,
                      f"chi2({df})")
 
-    def _scaled(self, fit, axis: str, key: str) -> tuple[dict, dict]:
+    def _scaled(self, fit: FinalFit, axis: str, key: str) -> tuple[dict, dict]:
         """The catalog parameter ``key = c/(1 + s)`` of a one-column effect."""
         sc, cn = f"{axis}.scale", f"{axis}.{self.coefficients[0]}"
         v, sd = ratio(fit.value(cn), fit.value(sc), fit.cov_of(sc, cn))
@@ -80,10 +85,10 @@ class Misalignment(LinearEffect):
     def raw_physical(self, run, k: int) -> dict[str, np.ndarray]:
         return {"mis": SIGN_P[k] * run.a_ref[:, 1 - k]}
 
-    def columns(self, ext: Extensions, k: int, st: AxisState) -> list[np.ndarray]:
+    def columns(self, ext: Likelihood, k: int, st: AxisState) -> list[np.ndarray]:
         return [ext.physical_column(k, st.tau, "mis")]
 
-    def estimate(self, fit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
         sc, cn = f"{axis}.scale", f"{axis}.c_mis"
         s, c = fit.value(sc), fit.value(cn)
         den = (1 + s) ** 2 + c * c
@@ -99,11 +104,11 @@ class NonlinearityK2(LinearEffect):
     name = "nonlinearity_k2"
     coefficients = ("c_k2",)
 
-    def columns(self, ext: Extensions, k: int, st: AxisState) -> list[np.ndarray]:
+    def columns(self, ext: Likelihood, k: int, st: AxisState) -> list[np.ndarray]:
         r = ext.reference(k, st.tau, st.limit)
         return [r * r]
 
-    def estimate(self, fit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
         return self._scaled(fit, axis, "k2")
 
 
@@ -114,11 +119,11 @@ class CrossAxis(LinearEffect):
     name = "cross_axis"
     coefficients = ("c_cross",)
 
-    def columns(self, ext: Extensions, k: int, st: AxisState) -> list[np.ndarray]:
+    def columns(self, ext: Likelihood, k: int, st: AxisState) -> list[np.ndarray]:
         r = ext.reference(k, st.tau, st.limit)
         return [r * ext.run.a_ref[:, 1 - k]]
 
-    def estimate(self, fit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
         return self._scaled(fit, axis, "k_ip")
 
 
@@ -132,10 +137,10 @@ class BiasDrift(LinearEffect):
         "a linear trend is one realisation of a random walk; a longer run, or repeated runs, "
         "separate them")
 
-    def columns(self, ext: Extensions, k: int, st: AxisState) -> list[np.ndarray]:
+    def columns(self, ext: Likelihood, k: int, st: AxisState) -> list[np.ndarray]:
         return [ext.run.tcol]
 
-    def estimate(self, fit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
         cn = f"{axis}.c_drift"
         key = self.info.keys[0] if fit.run.time_unit == "s" else self.info.keys[1]
         return {key: fit.value(cn)}, {key: float(np.sqrt(fit.cov_of(cn)[0, 0]))}
@@ -156,12 +161,12 @@ class LeverArm(LinearEffect):
             return {}
         return {"w2": run.omega**2, "alpha": run.alpha}
 
-    def columns(self, ext: Extensions, k: int, st: AxisState) -> list[np.ndarray]:
+    def columns(self, ext: Likelihood, k: int, st: AxisState) -> list[np.ndarray]:
         if ext.run.omega is None:
             raise UntestableError("lever_arm needs sample times")
         return [ext.physical_column(k, st.tau, "w2"), ext.physical_column(k, st.tau, "alpha")]
 
-    def estimate(self, fit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
         sc, w2, al = f"{axis}.scale", f"{axis}.c_w2", f"{axis}.c_alpha"
         s = fit.value(sc)
         c = fit.cov_of(sc, w2, al)

@@ -12,19 +12,23 @@
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import stats
 
 from calib.conventions import AXES
 from calib.diagnostics import chi2_two_sided_logp
-from calib.effects.base import Effect, Trial, minimise, register
+from calib.effects.base import (
+    AxisState,
+    Effect,
+    FinalFit,
+    Likelihood,
+    ModelState,
+    Trial,
+    minimise,
+    register,
+)
 from calib.effects.response import BoundaryEffect, ProfiledEffect
-
-if TYPE_CHECKING:
-    from calib.effects.engine import Extensions
-    from calib.effects.state import AxisState, ModelState
 
 
 @register
@@ -38,7 +42,7 @@ class BiasRandomWalk(BoundaryEffect):
     refine_rank = 2
     refine_window = 1.0
 
-    def profile(self, ext: Extensions, state: ModelState, k: int,
+    def profile(self, ext: Likelihood, state: ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:
         """REML of the random-walk intensity q of axis k (others fixed): (q, REML -2 log L).
 
@@ -69,19 +73,19 @@ class BiasRandomWalk(BoundaryEffect):
         lk, val = minimise(f, grid)
         return float(np.sqrt(np.exp(lk) * s2 / dtm)), val
 
-    def std(self, fit, k: int) -> float:
-        """From the REML profile interval (:func:`calib.gap.random_walk._q_uncertainty`)."""
+    def std(self, fit: FinalFit, k: int) -> float:
+        """From the REML profile interval (:func:`calib.gap.random_walk.q_uncertainty`)."""
         return fit.q_uncertainty(k)[0]
 
     def _key(self, fit) -> str:
         return self.info.keys[0] if fit.run.time_unit == "s" else self.info.keys[1]
 
-    def estimate(self, fit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
         k = AXES.index(axis)
         key = self._key(fit)
         return {key: fit.state.axes[k].q}, {key: self.std(fit, k)}
 
-    def interval(self, fit, axis: str, params: dict) -> dict:
+    def interval(self, fit: FinalFit, axis: str, params: dict) -> dict:
         """The REML profile-likelihood interval of q (asymmetric)."""
         return {self._key(fit): fit.q_uncertainty(AXES.index(axis))[1]}
 
@@ -98,12 +102,12 @@ class NoiseLevel(ProfiledEffect):
         return st.noise_free
 
     def add(self, st: AxisState, value: float | None = None) -> AxisState:
-        return replace(st, sigma2=float(value), noise_free=True)
+        return replace(st, sigma2_fitted=float(value))
 
-    def remove(self, st: AxisState, stated_sigma2: float) -> AxisState:
-        return replace(st, sigma2=stated_sigma2, noise_free=False)
+    def remove(self, st: AxisState) -> AxisState:
+        return replace(st, sigma2_fitted=None)  # the stated σ² is in use again
 
-    def test(self, ext: Extensions, state: ModelState, axis: str) -> Trial:
+    def test(self, ext: Likelihood, state: ModelState, axis: str) -> Trial:
         k = AXES.index(axis)
         nll0 = ext.nll(state)
         fit = ext.fit(state)
@@ -113,7 +117,7 @@ class NoiseLevel(ProfiledEffect):
         new = state.with_axis(k, self.add(state.axes[k], s2))
         return Trial(self.name, axis, new, max(nll0 - nll1, 0.0), logp, nll1, f"chi2({dof})")
 
-    def profile(self, ext: Extensions, state: ModelState, k: int,
+    def profile(self, ext: Likelihood, state: ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:
         """ML of the white-noise variance σ² of axis k (others fixed): (σ², nll)."""
         st = state.axes[k]
@@ -121,23 +125,23 @@ class NoiseLevel(ProfiledEffect):
         m = ext.run.n - 1
         guess = max(fit.rss[k] * st.sigma2_eff / m - st.lsb**2 / 12.0, 1e-12 * st.sigma2_eff)
         if st.q == 0:  # RSS ∝ 1/σ²_eff exactly: closed form
-            return guess, ext.safe_nll(state.with_axis(k, replace(st, sigma2=guess)))
+            return guess, ext.safe_nll(state.with_axis(k, self.add(st, guess)))
 
         def f(ls: float) -> float:
-            return ext.safe_nll(state.with_axis(k, replace(st, sigma2=float(np.exp(ls)))))
+            return ext.safe_nll(state.with_axis(k, self.add(st, float(np.exp(ls)))))
 
         ls, val = minimise(f, np.log(guess) + np.linspace(-0.7, 0.7, 7))
         return float(np.exp(ls)), val
 
     @staticmethod
-    def _dof(fit, k: int) -> int:
+    def _dof(fit: FinalFit, k: int) -> int:
         return fit.run.n - fit.ext.n_params(fit.state, k)
 
-    def std(self, fit, k: int) -> float:
+    def std(self, fit: FinalFit, k: int) -> float:
         """``σ̂²·sqrt(2/dof)`` (χ²(dof) variance)."""
         return fit.state.axes[k].sigma2 * float(np.sqrt(2.0 / self._dof(fit, k)))
 
-    def interval(self, fit, axis: str, params: dict) -> dict:
+    def interval(self, fit: FinalFit, axis: str, params: dict) -> dict:
         """``(dof·σ̂²/χ²_{0.975}, dof·σ̂²/χ²_{0.025})``."""
         dof = self._dof(fit, AXES.index(axis))
         lo, hi = dof * params["sigma2"] / stats.chi2.ppf([0.975, 0.025], dof)
@@ -155,9 +159,9 @@ class Quantization(Effect):
     def present(self, st: AxisState) -> bool:
         return st.lsb > 0
 
-    def remove(self, st: AxisState, stated_sigma2: float) -> AxisState:
+    def remove(self, st: AxisState) -> AxisState:
         return replace(st, lsb=0.0)
 
-    def estimate(self, fit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
         lat = fit.lattice[AXES.index(axis)]
         return {"lsb": lat.lsb}, {"lsb": lat.lsb_std}

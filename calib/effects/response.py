@@ -12,18 +12,24 @@ by :meth:`Extensions.reference`), and are estimated by a 1-D profile likelihood.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 import numpy as np
 from scipy import stats
 
 from calib.conventions import AXES
 from calib.diagnostics import LN2, flat_top_score, hinge_columns, hinge_levels
-from calib.effects.base import Effect, Trial, UntestableError, minimise, register
-
-if TYPE_CHECKING:
-    from calib.effects.engine import Extensions
-    from calib.effects.state import AxisState, ModelState
+from calib.effects.base import (
+    AxisState,
+    Effect,
+    FinalFit,
+    Likelihood,
+    ModelState,
+    Trial,
+    UntestableError,
+    minimise,
+    register,
+)
 
 
 class ProfiledEffect(Effect):
@@ -41,26 +47,26 @@ class ProfiledEffect(Effect):
     def add(self, st: AxisState, value: float | None = None) -> AxisState:
         return replace(st, **{self.field: float(value)})
 
-    def remove(self, st: AxisState, stated_sigma2: float) -> AxisState:
+    def remove(self, st: AxisState) -> AxisState:
         return replace(st, **{self.field: self.off})
 
-    def profile(self, ext: Extensions, state: ModelState, k: int,
+    def profile(self, ext: Likelihood, state: ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:
         """ML (or REML) of the parameter of axis k, others fixed: (value, -2 log L)."""
         raise NotImplementedError
 
-    def refine(self, ext: Extensions, state: ModelState, k: int) -> ModelState:
+    def refine(self, ext: Likelihood, state: ModelState, k: int) -> ModelState:
         val, _ = self.profile(ext, state, k, window=self.refine_window)
-        return state.with_axis(k, replace(state.axes[k], **{self.field: val}))
+        return state.with_axis(k, self.add(state.axes[k], val))
 
-    def nonlinear(self, fit, k: int) -> tuple[float, float]:
+    def nonlinear(self, fit: FinalFit, k: int) -> tuple[float, float]:
         return getattr(fit.state.axes[k], self.field), self.std(fit, k)
 
-    def std(self, fit, k: int) -> float:
+    def std(self, fit: FinalFit, k: int) -> float:
         """Gauss-Newton std from the final fit's column ``d_<field>`` (:meth:`gn_column`)."""
         return fit.gn_std[f"{AXES[k]}.d_{self.field}"]
 
-    def estimate(self, fit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
         k = AXES.index(axis)
         key = self.info.keys[0]
         return {key: getattr(fit.state.axes[k], self.field)}, {key: self.std(fit, k)}
@@ -71,7 +77,7 @@ class BoundaryEffect(ProfiledEffect):
 
     reml: ClassVar[bool] = False
 
-    def test(self, ext: Extensions, state: ModelState, axis: str) -> Trial:
+    def test(self, ext: Likelihood, state: ModelState, axis: str) -> Trial:
         k = AXES.index(axis)
         nll0 = ext.nll(state)
         self.check_testable(ext)
@@ -83,7 +89,7 @@ class BoundaryEffect(ProfiledEffect):
         return Trial(self.name, axis, new, lr, float(-LN2 + stats.chi2.logsf(lr, 1)),
                      ext.nll(new), "chibar2(0:1)")
 
-    def check_testable(self, ext: Extensions) -> None:
+    def check_testable(self, ext: Likelihood) -> None:
         return None
 
 
@@ -100,11 +106,11 @@ class LowpassLag(BoundaryEffect):
         "at a constant sweep rate a lag τ looks like an angle offset -τ·ω; a sweep with a "
         "varying rate or a reversal (up-then-down) separates them")
 
-    def check_testable(self, ext: Extensions) -> None:
+    def check_testable(self, ext: Likelihood) -> None:
         if not ext.run.timed:
             raise UntestableError("lowpass_lag needs sample times")
 
-    def profile(self, ext: Extensions, state: ModelState, k: int,
+    def profile(self, ext: Likelihood, state: ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:
         """ML of the low-pass time constant τ (s) of axis k (others fixed): (τ, nll)."""
         st = state.axes[k]
@@ -122,7 +128,7 @@ class LowpassLag(BoundaryEffect):
         lt, val = minimise(f, grid)
         return float(np.exp(lt)), val
 
-    def gn_column(self, ext: Extensions, k: int, st: AxisState, gain: float
+    def gn_column(self, ext: Likelihood, k: int, st: AxisState, gain: float
                   ) -> tuple[str, np.ndarray] | None:
         """``d r / d τ`` by a central difference (relative step 1e-3), times the gain."""
         eps = 1e-3
@@ -144,7 +150,7 @@ class Saturation(ProfiledEffect):
     refine_rank = 1
     refine_window = 0.05
 
-    def test(self, ext: Extensions, state: ModelState, axis: str) -> Trial:
+    def test(self, ext: Likelihood, state: ModelState, axis: str) -> Trial:
         k = AXES.index(axis)
         nll0 = ext.nll(state)
         logp = self.score(ext, state, k)
@@ -153,7 +159,7 @@ class Saturation(ProfiledEffect):
         new = state.with_axis(k, self.add(state.axes[k], lim)) if np.isfinite(lim) else state
         return Trial(self.name, axis, new, lr, logp, min(nll1, nll0), "davies")
 
-    def score(self, ext: Extensions, state: ModelState, k: int) -> float:
+    def score(self, ext: Likelihood, state: ModelState, k: int) -> float:
         """log p of the flat-top score test (clip at ±L, L unknown) on axis k."""
         st = state.axes[k]
         levels = self.levels(ext, k)
@@ -168,11 +174,11 @@ class Saturation(ProfiledEffect):
         _, logp = flat_top_score(resid, design, hinges_w)
         return logp
 
-    def levels(self, ext: Extensions, k: int) -> np.ndarray:
+    def levels(self, ext: Likelihood, k: int) -> np.ndarray:
         """The grid of limits of axis k (:func:`calib.diagnostics.hinge_levels`), m/s²."""
         return ext.memo((self.name, "levels", k), lambda: hinge_levels(ext.run.a_ref[:, k]))
 
-    def profile(self, ext: Extensions, state: ModelState, k: int,
+    def profile(self, ext: Likelihood, state: ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:
         """ML of the saturation limit L (m/s²) of axis k (others fixed): (L, nll)."""
         st = state.axes[k]
@@ -189,7 +195,7 @@ class Saturation(ProfiledEffect):
         lim, val = minimise(f, grid)
         return lim, val
 
-    def gn_column(self, ext: Extensions, k: int, st: AxisState, gain: float
+    def gn_column(self, ext: Likelihood, k: int, st: AxisState, gain: float
                   ) -> tuple[str, np.ndarray] | None:
         """``d r / d L = LPF_τ(sgn(A_r)·[|A_r| > L])``, times the gain."""
         a = ext.run.a_ref[:, k]

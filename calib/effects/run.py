@@ -16,7 +16,8 @@ class RunData:
     """A measured calibration run prepared for the extensions (read-only arrays).
 
     tita : (N,) rad.  datos : (N, 2) m/s².  a_ref : (N, 2) ``[-g sin θ, -g cos θ]``.
-    sigma2 : (2,) stated noise variances, (m/s²)².  g : m/s².
+    g : m/s².  The stated noise is not part of the run: it is a statement about the sensor,
+    kept in the model state (:attr:`calib.effects.AxisState.sigma2_stated`).
     t : (N,) sample times, s (the file's ``t`` or ``k/rate``), or None.
     tcol : (N,) ``t - t0`` (s) or the sample index k.  time_unit : "s" or "sample".
     dt_walk : (N-1,) Δt of the random walk (s, or 1 per sample).
@@ -27,7 +28,6 @@ class RunData:
     tita: np.ndarray
     datos: np.ndarray
     a_ref: np.ndarray
-    sigma2: np.ndarray
     g: float
     t: np.ndarray | None
     tcol: np.ndarray
@@ -46,19 +46,13 @@ class RunData:
         return self.t is not None
 
     @classmethod
-    def build(cls, tita, datos, noise_var, g: float, t=None, rate: float | None = None
-              ) -> RunData:
+    def build(cls, tita, datos, g: float, t=None, rate: float | None = None) -> RunData:
         """Prepare a run. ``t`` (s) wins over ``rate`` (Hz, samples in time order)."""
         tita = np.asarray(tita, dtype=float)
         datos = np.asarray(datos, dtype=float)
         n = tita.shape[0]
         if datos.shape != (n, 2):
             raise ValueError(f"datos must be ({n}, 2), got {datos.shape}")
-        s2 = np.asarray(noise_var, dtype=float)
-        if s2.shape == (2, 2):
-            s2 = np.diag(s2)
-        if s2.shape != (2,) or np.any(~np.isfinite(s2)) or np.any(s2 <= 0):
-            raise ValueError(f"noise_var must be two positive variances, got {noise_var!r}")
         if t is None and rate is not None:
             if not (np.isfinite(rate) and rate > 0):
                 raise ValueError(f"rate must be a positive sample rate (Hz), got {rate}")
@@ -78,7 +72,7 @@ class RunData:
             tcol = np.arange(n, dtype=float)
             dt = np.ones(n - 1)
             unit = "sample"
-        arrays = dict(tita=tita, datos=datos, a_ref=reference_accel(tita, g), sigma2=s2,
+        arrays = dict(tita=tita, datos=datos, a_ref=reference_accel(tita, g),
                       t=t, tcol=tcol, dt_walk=dt, omega=omega, alpha=alpha)
         for v in arrays.values():
             if v is not None:

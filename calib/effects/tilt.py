@@ -8,16 +8,11 @@ Test: ``LR = Δχ² ~ χ²(1)`` exactly (σ² known).
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import stats
 
-from calib.effects.base import Effect, Trial, register
-
-if TYPE_CHECKING:
-    from calib.effects.engine import Extensions
-    from calib.effects.state import AxisState, ModelState
+from calib.effects.base import AxisState, Effect, FinalFit, Likelihood, ModelState, Trial, register
 
 
 @register
@@ -29,7 +24,7 @@ class TiltOffset(Effect):
         "sensors; mounting the sensor block rotated by 90° (or an independent inclinometer) "
         "separates them")
 
-    def shared_column(self, ext: Extensions, k: int, st: AxisState) -> np.ndarray:
+    def shared_column(self, ext: Likelihood, k: int, st: AxisState) -> np.ndarray:
         """``sgn·(1 + ŝ_k)·LPF_τ(A_p)``: the reading change per unit sin δ of a tilt offset
         (the misalignment's physical column times the nominal gain)."""
         return ext.gains[k] * ext.physical_column(k, st.tau, "mis")
@@ -37,17 +32,17 @@ class TiltOffset(Effect):
     def in_model(self, state: ModelState, axis: str) -> bool:
         return state.tilt
 
-    def drop(self, state: ModelState, axis: str, stated_sigma2: np.ndarray) -> ModelState:
+    def drop(self, state: ModelState, axis: str) -> ModelState:
         return replace(state, tilt=False)
 
-    def test(self, ext: Extensions, state: ModelState, axis: str) -> Trial:
+    def test(self, ext: Likelihood, state: ModelState, axis: str) -> Trial:
         new = replace(state, tilt=True)
         nll1 = ext.nll(new)
         lr = max(ext.nll(state) - nll1, 0.0)
         return Trial(self.name, "both", new, lr, float(stats.chi2.logsf(lr, 1)), nll1,
                      "chi2(1)")
 
-    def estimate(self, fit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
         s = fit.value("sin_tilt")
         sd = float(np.sqrt(fit.cov_of("sin_tilt")[0, 0]))
         d = float(np.arcsin(np.clip(s, -1, 1)))

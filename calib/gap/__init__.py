@@ -29,11 +29,11 @@ from calib.gap.analysis import analyze_gap
 from calib.gap.confusions import AMBIGUITY_LR, REASONS
 from calib.gap.prediction import predict
 from calib.gap.quantization import quantized_moments
-from calib.gap.random_walk import Q_LEVEL, _q_curvature_std, _q_profile_interval, _q_uncertainty
+from calib.gap.random_walk import Q_LEVEL, q_curvature_std, q_profile_interval, q_uncertainty
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
 from calib.gap.selection import MAX_STEPS, PER_AXIS_CANDIDATES
 
 __all__ = ["analyze_gap", "gap_measure", "predict", "GapAnalysis", "GapMeasure",
            "EffectEstimate", "ExtendedModel", "PER_AXIS_CANDIDATES", "EFFECT_NAMES",
            "lowpass", "quantized_moments", "AMBIGUITY_LR", "REASONS", "MAX_STEPS", "Q_LEVEL",
-           "_q_curvature_std", "_q_profile_interval", "_q_uncertainty"]
+           "q_curvature_std", "q_profile_interval", "q_uncertainty"]

@@ -54,18 +54,22 @@ Every check has a p-value; ``rival_shapes`` runs only where effects are named.
 
 from __future__ import annotations
 
-from copy import copy
 from dataclasses import dataclass
-from math import comb
 
 import numpy as np
-from scipy import linalg as sla
 from scipy import stats
 
 from calib.conventions import AXES
 from calib.diagnostics import GapMeasure, Lattice, chi2_two_sided_logp, ljung_box_logp
 from calib.effects import Extensions, ModelState, effect
 from calib.gap.selection import walk_cost
+from calib.gap.space import (
+    AxisSpace,
+    Check,
+    legendre_in_time,
+    motion_direction,
+    spectral_peak,
+)
 
 ADEQUACY_ALPHA = 0.005
 """Family-wise false-alarm probability of the battery on a run the final model describes."""
@@ -79,50 +83,8 @@ SEGMENTS = 8
 MIN_GROUP = 30
 """Fewest samples per group for the variance checks (fewer groups on short runs)."""
 
-COLLINEAR_TOL = 1e-6
-"""A test column whose part outside the model is below this fraction of its norm is dropped."""
-
 OUTLIER_Z = 5.0
 """|z| counted as an outlier in the description."""
-
-
-@dataclass(frozen=True)
-class Check:
-    """One adequacy check on one axis.
-
-    name, axis : the check and the axis ("x", "y").  statistic : its value (χ², g, |z|, …).
-    logp : log p-value under the model.
-    reference : the reference distribution.
-    size, unit : how big the departure is, in the units of the readings.
-    description : words a test engineer can act on ("a 3rd harmonic of θ on x, 0.04 m/s²").
-    failed : whether the check failed (set by :func:`run_battery`).
-    """
-
-    name: str
-    axis: str
-    statistic: float
-    logp: float
-    reference: str
-    size: float
-    unit: str
-    description: str
-    failed: bool = False
-
-    @property
-    def p_value(self) -> float:
-        return float(np.exp(self.logp))
-
-    def to_dict(self) -> dict:
-        return {"name": self.name, "axis": self.axis, "statistic": float(self.statistic),
-                "p_value": self.p_value, "reference": self.reference,
-                "passed": not self.failed, "size": float(self.size), "unit": self.unit,
-                "description": self.description}
-
-    def signature(self) -> dict:
-        """The ``unexplained`` entry of a failed check."""
-        return {"axis": self.axis, "signature": self.name, "size": float(self.size),
-                "unit": self.unit, "statistic": float(self.statistic),
-                "p_value": self.p_value, "description": self.description}
 
 
 @dataclass(frozen=True)
@@ -145,89 +107,6 @@ class Battery:
                 "alpha_check": float(self.alpha_check),
                 "rule": "Bonferroni over the checks",
                 "checks": [c.to_dict() for c in self.checks]}
-
-
-# --------------------------------------------------------------------- column tests (GLS)
-
-class AxisSpace:
-    """The whitened system of one axis of the final model, to test added columns.
-
-    ``yw, H`` from :meth:`Extensions.axis_system` (differenced and whitened with the model's
-    noise: σ², lsb, q; unit variance under the model), ``rw`` the residual of the model's
-    columns. An added column block Z is whitened the same way and projected off H; the
-    regression of ``rw`` on it gives ``ΔRSS ~ χ²(rank)`` under the model.
-    """
-
-    def __init__(self, ext: Extensions, state: ModelState, k: int) -> None:
-        st = state.axes[k]
-        yw, hw, _, _, tw = ext.axis_system(k, st, state.tilt)
-        h = hw if tw is None else np.column_stack([hw, tw])
-        self.qh, _ = np.linalg.qr(h)
-        self.rw = yw - self.qh @ (self.qh.T @ yw)
-        self.ext, self.st = ext, st
-
-    def without(self, z: np.ndarray) -> AxisSpace:
-        """A copy whose residual has the columns of z projected out as well (to look for
-        what is left once z is in the model)."""
-        z = np.asarray(z, dtype=float).reshape(z.shape[0], -1)
-        zw = self.ext.whiten(self.st, z)
-        zp = zw - self.qh @ (self.qh.T @ zw)
-        out = copy(self)
-        coef = np.linalg.lstsq(zp, self.rw, rcond=None)[0]
-        out.rw = self.rw - zp @ coef
-        return out
-
-    def scan(self, make, grid) -> np.ndarray:
-        """ΔRSS of each column block ``make(g)`` (N, c) of a grid, batched: the blocks are
-        whitened together and each projected off the model (batched QR); a block of rank < c
-        counts its independent part (its ΔRSS is then the least-squares one, by QR of the
-        projected block). Use :meth:`test` on the best for its rank and coefficients."""
-        grid = list(grid)
-        out = np.zeros(len(grid))
-        if not grid:
-            return out
-        chunk = max(1, int(3e6 // (self.rw.size * 4)))
-        for a in range(0, len(grid), chunk):
-            blocks = [np.asarray(make(g), dtype=float) for g in grid[a:a + chunk]]
-            blocks = [b.reshape(b.shape[0], -1) for b in blocks]
-            c = blocks[0].shape[1]
-            z = np.concatenate(blocks, axis=1)
-            zw = self.ext.whiten(self.st, z)
-            zp = zw - self.qh @ (self.qh.T @ zw)
-            if c == 1:  # one column: ΔRSS = (zᵀr)²/‖z‖², no factorisation needed
-                nz = np.einsum("ng,ng->g", zp, zp)
-                ok = nz > (COLLINEAR_TOL * np.linalg.norm(zw, axis=0)) ** 2
-                out[a:a + len(blocks)] = np.where(ok, (zp.T @ self.rw) ** 2
-                                                  / np.maximum(nz, 1e-300), 0.0)
-                continue
-            stack = zp.reshape(zp.shape[0], len(blocks), c).transpose(1, 0, 2)
-            q, r = np.linalg.qr(stack)
-            d = np.abs(np.diagonal(r, axis1=1, axis2=2))
-            norms = np.linalg.norm(stack, axis=1)
-            ok = d > COLLINEAR_TOL * np.maximum(norms, 1e-300)
-            proj = np.einsum("gnc,n->gc", q, self.rw) * ok
-            out[a:a + len(blocks)] = np.sum(proj * proj, axis=1)
-        return out
-
-    def test(self, z: np.ndarray) -> tuple[float, int, np.ndarray] | None:
-        """(ΔRSS, rank, coefficients of the columns of z in their own units) or None."""
-        z = np.asarray(z, dtype=float).reshape(z.shape[0], -1)
-        zw = self.ext.whiten(self.st, z)
-        zp = zw - self.qh @ (self.qh.T @ zw)
-        norms = np.linalg.norm(zw, axis=0)
-        keep = np.linalg.norm(zp, axis=0) > COLLINEAR_TOL * np.maximum(norms, 1e-300)
-        if not np.any(keep):
-            return None
-        q, r, piv = sla.qr(zp[:, keep], mode="economic", pivoting=True)
-        d = np.abs(np.diag(r))
-        rank = int(np.sum(d > COLLINEAR_TOL * d[0])) if d.size else 0
-        if rank == 0:
-            return None
-        proj = q[:, :rank].T @ self.rw
-        cols = np.flatnonzero(keep)[piv[:rank]]
-        coef = np.zeros(z.shape[1])
-        coef[cols] = np.linalg.lstsq(zp[:, cols], self.rw, rcond=None)[0]
-        return float(proj @ proj), rank, coef
 
 
 def _chi2_check(space: AxisSpace, z: np.ndarray, name: str, axis: str
@@ -257,54 +136,6 @@ def _harmonics(space: AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
     return Check("harmonics", axis, stat, logp, f"chi2({dof})", size, "m/s²",
                  f"a {_ordinal(j)} harmonic of θ on {axis}, {size:.3g} m/s² "
                  f"(harmonics {HARMONICS[0]}–{HARMONICS[-1]} tested)")
-
-
-def fisher_g_logp(g: float, m: int) -> float:
-    """log P(max periodogram ordinate / sum > g) for white Gaussian noise (Fisher 1929)."""
-    p = 0.0
-    for j in range(1, int(min(m, np.floor(1.0 / g))) + 1):
-        term = (-1) ** (j - 1) * comb(m, j) * (1.0 - j * g) ** (m - 1)
-        p += term
-        if j >= 3:  # alternating, decreasing: three terms are plenty
-            break
-    return float(np.log(min(max(p, 1e-300), 1.0)))
-
-
-def spectral_peak(space: AxisSpace, run, min_cycles: float = 0.5
-          ) -> tuple[float, float, int, float, np.ndarray] | None:
-    """Largest periodogram ordinate of the whitened residual: (g, log p, m, period, columns).
-
-    Period in the run's time unit (s, or samples), refined between the neighbouring Fourier
-    frequencies (a period that is not a whole fraction of the run leaks into two bins);
-    columns: cos and sin at that frequency. Frequencies below ``min_cycles`` per run are not
-    considered."""
-    r = space.rw
-    n = r.size
-    if n < 16:
-        return None
-    spec = np.abs(np.fft.rfft(r - r.mean())) ** 2
-    spec = spec[1:(n - 1) // 2 + 1]  # Fourier frequencies j = 1 … floor((n-1)/2)
-    m = spec.size
-    total = float(spec.sum())
-    j0 = int(np.ceil(min_cycles))
-    if m < j0 + 1 or total <= 0:
-        return None
-    j = int(np.argmax(spec[j0 - 1:])) + j0
-    g = float(spec[j - 1] / total)
-    # j cycles over the N-1 differenced samples: the same frequency in the readings
-    span = float(run.tcol[-1] - run.tcol[0]) * (n / max(n - 1, 1))
-    tc = run.tcol - run.tcol[0]
-
-    def columns(f: float) -> np.ndarray:
-        phase = 2.0 * np.pi * f * tc / span
-        return np.column_stack([np.cos(phase), np.sin(phase)])
-
-    best_f, best = float(j), -1.0
-    for f in np.linspace(max(j - 1.0, min_cycles), j + 1.0, 21):
-        fit = space.test(columns(f))
-        if fit is not None and fit[0] > best:
-            best_f, best = float(f), fit[0]
-    return g, fisher_g_logp(g, m), m, span / best_f, columns(best_f)
 
 
 def _periodic(space: AxisSpace, run, axis: str) -> Check | None:
@@ -363,13 +194,6 @@ def _step(z: np.ndarray, scale: float, run, axis: str) -> Check | None:
                  f"after {where}")
 
 
-def legendre_in_time(run, degrees: tuple[int, ...]) -> np.ndarray:
-    """(N, len(degrees)) Legendre polynomials ``P_d(x)`` of time mapped onto x ∈ [-1, 1]."""
-    tc = run.tcol
-    x = 2.0 * (tc - tc[0]) / max(float(tc[-1] - tc[0]), 1e-300) - 1.0
-    return np.column_stack([np.polynomial.legendre.Legendre.basis(d)(x) for d in degrees])
-
-
 def _trend(space: AxisSpace, run, axis: str) -> Check | None:
     cols = legendre_in_time(run, (2, 3, 4))
     res = _chi2_check(space, cols, "trend", axis)
@@ -398,19 +222,6 @@ def _variance(z: np.ndarray, order: np.ndarray, name: str, what: str, axis: str,
                  f"Bartlett chi2({len(groups) - 1})", float(sd.max() - sd.min()), "m/s²",
                  f"the noise on {axis} changes with {what}: std from {sd.min():.3g} to "
                  f"{sd.max():.3g} m/s² over {len(groups)} groups")
-
-
-def motion_direction(tita: np.ndarray) -> np.ndarray | None:
-    """+1 after an upward move, -1 after a downward one (held samples keep the last)."""
-    d = np.sign(np.diff(tita, prepend=tita[0]))
-    if not (np.any(d > 0) and np.any(d < 0)):
-        return None
-    idx = np.where(d != 0, np.arange(d.size), 0)
-    np.maximum.accumulate(idx, out=idx)
-    first = d[np.flatnonzero(d)[0]]
-    out = np.where(d[idx] != 0, d[idx], first)
-    frac = min(np.mean(out > 0), np.mean(out < 0))
-    return out if frac >= 0.05 else None
 
 
 def _hysteresis(space: AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
@@ -487,7 +298,7 @@ def _walk_whiteness(innov: np.ndarray, axis: str) -> Check:
                  "random walk")
 
 
-def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> Check | None:
+def _rivals(ext: Extensions, state: ModelState, k: int) -> Check | None:
     """The named effects of one axis against few-parameter shapes outside the catalog.
 
     The named set of axis k (its per-axis effects but the noise level and quantization; a
@@ -509,7 +320,7 @@ def _rivals(ext: Extensions, state: ModelState, k: int, stated: np.ndarray) -> C
     run = ext.run
     reduced = state
     for n in named:
-        reduced = reduced.without(n, axis, stated)
+        reduced = reduced.without(n, axis)
     lr_named = ext.nll(reduced) - ext.nll(state)
     cost = sum(walk_cost(ext, st, k) if n == "bias_random_walk" else float(effect(n).n_free)
                for n in named)
@@ -629,11 +440,10 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
         ]
         if st.q > 0:
             found.append(_walk_whiteness(innovations[k], axis))
-        found.append(_rivals(ext, state, k, run.sigma2))
+        found.append(_rivals(ext, state, k))
         if gaps is not None and axis in gaps:
             if not st.noise_free:
-                found.append(_gap_noise(gaps[axis], float(run.sigma2[k]) + st.lsb**2 / 12.0,
-                                        axis))
+                found.append(_gap_noise(gaps[axis], st.sigma2_stated + st.lsb**2 / 12.0, axis))
             found.append(_gap_signatures(gaps[axis], axis))
         checks += [c for c in found if c is not None]
     checks += list(extra or ())

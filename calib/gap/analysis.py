@@ -9,14 +9,14 @@ import numpy as np
 from calib.calibration import Calibration, calibrate
 from calib.conventions import AXES, G
 from calib.diagnostics import GapMeasure, Lattice, detect_lattice, gap_measure
-from calib.effects import Extensions, ModelState, RunData, effect
+from calib.effects import Extensions, ModelState, RunData, effect, stated_variances
 from calib.effects.catalog import REFINED
 from calib.gap.adequacy import ADEQUACY_ALPHA, Battery, run_battery
-from calib.gap.confusions import _confusions, merge_tilt, prefer_less_assuming
-from calib.gap.estimates import _Reporter
+from calib.gap.confusions import merge_tilt, not_identifiable, prefer_less_assuming
+from calib.gap.estimates import Reporter
 from calib.gap.mechanisms import mechanism_checks
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
-from calib.gap.selection import _try, candidate_list, initial_state, select
+from calib.gap.selection import candidate_list, initial_state, select, try_test
 from calib.gap.sponges import review_sponges
 from calib.gap.walk import WALK_CHECKS, WalkReview, review_walk
 from calib.io import Ensayo
@@ -62,8 +62,8 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     for label, a in (("family_alpha", family_alpha), ("adequacy_alpha", adequacy_alpha)):
         if not 0 < a < 1:
             raise ValueError(f"{label} must be in (0, 1), got {a}")
-    run = RunData.build(ensayo.tita, ensayo.datos, noise_var, g, ensayo.t, rate)
-    stated = run.sigma2
+    stated = stated_variances(noise_var)
+    run = RunData.build(ensayo.tita, ensayo.datos, g, ensayo.t, rate)
     nominal = calibrate(ensayo, stated, "ols", g)
     gains = 1.0 + nominal.scale
     for k, a in enumerate(AXES):  # the extensions act through the sensor's gain
@@ -80,17 +80,17 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     lattice = [detect_lattice(run.datos[:, k]) for k in range(2)]
     candidates, needs_timing = candidate_list(run)
     profile = _apply_profile(ext, sensor, candidates)
-    sel = select(ext, initial_state(run, lattice), candidates, family_alpha)
+    sel = select(ext, initial_state(stated, lattice), candidates, family_alpha)
     steps = list(sel.steps)
-    state = prefer_less_assuming(ext, sel.state, stated, sel.candidates, steps)
-    state = merge_tilt(ext, state, stated, sel.candidates, steps)
+    state = prefer_less_assuming(ext, sel.state, sel.candidates, steps)
+    state = merge_tilt(ext, state, sel.candidates, steps)
     state, sponges = review_sponges(ext, state, lattice, float(np.log(sel.alpha_step)))
 
-    rep = _Reporter(ext, state, lattice)
+    rep = Reporter(ext, state, lattice)
     effects = _named_effects(ext, rep, state, lattice)
     before, after, resid_before, resid_after, fitted = _gaps(ext, rep, state, nominal)
     final = _final_model(ext, rep, state, gains)
-    reviews = {k: review_walk(ext, state, k, rep.walk_input(k), rep.innov[k], stated)
+    reviews = {k: review_walk(ext, state, k, rep.walk_input(k), rep.innov[k])
                for k in range(2) if state.axes[k].q > 0}
     battery = run_battery(ext, state, resid_after, lattice, rep.innov, adequacy_alpha,
                           gaps=_battery_gaps(ext, state, after, resid_after),
@@ -118,8 +118,7 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         criterion["profile"] = profile
     return GapAnalysis(
         effects=tuple(effects),
-        not_identifiable=tuple(_confusions(ext, state, stated, sel.candidates,
-                                           sel.untestable)),
+        not_identifiable=tuple(not_identifiable(ext, state, sel.candidates, sel.untestable)),
         gap_before=before, gap_after_fit=after, nominal=nominal, final=final,
         residuals_before=resid_before, residuals_after=resid_after, fitted=fitted,
         needs_timing=tuple(needs_timing), criterion=criterion, steps=tuple(steps), g=float(g),
@@ -194,7 +193,7 @@ def _adequacy(battery: Battery, drifting: list[WalkReview], reviews: dict[int, W
     return out
 
 
-def _named_effects(ext: Extensions, rep: _Reporter, state: ModelState, lattice: list[Lattice]
+def _named_effects(ext: Extensions, rep: Reporter, state: ModelState, lattice: list[Lattice]
                    ) -> list[EffectEstimate]:
     """Each effect of the final model: estimate ± std, drop-one statistic, interval."""
     effects = []
@@ -202,7 +201,7 @@ def _named_effects(ext: Extensions, rep: _Reporter, state: ModelState, lattice: 
         e = effect(name)
         params, std = e.estimate(rep, axis)
         if e.lr_tested:
-            t = _try(ext, state.without(name, axis, ext.run.sigma2), name, axis)
+            t = try_test(ext, state.without(name, axis), name, axis)
             stat, p = (t.lr, t.p_value) if t is not None else (float("nan"), float("nan"))
         else:  # the lattice test of step 0: number of levels, its p-value
             lat = lattice[AXES.index(axis)]
@@ -212,7 +211,7 @@ def _named_effects(ext: Extensions, rep: _Reporter, state: ModelState, lattice: 
     return effects
 
 
-def _gaps(ext: Extensions, rep: _Reporter, state: ModelState, nominal: Calibration
+def _gaps(ext: Extensions, rep: Reporter, state: ModelState, nominal: Calibration
           ) -> tuple[dict[str, GapMeasure], dict[str, GapMeasure], np.ndarray, np.ndarray,
                      np.ndarray]:
     """Gap of the nominal and of the extended model per axis, their residuals, the fit."""
@@ -224,17 +223,17 @@ def _gaps(ext: Extensions, rep: _Reporter, state: ModelState, nominal: Calibrati
     for k, a in enumerate(AXES):
         common = dict(t=run.t, other_ref=run.a_ref[:, 1 - k], own_ref=run.a_ref[:, k],
                       readings=run.datos[:, k])
-        before[a] = gap_measure(resid_before[:, k], run.tita, float(run.sigma2[k]), n_params=2,
-                                **common)
         st = state.axes[k]
-        stated_eff = float(run.sigma2[k]) + st.lsb**2 / 12.0  # the stated noise, not σ̂²
+        before[a] = gap_measure(resid_before[:, k], run.tita, st.sigma2_stated, n_params=2,
+                                **common)
+        stated_eff = st.sigma2_stated + st.lsb**2 / 12.0  # the stated noise, not σ̂²
         after[a] = gap_measure(resid_after[:, k], run.tita, stated_eff,
                                model_lsb=st.lsb if st.lsb > 0 else None,
                                n_params=ext.n_params(state, k), **common)
     return before, after, resid_before, resid_after, fitted
 
 
-def _final_model(ext: Extensions, rep: _Reporter, state: ModelState, gains: np.ndarray
+def _final_model(ext: Extensions, rep: Reporter, state: ModelState, gains: np.ndarray
                  ) -> ExtendedModel:
     """The extended model: linear parameters with covariance, nonlinear ones ± std."""
     nonlinear = {}

@@ -15,7 +15,7 @@ import numpy as np
 
 from calib.conventions import AXES, EFFECTS
 from calib.effects import CATALOG, Extensions, ModelState, effect
-from calib.gap.selection import FLEXIBLE, _drop, _try
+from calib.gap.selection import FLEXIBLE, try_test
 
 AMBIGUITY_LR = 2.0 * float(np.log(10.0))
 """Two explanations whose ``-2 log L`` differ by less than this (likelihood ratio < 10) are
@@ -37,24 +37,24 @@ def assumptions(name: str) -> tuple[bool, bool, int]:
     return (EFFECTS[name].timing == "yes", name in FLEXIBLE, effect(name).n_free)
 
 
-def prefer_less_assuming(ext: Extensions, state: ModelState, stated: np.ndarray,
-                         candidates: list[tuple[str, str]], steps: list[dict]) -> ModelState:
+def prefer_less_assuming(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]],
+                         steps: list[dict]) -> ModelState:
     """Ties: a named effect that another candidate explains within ``AMBIGUITY_LR`` (AIC
     penalised) is replaced by that candidate when it assumes less (:func:`assumptions`),
     e.g. a one-axis rotation instead of a low-pass lag on a constant-rate sweep. The pair is
-    then reported by :func:`_confusions`. Each swap is recorded in ``steps``."""
+    then reported by :func:`not_identifiable`. Each swap is recorded in ``steps``."""
     for name, axis in list(state.effects()):
         if name in ("quantization", "noise_level") or not state.has(name, axis):
             continue
         nll_final = ext.nll(state)
-        base = _drop(state, name, axis, stated)
+        base = state.without(name, axis)
         named = state.effects()
         alternatives = [(n, a) for n, a in candidates if (n, a) not in named and n != name
                         and n != "noise_level" and n not in FLEXIBLE and a == axis
                         and assumptions(n) < assumptions(name)]
         best = None
         for alt, alt_axis in sorted(alternatives, key=lambda c: assumptions(c[0])):
-            t = _try(ext, base, alt, alt_axis)
+            t = try_test(ext, base, alt, alt_axis)
             if t is None:
                 continue
             penalty = 2.0 * (effect(alt).n_free - effect(name).n_free)
@@ -71,8 +71,8 @@ def prefer_less_assuming(ext: Extensions, state: ModelState, stated: np.ndarray,
     return state
 
 
-def merge_tilt(ext: Extensions, state: ModelState, stated: np.ndarray,
-               candidates: list[tuple[str, str]], steps: list[dict]) -> ModelState:
+def merge_tilt(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]],
+               steps: list[dict]) -> ModelState:
     """A tilt offset δ_t with a misalignment δ_a of one axis is the same rotation as a
     misalignment δ_t of the other axis when δ_a ≈ -δ_t: one parameter instead of two. When
     that simpler model fits within the ambiguity margin (AIC-penalised), it is named."""
@@ -84,8 +84,8 @@ def merge_tilt(ext: Extensions, state: ModelState, stated: np.ndarray,
     other = AXES[1 - AXES.index(mis[0])]
     if ("misalignment", other) not in candidates:
         return state
-    base = _drop(_drop(state, "tilt_offset", "both", stated), "misalignment", mis[0], stated)
-    t = _try(ext, base, "misalignment", other)
+    base = state.without("tilt_offset", "both").without("misalignment", mis[0])
+    t = try_test(ext, base, "misalignment", other)
     if t is None:
         return state
     delta = ext.nll(t.state) - 2.0 - ext.nll(state)  # one parameter fewer: AIC -2
@@ -98,8 +98,8 @@ def merge_tilt(ext: Extensions, state: ModelState, stated: np.ndarray,
     return state
 
 
-def _confusions(ext: Extensions, state: ModelState, stated: np.ndarray,
-                candidates: list[tuple[str, str]], untestable: dict) -> list[dict]:
+def not_identifiable(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]],
+                     untestable: dict) -> list[dict]:
     """``not_identifiable`` entries (see the module docstring).
 
     Swap test: for each named effect, every other candidate is fitted *in its place*; when
@@ -118,7 +118,7 @@ def _confusions(ext: Extensions, state: ModelState, stated: np.ndarray,
     def alt_nll(base: ModelState, adds: list[tuple[str, str]]) -> float:
         s = base
         for n, a in adds:
-            t = _try(ext, s, n, a)
+            t = try_test(ext, s, n, a)
             if t is None:
                 return np.inf
             s = t.state
@@ -140,7 +140,7 @@ def _confusions(ext: Extensions, state: ModelState, stated: np.ndarray,
     for name, axis in named:
         if name in ("quantization", "noise_level"):
             continue
-        base = _drop(state, name, axis, stated)
+        base = state.without(name, axis)
         alternatives = [(n, a) for n, a in candidates if (n, a) not in named and n != name
                         and n != "noise_level" and (a == axis or "both" in (a, axis))]
         for alt, alt_axis in alternatives:

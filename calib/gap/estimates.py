@@ -1,6 +1,6 @@
 """Final fit of the selected model and the catalog estimates (± std) of each named effect.
 
-:class:`_Reporter` refits the model with every linear parameter and the Gauss-Newton columns of
+:class:`Reporter` refits the model with every linear parameter and the Gauss-Newton columns of
 the nonlinear ones (τ, L: :meth:`calib.effects.Effect.gn_column`) in one whitened
 least-squares system, gives the bias at t0 of a random-walk axis from the smoother, the mean
 reading and the whitened residuals. Each effect object turns them into its catalog parameters
@@ -17,11 +17,11 @@ from calib.diagnostics import Lattice
 from calib.effects import CATALOG, Extensions, ModelState
 from calib.filters import walk_filter
 from calib.gap.quantization import quantized_moments
-from calib.gap.random_walk import _q_uncertainty
+from calib.gap.random_walk import q_uncertainty
 from calib.ls import fit_linear
 
 
-class _Reporter:
+class Reporter:
     """Final fit of a model: parameters with covariance, effect estimates, residuals.
 
     The effect objects read it through ``value``, ``cov_of``, ``gn_std`` (Gauss-Newton std of
@@ -36,10 +36,20 @@ class _Reporter:
         self._q_unc: dict[int, tuple[float, tuple[float, float]]] = {}
         self._fit()
 
+    @classmethod
+    def from_params(cls, ext: Extensions, state: ModelState, names: list[str],
+                    params: np.ndarray) -> Reporter:
+        """A final fit given its parameters (no refit): enough for :meth:`mean` at the
+        angles and times of ``ext.run`` (what :func:`calib.gap.predict` needs)."""
+        rep = cls.__new__(cls)
+        rep.ext, rep.state, rep.run = ext, state, ext.run
+        rep.names, rep.params = list(names), np.asarray(params)
+        return rep
+
     def q_uncertainty(self, k: int) -> tuple[float, tuple[float, float]]:
-        """(std, 95 % interval) of the random-walk q of axis k (:func:`_q_uncertainty`)."""
+        """(std, 95 % interval) of the random-walk q of axis k (:func:`q_uncertainty`)."""
         if k not in self._q_unc:
-            self._q_unc[k] = _q_uncertainty(self.ext, self.state, k)
+            self._q_unc[k] = q_uncertainty(self.ext, self.state, k)
         return self._q_unc[k]
 
     def _axis_rows(self, k: int, gain: float) -> tuple[np.ndarray, np.ndarray, list[str],
@@ -160,6 +170,3 @@ class _Reporter:
         idx = [self.names.index(n) for n in names]
         return self.cov[np.ix_(idx, idx)]
 
-
-Reporter = _Reporter
-"""Public name of the final fit (:class:`_Reporter`), for the modules that refit a model."""

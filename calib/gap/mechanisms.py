@@ -10,7 +10,7 @@ is a catalog effect, so none is ever named).
     stop ``i`` (θ held after moving, ``s_i`` the sign of the move that stopped) the columns
     ``Σ_i s_i·e^{-ζω τ_i}·(cos ω_d τ_i, sin ω_d τ_i)`` and the same unsigned (``τ_i`` the time
     since the stop, within the hold; ``ω_d = ω·sqrt(1 - ζ²)``) are added to the final model
-    (GLS in its whitened space, :class:`calib.gap.adequacy.AxisSpace`): ``ΔRSS ~ χ²(4)``,
+    (GLS in its whitened space, :class:`calib.gap.space.AxisSpace`): ``ΔRSS ~ χ²(4)``,
     maximised over a grid of frequencies and damping ratios, Bonferroni over the grid. Reported:
     frequency, damping ratio, initial amplitude (the damped-mode fit on the segments after the
     stops).
@@ -38,7 +38,7 @@ from scipy import stats
 
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
-from calib.gap.adequacy import AxisSpace, Check
+from calib.gap.space import AxisSpace, Check
 
 RING_FREQS = np.geomspace(0.5, 25.0, 24)
 """Frequencies (Hz) of the ringing grid (those below the Nyquist frequency / 2 are used)."""

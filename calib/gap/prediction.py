@@ -6,7 +6,7 @@ import numpy as np
 
 from calib.conventions import AXES
 from calib.effects import Extensions, RunData, effect
-from calib.gap.estimates import _Reporter
+from calib.gap.estimates import Reporter
 from calib.gap.results import GapAnalysis
 
 
@@ -29,8 +29,7 @@ def predict(analysis: GapAnalysis, tita: np.ndarray, t: np.ndarray | None = None
     """
     final = analysis.final
     tita = np.asarray(tita, dtype=float)
-    run = RunData.build(tita, np.zeros((tita.size, 2)), analysis.noise_var, analysis.g, t,
-                        rate)
+    run = RunData.build(tita, np.zeros((tita.size, 2)), analysis.g, t, rate)
     for k, a in enumerate(AXES):
         st = final.state.axes[k]
         needs = any(effect(n).needs_times_to_predict(final.time_unit) for n in st.effects())
@@ -38,7 +37,5 @@ def predict(analysis: GapAnalysis, tita: np.ndarray, t: np.ndarray | None = None
             raise ValueError(f"axis {a}: the extended model needs sample times (t or rate) "
                              "to predict (low-pass, lever arm or drift per second)")
     ext = Extensions(run, np.asarray(final.gains))
-    rep = _Reporter.__new__(_Reporter)
-    rep.ext, rep.state, rep.run = ext, final.state, run
-    rep.names, rep.params = list(final.names), np.asarray(final.params)
+    rep = Reporter.from_params(ext, final.state, list(final.names), final.params)
     return np.column_stack([rep.mean(k) for k in range(2)])

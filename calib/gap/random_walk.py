@@ -13,10 +13,10 @@ Q_LEVEL = 0.95
 """Level of the profile-likelihood interval reported for the random-walk intensity q."""
 
 
-def _q_curvature_std(ext: Extensions, state: ModelState, k: int) -> float:
+def q_curvature_std(ext: Extensions, state: ModelState, k: int) -> float:
     """std of q from the curvature of the REML -2 log L at q̂ (others fixed): 2 / (d²/dq²).
 
-    Used as the search scale of :func:`_q_profile_interval` (and measured against it in
+    Used as the search scale of :func:`q_profile_interval` (and measured against it in
     ``benchmarks/gap_uncertainty_mc.py``); NaN when the curvature is not positive.
     """
     st = state.axes[k]
@@ -31,7 +31,7 @@ def _q_curvature_std(ext: Extensions, state: ModelState, k: int) -> float:
     return vals[-1] if vals else float("nan")
 
 
-def _q_profile_interval(ext: Extensions, state: ModelState, k: int, level: float = Q_LEVEL
+def q_profile_interval(ext: Extensions, state: ModelState, k: int, level: float = Q_LEVEL
                         ) -> tuple[float, float]:
     """Profile-likelihood (REML) interval of the random-walk intensity q of axis k.
 
@@ -54,7 +54,7 @@ def _q_profile_interval(ext: Extensions, state: ModelState, k: int, level: float
     def dev(q: float) -> float:
         return ext.nll(state.with_axis(k, replace(st, q=float(q))), reml=True) - f0
 
-    s = _q_curvature_std(ext, state, k) / q_hat
+    s = q_curvature_std(ext, state, k) / q_hat
     s = s if np.isfinite(s) and s > 0 else 0.1
     u0 = float(np.log(q_hat))
 
@@ -75,13 +75,13 @@ def _q_profile_interval(ext: Extensions, state: ModelState, k: int, level: float
     return lo, end(1.0)
 
 
-def _q_uncertainty(ext: Extensions, state: ModelState, k: int
+def q_uncertainty(ext: Extensions, state: ModelState, k: int
                    ) -> tuple[float, tuple[float, float]]:
     """(std, 95 % interval) reported for the random-walk intensity q of axis k.
 
     q is a variance component informed only by the few low-frequency modes where the walk
     beats the white noise, so q̂ is skewed (low more often than high). The honest statement is
-    the REML profile-likelihood interval (:func:`_q_profile_interval`, asymmetric); the std is
+    the REML profile-likelihood interval (:func:`q_profile_interval`, asymmetric); the std is
     derived from it, ``std = (high - low) / (2·1.96)`` in q units (the average of its two
     half-widths over the normal quantile), so ``q̂ ± 1.96 std`` spans the same length.
 
@@ -92,7 +92,7 @@ def _q_uncertainty(ext: Extensions, state: ModelState, k: int
     * profile interval: coverage 0.940-0.958, misses 1.3-2.5 % low and 2.3-4 % high;
     * this std: sd((q̂ - q)/std) = 0.97-1.05, mean -0.06 to -0.19, ``q̂ ± 1.96 std`` covers
       0.925-0.953 (the symmetric statement inherits the skew: it misses high more often);
-    * the former curvature std (:func:`_q_curvature_std`): about as good on average
+    * the former curvature std (:func:`q_curvature_std`): about as good on average
       (sd 0.98-1.05; the "1.2×" once stated for it is not reproduced), but its symmetric
       interval covered 0.925-0.95 with misses 0.5-1.5 % low and 4-6 % high; the exact expected
       REML information on log q (spectral form) was no better (sd 1.00-1.07, its log-scale
@@ -102,9 +102,9 @@ def _q_uncertainty(ext: Extensions, state: ModelState, k: int
 
     Falls back to the curvature std if an end of the interval is not finite.
     """
-    lo, hi = _q_profile_interval(ext, state, k)
+    lo, hi = q_profile_interval(ext, state, k)
     std = (hi - lo) / (2.0 * float(stats.norm.ppf(0.5 + Q_LEVEL / 2.0)))
     if not np.isfinite(std):
-        std = _q_curvature_std(ext, state, k)
+        std = q_curvature_std(ext, state, k)
     return float(std), (lo, hi)
 

@@ -41,7 +41,7 @@ class EffectEstimate:
     but something not in the model remains, so its estimate may be biased by it."""
     """Optional 95 % intervals (key → (low, high)): noise_level, the χ²(dof) interval of σ²;
     bias_random_walk, the REML profile-likelihood interval of q (asymmetric; its std is
-    (high - low)/(2·1.96), see :func:`_q_uncertainty`)."""
+    (high - low)/(2·1.96), see :func:`q_uncertainty`)."""
 
     def to_dict(self) -> dict:
         """``{"name", "axis", "params", "std", "statistic", "p_value"}`` (documented JSON),

@@ -124,7 +124,7 @@ def _remaining(state: ModelState, candidates: list[tuple[str, str]]) -> list[tup
 _MISS = object()
 
 
-def _try(ext: Extensions, state: ModelState, name: str, axis: str,
+def try_test(ext: Extensions, state: ModelState, name: str, axis: str,
          memo: dict | None = None) -> Trial | None:
     """``ext.test`` or None when the extension is not identifiable here.
 
@@ -150,17 +150,12 @@ def _try(ext: Extensions, state: ModelState, name: str, axis: str,
     return trial
 
 
-def _drop(state: ModelState, name: str, axis: str, stated: np.ndarray) -> ModelState:
-    return state.without(name, axis, stated)
-
-
 # --------------------------------------------------------------------------- steps
 
-def initial_state(run: RunData, lattice: list[Lattice]) -> ModelState:
-    """Step 0: the nominal model at the stated σ², with the lattice of each axis if found."""
-    return ModelState(tuple(AxisState(sigma2=float(run.sigma2[k]),
-                                      lsb=lattice[k].lsb if lattice[k].found else 0.0)
-                            for k in range(2)))
+def initial_state(noise_var, lattice: list[Lattice]) -> ModelState:
+    """Step 0: the nominal model at the stated σ² (checked by
+    :func:`calib.effects.stated_variances`), with the lattice of each axis if found."""
+    return ModelState.nominal(noise_var, [lat.lsb if lat.found else 0.0 for lat in lattice])
 
 
 def candidate_list(run: RunData) -> tuple[list[tuple[str, str]], tuple[str, ...]]:
@@ -171,7 +166,7 @@ def candidate_list(run: RunData) -> tuple[list[tuple[str, str]], tuple[str, ...]
     return candidates, needs_timing
 
 
-def _first_step(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]]
+def first_step(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]]
                 ) -> tuple[list[Trial], dict[tuple[str, str], str]]:
     """Test every candidate on the nominal model; those that raise are untestable here."""
     untestable: dict[tuple[str, str], str] = {}
@@ -238,7 +233,7 @@ def _forward(ext: Extensions, state: ModelState, trials: list[Trial],
         if best is None:
             break
         state = ext.refine(best.state)
-        trials = [t for t in (_try(ext, state, n, a, memo)
+        trials = [t for t in (try_test(ext, state, n, a, memo)
                               for n, a in _remaining(state, candidates)) if t is not None]
     return state
 
@@ -247,7 +242,6 @@ def _flexible_swap(ext: Extensions, state: ModelState, candidates: list[tuple[st
                    log_alpha: float, steps: list[dict]) -> ModelState:
     """Per axis: the structured effects named there against a walk in their place (AIC, the
     walk charged its effective dof); the walk is kept only when its own test passes."""
-    stated = ext.run.sigma2
     for k, axis in enumerate(AXES):
         st = state.axes[k]
         named = [n for n in st.effects() if n not in ("noise_level", "quantization")]
@@ -255,8 +249,8 @@ def _flexible_swap(ext: Extensions, state: ModelState, candidates: list[tuple[st
             continue
         reduced = state
         for n in named:
-            reduced = reduced.without(n, axis, stated)
-        t = _try(ext, reduced, "bias_random_walk", axis)
+            reduced = reduced.without(n, axis)
+        t = try_test(ext, reduced, "bias_random_walk", axis)
         if t is None or t.logp >= log_alpha:
             continue
         walk = ext.refine(t.state)
@@ -273,15 +267,15 @@ def _flexible_swap(ext: Extensions, state: ModelState, candidates: list[tuple[st
     return state
 
 
-def _backward(ext: Extensions, state: ModelState, stated: np.ndarray, log_alpha: float,
-              steps: list[dict]) -> ModelState:
+def _backward(ext: Extensions, state: ModelState, log_alpha: float, steps: list[dict]
+              ) -> ModelState:
     """One backward pass: drop what the later additions made unnecessary."""
     for name, axis in state.effects():
         if not effect(name).lr_tested:
             continue
-        t = _try(ext, _drop(state, name, axis, stated), name, axis)
+        t = try_test(ext, state.without(name, axis), name, axis)
         if t is not None and t.logp >= log_alpha:
-            state = ext.refine(_drop(state, name, axis, stated))
+            state = ext.refine(state.without(name, axis))
             steps.append({"removed": [name, axis], "p_value": t.p_value})
     return state
 
@@ -289,7 +283,7 @@ def _backward(ext: Extensions, state: ModelState, stated: np.ndarray, log_alpha:
 def select(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]],
            family_alpha: float) -> Selection:
     """Forward selection from ``state`` over ``candidates``, then one backward pass."""
-    first, untestable = _first_step(ext, state, candidates)
+    first, untestable = first_step(ext, state, candidates)
     candidates = [c for c in candidates if c not in untestable]
     n_tests = len(candidates) + LATTICE_TESTS
     alpha_step = family_alpha / n_tests
@@ -303,8 +297,8 @@ def select(ext: Extensions, state: ModelState, candidates: list[tuple[str, str]]
     state = _forward(ext, state, first, candidates, log_alpha, steps, memo)
     swapped = _flexible_swap(ext, state, candidates, log_alpha, steps)
     if swapped is not state:  # structured candidates again, on top of the walk
-        trials = [t for t in (_try(ext, swapped, n, a, memo)
+        trials = [t for t in (try_test(ext, swapped, n, a, memo)
                               for n, a in _remaining(swapped, candidates)) if t is not None]
         state = _forward(ext, swapped, trials, candidates, log_alpha, steps, memo)
-    state = _backward(ext, state, ext.run.sigma2, log_alpha, steps)
+    state = _backward(ext, state, log_alpha, steps)
     return Selection(state, candidates, untestable, n_tests, alpha_step, tuple(steps))

@@ -67,7 +67,6 @@ def standardized(rep: Reporter, k: int) -> tuple[np.ndarray, str, np.ndarray | N
 def review_sponges(ext: Extensions, state: ModelState, lattice: list[Lattice],
                    log_alpha: float) -> tuple[ModelState, list[dict]]:
     """Apply the rule of the module docstring; returns the model and one note per decision."""
-    stated = ext.run.sigma2
     notes: list[dict] = []
     for k, axis in enumerate(AXES):
         st = state.axes[k]
@@ -78,7 +77,7 @@ def review_sponges(ext: Extensions, state: ModelState, lattice: list[Lattice],
             continue
         reduced = state
         for n in sponges:
-            reduced = reduced.without(n, axis, stated)
+            reduced = reduced.without(n, axis)
         reduced = ext.refine(reduced)
         rep = Reporter(ext, reduced, lattice)
         z, how, kept = standardized(rep, k)
@@ -116,6 +115,6 @@ def review_sponges(ext: Extensions, state: ModelState, lattice: list[Lattice],
             new = state
             for n in sponges:
                 if n not in keep:
-                    new = new.without(n, axis, stated)
+                    new = new.without(n, axis)
             state = ext.refine(new)
     return state, notes

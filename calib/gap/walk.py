@@ -7,7 +7,7 @@ selection named on an axis before it may explain anything (issue 20, item 1):
 
 1. **It beats generic rivals of comparable flexibility by the same charged likelihood.** With
    the walk removed (the other named effects kept, their linear parameters refitted), each
-   rival shape is added to the axis' whitened system (:class:`calib.gap.adequacy.AxisSpace`);
+   rival shape is added to the axis' whitened system (:class:`calib.gap.space.AxisSpace`);
    its gain ``LR_r`` in ``-2 log L`` is compared with the walk's ``LR_w`` (marginal
    likelihood: the path integrated out) by AIC: the walk keeps its place only when
    ``LR_w - 2·c_w > LR_r - 2·c_r`` for every rival, ``c`` the parameters charged — for a
@@ -68,7 +68,9 @@ from scipy import optimize, stats
 
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
-from calib.gap.adequacy import (
+from calib.gap.flexibility import tridiagonal_inverse_diagonal
+from calib.gap.mechanisms import drive_orders
+from calib.gap.space import (
     AxisSpace,
     Check,
     fisher_g_logp,
@@ -76,8 +78,6 @@ from calib.gap.adequacy import (
     motion_direction,
     spectral_peak,
 )
-from calib.gap.flexibility import tridiagonal_inverse_diagonal
-from calib.gap.mechanisms import drive_orders
 
 GRID = 120
 """Places on the grid of the step, two-step and bump rivals."""
@@ -546,15 +546,15 @@ def rival_check(ext: Extensions, e: np.ndarray, sigma2: float, q: float, k: int,
 
 
 def review_walk(ext: Extensions, state: ModelState, k: int, e: np.ndarray,
-                innov: np.ndarray, stated: np.ndarray) -> WalkReview:
+                innov: np.ndarray) -> WalkReview:
     """Rivals and path battery for the walk named on axis k of ``state``.
 
     e : (N,) readings minus the final model's mean without its bias, m/s².  innov : (N,) the
-    walk filter's normalised innovations.  stated : (2,) stated σ² (to remove the walk).
+    walk filter's normalised innovations.
     """
     st = state.axes[k]
     axis = AXES[k]
-    reduced = state.without("bias_random_walk", axis, stated)
+    reduced = state.without("bias_random_walk", axis)
     lr = float(ext.nll(reduced) - ext.nll(state))
     charge = walk_charge(ext, k)
     found = rivals(ext, reduced, k)
