@@ -26,6 +26,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
 	$(BIN)/python benchmarks/cli_startup.py
 	$(BIN)/python benchmarks/gap_scaling.py
+	$(BIN)/python benchmarks/gap_command.py
 	$(BIN)/python benchmarks/mc_speed.py
 
 octave-check: $(STAMP)
