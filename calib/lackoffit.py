@@ -103,9 +103,11 @@ class LackOfFit(ResultMixin):
         return f"axis {self.axis}: lack of fit {self._stat_text()} ({self.groups} poses){pe}"
 
     def warning_line(self) -> str:
-        """The one line a command prints when :meth:`misses` is true."""
-        return (f"axis {self.axis}: lack of fit {self._stat_text()} — the model misses "
-                "something; run `tiltbench gap`")
+        """The one line a command prints when :meth:`misses` is true (within 100 columns
+        after a ``warning:`` prefix: the degrees of freedom are in :meth:`summary`)."""
+        name = "F" if self.statistic == "F" else "χ²"
+        return (f"axis {self.axis}: lack of fit {name} = {self.value:.4g}, "
+                f"{format_p(self.p_value)} — the model misses something; run `tiltbench gap`")
 
     def to_dict(self) -> dict:
         return {"axis": self.axis, "groups": self.groups,
