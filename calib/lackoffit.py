@@ -103,11 +103,12 @@ class LackOfFit(ResultMixin):
         return f"axis {self.axis}: lack of fit {self._stat_text()} ({self.groups} poses){pe}"
 
     def warning_line(self) -> str:
-        """The one line a command prints when :meth:`misses` is true (within 100 columns
-        after a ``warning:`` prefix: the degrees of freedom are in :meth:`summary`)."""
+        """The one line a command prints when :meth:`misses` is true: the lack-of-fit
+        statistic and its p (its dof are in :meth:`summary`), within 100 columns after a
+        ``warning:`` prefix."""
         name = "F" if self.statistic == "F" else "χ²"
-        return (f"axis {self.axis}: lack of fit {name} = {self.value:.4g}, "
-                f"{format_p(self.p_value)} — the model misses something; run `tiltbench gap`")
+        return (f"axis {self.axis}: the model misses something ({name} = {self.value:.3g}, "
+                f"{format_p(self.p_value)}); run `tiltbench gap`")
 
     def to_dict(self) -> dict:
         return {"axis": self.axis, "groups": self.groups,

@@ -133,8 +133,8 @@ def test_calibrate_uses_the_pure_error_and_says_the_model_misses_something():
     assert fx.quantile(0.95) == pytest.approx(stats.t.ppf(0.975, dof), rel=1e-12)
     assert cal.lack_of_fit["x"].misses() and not cal.lack_of_fit["y"].misses(1e-4)
     lines = cal.lack_of_fit_warnings()
-    assert len(lines) == 1 and lines[0].startswith("axis x: lack of fit F = ")
-    assert lines[0].endswith("the model misses something; run `tiltbench gap`")
+    assert len(lines) == 1 and lines[0].startswith("axis x: the model misses something (F = ")
+    assert lines[0].endswith("); run `tiltbench gap`") and len("warning: " + lines[0]) <= 100
     assert "axis x: lack of fit F" in cal.summary()
 
 
