@@ -25,7 +25,7 @@ import numpy as np
 import pytest
 
 from calib.gap import analyze_gap
-from calib.gap.mechanisms import RING_FREQS, drive_orders
+from calib.gap.mechanisms import LAST_HARMONIC, RING_FREQS, drive_orders
 from calib.io import Ensayo
 from calib.sensor_profile import NoiseTerm, SensorProfile, save_profile
 from tests.cli import run
@@ -97,9 +97,14 @@ def test_ringing_drive_and_frozen_are_found_and_said_in_words(mechanisms):
             assert u["statistic"] <= p["length"] + 3  # equal neighbours by chance: rare
 
 
-def test_drive_orders_skip_the_integers():
+def test_drive_orders_skip_the_low_harmonics_and_keep_tooth_counts():
+    """Orders 1–6 are the catalog's and the harmonics check's; whole tooth counts above them
+    (a 23-tooth gear) are harmonics of θ nothing else looks for."""
     v = drive_orders(3.0)
-    assert np.all(np.abs(v - np.round(v)) > 0.01) and v.min() >= 0.5 and v.max() <= 12.0
+    low = v[v < LAST_HARMONIC + 0.5]
+    assert np.all(np.abs(low - np.round(low)) > 0.01) and v.min() >= 0.5
+    assert set(range(LAST_HARMONIC + 1, 49)) <= set(np.round(v[np.isclose(v, np.round(v))]))
+    assert v.max() <= 48.0
 
 
 def _walk_review(i: int) -> list[bool]:
@@ -231,3 +236,24 @@ def test_sponge_review_beside_a_rail_clipped_after_the_noise_does_not_crash():
     motion, datos, truth = build(case_by_id()[case_id], seed=0)
     res = analyze_gap(validate_ensayo(motion.theta, datos), truth["noise_var"])
     assert res.verdict == "unexplained"
+
+
+def test_a_vibration_at_a_whole_tooth_count_is_found():
+    """A 23-tooth drive: ``a·(|ω|/max|ω|)·sin(23θ)`` on x of a timed two-turn run of varying
+    rate, sized 10 σ of its own signature (``a²·Σ(speed²·sin²)/σ² = 100``): a whole order
+    above the harmonics check's is looked for (it was not), found at order 23 and said."""
+    rng = np.random.default_rng(23)
+    tita, t = designs.design("varying_rate", None)
+    speed = np.abs(np.gradient(tita, t))
+    speed /= speed.max()
+    shape = speed * np.sin(23.0 * tita + 0.4)
+    sd = np.array([0.5, 0.8])
+    amp = 10.0 * sd[0] / np.sqrt(float(shape @ shape))
+    y = np.column_stack([-G * np.sin(tita), -G * np.cos(tita)]) + sd * rng.standard_normal(
+        (tita.size, 2))
+    y[:, 0] += amp * shape
+    a = analyze_gap(Ensayo(tita, y, t), sd**2)
+    assert a.verdict == "unexplained" and not a.effects
+    (u,) = [u for u in a.unexplained if u["signature"] == "drive_angle"]
+    assert u["axis"] == "x" and "order 23 of θ" in u["description"]
+    assert "drive speed" in u["description"]

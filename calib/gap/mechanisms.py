@@ -15,10 +15,13 @@ is a catalog effect, so none is ever named).
     frequency, damping ratio, initial amplitude (the damped-mode fit on the segments after the
     stops).
 ``drive_angle``
-    A vibration tied to the drive: ``cos νθ, sin νθ`` at a non-integer order ν (a gear or belt
-    ratio; the integer orders are harmonics of θ, the catalog's and the ``harmonics`` check's),
-    searched on a grid of ν, ``ΔRSS ~ χ²(2)``, Bonferroni over the grid; with timing also
-    the same columns times ``|ω|/max|ω|`` (a vibration growing with the drive speed).
+    A vibration tied to the drive: ``cos νθ, sin νθ`` at an order ν of the drive angle (a gear
+    or belt ratio, or a tooth count), searched on a grid of ν up to :data:`DRIVE_ORDERS`' top
+    (a gear of up to 48 teeth), ``ΔRSS ~ χ²(2)``, Bonferroni over the grid; with timing also
+    the same columns times ``|ω|/max|ω|`` (a vibration growing with the drive speed). The
+    integer orders up to the ``harmonics`` check's last (6) are left out (1 and 2 are the
+    catalog's scale, K2 and cross-axis; 3–6 the ``harmonics`` check's); a whole tooth count
+    above them is a harmonic of θ nothing else looks for, so it is on the grid.
 ``frozen``
     The output repeating one value exactly (a stuck register, dropped updates): the longest
     run of identical consecutive readings, L samples. With white noise of std σ rounded to a
@@ -49,17 +52,25 @@ RING_DAMPING = (0.02, 0.05, 0.1, 0.2, 0.4)
 MIN_HOLD = 5
 """Fewest held samples after a stop for it to count."""
 
-DRIVE_ORDERS = (0.5, 12.0)
+DRIVE_ORDERS = (0.5, 48.0)
 """Range of the orders ν of the drive-angle grid, spaced by half a cycle over the run's
-angle range (``0.5/turns``, between 0.02 and 0.25); the integers are excluded."""
-"""Orders ν of the drive-angle grid (integers excluded)."""
+angle range (``0.5/turns``, between 0.02 and 0.25); the integers up to
+:data:`LAST_HARMONIC` are excluded."""
+
+LAST_HARMONIC = 6
+"""The highest integer order tested elsewhere (``harmonics`` check of the adequacy battery:
+3–6; 1 and 2 are catalog effects): integer orders above it are on the drive grid."""
 
 
 def drive_orders(turns: float) -> np.ndarray:
-    """The non-integer orders ν searched for a run covering ``turns`` turns."""
+    """The orders ν searched for a run covering ``turns`` turns: non-integers, and the whole
+    tooth counts above :data:`LAST_HARMONIC`."""
     step = float(np.clip(0.5 / max(turns, 1e-9), 0.02, 0.25))
     v = np.arange(DRIVE_ORDERS[0], DRIVE_ORDERS[1] + 1e-9, step)
-    return v[np.abs(v - np.round(v)) > min(0.02, step / 2)]
+    near = np.abs(v - np.round(v)) <= min(0.02, step / 2)
+    v = v[~near | (np.round(v) > LAST_HARMONIC)]
+    whole = np.arange(LAST_HARMONIC + 1, int(DRIVE_ORDERS[1]) + 1, dtype=float)
+    return np.unique(np.concatenate([v[np.abs(v - np.round(v)) > 1e-9], whole]))
 
 
 def stops(run) -> list[tuple[int, int, float]]:
@@ -150,7 +161,7 @@ def drive_angle(space: AxisSpace, run, axis: str) -> Check | None:
     logp = min(0.0, float(np.log(tests) + stats.chi2.logsf(stat, dof)))
     amp = float(np.hypot(*coef[:2]))
     return Check("drive_angle", axis, stat, logp, f"chi2({dof}) × {tests} orders", amp, "m/s²",
-                 f"a vibration tied to the drive on {axis}: order {v:.3g} of θ (not a harmonic;"
+                 f"a vibration tied to the drive on {axis}: order {v:.3g} of θ (a tooth count,"
                  f" a gear or belt ratio){label}, {amp:.3g} m/s²")
 
 
