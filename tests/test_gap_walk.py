@@ -257,3 +257,29 @@ def test_a_vibration_at_a_whole_tooth_count_is_found():
     (u,) = [u for u in a.unexplained if u["signature"] == "drive_angle"]
     assert u["axis"] == "x" and "order 23 of θ" in u["description"]
     assert "drive speed" in u["description"]
+
+
+@pytest.mark.parametrize("design,frac", [("stop_and_go", 0.02), ("held_poses", 0.06)])
+def test_a_settling_transient_after_the_stops_is_found_not_a_walk(design, frac):
+    """``Σ_stops s·e^{-(t - t_s)/T}`` (s the sign of the move that stopped; T a fraction of the
+    run's span) on x, sized 10 σ of its own (mean-removed) signature, built here from θ alone:
+    the walk used to absorb it ("explained"); now "unexplained" with a settling transient
+    found (as a mechanism or as the walk's winning rival) and no walk named."""
+    rng = np.random.default_rng(31)
+    tita, t = designs.design(design, None)
+    clock = t if t is not None else np.arange(tita.size) / 100.0
+    moving = np.concatenate([[False], np.diff(tita) != 0.0])
+    shape = np.zeros(tita.size)
+    for i in np.flatnonzero(moving[:-1] & ~moving[1:]):  # i: the last moving sample
+        shape[i:] += np.sign(tita[i] - tita[i - 1]) * np.exp(-(clock[i:] - clock[i])
+                                                              / (frac * clock[-1]))
+    shape -= shape.mean()
+    sd = np.array([0.5, 0.8])
+    y = np.column_stack([-G * np.sin(tita), -G * np.cos(tita)]) + sd * rng.standard_normal(
+        (tita.size, 2))
+    y[:, 0] += 10.0 * sd[0] / np.sqrt(float(shape @ shape)) * shape
+    a = analyze_gap(Ensayo(tita, y, t), sd**2, rate=None if t is not None else 100.0)
+    assert a.verdict == "unexplained"
+    assert all(e.name != "bias_random_walk" for e in a.effects)
+    assert any("settling transient" in u["description"] for u in a.unexplained
+               if u["axis"] == "x")

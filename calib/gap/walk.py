@@ -26,7 +26,8 @@ selection named on an axis before it may explain anything (issue 20, item 1):
    ``two_steps``       two steps (greedy on the grid, then the first re-placed)     4
    ``bump``            a Gaussian bump, centre and width on a grid                  3
    ``near_zero_g``     ``exp(-(A_r/w)²/2)`` of the axis' own reference, w on a grid 2
-   ``drive_angle``     cos νθ, sin νθ at a searched non-integer order ν             3
+   ``drive_angle``     cos νθ, sin νθ at a searched order ν (not 1–6)               3
+   ``settling``        signed and unsigned ``e^{-τ/T}`` after each stop, T on a grid 3
    ==================  ===========================================================  ======
 
 2. **Its own path passes a battery.** With the linear parameters at their final values,
@@ -77,7 +78,13 @@ from calib.gap.adequacy import (
     spectral_peak,
 )
 from calib.gap.flexibility import tridiagonal_inverse_diagonal
-from calib.gap.mechanisms import drive_orders
+from calib.gap.mechanisms import (
+    drive_orders,
+    resolved_order,
+    settle_times,
+    settling_columns,
+    stops,
+)
 
 GRID = 120
 """Places on the grid of the step, two-step and bump rivals."""
@@ -316,7 +323,8 @@ def _drive_angle(space: AxisSpace, run) -> Rival | None:
     turns = float(np.ptp(th)) / (2.0 * np.pi)
     if turns < 0.5:
         return None
-    orders = [v for v in drive_orders(turns) if v * turns >= 1.0]
+    top = resolved_order(th)
+    orders = [v for v in drive_orders(turns) if v * turns >= 1.0 and v <= top]
     best = _best_on_grid(space, lambda v: np.column_stack([np.cos(v * th), np.sin(v * th)]),
                          orders)
     if best is None:
@@ -326,6 +334,22 @@ def _drive_angle(space: AxisSpace, run) -> Rival | None:
                  f"a vibration tied to the drive angle: order {v:.3g} of θ (a tooth count or "
                  f"a gear ratio), {amp:.3g} m/s²",
                  np.column_stack([np.cos(v * th), np.sin(v * th)]), len(orders))
+
+
+def _settling(space: AxisSpace, run) -> Rival | None:
+    """A settling transient after the stops (:func:`calib.gap.mechanisms.settling`)."""
+    hold = stops(run)
+    grid = settle_times(run)
+    if not hold or grid.size == 0:
+        return None
+    best = _best_on_grid(space, lambda c: settling_columns(run, hold, c), grid)
+    if best is None:
+        return None
+    tconst, amp = float(best[1]), float(np.max(np.abs(best[2])))
+    return Rival("settling", best[0], 3.0, amp,
+                 f"a settling transient after each of {len(hold)} stops: {amp:.3g} m/s² at "
+                 f"the stop, time constant about {tconst:.3g} {_time_unit(run)}",
+                 settling_columns(run, hold, tconst), grid.size)
 
 
 def _near_zero_g(space: AxisSpace, ext: Extensions, k: int) -> Rival | None:
@@ -361,7 +385,8 @@ def rivals(ext: Extensions, reduced: ModelState, k: int) -> list[Rival]:
                              f"the reading depends on the direction of the last motion (up "
                              f"minus down {2.0 * float(fit[2][0]):+.3g} m/s²)", d[:, None], 1))
     out += _steps(space, run)
-    for r in (_bump(space, run), _near_zero_g(space, ext, k), _drive_angle(space, run)):
+    for r in (_bump(space, run), _near_zero_g(space, ext, k), _drive_angle(space, run),
+              _settling(space, run)):
         if r is not None:
             out.append(r)
     return out
