@@ -19,8 +19,9 @@ selection named on an axis before it may explain anything (issue 20, item 1):
    rival               columns (in time unless said)                                charge
    ==================  ===========================================================  ======
    ``polynomial``      Legendre P1 … P3 of time                                     3
-   ``sinusoid``        cos, sin at the periodogram peak (refined)                   3
-   ``two_sinusoids``   the two strongest peaks                                      6
+   ``sinusoid``        cos, sin at the periodogram peak (refined) in the walk's     3
+                       band (:func:`walk_band`: the frequencies a walk can follow)
+   ``two_sinusoids``   the two strongest peaks in that band                         6
    ``direction``       direction of the last motion (±1)                            1
    ``step``            one step of the bias, at the best of a grid of places        2
    ``two_steps``       two steps (greedy on the grid, then the first re-placed)     4
@@ -285,8 +286,19 @@ def _bump(space: AxisSpace, run) -> Rival | None:
                  np.exp(-0.5 * ((tc - c) / w) ** 2)[:, None], len(grid))
 
 
-def _sinusoids(space: AxisSpace, run) -> list[Rival]:
-    peak = spectral_peak(space, run)
+def walk_band(run, q: float, sigma2: float) -> float:
+    """Cycles per run below which the walk's path can follow a shape: an octave above the
+    corner where its steps' spectrum ``q²Δt`` meets the differenced noise's
+    ``σ²·|2 sin πf|²`` (``2 sin πf_c = q√Δt/σ``), at least 4. Above it the walk absorbs
+    little: a faster oscillation is the ``periodic`` / ``walk_period`` checks' business, so the
+    sinusoid rivals search (and are charged for) the band only."""
+    dt = float(np.median(np.asarray(run.dt_walk, dtype=float)))
+    x = min(1.0, q * np.sqrt(dt) / (2.0 * np.sqrt(max(sigma2, 1e-300))))
+    return float(max(4.0, 2.0 * np.arcsin(x) / np.pi * (run.n - 1)))
+
+
+def _sinusoids(space: AxisSpace, run, band: float | None = None) -> list[Rival]:
+    peak = spectral_peak(space, run, max_cycles=band)
     if peak is None:
         return []
     cols1, period1 = peak[4], peak[3]
@@ -305,7 +317,7 @@ def _sinusoids(space: AxisSpace, run) -> list[Rival]:
     m = 2 * peak[2]  # Fourier frequencies, each refined between its neighbours
     out = [Rival("sinusoid", fit1[0], 3.0, amp1, words(period1, amp1), cols1, m)]
     # the second tone: the periodogram peak of what the first leaves
-    peak2 = spectral_peak(space.without(cols1), run)
+    peak2 = spectral_peak(space.without(cols1), run, max_cycles=band)
     if peak2 is None:
         return out
     cols = np.column_stack([cols1, peak2[4]])
@@ -364,8 +376,10 @@ def _near_zero_g(space: AxisSpace, ext: Extensions, k: int) -> Rival | None:
                  np.exp(-0.5 * (a / w) ** 2)[:, None], len(ZERO_G_WIDTHS))
 
 
-def rivals(ext: Extensions, reduced: ModelState, k: int) -> list[Rival]:
-    """Every rival shape on axis k of ``reduced`` (the model without the walk)."""
+def rivals(ext: Extensions, reduced: ModelState, k: int, band: float | None = None
+           ) -> list[Rival]:
+    """Every rival shape on axis k of ``reduced`` (the model without the walk); ``band``: the
+    cycles per run the sinusoids search (:func:`walk_band`; None: every frequency)."""
     run = ext.run
     space = AxisSpace(ext, reduced, k)
     out: list[Rival] = []
@@ -376,7 +390,7 @@ def rivals(ext: Extensions, reduced: ModelState, k: int) -> list[Rival]:
                          float(np.ptp(cols @ poly[2])),
                          f"a smooth drift in time (polynomial, range "
                          f"{float(np.ptp(cols @ poly[2])):.3g} m/s²)", cols, 1))
-    out += _sinusoids(space, run)
+    out += _sinusoids(space, run, band)
     d = motion_direction(run.tita)
     if d is not None:
         fit = space.test(d[:, None])
@@ -655,7 +669,7 @@ def review_walk(ext: Extensions, state: ModelState, k: int, e: np.ndarray,
     reduced = state.without("bias_random_walk", axis, stated)
     lr = float(ext.nll(reduced) - ext.nll(state))
     charge = walk_charge(ext, k)
-    found = rivals(ext, reduced, k)
+    found = rivals(ext, reduced, k, walk_band(ext.run, st.q, st.sigma2_eff))
     checks = path_checks(ext, e, innov, st.sigma2_eff, st.q, axis)
     rc = rival_check(ext, e, st.sigma2_eff, st.q, k, found, lr - 2.0 * charge,
                      k in getattr(ext, "walk_bounds", {}))
