@@ -26,6 +26,7 @@ import pytest
 
 from calib.gap import analyze_gap
 from calib.gap.mechanisms import LAST_HARMONIC, RING_FREQS, drive_orders
+from calib.gap.walk import spectral_exponent_lr
 from calib.io import Ensayo
 from calib.sensor_profile import NoiseTerm, SensorProfile, save_profile
 from tests.cli import run
@@ -283,3 +284,31 @@ def test_a_settling_transient_after_the_stops_is_found_not_a_walk(design, frac):
     assert all(e.name != "bias_random_walk" for e in a.effects)
     assert any("settling transient" in u["description"] for u in a.unexplained
                if u["axis"] == "x")
+
+
+def test_the_walk_spectrum_test_keeps_walks_and_rejects_strong_flicker():
+    """``walk_spectrum``'s Whittle LR (β = 2 against β free) on the differenced path: on R = 40
+    simulated local levels (N = 2001, q√N = 2-6 σ) it exceeds χ²₁(0.99) in at most the 0.999
+    quantile of Binomial(40, 0.01) runs (it is conservative: the exponent is weakly identified
+    where the walk is faint); on strong 1/f noise (std 3 σ, spectrum shaped by FFT) it is
+    beyond χ²₁(1 - 1e-6) with β̂ < 2, and on a strong walk β̂ is within 0.5 of 2."""
+    from scipy import stats
+
+    rng = np.random.default_rng(2001)
+    n = 2001
+    crit = float(stats.chi2.ppf(0.99, 1))
+    over = 0
+    for _ in range(40):
+        q = rng.uniform(2.0, 6.0) / np.sqrt(n)
+        e = np.cumsum(q * rng.standard_normal(n)) + rng.standard_normal(n)
+        over += spectral_exponent_lr(np.diff(e))[0] > crit
+    assert over <= max_wrong(40, 0.01)
+    e = np.cumsum(0.2 * rng.standard_normal(n)) + rng.standard_normal(n)
+    assert abs(spectral_exponent_lr(np.diff(e))[1] - 2.0) < 0.5
+    spec = np.fft.rfft(rng.standard_normal(n))
+    f = np.fft.rfftfreq(n)
+    spec[0], spec[1:] = 0.0, spec[1:] / np.sqrt(f[1:])
+    flick = np.fft.irfft(spec, n=n)
+    e = 3.0 * flick / flick.std() + rng.standard_normal(n)
+    lr, beta = spectral_exponent_lr(np.diff(e))[:2]
+    assert lr > stats.chi2.isf(1e-6, 1) and beta < 2.0

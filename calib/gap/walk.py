@@ -462,7 +462,7 @@ flicker noise 1, white noise 0; a drift smoother than a walk — a slow oscillat
 transient — more than 2)."""
 
 
-def _whittle(d: np.ndarray) -> tuple[float, float, float] | None:
+def spectral_exponent_lr(d: np.ndarray) -> tuple[float, float, float] | None:
     """Whittle test of the walk's spectral exponent on its differenced path (``walk_spectrum``).
 
     Under the local level the differenced path ``Δe = Δv + w`` has the spectral density
@@ -513,7 +513,7 @@ def _whittle(d: np.ndarray) -> tuple[float, float, float] | None:
 
 
 def _spectrum_check(de: np.ndarray, axis: str) -> Check | None:
-    out = _whittle(de)
+    out = spectral_exponent_lr(de)
     if out is None:
         return None
     lr, beta, _ = out
