@@ -29,6 +29,8 @@ selection named on an axis before it may explain anything (issue 20, item 1):
    ``near_zero_g``     ``exp(-(A_r/w)²/2)`` of the axis' own reference, w on a grid 2
    ``drive_angle``     cos νθ, sin νθ at a searched order ν (not 1–6)               3
    ``settling``        signed and unsigned ``e^{-τ/T}`` after each stop, T on a grid 3
+   ``response_bend``   ``max(A_r - κ, 0)`` or ``clip(A_r, -w, w)`` of the axis' own     2
+                       specific force, κ or w on a grid (a bend, a dead zone)
    ==================  ===========================================================  ======
 
 2. **Its own path passes a battery.** With the linear parameters at their final values,
@@ -95,6 +97,9 @@ WIDTHS = (0.01, 0.03, 0.08, 0.2)
 
 ZERO_G_WIDTHS = (0.3, 0.6, 1.2, 2.4)
 """Widths w (m/s²) of the near-0 g rival ``exp(-(A_r/w)²/2)``."""
+
+BEND_KNOTS = 24
+"""Knots of the response-bend rival's hinge (quantiles 5 %–95 % of the axis' own A_r)."""
 
 WALK_CHECKS = ("walk_normality", "walk_whiteness", "walk_period", "walk_jump",
                "walk_stationarity", "walk_spectrum", "walk_rivals")
@@ -364,6 +369,32 @@ def _settling(space: AxisSpace, run) -> Rival | None:
                  settling_columns(run, hold, tconst), grid.size)
 
 
+def _bend_column(a: np.ndarray, g: tuple[str, float]) -> np.ndarray:
+    kind, v = g
+    return (np.maximum(a - v, 0.0) if kind == "hinge" else np.clip(a, -v, v))[:, None]
+
+
+def _response_bend(space: AxisSpace, ext: Extensions, k: int) -> Rival | None:
+    """The response bends at a level of the axis' own specific force ``A_r``: a hinge
+    ``max(A_r - κ, 0)`` (the gain changes at κ: a scale asymmetry at κ = 0) at κ on the
+    quantiles of ``A_r``, or a band ``clip(A_r, -w, w)`` (the gain differs within ±w: a dead
+    zone) at w on the near-0 g grid. A walk follows it where ``A_r`` moves slowly; it is a
+    fixed function of the specific force, which a walk is not."""
+    a = ext.run.a_ref[:, k]
+    grid = ([("hinge", float(v)) for v in np.quantile(a, np.linspace(0.05, 0.95, BEND_KNOTS))]
+            + [("band", float(w)) for w in ZERO_G_WIDTHS if w < float(np.max(np.abs(a)))])
+    best = _best_on_grid(space, lambda g: _bend_column(a, g), grid)
+    if best is None:
+        return None
+    (kind, v), c = best[1], float(best[2][0])
+    words = (f"the gain on {AXES[k]} changes by {c:+.3g} where the specific force exceeds "
+             f"{v:.3g} m/s² (a bend of the response)" if kind == "hinge" else
+             f"the gain on {AXES[k]} differs by {c:+.3g} within ±{v:.2g} m/s² of 0 g (a dead "
+             "zone or a bend of the response near 0 g)")
+    return Rival("response_bend", best[0], 2.0, abs(c) * v if kind == "band" else abs(c),
+                 words, _bend_column(a, (kind, v)), len(grid))
+
+
 def _near_zero_g(space: AxisSpace, ext: Extensions, k: int) -> Rival | None:
     a = ext.run.a_ref[:, k]
     best = _best_on_grid(space, lambda w: np.exp(-0.5 * (a / w) ** 2)[:, None], ZERO_G_WIDTHS)
@@ -400,7 +431,7 @@ def rivals(ext: Extensions, reduced: ModelState, k: int, band: float | None = No
                              f"minus down {2.0 * float(fit[2][0]):+.3g} m/s²)", d[:, None], 1))
     out += _steps(space, run)
     for r in (_bump(space, run), _near_zero_g(space, ext, k), _drive_angle(space, run),
-              _settling(space, run)):
+              _settling(space, run), _response_bend(space, ext, k)):
         if r is not None:
             out.append(r)
     return out
