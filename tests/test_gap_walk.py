@@ -312,3 +312,24 @@ def test_the_walk_spectrum_test_keeps_walks_and_rejects_strong_flicker():
     e = 3.0 * flick / flick.std() + rng.standard_normal(n)
     lr, beta = spectral_exponent_lr(np.diff(e))[:2]
     assert lr > stats.chi2.isf(1e-6, 1) and beta < 2.0
+
+
+def test_a_dead_zone_is_not_taken_for_a_walk():
+    """A dead zone on y, ``-clip(A_ry, -d, d)`` (d = 2 m/s²), on 60 static poses visited in
+    increasing order over a turn (100 samples each, time in samples: the specific force moves
+    slowly, so a walk can follow the error), sized 10 σ of its signature beyond scale and
+    bias: "unexplained", no walk named (the walk's response_bend rival or a check of the
+    battery finds it)."""
+    rng = np.random.default_rng(61)
+    poses = np.sort(rng.uniform(0.0, 2.0 * np.pi, 60))
+    tita = np.repeat(poses, 100)
+    a = np.column_stack([-G * np.sin(tita), -G * np.cos(tita)])
+    shape = -np.clip(a[:, 1], -2.0, 2.0)
+    basis = np.column_stack([np.ones_like(shape), a[:, 1]])
+    shape -= basis @ np.linalg.lstsq(basis, shape, rcond=None)[0]
+    sd = np.array([0.5, 0.8])
+    y = a + sd * rng.standard_normal(a.shape)
+    y[:, 1] += 10.0 * sd[1] / np.sqrt(float(shape @ shape)) * shape
+    out = analyze_gap(Ensayo(tita, y, None), sd**2)
+    assert out.verdict == "unexplained"
+    assert all(e.name != "bias_random_walk" for e in out.effects)
