@@ -16,8 +16,9 @@ is a catalog effect, so none is ever named).
     stops).
 ``drive_angle``
     A vibration tied to the drive: ``cos νθ, sin νθ`` at an order ν of the drive angle (a gear
-    or belt ratio, or a tooth count), searched on a grid of ν up to :data:`DRIVE_ORDERS`' top
-    (a gear of up to 48 teeth), ``ΔRSS ~ χ²(2)``, Bonferroni over the grid; with timing also
+    or belt ratio, or a tooth count), searched on a grid of fractional ν up to
+    :data:`DRIVE_ORDERS`' top and of whole ν up to :data:`MAX_TEETH` (a gear of up to 48
+    teeth), ``ΔRSS ~ χ²(2)``, Bonferroni over the grid; with timing also
     the same columns times ``|ω|/max|ω|`` (a vibration growing with the drive speed). The
     integer orders up to the ``harmonics`` check's last (6) are left out (1 and 2 are the
     catalog's scale, K2 and cross-axis; 3–6 the ``harmonics`` check's); a whole tooth count
@@ -64,10 +65,13 @@ samples are used)."""
 MIN_HOLD = 5
 """Fewest held samples after a stop for it to count."""
 
-DRIVE_ORDERS = (0.5, 48.0)
-"""Range of the orders ν of the drive-angle grid, spaced by half a cycle over the run's
-angle range (``0.5/turns``, between 0.02 and 0.25); the integers up to
-:data:`LAST_HARMONIC` are excluded."""
+DRIVE_ORDERS = (0.5, 12.0)
+"""Range of the fractional orders ν of the drive-angle grid (gear or belt ratios), spaced by
+half a cycle over the run's angle range (``0.5/turns``, between 0.02 and 0.25); the integers
+up to :data:`LAST_HARMONIC` are excluded."""
+
+MAX_TEETH = 48
+"""Whole orders (tooth counts) are searched from :data:`LAST_HARMONIC` + 1 up to this."""
 
 LAST_HARMONIC = 6
 """The highest integer order tested elsewhere (``harmonics`` check of the adequacy battery:
@@ -75,13 +79,14 @@ LAST_HARMONIC = 6
 
 
 def drive_orders(turns: float) -> np.ndarray:
-    """The orders ν searched for a run covering ``turns`` turns: non-integers, and the whole
-    tooth counts above :data:`LAST_HARMONIC`."""
+    """The orders ν searched for a run covering ``turns`` turns: fractional ones up to
+    :data:`DRIVE_ORDERS`' top, and the whole tooth counts from :data:`LAST_HARMONIC` + 1 to
+    :data:`MAX_TEETH` (a tooth count is a whole number: the fine grid is not needed there)."""
     step = float(np.clip(0.5 / max(turns, 1e-9), 0.02, 0.25))
     v = np.arange(DRIVE_ORDERS[0], DRIVE_ORDERS[1] + 1e-9, step)
     near = np.abs(v - np.round(v)) <= min(0.02, step / 2)
     v = v[~near | (np.round(v) > LAST_HARMONIC)]
-    whole = np.arange(LAST_HARMONIC + 1, int(DRIVE_ORDERS[1]) + 1, dtype=float)
+    whole = np.arange(LAST_HARMONIC + 1, MAX_TEETH + 1, dtype=float)
     return np.unique(np.concatenate([v[np.abs(v - np.round(v)) > 1e-9], whole]))
 
 
