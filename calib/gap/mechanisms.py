@@ -1,6 +1,6 @@
 """Mechanisms of a real bench the catalog does not have, looked for on the final model.
 
-Three checks per axis, each with a p-value, judged in the adequacy battery
+Four checks per axis, each with a p-value, judged in the adequacy battery
 (:func:`calib.gap.adequacy.run_battery`, Bonferroni over the battery at its family α): a
 failure makes the verdict "unexplained" and says what the mechanism is in words (none of them
 is a catalog effect, so none is ever named).
@@ -15,10 +15,22 @@ is a catalog effect, so none is ever named).
     frequency, damping ratio, initial amplitude (the damped-mode fit on the segments after the
     stops).
 ``drive_angle``
-    A vibration tied to the drive: ``cos νθ, sin νθ`` at a non-integer order ν (a gear or belt
-    ratio; the integer orders are harmonics of θ, the catalog's and the ``harmonics`` check's),
-    searched on a grid of ν, ``ΔRSS ~ χ²(2)``, Bonferroni over the grid; with timing also
-    the same columns times ``|ω|/max|ω|`` (a vibration growing with the drive speed).
+    A vibration tied to the drive: ``cos νθ, sin νθ`` at an order ν of the drive angle (a gear
+    or belt ratio, or a tooth count), searched on a grid of fractional ν up to
+    :data:`DRIVE_ORDERS`' top and of whole ν up to :data:`MAX_TEETH` (a gear of up to 48
+    teeth), ``ΔRSS ~ χ²(2)``, Bonferroni over the grid; with timing also
+    the same columns times ``|ω|/max|ω|`` (a vibration growing with the drive speed). The
+    integer orders up to the ``harmonics`` check's last (6) are left out (1 and 2 are the
+    catalog's scale, K2 and cross-axis; 3–6 the ``harmonics`` check's); a whole tooth count
+    above them is a harmonic of θ nothing else looks for, so it is on the grid.
+``settling``
+    A settling transient after each stop (a relaxation of the mount or the sensor after a
+    move, not oscillating): ``Σ_i s_i·e^{-τ_i/T}`` and the same unsigned (``τ_i`` the time since
+    stop i, from its last moving sample to the end of the run: the relaxation goes on through
+    the next moves), added to the final model: ``ΔRSS ~ χ²(2)``, maximised over a geometric
+    grid of time constants T (:data:`SETTLE_TIMES`, fractions of the run's span, from two
+    samples up), Bonferroni over the grid. Static runs too (time then in samples). The same
+    columns are a rival of the random walk (:mod:`calib.gap.walk`), which absorbs a slow one.
 ``frozen``
     The output repeating one value exactly (a stuck register, dropped updates): the longest
     run of identical consecutive readings, L samples. With white noise of std σ rounded to a
@@ -46,20 +58,45 @@ RING_FREQS = np.geomspace(0.5, 25.0, 24)
 RING_DAMPING = (0.02, 0.05, 0.1, 0.2, 0.4)
 """Damping ratios ζ of the ringing grid."""
 
+SETTLE_TIMES = np.geomspace(1e-3, 0.25, 16)
+"""Time constants T of the settling grid, fractions of the run's span (those of at least two
+samples are used)."""
+
 MIN_HOLD = 5
 """Fewest held samples after a stop for it to count."""
 
 DRIVE_ORDERS = (0.5, 12.0)
-"""Range of the orders ν of the drive-angle grid, spaced by half a cycle over the run's
-angle range (``0.5/turns``, between 0.02 and 0.25); the integers are excluded."""
-"""Orders ν of the drive-angle grid (integers excluded)."""
+"""Range of the fractional orders ν of the drive-angle grid (gear or belt ratios), spaced by
+half a cycle over the run's angle range (``0.5/turns``, between 0.02 and 0.25); the integers
+up to :data:`LAST_HARMONIC` are excluded."""
+
+MAX_TEETH = 48
+"""Whole orders (tooth counts) are searched from :data:`LAST_HARMONIC` + 1 up to this."""
+
+LAST_HARMONIC = 6
+"""The highest integer order tested elsewhere (``harmonics`` check of the adequacy battery:
+3–6; 1 and 2 are catalog effects): integer orders above it are on the drive grid."""
 
 
 def drive_orders(turns: float) -> np.ndarray:
-    """The non-integer orders ν searched for a run covering ``turns`` turns."""
+    """The orders ν searched for a run covering ``turns`` turns: fractional ones up to
+    :data:`DRIVE_ORDERS`' top, and the whole tooth counts from :data:`LAST_HARMONIC` + 1 to
+    :data:`MAX_TEETH` (a tooth count is a whole number: the fine grid is not needed there)."""
     step = float(np.clip(0.5 / max(turns, 1e-9), 0.02, 0.25))
     v = np.arange(DRIVE_ORDERS[0], DRIVE_ORDERS[1] + 1e-9, step)
-    return v[np.abs(v - np.round(v)) > min(0.02, step / 2)]
+    near = np.abs(v - np.round(v)) <= min(0.02, step / 2)
+    v = v[~near | (np.round(v) > LAST_HARMONIC)]
+    whole = np.arange(LAST_HARMONIC + 1, MAX_TEETH + 1, dtype=float)
+    return np.unique(np.concatenate([v[np.abs(v - np.round(v)) > 1e-9], whole]))
+
+
+def resolved_order(tita: np.ndarray) -> float:
+    """The highest order ν of θ the run's angles resolve: ``π / (largest gap between its
+    sorted distinct angles)`` (half a period per gap at most; above it ``cos νθ`` at the
+    visited angles aliases onto a lower order, or is any pattern over a few poses)."""
+    u = np.unique(np.asarray(tita, dtype=float))
+    gap = float(np.max(np.diff(u))) if u.size > 1 else np.inf
+    return float(np.pi / gap) if gap > 0 else np.inf
 
 
 def stops(run) -> list[tuple[int, int, float]]:
@@ -123,11 +160,54 @@ def ringing(space: AxisSpace, run, axis: str) -> Check | None:
                  f"{len(hold)} stops — a lightly damped mode of the table or the mount")
 
 
+def settle_times(run) -> np.ndarray:
+    """Time constants of the settling grid for this run (run's time unit)."""
+    span = float(run.tcol[-1] - run.tcol[0])
+    h = float(np.median(np.diff(run.tcol)))
+    return SETTLE_TIMES[SETTLE_TIMES * span >= 2.0 * h] * span
+
+
+def settling_columns(run, hold: list[tuple[int, int, float]], tconst: float) -> np.ndarray:
+    """(N, 2): ``Σ_i s_i·e^{-τ_i/T}`` and ``Σ_i e^{-τ_i/T}`` after each stop (docstring)."""
+    z = np.zeros((run.n, 2))
+    tc = run.tcol
+    for i, _, s in hold:
+        tau = tc[i - 1:] - tc[i - 1]
+        env = np.exp(-tau / tconst)
+        z[i - 1:, 0] += s * env
+        z[i - 1:, 1] += env
+    return z
+
+
+def settling(space: AxisSpace, run, axis: str) -> Check | None:
+    """The settling transient after the stops (module docstring)."""
+    hold = stops(run)
+    grid = settle_times(run)
+    if not hold or grid.size == 0:
+        return None
+    tconst = float(grid[int(np.argmax(space.scan(lambda c: settling_columns(run, hold, c),
+                                                     grid)))])
+    fit = space.test(settling_columns(run, hold, tconst))
+    if fit is None:
+        return None
+    stat, dof, coef = fit
+    logp = min(0.0, float(np.log(grid.size) + stats.chi2.logsf(stat, dof)))
+    amp = float(max(abs(coef[0]), abs(coef[1])))
+    unit = "s" if run.time_unit == "s" else "samples"
+    return Check("settling", axis, stat, logp, f"chi2({dof}) × {grid.size} time constants",
+                 amp, "m/s²",
+                 f"a settling transient after the stops on {axis}: {amp:.3g} m/s² at the stop, "
+                 f"decaying with a time constant of about {tconst:.3g} {unit}, after each of "
+                 f"{len(hold)} stops (signed by the move {coef[0]:+.3g}, unsigned "
+                 f"{coef[1]:+.3g} m/s²) — the mount or the sensor relaxing after a move")
+
+
 def drive_angle(space: AxisSpace, run, axis: str) -> Check | None:
     """A vibration at a non-integer order of the drive angle (module docstring)."""
     th = run.tita
     turns = float(np.ptp(th)) / (2.0 * np.pi)
-    orders = [v for v in drive_orders(turns) if v * turns >= 1.5]
+    top = resolved_order(th)
+    orders = [v for v in drive_orders(turns) if v * turns >= 1.5 and v <= top]
     if not orders:
         return None
     speed = None
@@ -150,7 +230,7 @@ def drive_angle(space: AxisSpace, run, axis: str) -> Check | None:
     logp = min(0.0, float(np.log(tests) + stats.chi2.logsf(stat, dof)))
     amp = float(np.hypot(*coef[:2]))
     return Check("drive_angle", axis, stat, logp, f"chi2({dof}) × {tests} orders", amp, "m/s²",
-                 f"a vibration tied to the drive on {axis}: order {v:.3g} of θ (not a harmonic;"
+                 f"a vibration tied to the drive on {axis}: order {v:.3g} of θ (a tooth count,"
                  f" a gear or belt ratio){label}, {amp:.3g} m/s²")
 
 
@@ -190,12 +270,13 @@ def frozen(readings: np.ndarray, sigma2: float, lsb: float, run, axis: str) -> C
 
 def mechanism_checks(ext: Extensions, state: ModelState, k: int, lattice_lsb: float = 0.0
                      ) -> list[Check]:
-    """The three checks on axis k of the final model (those that apply to this run);
+    """The four checks on axis k of the final model (those that apply to this run);
     ``lattice_lsb`` the step of the lattice found on the readings (0: none)."""
     axis = AXES[k]
     st = state.axes[k]
     run = ext.run
     space = AxisSpace(ext, state, k)
-    found = [ringing(space, run, axis), drive_angle(space, run, axis),
+    found = [ringing(space, run, axis), settling(space, run, axis),
+             drive_angle(space, run, axis),
              frozen(run.datos[:, k], st.sigma2, max(st.lsb, lattice_lsb), run, axis)]
     return [c for c in found if c is not None]

@@ -157,14 +157,16 @@ def fisher_g_logp(g: float, m: int) -> float:
     return float(np.log(min(max(p, 1e-300), 1.0)))
 
 
-def spectral_peak(space: AxisSpace, run, min_cycles: float = 0.5
-          ) -> tuple[float, float, int, float, np.ndarray] | None:
+def spectral_peak(space: AxisSpace, run, min_cycles: float = 0.5,
+                  max_cycles: float | None = None
+                  ) -> tuple[float, float, int, float, np.ndarray] | None:
     """Largest periodogram ordinate of the whitened residual: (g, log p, m, period, columns).
 
     Period in the run's time unit (s, or samples), refined between the neighbouring Fourier
     frequencies (a period that is not a whole fraction of the run leaks into two bins);
     columns: cos and sin at that frequency. Frequencies below ``min_cycles`` per run are not
-    considered."""
+    considered, nor above ``max_cycles`` when given (then m is the number of frequencies
+    searched, and g, log p are those of the whole periodogram)."""
     r = space.rw
     n = r.size
     if n < 16:
@@ -176,7 +178,8 @@ def spectral_peak(space: AxisSpace, run, min_cycles: float = 0.5
     j0 = int(np.ceil(min_cycles))
     if m < j0 + 1 or total <= 0:
         return None
-    j = int(np.argmax(spec[j0 - 1:])) + j0
+    top = m if max_cycles is None else int(min(m, max(np.floor(max_cycles), j0)))
+    j = int(np.argmax(spec[j0 - 1:top])) + j0
     g = float(spec[j - 1] / total)
     # j cycles over the N-1 differenced samples: the same frequency in the readings
     span = float(run.tcol[-1] - run.tcol[0]) * (n / max(n - 1, 1))
@@ -191,7 +194,10 @@ def spectral_peak(space: AxisSpace, run, min_cycles: float = 0.5
         fit = space.test(columns(f))
         if fit is not None and fit[0] > best:
             best_f, best = float(f), fit[0]
-    return g, fisher_g_logp(g, m), m, span / best_f, columns(best_f)
+    logp = fisher_g_logp(g, m)
+    if max_cycles is not None:
+        m = top - j0 + 1
+    return g, logp, m, span / best_f, columns(best_f)
 
 
 def legendre_in_time(run, degrees: tuple[int, ...]) -> np.ndarray:
