@@ -21,6 +21,7 @@ from calib.multiposition.shared import (
     SAME_POSE_STD,
     SPAN_FRACTION,
     UNIDENTIFIED_STD,
+    FitIntervals,
     Poses,
     Sigma2Source,
     distinct_orientations,
@@ -36,7 +37,7 @@ plane (e.g. a 3-axis IMU lying with z up): it is left out, with a warning."""
 
 
 @dataclass(frozen=True, eq=False)
-class MultiPositionFit(ResultMixin):
+class MultiPositionFit(FitIntervals, ResultMixin):
     """Bias and scale of both axes from held poses with θ unknown (:mod:`calib.multiposition`).
 
     Attributes
@@ -108,30 +109,10 @@ class MultiPositionFit(ResultMixin):
     def scale(self) -> np.ndarray:
         return self.params[[1, 3]]
 
-    def quantile(self, level: float) -> float:
-        """Two-sided quantile: normal (σ² given) or Student t with ``sigma2_dof``."""
-        if not 0 < level < 1:
-            raise ValueError(f"level must be in (0, 1), got {level}")
-        q = 0.5 + level / 2
-        return float(stats.norm.ppf(q) if self.sigma2_source == "given"
-                     else stats.t.ppf(q, self.sigma2_dof))
-
-    def conf_int(self, level: float = 0.95) -> np.ndarray:
-        """(4, 2) two-sided intervals at ``level``."""
-        half = self.quantile(level) * self.std
-        return np.column_stack([self.params - half, self.params + half])
-
     def summary(self, level: float = 0.95) -> str:
-        lo, hi = self.conf_int(level).T
-        pct = f"{100 * level:g}%"
         out = [f"Calibration: multi-position (θ unknown, gravity norm), g = {self.g} m/s², "
                f"N = {self.n}, {self.poses.count} poses",
-               f"{'param':<9}{'unit':<6}{'estimate':>14}{'std':>13}{'[' + pct:>14}"
-               f"{pct + ']':>13}"]
-        for i, name in enumerate(self.param_names):
-            unit = "m/s²" if name.startswith("bias") else "1"
-            out.append(f"{name:<9}{unit:<6}{self.params[i]:>14.6g}{self.std[i]:>13.4g}"
-                       f"{lo[i]:>14.6g}{hi[i]:>13.6g}")
+               *self.param_table(level)]
         s2 = ", ".join(f"{v:.4g}" for v in self.sigma2)
         src = ("given" if self.sigma2_source == "given"
                else f"estimated within poses, dof {self.sigma2_dof}")

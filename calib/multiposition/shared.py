@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+from scipy import stats
 
 from calib.input_rules import DataError
 from calib.results import ResultMixin, readonly
@@ -36,6 +37,38 @@ SPAN_FRACTION = 0.05
 same line) cannot identify its scale: refused, naming ``scale_<axis>``."""
 
 Sigma2Source = Literal["given", "estimated"]
+
+
+class FitIntervals:
+    """Intervals and the parameter table of a multi-position fit (planar or 3-axis): the
+    fit provides ``params``, ``std``, ``param_names``, ``sigma2_source`` and ``sigma2_dof``.
+    Normal quantiles when σ² was given, Student t with the pure-error dof when it was
+    estimated within the poses."""
+
+    def quantile(self, level: float) -> float:
+        """Two-sided quantile: normal (σ² given) or Student t with ``sigma2_dof``."""
+        if not 0 < level < 1:
+            raise ValueError(f"level must be in (0, 1), got {level}")
+        q = 0.5 + level / 2
+        return float(stats.norm.ppf(q) if self.sigma2_source == "given"
+                     else stats.t.ppf(q, self.sigma2_dof))
+
+    def conf_int(self, level: float = 0.95) -> np.ndarray:
+        """(p, 2) two-sided intervals at ``level``."""
+        half = self.quantile(level) * self.std
+        return np.column_stack([self.params - half, self.params + half])
+
+    def param_table(self, level: float = 0.95) -> list[str]:
+        """The header and one line per parameter: unit, estimate, std, interval."""
+        lo, hi = self.conf_int(level).T
+        pct = f"{100 * level:g}%"
+        out = [f"{'param':<9}{'unit':<6}{'estimate':>14}{'std':>13}{'[' + pct:>14}"
+               f"{pct + ']':>13}"]
+        for i, name in enumerate(self.param_names):
+            unit = "m/s²" if name.startswith("bias") else "1"
+            out.append(f"{name:<9}{unit:<6}{self.params[i]:>14.6g}{self.std[i]:>13.4g}"
+                       f"{lo[i]:>14.6g}{hi[i]:>13.6g}")
+        return out
 
 
 @dataclass(frozen=True, eq=False)
