@@ -293,7 +293,9 @@ def read_log(path: str | os.PathLike, options: LogOptions | None = None,
             prov = {"source": {"name": path.name}, "format": "course"}
             if expect == "ensayo":
                 e = read_ensayo(path)
-                return ImuLog(acc=e.datos, t=e.t, theta=e.tita, source=str(path),
+                # an imported run keeps its pose labels (lack of fit, pure-error σ²)
+                pose = _course_pose(path, e.n) if "pose" in names else None
+                return ImuLog(acc=e.datos, t=e.t, theta=e.tita, pose=pose, source=str(path),
                               provenance=prov, course=e)
             a = read_acel(path)
             return ImuLog(acc=a.aerr, t=a.t, gyro=a.gyro, source=str(path), provenance=prov,
@@ -309,6 +311,19 @@ def read_log(path: str | os.PathLike, options: LogOptions | None = None,
         return _read_course(path, options, read_ensayo, read_acel)
     raw = _read_raw(path, fmt, options)
     return assemble(raw, options, path)
+
+
+def _course_pose(path: Path, n: int) -> np.ndarray:
+    """The ``pose`` labels (N×1 integers, -1 while moving) that ``tiltbench import`` writes
+    beside ``tita``/``datos``; DataError naming the file when they do not fit."""
+    import scipy.io
+
+    pose = np.asarray(scipy.io.loadmat(path, variable_names=["pose"])["pose"], dtype=float)
+    pose = pose.reshape(-1)
+    if pose.size != n or not np.all(np.isfinite(pose)) or np.any(pose != np.round(pose)):
+        raise DataError(f"{path}: 'pose' must hold one integer label per sample ({n}), "
+                        f"got {pose.size} values; remove it or re-run `tiltbench import`")
+    return pose.astype(int)
 
 
 def _read_course(path: Path, options: LogOptions, read_ensayo, read_acel) -> ImuLog:

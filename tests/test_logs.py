@@ -224,3 +224,21 @@ def test_mat_map_with_angles_and_a_named_gyro_column(tmp_path):
     (tmp_path / "w.csv").write_text("t,ax (m/s^2),ay (m/s^2),turn (deg/s)\n" + body + "\n")
     log = read_log(tmp_path / "w.csv", LogOptions(columns={"gyro": "turn (deg/s)"}))
     assert _close(log.gyro, np.deg2rad(rate))
+
+
+def test_an_imported_ensayo_keeps_its_pose_labels_for_the_course_reader(tmp_path):
+    """``tiltbench import`` writes ``pose`` beside ``tita``/``datos``: reading it back as a
+    course input keeps the labels (lack of fit, pure-error σ²); a label per sample or a
+    one-line error naming the file."""
+    tita = np.repeat([0.0, 1.0, 2.0, 3.0], 5)
+    noise = np.random.default_rng(5).standard_normal((20, 2)) * 0.01
+    datos = np.column_stack([-9.8 * np.sin(tita), -9.8 * np.cos(tita)]) + noise
+    pose = np.repeat([0, 1, 2, 3], 5)
+    scipy.io.savemat(tmp_path / "ok.mat", {"tita": tita[:, None], "datos": datos,
+                                           "pose": pose[:, None].astype(np.int32)})
+    log = read_log(tmp_path / "ok.mat", expect="ensayo")
+    assert log.pose is not None and np.array_equal(log.pose, pose)
+    scipy.io.savemat(tmp_path / "bad.mat", {"tita": tita[:, None], "datos": datos,
+                                            "pose": pose[:7, None]})
+    with pytest.raises(DataError, match="bad.mat: 'pose' must hold one integer label"):
+        read_log(tmp_path / "bad.mat", expect="ensayo")
