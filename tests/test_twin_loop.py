@@ -239,13 +239,14 @@ def test_twin_loop_on_the_shipped_real_log(capsys, tmp_path, monkeypatch):
     for a_r in (-G * np.sin(th), -G * np.cos(th)):
         h = np.c_[np.ones_like(th), a_r]
         assert np.linalg.cond(h / np.linalg.norm(h, axis=0)) < 10
-    # the y axis against the independent six-position computation (y = -z), within the
-    # combined std (calibrate's σ² is estimated from a hand-turned sweep: wide, honest)
+    # the turns are made by hand: the sweep's readings carry the hand's accelerations, which
+    # the model lacks. The imported run keeps its pose labels, so calibrate tests the fit
+    # against the scatter within the holds and says the model misses something on both axes
+    # (its intervals are then those of the sensor's noise, the pure error, not of the hand;
+    # the held poses' agreement with the six-position reference is in test_real_readers)
     params = dict(zip(cal["param_names"], cal["params"], strict=True))
-    std = dict(zip(cal["param_names"], cal["std"], strict=True))
-    z = ref.six_position(log.path, g=G, g_unit=G)["axes"]["z"]
-    assert abs(params["bias_y"] + z["bias"]) <= K * math.hypot(std["bias_y"], z["bias_std"])
-    assert abs(params["scale_y"] - z["scale"]) <= K * math.hypot(std["scale_y"], z["scale_std"])
+    lof = out["calibrate_json"]["lack_of_fit"]
+    assert all(lof[a]["p_value"] < 1e-6 for a in "xy"), lof
     # the twin holds the calibration: its fit lands on it within its own std
     twin = out["twin"]
     for i, axis in enumerate("xy"):
