@@ -35,6 +35,7 @@ from calib.effects import Extensions, ModelState
 from calib.gap.estimates import Reporter
 from calib.gap.quantization import quantized_moments, rails
 from calib.gap.walk import gls_nll, walk_nll
+from calib.ls import NotIdentifiableError
 
 SPONGES = ("noise_level", "bias_random_walk")
 LN2 = float(np.log(2.0))
@@ -78,8 +79,18 @@ def review_sponges(ext: Extensions, state: ModelState, lattice: list[Lattice],
         reduced = state
         for n in sponges:
             reduced = reduced.without(n, axis)
-        reduced = ext.refine(reduced)
-        rep = Reporter(ext, reduced, lattice)
+        try:
+            reduced = ext.refine(reduced)
+            rep = Reporter(ext, reduced, lattice)
+        except NotIdentifiableError as exc:
+            # without them the structured effect cannot be fitted on this run: there is no
+            # reading to review them on, so they stay as selected, and the report says why
+            notes += [{"name": n, "axis": axis, "beside": structured, "named": True,
+                       "statistic": float("nan"), "p_value": float("nan"),
+                       "reason": (f"{n} on {axis} kept beside {' and '.join(structured)}: "
+                                  f"without it the model is not identifiable here ({exc})")}
+                      for n in sponges]
+            continue
         z, how, kept = standardized(rep, k)
         dof = max(z.size - ext.n_params(reduced, k), 1)
         keep = []
