@@ -80,8 +80,16 @@ def test_readme_examples_fit(capsys, tmp_path, monkeypatch):
     _fits(capsys, "generate", "class", "--students", "2", "--seed", "7", "--out", "class",
           "--workers", "1")
     _fits(capsys, "design", "--runs", "0", "--n", "201", "--workers", "1")
+    # the measured-data examples (README "Measured data")
+    out = _fits(capsys, "calibrate", "ex/data/real/axivity-ax3-wrist-night.csv.gz", "--units",
+                "counts", "--sensitivity", "256", "--min-hold", "100")
+    assert "multi-position, 3 axes" in out
+    out = _fits(capsys, "import", "ex/data/real/yei-3space-z-flip.csv", "--units", "g",
+                "--gyro-unit", "rad/s", "--axes", "x,-z", "--min-hold", "0.5", "--poses",
+                "0,0,180,180,0,0", "--angle-unit", "deg", "--out", "yei")
+    assert "wrote: yei/ensayo.mat" in out
     for cmd in ("calibrate", "trajectory", "nmin", "gap", "fuse", "design", "fusion-study",
-                "validate", "generate"):
+                "validate", "generate", "import", "noise"):
         _fits(capsys, cmd, "--help")
 
 
