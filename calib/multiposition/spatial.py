@@ -27,6 +27,7 @@ from calib.multiposition.shared import (
     distinct_orientations,
 )
 from calib.results import ResultMixin, readonly
+from calib.static_log import quantization_step as lattice_step
 
 POSES_NEEDED_3D = 7
 """Fewest held poses for the 3-axis fit. Unknowns: bias and scale of three axes (6) and each
@@ -52,18 +53,11 @@ AXES_3D = ("x", "y", "n")
 
 
 def quantization_step(values: np.ndarray) -> float:
-    """The step q of readings on a lattice (m/s² if they are), else 0: the smallest gap
-    between distinct values, kept only when every value is a whole number of steps from the
-    smallest (within 1e-6 of a step) and the values take at least 3 levels — raw counts
-    converted to m/s². Continuous readings (floats with noise) give 0."""
-    u = np.unique(np.asarray(values, dtype=float))
-    if u.size < 3:
-        return 0.0
-    q = float(np.diff(u).min())
-    if q <= 0 or (u[-1] - u[0]) / q > 1e7:
-        return 0.0
-    k = (u - u[0]) / q
-    return q if np.all(np.abs(k - np.round(k)) <= 1e-6) else 0.0
+    """The step q of readings on a lattice (m/s², raw counts converted), else 0 for
+    continuous readings: :func:`calib.static_log.quantization_step` (one home for the
+    lattice test), with "none" as 0 so it adds nothing to a pose mean's variance."""
+    step = lattice_step(np.asarray(values, dtype=float))
+    return 0.0 if step is None else step
 
 
 @dataclass(frozen=True, eq=False)
