@@ -291,15 +291,7 @@ def read_log(path: str | os.PathLike, options: LogOptions | None = None,
         names = _mat_names(path) if fmt == "course" else []
         if not (expect == "ensayo" and "pose" in names and "tita" not in names):
             prov = {"source": {"name": path.name}, "format": "course"}
-            if expect == "ensayo":
-                e = read_ensayo(path)
-                # an imported run keeps its pose labels (lack of fit, pure-error σ²)
-                pose = _course_pose(path, e.n) if "pose" in names else None
-                return ImuLog(acc=e.datos, t=e.t, theta=e.tita, pose=pose, source=str(path),
-                              provenance=prov, course=e)
-            a = read_acel(path)
-            return ImuLog(acc=a.aerr, t=a.t, gyro=a.gyro, source=str(path), provenance=prov,
-                          course=a)
+            return _course_log(path, expect, names, prov, read_ensayo, read_acel)
     if expect == "acel":  # a vehicle run: poses and their angles do not apply
         options = replace(options, poses=None, label_angles=None, detect=False)
     if not path.exists():
@@ -334,13 +326,22 @@ def _read_course(path: Path, options: LogOptions, read_ensayo, read_acel) -> Imu
                            and "datos" in names):
         return assemble(_read_raw(path, "mat", options), options, path)
     prov = {"source": {"name": path.name, "sha256": file_sha256(path)}, "format": "course"}
-    if "Aerr" in names and "tita" not in names:
+    kind = "acel" if "Aerr" in names and "tita" not in names else "ensayo"
+    return _course_log(path, kind, names, prov, read_ensayo, read_acel)
+
+
+def _course_log(path: Path, kind: str, names: list[str], prov: dict, read_ensayo,
+                read_acel) -> ImuLog:
+    """A course file read by its course reader (``kind`` "ensayo" or "acel"); an imported
+    ensayo keeps its ``pose`` labels (lack of fit, pure-error σ²)."""
+    if kind == "acel":
         a = read_acel(path)
         return ImuLog(acc=a.aerr, t=a.t, gyro=a.gyro, source=str(path), provenance=prov,
                       course=a)
     e = read_ensayo(path)
-    return ImuLog(acc=e.datos, t=e.t, theta=e.tita, source=str(path), provenance=prov,
-                  course=e)
+    pose = _course_pose(path, e.n) if "pose" in names else None
+    return ImuLog(acc=e.datos, t=e.t, theta=e.tita, pose=pose, source=str(path),
+                  provenance=prov, course=e)
 
 
 def _read_raw(path: Path, fmt: str, options: LogOptions) -> RawLog:
