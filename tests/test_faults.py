@@ -355,11 +355,13 @@ def test_leftover_temporary_files_are_not_carried_into_the_new_set(tmp_path):
 
 
 def test_stale_file_of_a_dead_writer_is_removed_by_the_next_write(tmp_path):
+    """A single file is written under its lock, so every temporary of that name is stale
+    (no live run can own one); temporaries of other names are not touched."""
     dead = subprocess.Popen(["true"])
     dead.wait()
     stale = tmp_path / f".x.rrd.{dead.pid}-abcdefgh.tmp"
     stale.write_bytes(b"left by a kill")
-    live = tmp_path / f".x.rrd.{os.getpid()}-abcdefgh.tmp"  # a live writer's: kept
-    live.write_bytes(b"being written")
+    other = tmp_path / f".y.rrd.{os.getpid()}-abcdefgh.tmp"  # another target's: kept
+    other.write_bytes(b"being written")
     atomic.write_bytes(tmp_path / "x.rrd", b"data")
-    assert sorted(os.listdir(tmp_path)) == [live.name, "x.rrd"]
+    assert sorted(os.listdir(tmp_path)) == [other.name, "x.rrd"]
