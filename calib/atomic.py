@@ -382,18 +382,21 @@ def _input_inside(folder: Path) -> str | None:
     return None
 
 
-def refuse_input(path: str | os.PathLike) -> None:
+def refuse_input(path: str | os.PathLike, shown: str | os.PathLike | None = None) -> None:
     """Raise :class:`InputAsOutputError` if ``path`` is a protected input (any spelling,
-    symbolic or hard link)."""
+    symbolic or hard link); the message names ``shown`` (default ``path``)."""
     name = input_behind(path)
     if name is None:
         return
-    how = "" if os.path.realpath(name) == os.path.realpath(path) else (
-        " through a link" if os.path.islink(path) or os.path.islink(name)
-        else " (a hard link to it)")
+    if os.path.islink(path) or os.path.islink(name):
+        how = " through a symbolic link"
+    elif os.path.realpath(name) == os.path.realpath(path):
+        how = ""
+    else:
+        how = " (a hard link to it)"
     raise InputAsOutputError(
-        f"{path}: is the input {name}{how}; an output never replaces an input of the same "
-        "run, not even with --force: write to another name")
+        f"{shown if shown is not None else path}: is the input {name}{how}; an output never "
+        "replaces an input of the same run, not even with --force: write to another name")
 
 
 def _exchange(a: Path, b: Path) -> bool:
@@ -533,7 +536,7 @@ def atomic_dir(target: str | os.PathLike, force: bool = False, owned: Iterable[s
         if in_place:
             clean_stale(real / real.name, locked=True)
         for n in owned:  # before anything is written, whatever ``force`` says
-            refuse_input(real / n)
+            refuse_input(real / n, shown / n)
         for n in exclusive:  # replaced whole: an input anywhere inside would go with it
             inside = _input_inside(real / n)
             if inside is not None:
