@@ -209,6 +209,7 @@ def test_kill_before_the_rename_leaves_the_old_file_and_the_next_run_cleans(
     assert load_calibration(out).fits["x"].params.shape == (2,)  # one whole result
 
 
+@pytest.mark.slow  # ~11 s here: a class set is written twice, once by a subprocess
 def test_killed_class_leaves_no_readable_key_and_the_next_run_removes_it(tmp_path, capsys):
     """SIGKILL at the set's final rename: the class (answer key included) is left in a
     temporary folder beside OUT, never in a student folder, that only its owner can open
@@ -367,6 +368,11 @@ def test_a_refused_run_leaves_no_folder_it_created(tmp_path, files, capsys):
     out = tmp_path / "new" / "sub" / "cal.json"
     one_line_error(capsys, "calibrate", files / "ensayo.mat", "--noise-var=-1,1", "--save", out)
     assert sorted(os.listdir(tmp_path)) == ["in"]
+
+
+def test_a_nul_in_an_output_name_is_named(files, capsys):
+    line = one_line_error(capsys, "calibrate", files / "ensayo.mat", *NV, "--save", "a\0b.json")
+    assert "'a\\x00b.json': a file name cannot hold a NUL character" in line
 
 
 # ---------------------------------------------------------------- the writer itself

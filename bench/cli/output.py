@@ -177,6 +177,9 @@ def _make_parents(path: Path, stack: contextlib.ExitStack) -> None:
 def _claim(path: str | Path, stack: contextlib.ExitStack) -> None:
     from calib.atomic import clean_stale, holding, holds_lock, refuse_input
 
+    if "\0" in os.fspath(path):  # the system would say "embedded null byte", naming nothing
+        raise ValueError(f"{os.fspath(path)!r}: a file name cannot hold a NUL character; "
+                         "give another output name")
     path = Path(path)
     refuse_input(path)
     if holds_lock(path):
