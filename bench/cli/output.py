@@ -171,7 +171,12 @@ def _make_parents(path: Path, stack: contextlib.ExitStack) -> None:
             continue
         except OSError as exc:
             raise type(exc)(exc.errno, exc.strerror, str(path)) from exc
-        stack.callback(lambda d=d: d.rmdir() if not any(d.iterdir()) else None)
+        stack.callback(_remove_if_empty, d)
+
+
+def _remove_if_empty(folder: Path) -> None:
+    with contextlib.suppress(OSError):  # not empty (the command wrote there) or gone
+        folder.rmdir()
 
 
 def _claim(path: str | Path, stack: contextlib.ExitStack) -> None:
