@@ -10,7 +10,10 @@
 
 Nothing inside a student folder reveals the truth (no ``truth.json``, no seed; the .mat
 headers are a fixed text). Keep ``answer_key.*`` private: hand out the ``student_*`` folders
-only.
+only. The key files are written mode 0600 (owner only), and while the class is being written
+it lives in a temporary folder beside DIR that only its owner can open (0700), never inside a
+student folder: a run killed before the end leaves no key that others can read, and the next
+run removes that folder at start-up.
 
 Seeds: ``SeedSequence(S).spawn(K)``; student i gets the 63-bit integer
 ``child_i.generate_state(1, uint64)[0] >> 1`` as the seed of its course set
@@ -42,6 +45,8 @@ from calib.units import nest, with_units
 STUDENT_FILES = ("ensayo.mat", "acel.mat", "puntos.mat", "datos.txt")
 KEY_CSV = "answer_key.csv"
 KEY_JSON = "answer_key.json"
+KEY_MODE = 0o600
+"""Mode of the answer-key files: readable and writable by their owner only."""
 CSV_COLUMNS = ("student", "seed", "answer", "raw_end_decoy", "bias_x", "scale_x", "bias_y",
                "scale_y", "noise_var_x", "noise_var_y", "true_final_x", "true_final_y",
                "candidates")
@@ -178,7 +183,11 @@ def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = Fal
                 folders[name] = out / name
                 truths[name] = truth
                 rows.append(_row(name, s, truth))
-        write_text(tmp / KEY_CSV, key_csv_text(rows), force=True)
+        # The key is private (0600) from its first byte: its temporary name, the set's
+        # temporary folder (0700 until it is renamed into place, beside OUT and never inside a
+        # student folder) and the published file. A run killed before the final rename leaves
+        # nothing another user can read; the next run removes it at start-up.
+        write_text(tmp / KEY_CSV, key_csv_text(rows), force=True, mode=KEY_MODE)
         key = {"kind": "class", "class_seed": int(seed), "count": int(count),
                "seed_derivation": "SeedSequence(class_seed).spawn(count)[i]"
                                   ".generate_state(1, uint64)[0] >> 1",
@@ -188,7 +197,7 @@ def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = Fal
                              "truth": truths[r["student"]]} for r in rows]}
         units = {"class_seed": "—", "count": "count", "students.seed": "—",
                  **nest("students.truth", truth_units())}  # docs/units.md
-        write_text(tmp / KEY_JSON, dumps(with_units(key, units)), force=True)
+        write_text(tmp / KEY_JSON, dumps(with_units(key, units)), force=True, mode=KEY_MODE)
     return ClassSet(out, folders, out / KEY_CSV, out / KEY_JSON, rows)
 
 

@@ -13,11 +13,21 @@ Guarantees (each writer here):
   next run puts it back);
 * **one writer per target** — :func:`output_lock` takes a non-blocking ``flock`` on
   ``.NAME.lock`` beside the target; a second run fails at once with :class:`OutputBusyError`
-  ("another tiltbench run is writing OUT (pid N)");
+  ("another tiltbench run is writing OUT (pid N)"). Single files take the same lock as sets
+  (:func:`write_bytes`); a command takes the locks of all its outputs at start-up
+  (:func:`holding`, from ``bench.cli.output``) and keeps them until it ends, so a second run
+  is refused before it computes anything and no result replaces another one silently;
+* **never an input as the output** — inside :func:`inputs_protected` (a command's input
+  files), writing a file that *is* one of them (same inode: the same name, a symbolic link
+  or a hard link) raises :class:`InputAsOutputError`, with or without ``force``;
 * **no leftovers** — every error path removes its temporary files; temporary names left by
   a killed run (its pid is gone, or we hold the target's lock) are removed by the next run;
 * **errors name the target**, never a temporary name (a full disk reads
-  ``OUT: No space left on device``).
+  ``OUT: No space left on device``);
+* **private until published** — a temporary is created readable by its owner only (file
+  0600, directory 0700) and keeps that mode until it is renamed into place; what must stay
+  private (an answer key: ``mode=0o600``) keeps it for good. A run killed before its final
+  rename leaves nothing that another user can read.
 
 Exception: a target that is a mount point or holds the working directory is not swapped;
 its new files are renamed into it one by one (each file atomic, the set not).
@@ -58,6 +68,18 @@ def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+_HELD: dict[tuple[int, str], int] = {}
+"""Locks this process holds: (pid, lock path) → descriptor. The pid keeps a forked child
+from believing it holds its parent's locks."""
+
+_INPUTS: list[tuple[str, int, int]] = []
+"""Files protected by :func:`inputs_protected`: (name as given, st_dev, st_ino)."""
+
+
+class InputAsOutputError(ValueError):
+    """An output path that is one of the command's inputs (one line at the command line)."""
 
 
 def _tmp_prefix(name: str) -> str:
@@ -187,56 +209,87 @@ def _fsync_tree(root: Path) -> None:
         _fsync_dir(d)
 
 
-def write_bytes(path: str | os.PathLike, data: bytes, force: bool = False) -> Path:
+def write_bytes(path: str | os.PathLike, data: bytes, force: bool = False,
+                mode: int | None = None) -> Path:
     """Write ``data`` to ``path`` atomically and durably (temporary file, fsync, rename).
 
-    Refuses a directory (:class:`ValueError`) and an existing file unless ``force``
-    (:class:`FileExistsError`). Stale temporary files of ``path`` left by killed runs are
-    removed first. The file gets the mode a plain ``open()`` would give it.
+    Under the output lock of ``path`` (:func:`holding`: the command's own if it took it at
+    start-up, else taken here; another writer → :class:`OutputBusyError`). Refuses a
+    directory (:class:`ValueError`), an input of the command (:class:`InputAsOutputError`,
+    even with ``force``) and an existing file unless ``force`` (:class:`FileExistsError`).
+    Temporary files of ``path`` left by killed runs are removed first; the temporary is
+    created 0600 and removed on any error. The file gets ``mode`` if given (0o600: private),
+    else the mode of the file it replaces, else what a plain ``open()`` would give.
     """
     path = Path(path)
     if path.is_dir():  # a ValueError, as calib.io.DataError: one line at the command line
         raise ValueError(f"{path}: is a directory; expected an output file name")
-    if path.exists() and not force:
-        raise FileExistsError(f"{path}: exists")
+    refuse_input(path)
     parent = path.parent
-    tmp = None
     try:
         parent.mkdir(parents=True, exist_ok=True)
-        clean_stale(path)
-        fd, tmp = tempfile.mkstemp(dir=parent, prefix=_tmp_prefix(path.name), suffix=TMP_SUFFIX)
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-            os.fchmod(fh.fileno(), 0o666 & ~_umask())  # mkstemp creates 0600
-        os.replace(tmp, path)
-        tmp = None
-        _fsync_dir(parent)
     except OSError as exc:
         _reraise(exc, path)
-    finally:
-        if tmp is not None:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
+    with holding(path):
+        if path.exists() and not force:
+            raise FileExistsError(f"{path}: exists")
+        clean_stale(path, locked=True)
+        if mode is None:
+            try:
+                mode = stat.S_IMODE(os.stat(path).st_mode)
+            except OSError:
+                mode = 0o666 & ~_umask()
+        tmp = None
+        try:
+            fd, tmp = tempfile.mkstemp(dir=parent, prefix=_tmp_prefix(path.name),
+                                       suffix=TMP_SUFFIX)
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(data)
+                fh.flush()
+                os.fsync(fh.fileno())
+                os.fchmod(fh.fileno(), mode)  # mkstemp creates 0600: the final mode last
+            os.replace(tmp, path)
+            tmp = None
+            _fsync_dir(parent)
+        except OSError as exc:
+            _reraise(exc, path)
+        finally:
+            if tmp is not None:
+                with contextlib.suppress(OSError):
+                    os.unlink(tmp)
     return path
 
 
-def write_text(path: str | os.PathLike, text: str, force: bool = False) -> Path:
+def write_text(path: str | os.PathLike, text: str, force: bool = False,
+               mode: int | None = None) -> Path:
     """:func:`write_bytes` of ``text`` in UTF-8."""
-    return write_bytes(path, text.encode("utf-8"), force=force)
+    return write_bytes(path, text.encode("utf-8"), force=force, mode=mode)
+
+
+def _lock_path(target: str | os.PathLike) -> Path:
+    real = Path(os.path.realpath(target))
+    return real.parent / f".{real.name}.lock"
+
+
+def holds_lock(target: str | os.PathLike) -> bool:
+    """True if this process holds the output lock of ``target``."""
+    return (os.getpid(), str(_lock_path(target))) in _HELD
 
 
 @contextlib.contextmanager
 def output_lock(target: str | os.PathLike) -> Iterator[Path]:
     """Hold the exclusive lock of ``target`` (``.NAME.lock`` beside it; removed on release).
 
-    Non-blocking: if another process holds it, raise :class:`OutputBusyError` at once. The lock
-    is the kernel's ``flock``: a killed run releases it with its last file descriptor.
+    Non-blocking: if another process holds it (or this one already does), raise
+    :class:`OutputBusyError` at once. The lock is the kernel's ``flock``: a killed run releases
+    it with its last file descriptor. Several writes under one lock: :func:`holding`.
     """
     target = Path(target)
-    real = Path(os.path.realpath(target))
-    lock_path = real.parent / f".{real.name}.lock"
+    lock_path = _lock_path(target)
+    key = (os.getpid(), str(lock_path))
+    if key in _HELD:
+        raise OutputBusyError(f"another tiltbench run is writing {target} (pid {os.getpid()}); "
+                              "wait for it to end or choose another output")
     while True:
         try:
             fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o666)
@@ -250,7 +303,8 @@ def output_lock(target: str | os.PathLike) -> Iterator[Path]:
             finally:
                 os.close(fd)
             raise OutputBusyError(f"another tiltbench run is writing {target} (pid {pid}); "
-                             "wait for it to end or choose another output") from None
+                                  "nothing was written by this run: run it again when that "
+                                  "one has ended, or choose another output") from None
         try:  # the holder before us may have removed the file: lock the one on disk
             same = os.path.samestat(os.fstat(fd), os.stat(lock_path))
         except FileNotFoundError:
@@ -258,15 +312,91 @@ def output_lock(target: str | os.PathLike) -> Iterator[Path]:
         if same:
             break
         os.close(fd)
+    _HELD[key] = fd
     try:
         with contextlib.suppress(OSError):  # the pid is for the message only (full disk)
             os.ftruncate(fd, 0)
             os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         yield lock_path
     finally:
+        del _HELD[key]
         with contextlib.suppress(OSError):
             os.unlink(lock_path)
         os.close(fd)
+
+
+@contextlib.contextmanager
+def holding(target: str | os.PathLike) -> Iterator[Path]:
+    """The output lock of ``target`` for the block: taken here (:func:`output_lock`) unless
+    this process already holds it (a command that claimed its outputs at start-up), in which
+    case the block runs under that lock and leaves it held."""
+    if holds_lock(target):
+        yield _lock_path(target)
+        return
+    with output_lock(target) as lock_path:
+        yield lock_path
+
+
+@contextlib.contextmanager
+def inputs_protected(paths: Iterable[str | os.PathLike]) -> Iterator[list[str]]:
+    """Within the block, :func:`write_bytes` and :func:`atomic_dir` refuse to replace any
+    of ``paths`` (existing regular files; others are ignored) — a command's inputs.
+
+    A file is matched by its identity (``st_dev``, ``st_ino``), so the same name, another
+    spelling (``./a``, ``../x/a``), a symbolic link or a hard link to an input are all
+    refused. Yields the names protected."""
+    added = []
+    for p in paths:
+        with contextlib.suppress(OSError, ValueError, TypeError):
+            st = os.stat(p)
+            if stat.S_ISREG(st.st_mode):
+                added.append((os.fspath(p), st.st_dev, st.st_ino))
+    _INPUTS.extend(added)
+    try:
+        yield [a[0] for a in added]
+    finally:
+        for a in added:
+            _INPUTS.remove(a)
+
+
+def input_behind(path: str | os.PathLike) -> str | None:
+    """The protected input (:func:`inputs_protected`) that ``path`` is, or None."""
+    if not _INPUTS:
+        return None
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return None
+    for name, dev, ino in _INPUTS:
+        if (st.st_dev, st.st_ino) == (dev, ino):
+            return name
+    return None
+
+
+def _input_inside(folder: Path) -> str | None:
+    """The first protected input whose real path lies inside ``folder``, or None."""
+    top = os.path.realpath(folder)
+    for name, _, _ in _INPUTS:
+        if os.path.realpath(name).startswith(top + os.sep):
+            return name
+    return None
+
+
+def refuse_input(path: str | os.PathLike, shown: str | os.PathLike | None = None) -> None:
+    """Raise :class:`InputAsOutputError` if ``path`` is a protected input (any spelling,
+    symbolic or hard link); the message names ``shown`` (default ``path``)."""
+    name = input_behind(path)
+    if name is None:
+        return
+    if os.path.islink(path) or os.path.islink(name):
+        how = " through a symbolic link"
+    elif os.path.realpath(name) == os.path.realpath(path):
+        how = ""
+    else:
+        how = " (a hard link to it)"
+    raise InputAsOutputError(
+        f"{shown if shown is not None else path}: is the input {name}{how}; an output never "
+        "replaces an input of the same run, not even with --force: write to another name")
 
 
 def _exchange(a: Path, b: Path) -> bool:
@@ -312,15 +442,22 @@ def _carry_over(old: Path, new: Path, exclusive: set[str], rel: str = "") -> Non
 
 
 def _commit(tmp: Path, real: Path) -> None:
-    """Put the finished ``tmp`` at ``real`` (replacing an old directory as a whole)."""
+    """Put the finished ``tmp`` at ``real`` (replacing an old directory as a whole).
+
+    ``tmp`` is 0700 (``mkdtemp``) and gets the target's mode only after the rename: a run
+    killed before it leaves a temporary set (an answer key) that other users cannot read,
+    and the new target at worst 0700 (closed, not exposed) until the next run."""
     parent = real.parent
     if not real.exists():
-        os.chmod(tmp, 0o777 & ~_umask())
         os.rename(tmp, real)
+        os.chmod(real, 0o777 & ~_umask())
         _fsync_dir(parent)
         return
-    os.chmod(tmp, stat.S_IMODE(os.stat(real).st_mode))
+    mode = stat.S_IMODE(os.stat(real).st_mode)
     if _exchange(tmp, real):  # tmp now holds the old set
+        os.chmod(real, mode)
+        with contextlib.suppress(OSError):
+            os.chmod(tmp, 0o700)  # the old set, on its way out: private meanwhile
         _fsync_dir(parent)
         shutil.rmtree(tmp, ignore_errors=True)
         return
@@ -331,6 +468,7 @@ def _commit(tmp: Path, real: Path) -> None:
     except BaseException:
         os.rename(backup, real)  # restore the old set
         raise
+    os.chmod(real, mode)
     _fsync_dir(parent)
     shutil.rmtree(backup, ignore_errors=True)
 
@@ -381,6 +519,7 @@ def atomic_dir(target: str | os.PathLike, force: bool = False, owned: Iterable[s
     """
     shown = Path(target)
     real = Path(os.path.realpath(shown))
+    owned, exclusive = list(owned), list(exclusive)  # each read more than once
     if real.exists() and not real.is_dir():
         raise NotADirectoryError(errno.ENOTDIR, "exists and is not a directory", str(shown))
     try:
@@ -392,10 +531,18 @@ def atomic_dir(target: str | os.PathLike, force: bool = False, owned: Iterable[s
     # temporary directory inside it: each file atomic, the set not.
     in_place = real.is_dir() and (os.path.ismount(real) or _holds_cwd(real))
     tmp_parent = real if in_place else real.parent
-    with output_lock(shown):
+    with holding(shown):
         clean_stale(real, locked=True)
         if in_place:
             clean_stale(real / real.name, locked=True)
+        for n in owned:  # before anything is written, whatever ``force`` says
+            refuse_input(real / n, shown / n)
+        for n in exclusive:  # replaced whole: an input anywhere inside would go with it
+            inside = _input_inside(real / n)
+            if inside is not None:
+                raise InputAsOutputError(f"{shown / n}: holds the input {inside}, and this "
+                                         "run replaces that folder whole, even with --force: "
+                                         "write to another folder or move the input out")
         if not force and real.is_dir():
             clash = [n for n in owned if os.path.lexists(real / n)]
             if clash:
@@ -424,5 +571,6 @@ def atomic_dir(target: str | os.PathLike, force: bool = False, owned: Iterable[s
             raise
 
 
-__all__ = ["OutputBusyError", "atomic_dir", "clean_stale", "output_lock", "write_bytes",
-           "write_text"]
+__all__ = ["InputAsOutputError", "OutputBusyError", "atomic_dir", "clean_stale", "holding",
+           "holds_lock", "input_behind", "inputs_protected", "output_lock", "refuse_input",
+           "write_bytes", "write_text"]

@@ -284,6 +284,37 @@ def test_full_disk_recording_ends_within_seconds(tmp_path):
         assert _leftovers(fs) == []
 
 
+def test_read_only_filesystem_single_file_is_one_line_and_loses_nothing(capsys, tmp_path,
+                                                                        course_dir):
+    """A single-file output (issue 23) on a read-only filesystem: refused at start-up (its
+    lock cannot be made), before any work; the old file stays."""
+    with _tmpfs(tmp_path / "ro", "4m") as ro:
+        out = ro / "cal.json"
+        out.write_bytes(b"the previous result")
+        subprocess.run(["mount", "-o", "remount,ro", str(ro)], check=True)
+        rc, err = _run(capsys, "calibrate", course_dir / "ensayo.mat", "--noise-var",
+                       "0.25,0.64", "--save", out, "--force")
+        assert rc == 2
+        line, = err.strip().splitlines()
+        assert line.endswith(f"{out}: Read-only file system") and ".lock" not in line
+        assert _tree(ro) == {"cal.json": b"the previous result"}
+
+
+def test_full_disk_single_file_is_one_line_and_loses_nothing(capsys, tmp_path, course_dir):
+    with _tmpfs(tmp_path / "fs", "1m") as fs:
+        out = fs / "cal.json"
+        out.write_bytes(b"the previous result")
+        _fill(fs, 64 * 1024)  # cal.json of the course run is ~1.2 MB
+        old = _tree(fs)
+        rc, err = _run(capsys, "calibrate", course_dir / "ensayo.mat", "--noise-var",
+                       "0.25,0.64", "--save", out, "--force")
+        assert rc == 2
+        line, = err.strip().splitlines()
+        assert line.endswith(f"{out}: No space left on device") and ".tmp" not in line
+        assert _tree(fs) == old
+        assert _leftovers(fs) == []
+
+
 def _no_space_under(root: Path):
     """An ``os.fsync`` that fails with ENOSPC for files and directories under ``root``."""
     real_fsync = os.fsync
@@ -355,11 +386,13 @@ def test_leftover_temporary_files_are_not_carried_into_the_new_set(tmp_path):
 
 
 def test_stale_file_of_a_dead_writer_is_removed_by_the_next_write(tmp_path):
+    """A single file is written under its lock, so every temporary of that name is stale
+    (no live run can own one); temporaries of other names are not touched."""
     dead = subprocess.Popen(["true"])
     dead.wait()
     stale = tmp_path / f".x.rrd.{dead.pid}-abcdefgh.tmp"
     stale.write_bytes(b"left by a kill")
-    live = tmp_path / f".x.rrd.{os.getpid()}-abcdefgh.tmp"  # a live writer's: kept
-    live.write_bytes(b"being written")
+    other = tmp_path / f".y.rrd.{os.getpid()}-abcdefgh.tmp"  # another target's: kept
+    other.write_bytes(b"being written")
     atomic.write_bytes(tmp_path / "x.rrd", b"data")
-    assert sorted(os.listdir(tmp_path)) == [live.name, "x.rrd"]
+    assert sorted(os.listdir(tmp_path)) == [other.name, "x.rrd"]

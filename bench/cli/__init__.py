@@ -43,7 +43,7 @@ from bench.cli import (  # noqa: E402
     validate,
 )
 from bench.cli.options import Parser, resolve_deferred  # noqa: E402
-from bench.cli.output import fit_columns  # noqa: E402
+from bench.cli.output import command_outputs, fit_columns  # noqa: E402
 
 COMMANDS = (generate, calibrate, trajectory, nmin, design, fuse, fusion_study, record, validate,
             gap, importlog, noise, demo, examples)
@@ -89,8 +89,8 @@ def main(argv: list[str] | None = None) -> int:
     resolve_deferred(args)
     warnings.showwarning = _warning_to_stderr
     try:
-        with fit_columns(stdout=not getattr(args, "json", False)):  # lines ≤ 100 columns
-            return int(args.handler(args) or 0)
+        with fit_columns(stdout=not getattr(args, "json", False)), command_outputs(args):
+            return int(args.handler(args) or 0)  # lines ≤ 100 columns; outputs locked
     except BrokenPipeError:  # output piped into `head`: not an error
         sys.stderr.close()
         return 0

@@ -4,6 +4,14 @@
 output names every file the command wrote (:func:`print_summary`, :func:`print_files`) and
 fits 100 columns: ``main`` runs every command inside :func:`fit_columns`, which breaks a
 longer line at spaces with a hanging indent (error lines, printed after it, stay one line).
+
+Outputs are claimed before any work (:func:`command_outputs`, around every command in
+``main``): each output named on the command line (:data:`OUTPUT_OPTIONS`) is locked
+(:func:`calib.atomic.holding`) until the command ends, so a second run writing the same file
+or folder is refused at once ("another tiltbench run is writing F (pid N)") instead of
+replacing the first one's result; stale temporaries of killed runs are removed; and no
+output may be one of the command's input files (same file by inode: another spelling, a
+symbolic or a hard link), not even with ``--force``.
 """
 
 from __future__ import annotations
@@ -11,6 +19,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import os
 import sys
 import warnings
 from collections.abc import Callable, Iterable, Iterator
@@ -116,20 +125,124 @@ def print_files(paths: Iterable[str | Path | None]) -> None:
             print(f"wrote: {p}")
 
 
+OUTPUT_OPTIONS = ("save", "plot", "rrd", "report", "out")
+"""Destinations (``args`` attributes) of the options that name an output, file or folder, in
+every command; :data:`OUTPUT_POSITIONALS` adds a command's positional output."""
+OUTPUT_POSITIONALS = {"examples": ("dir",)}
+NOT_PATHS = ("command", "kind", "action", "handler")
+"""``args`` attributes that are never file names (sub-command names, the handler)."""
+
+_SESSIONS: list[contextlib.ExitStack] = []
+
+
+def output_paths(args: argparse.Namespace) -> list[str]:
+    """The outputs a parsed command line names (:data:`OUTPUT_OPTIONS`), in order."""
+    names = OUTPUT_OPTIONS + OUTPUT_POSITIONALS.get(getattr(args, "command", None) or "", ())
+    values = (getattr(args, n, None) for n in names)
+    return [os.fspath(v) for v in values if isinstance(v, (str, os.PathLike)) and os.fspath(v)]
+
+
+def input_paths(args: argparse.Namespace) -> list[str]:
+    """Every other value of ``args`` (lists too) that names an existing file: the inputs."""
+    outputs = set(OUTPUT_OPTIONS) | set(OUTPUT_POSITIONALS.get(getattr(args, "command", None)
+                                                               or "", ()))
+    found = []
+    for key, value in vars(args).items():
+        if key in outputs or key in NOT_PATHS:
+            continue
+        for v in value if isinstance(value, (list, tuple)) else (value,):
+            if isinstance(v, (str, os.PathLike)) and os.fspath(v) and os.path.isfile(v):
+                found.append(os.fspath(v))
+    return found
+
+
+def _make_parents(path: Path, stack: contextlib.ExitStack) -> None:
+    """Create the missing folders above ``path`` (its lock lives there); each is removed
+    again when ``stack`` closes if the command left it empty (a refused run writes nothing)."""
+    missing = []
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        missing.append(parent)
+        parent = parent.parent
+    for d in reversed(missing):
+        try:
+            d.mkdir()
+        except FileExistsError:
+            continue
+        except OSError as exc:
+            raise type(exc)(exc.errno, exc.strerror, str(path)) from exc
+        stack.callback(_remove_if_empty, d)
+
+
+def _remove_if_empty(folder: Path) -> None:
+    with contextlib.suppress(OSError):  # not empty (the command wrote there) or gone
+        folder.rmdir()
+
+
+def _claim(path: str | Path, stack: contextlib.ExitStack) -> None:
+    from calib.atomic import clean_stale, holding, holds_lock, refuse_input
+
+    if "\0" in os.fspath(path):  # the system would say "embedded null byte", naming nothing
+        raise ValueError(f"{os.fspath(path)!r}: a file name cannot hold a NUL character; "
+                         "give another output name")
+    path = Path(path)
+    refuse_input(path)
+    if holds_lock(path):
+        return
+    _make_parents(path, stack)
+    stack.enter_context(holding(path))
+    clean_stale(path, locked=True)
+
+
+@contextlib.contextmanager
+def claim_outputs(paths: Iterable[str | Path | None]) -> Iterator[None]:
+    """Hold the output lock of each of ``paths`` (None skipped) for the block, after
+    refusing one that is a protected input; stale temporaries of each are removed.
+    :func:`refuse_overwrite` called inside the block claims its paths here too."""
+    with contextlib.ExitStack() as stack:
+        _SESSIONS.append(stack)
+        try:
+            for p in paths:
+                if p is not None:
+                    _claim(p, stack)
+            yield
+        finally:
+            _SESSIONS.remove(stack)
+
+
+@contextlib.contextmanager
+def command_outputs(args: argparse.Namespace) -> Iterator[None]:
+    """Around a command (``main``): its input files protected
+    (:func:`calib.atomic.inputs_protected`) and its outputs claimed (:func:`claim_outputs`)
+    until it ends, before any work."""
+    from calib.atomic import inputs_protected
+
+    with inputs_protected(input_paths(args)), claim_outputs(output_paths(args)):
+        yield
+
+
 def refuse_overwrite(paths: Iterable[str | Path | None], force: bool = False) -> None:
     """Check output files before any work, so that a refused run writes nothing.
 
     None entries are skipped. A directory is never a valid output file (ValueError); an
-    existing file needs ``--force`` (FileExistsError, worded by ``main``).
+    input of the command never is, even with ``--force``
+    (:class:`calib.atomic.InputAsOutputError`); an existing file needs ``--force``
+    (FileExistsError, worded by ``main``). Inside :func:`claim_outputs` (every command run by
+    ``main``) each path is also locked until the command ends.
     """
+    from calib.atomic import refuse_input
+
     for p in paths:
         if p is None:
             continue
         p = Path(p)
         if p.is_dir():
             raise ValueError(f"{p}: is a directory; expected an output file name")
+        refuse_input(p)
         if p.exists() and not force:
             raise FileExistsError(f"{p}: exists")
+        if _SESSIONS:
+            _claim(p, _SESSIONS[-1])
 
 
 def warnings_to_stderr(fn: Callable[[], T]) -> T:

@@ -234,5 +234,7 @@ def update_docs(doc: str | os.PathLike) -> bool:
     i, j = text.index(start) + len(start), text.index(end)
     new = text[:i] + "\n" + entity_table_markdown() + "\n" + text[j:]
     if new != text:
-        doc.write_text(new, encoding="utf-8")
+        from calib.atomic import write_text
+
+        write_text(doc, new, force=True)  # atomic and locked, as every output
     return new != text
