@@ -296,6 +296,11 @@ def _fail(path, field: str, what: str) -> DataError:
     return DataError(f"{path}: field '{field}' {what}")
 
 
+def _inconsistent(path, field: str, what: str) -> DataError:
+    """Two parts of the file disagree: it was edited (or damaged) after calibrate wrote it."""
+    return DataError(f"{path}: checksum/consistency failed: '{field}' {what}; {_RERUN}")
+
+
 def _short(v: Any) -> str:
     text = repr(v)
     return text if len(text) <= 40 else text[:37] + "..."
@@ -475,35 +480,36 @@ def check_calibration(cal: Calibration, sigma2_source: str, path: Any = "<memory
     for field, f in fits:
         _check_fit(f, field, path)
         if (f.sigma2_source == "estimated") != estimated:
-            raise _fail(path, f"{field}.sigma2_source", f"is {f.sigma2_source!r} but the "
-                        f"file's sigma2_source is {sigma2_source!r}")
+            raise _inconsistent(path, f"{field}.sigma2_source", f"is {f.sigma2_source!r} but "
+                                f"the file's sigma2_source is {sigma2_source!r}")
         joint = f.residuals.ndim == 2
         m = f.residuals.shape[0]
         if cal.method == "multiposition":
             want_rows, want_dof = m, (2 if joint else 1) * (n - m)
             if m > n:
-                raise _fail(path, f"{field}.residuals", f"has {m} pose means for n = {n} "
-                            "samples")
+                raise _inconsistent(path, f"{field}.residuals", f"has {m} pose means for "
+                                    f"n = {n} samples")
         else:
             want_rows, want_dof = n, (2 * n - 4) if joint else n - 2
             if "sigma2_dof" in f.extra and not f.extra["sigma2_dof"] < n:
-                raise _fail(path, f"{field}.extra.sigma2_dof", f"is {f.extra['sigma2_dof']} "
-                            f"for n = {n} samples (pure-error dof N − c < N)")
+                raise _inconsistent(path, f"{field}.extra.sigma2_dof", f"is "
+                                    f"{f.extra['sigma2_dof']} for n = {n} samples (pure-error "
+                                    "dof N − c < N)")
         if m != want_rows:
-            raise _fail(path, f"{field}.residuals", f"has {m} rows but n = {n} (the file "
-                        "was edited?)")
+            raise _inconsistent(path, f"{field}.residuals", f"has {m} rows but n = {n}")
         if f.dof != want_dof:
-            raise _fail(path, f"{field}.dof", f"is {f.dof}, expected {want_dof} for n = {n}")
+            raise _inconsistent(path, f"{field}.dof", f"is {f.dof}, expected {want_dof} for "
+                                f"n = {n}")
         if cal.method != "multiposition":  # its χ² adds the scatter within poses
             got = _chi2(f)
             if not _close(f.chi2, got):
-                raise _fail(path, f"{field}.chi2", f"is {f.chi2!r} but the residuals and σ² "
-                            f"give {got!r}")
+                raise _inconsistent(path, f"{field}.chi2", f"is {f.chi2!r} but the residuals "
+                                    f"and σ² give {got!r}")
         if estimated and cal.method == "ols" and "sigma2_dof" not in f.extra:
             got = float(f.residuals @ f.residuals / f.dof)
             if not _close(float(f.sigma2), got):
-                raise _fail(path, f"{field}.sigma2", f"is {float(f.sigma2)!r} but the "
-                            f"residuals give RSS/dof = {got!r}")
+                raise _inconsistent(path, f"{field}.sigma2", f"is {float(f.sigma2)!r} but the "
+                                    f"residuals give RSS/dof = {got!r}")
     if cal.joint is not None:
         for k, a in enumerate(AXES):
             sl, f = slice(2 * k, 2 * k + 2), cal.fits[a]
@@ -512,8 +518,8 @@ def check_calibration(cal: Calibration, sigma2_source: str, path: Any = "<memory
                                     ("sigma2", f.sigma2, cal.joint.sigma2[k]),
                                     ("residuals", f.residuals, cal.joint.residuals[:, k])):
                 if not np.array_equal(got, want):
-                    raise _fail(path, f"calibration.fits.{a}.{name}", "differs from its block "
-                                f"of calibration.joint (the file was edited?); {_RERUN}")
+                    raise _inconsistent(path, f"calibration.fits.{a}.{name}",
+                                        "differs from its block of calibration.joint")
 
 
 def _first_difference(got: Any, want: Any, where: str) -> str | None:
