@@ -782,7 +782,7 @@ def _read_mat_document(path: Path) -> tuple[CalibrationFile, dict]:
             raise _fail(path, key, f"is not a variable of the export (the file was edited?); "
                         f"{_RERUN}")
     for key, value in want.items():
-        if key in _MAT_COSMETIC:
+        if key in _MAT_COSMETIC or key == "document":  # the source itself, checked above
             continue
         if key not in mat:
             raise _fail(path, key, f"missing; {_RERUN}")
