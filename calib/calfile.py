@@ -388,7 +388,7 @@ def _check_cov(cov: np.ndarray, names: tuple[str, ...], field: str, path) -> Non
         raise _fail(path, field, f"is not symmetric (entry [{i}][{j}] = {cov[i, j]!r}, "
                     f"[{j}][{i}] = {cov[j, i]!r})")
     var = np.diag(cov)
-    for k, v in enumerate(var):
+    for k, v in enumerate(var.tolist()):
         if not SIGMA2_RANGE[0] <= v <= SIGMA2_RANGE[1]:
             raise _fail(path, field, f"has variance {v!r} of {names[k]} (must be in "
                         f"[{SIGMA2_RANGE[0]:g}, {SIGMA2_RANGE[1]:g}])")
@@ -415,7 +415,7 @@ def _close(a: float, b: float) -> bool:
 
 def _check_fit(f: FitResult, field: str, path) -> None:
     """The numbers of one fit: variances, covariance, bias and gain, χ² against residuals."""
-    for k, s2 in enumerate(np.atleast_1d(f.sigma2)):
+    for k, s2 in enumerate(np.atleast_1d(f.sigma2).tolist()):
         if not SIGMA2_RANGE[0] <= s2 <= SIGMA2_RANGE[1]:
             raise _fail(path, f"{field}.sigma2", f"is {s2!r}: a noise variance must be in "
                         f"[{SIGMA2_RANGE[0]:g}, {SIGMA2_RANGE[1]:g}] (m/s²)²"
