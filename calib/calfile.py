@@ -165,15 +165,26 @@ def defining_checksum(doc: dict) -> str:
     Canonical: ``{dotted field: value}``, keys sorted, no spaces, floats in ``repr`` (the
     shortest round trip), so the same numbers give the same hash whether ``doc`` was just
     built or read back from the file."""
-    from calib.io import to_jsonable
-
-    part = {f: to_jsonable(_get(doc, f)) for f in DEFINING_FIELDS}
-    text = json.dumps(part, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    part = {f: _get(doc, f) for f in DEFINING_FIELDS}
+    text = json.dumps(part, sort_keys=True, separators=(",", ":"), ensure_ascii=True,
+                      default=_plain)
     return hashlib.sha256(text.encode("ascii")).hexdigest()
 
 
+def _plain(obj: Any) -> Any:
+    """``json.dumps`` hook for what a result holds besides plain Python: numpy arrays and
+    scalars (numpy floats are ``float`` already and print the same ``repr``)."""
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, tuple):
+        return list(obj)
+    raise TypeError(f"not JSON: {type(obj).__name__}")
+
+
 def _document(cal: Calibration, source: dict | None, sigma2_source: str,
-              noise_file: dict | None, tool: Any) -> dict:
+              noise_file: dict | None, tool: Any, checksum: bool = True) -> dict:
     """The calibration-file object of ``cal`` given its provenance (references, not paths):
     what :func:`calibration_document` writes and what the loader re-derives to compare."""
     doc = {
@@ -187,8 +198,9 @@ def _document(cal: Calibration, source: dict | None, sigma2_source: str,
         "checksum": None,
         "calibration": cal.to_state(),
     }
-    doc["checksum"] = {"algorithm": "sha256", "covers": list(CHECKSUM_FIELDS),
-                       "value": defining_checksum(doc)}
+    if checksum:  # the reader compares the checksum with the file's own fields instead
+        doc["checksum"] = {"algorithm": "sha256", "covers": list(CHECKSUM_FIELDS),
+                           "value": defining_checksum(doc)}
     return doc
 
 
@@ -276,10 +288,8 @@ _MAT_COSMETIC = ("tool_version",)
 
 
 def _document_json(doc: dict) -> str:
-    from calib.io import to_jsonable
-
     # keys in the order of calibration_document (not sorted): the header is read first
-    return json.dumps(to_jsonable(doc), indent=2) + "\n"
+    return json.dumps(doc, indent=2, default=_plain) + "\n"
 
 
 def save_calibration_mat(path: str | os.PathLike, doc: dict, force: bool = False) -> Path:
@@ -538,6 +548,9 @@ def _first_difference(got: Any, want: Any, where: str) -> str | None:
     if isinstance(want, list):
         if not isinstance(got, list) or len(got) != len(want):
             return where
+        if (want and type(want[0]) is float and all(type(x) is float for x in got)
+                and got == want):  # residuals: 20001 floats compared at C speed
+            return None
         for i, (u, v) in enumerate(zip(got, want, strict=True)):
             d = _first_difference(u, v, f"{where}[{i}]")
             if d is not None:
@@ -640,8 +653,9 @@ def calibration_file_from_document(doc: Any, path: Any = "<memory>") -> Calibrat
     cal = Calibration(doc["method"], g, fits, doc["n"], joint, lof)
     check_calibration(cal, doc["sigma2_source"], path)
     try:
-        want = json.loads(_document_json(_document(cal, doc["source"], doc["sigma2_source"],
-                                                   doc["noise_file"], doc.get("tool"))))
+        want = json.loads(json.dumps(_document(cal, doc["source"], doc["sigma2_source"],
+                                               doc["noise_file"], doc.get("tool"), False),
+                                     default=_plain))
     except (TypeError, ValueError, KeyError, AttributeError) as exc:
         # a defining field that passed the checks yet does not re-serialise (a malformed
         # lack-of-fit test): the file is not one this tiltbench wrote
