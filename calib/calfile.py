@@ -644,8 +644,9 @@ def calibration_file_from_document(doc: Any, path: Any = "<memory>") -> Calibrat
              _fit_from(state["joint"], "calibration.joint", JOINT_PARAM_NAMES, path))
     lof = state.get("lack_of_fit")
     if lof is not None:
-        if not isinstance(lof, dict) or not lof:
-            raise _fail(path, "calibration.lack_of_fit", "must be null or an object of tests")
+        if not isinstance(lof, dict) or set(lof) != set(AXES):
+            raise _fail(path, "calibration.lack_of_fit", "must be null or the tests of axes "
+                        f"{' and '.join(AXES)}")
         try:
             lof = {str(a): LackOfFit.from_dict(v) for a, v in lof.items()}
         except (KeyError, TypeError, ValueError, AttributeError, OverflowError) as exc:

@@ -421,3 +421,25 @@ def test_cosmetic_tool_field_changes_nothing(small, tmp_path, capsys):
         b = _run(capsys, *base, path)
         assert a[0] == b[0] == 0 and a[1].replace(str(small), str(tmp_path)) == b[1]
         assert load_calibration(path) == load_calibration(small / "cal.json")
+
+
+def test_lack_of_fit_tests_are_covered_by_the_checksum(tmp_path):
+    """Repeated poses: the lack-of-fit tests (defining: they cannot be re-derived without the
+    readings) round-trip, and an edited p-value or an unknown axis is refused."""
+    th = np.repeat(np.linspace(0, 2 * np.pi, 12, endpoint=False), 10)
+    ref = np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)])
+    datos = ref + 0.3 * np.random.default_rng(9).standard_normal(ref.shape)
+    cal = calibrate(Ensayo(th, datos), groups=np.repeat(np.arange(12), 10))
+    assert cal.lack_of_fit is not None
+    path = save_calibration(tmp_path / "lof.json", cal)
+    assert load_calibration(path) == cal
+    edits = {
+        "p": lambda d: d["calibration"]["lack_of_fit"]["x"].update(p_value=0.5),
+        "axis": lambda d: d["calibration"]["lack_of_fit"].update(
+            z=d["calibration"]["lack_of_fit"]["x"]),
+    }
+    for label, edit in edits.items():
+        bad = _edit_json(path, tmp_path / "bad.json", edit)
+        with pytest.raises(DataError, match="lack_of_fit|checksum") as exc:
+            load_calibration(bad)
+        assert bad in str(exc.value), label
