@@ -134,7 +134,8 @@ def _edited(tmp_path, saved, edit) -> str:
 
 
 @pytest.mark.parametrize("edit, field", [
-    (lambda d: d.update(format_version=2), "format_version"),
+    (lambda d: d.update(format_version=FORMAT_VERSION + 1), "format_version"),
+    (lambda d: d.update(format_version=1), "format_version"),
     (lambda d: d.update(format="something-else"), "format"),
     (lambda d: d.pop("format"), "format"),
     (lambda d: d.pop("cov"), "cov"),
@@ -228,7 +229,8 @@ def _edited_mat(tmp_path, saved, **changes) -> str:
 
 
 @pytest.mark.parametrize("changes, field", [
-    ({"format_version": 2.0}, "format_version"),
+    ({"format_version": float(FORMAT_VERSION + 1)}, "format_version"),
+    ({"format_version": 1.0}, "format_version"),
     ({"format": "something-else"}, "format"),
     ({"params": np.zeros((1, 4))}, "params"),
 ])

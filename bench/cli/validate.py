@@ -1,8 +1,10 @@
 """``tiltbench validate``: estimates from any tool against the truth of a generated set.
 
 The estimates are ``--estimates est.json`` (any tool, docs/validate.md) or
-``--calibration cal.json`` (``calibrate --save``: its ``calibrate --json`` object is checked;
-with ``--ensayo`` too, that file must be the one the calibration was fitted on, by SHA-256).
+``--calibration cal.json`` (``calibrate --save``: read and checked by
+:func:`calib.calfile.load_calibration_file`, the reader of every command, and graded through
+its ``calibrate --json`` object; with ``--ensayo`` too, that file must be the one the
+calibration was fitted on, by SHA-256).
 """
 
 from __future__ import annotations
@@ -32,12 +34,13 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         truth = student_truth(truth, args.student)
         truth_name = f"{args.truth} (students[{idx}].truth)"
     if args.calibration:
-        from calib.calfile import file_sha256, read_calibration_document
+        from calib.calfile import file_sha256, load_calibration_file
 
-        doc = read_calibration_document(args.calibration)
-        est, est_name = doc["calibration"], str(args.calibration)
-        est = {k: v for k, v in est.items() if k not in ("fits", "joint")}  # calibrate --json
-        ref = doc["source"]
+        # the one reader of every command: validate grades the numbers trajectory, nmin and
+        # fuse use (the calibrate --json object of the checked calibration, not a copy)
+        cf = load_calibration_file(args.calibration)
+        est, est_name = cf.calibration.to_dict(), str(args.calibration)
+        ref = cf.source
         if args.ensayo and ref and file_sha256(args.ensayo) != ref.get("sha256"):
             raise OptionError(f"--ensayo {args.ensayo} is not the file {args.calibration} was "
                               f"fitted on ({ref.get('name')}, SHA-256 {ref.get('sha256')})")
