@@ -331,7 +331,8 @@ def fuse(t, acc_m, t_gps, pos_gps, *, noise_var, sigma_pos, p0, v0, p0_cov, v0_c
     gate = gate_threshold(gate_alpha, Z.shape[-1])
     nodes, hold, fixi = _timeline(t, t_gps)
     step = LinearStep(nodes, hold, acc, cal, sa2, estimate_scale)
-    kept, nu, S_all, used = run_filter(step, x0, P0, fixi, Z, Rm, keep, smoother, gate)
+    kept, nu, S_all, used = run_filter(step, x0, P0, fixi, Z, Rm, keep, smoother,
+                                       gate=gate)
     dt = float(np.median(np.diff(t)))
     names = STATE_NAMES + (SCALE_NAMES if estimate_scale else ())
     return FusionResult(state_names=names, times=nodes[kept.store], t_gps=t_gps,

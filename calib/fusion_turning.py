@@ -198,7 +198,7 @@ def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, noise_var, gyro_var, sigma_p
     fixi[k_fix] = np.arange(t_gps.shape[0])
     step = TurningStep(t, acc, w, cal, sa2, sg2)
     kept, nu, S_all, used = run_filter(step, x0, P0, fixi, Z, Rm, keep, smoother,
-                                       gate_threshold(gate_alpha, Z.shape[-1]))
+                                       gate=gate_threshold(gate_alpha, Z.shape[-1]))
     dt = float(np.median(np.diff(t)))
     Qnom = nominal_q(n, sa2, step.c, dt)
     Qnom[4, 4] = sg2 * dt * dt

@@ -161,7 +161,7 @@ def gate_threshold(alpha: float, d: int) -> float:
 
 
 def run_filter(step, x0: np.ndarray, P0: np.ndarray, fixi: np.ndarray, Z: np.ndarray,
-               Rm: np.ndarray, keep: str, smoother: bool, gate: float = float("inf")
+               Rm: np.ndarray, keep: str, smoother: bool, *, gate: float = float("inf")
                ) -> tuple[NodeStore, np.ndarray, np.ndarray, np.ndarray]:
     """The predict/update loop both filters share, over K nodes for R runs at once.
 
