@@ -57,6 +57,12 @@ from calib.input_rules import DataError
 PRECHECK_ALPHA = 1e-4
 """Largest false-refusal rate of the free-run test on right inputs (module docstring)."""
 
+MAX_SCAN_FIXES = 600
+"""At most this many fixes (evenly spread) enter the lag scan (bounded work)."""
+
+MAX_SCAN_LAGS = 1200
+"""At most about this many lags are scanned (the step grows with the run)."""
+
 MAX_YAW_RATE = 35.0
 """|ω| bound, rad/s (2000 °/s, the largest common MEMS full scale)."""
 
@@ -112,14 +118,18 @@ def _nis(nu: np.ndarray, S: np.ndarray) -> np.ndarray:
 
 def best_lag(free: FreeRun) -> tuple[float, float]:
     """``(τ, median NIS)`` of the best time shift: the fix at ``t_j`` compared with the path
-    at ``t_j - τ`` (s), τ over ±¾ of the run in steps of a quarter of the median fix interval,
+    at ``t_j - τ`` (s), τ over ±¾ of the run in steps of a quarter of the median fix interval
+    (coarser on long runs: at most :data:`MAX_SCAN_LAGS` lags, :data:`MAX_SCAN_FIXES` fixes),
     each τ with at least ``max(3, M/4)`` fixes whose shifted time is inside the run."""
-    t, m = free.t_gps, free.t_gps.shape[0]
+    t, z, m = free.t_gps, free.z, free.t_gps.shape[0]
     if m < 3:
         return 0.0, math.inf
+    if m > MAX_SCAN_FIXES:  # bounded work: evenly spread fixes are enough to find a lag
+        keep = np.linspace(0, m - 1, MAX_SCAN_FIXES).round().astype(int)
+        t, z, m = t[keep], z[keep], MAX_SCAN_FIXES
     span = float(free.path_t[-1] - free.path_t[0])
-    step = 0.25 * float(np.median(np.diff(t))) if m > 1 else span
-    n_side = min(int(0.75 * span / step), 4000)
+    step = max(0.25 * float(np.median(np.diff(t))), 1.5 * span / MAX_SCAN_LAGS)
+    n_side = int(0.75 * span / step)
     taus = np.arange(-n_side, n_side + 1) * step
     tt = t[None, :] - taus[:, None]                       # (L, M) the path's times
     ok = (tt >= free.path_t[0]) & (tt <= free.path_t[-1])
@@ -128,7 +138,7 @@ def best_lag(free: FreeRun) -> tuple[float, float]:
     for i in range(2):
         for j in range(2):
             P[..., i, j] = np.interp(tt, free.path_t, free.path_cov[:, i, j])
-    nis = _nis(free.z[None] - p, P + free.R)
+    nis = _nis(z[None] - p, P + free.R)
     nis = np.where(ok, nis, np.nan)
     enough = ok.sum(axis=1) >= max(3, math.ceil(m / 4))
     med = np.full(taus.shape, np.inf)
@@ -163,7 +173,8 @@ def explain(free: FreeRun, source: str) -> list[tuple[float, str]]:
     o = np.linalg.solve(Si.sum(axis=0), np.einsum("mij,mj->i", Si, free.nu))
     out.append((free.median_nis(free.nu - o),
                 f"{source}: 'pos' looks offset by a constant ({o[0]:.3g}, {o[1]:.3g}) m from the "
-                "dead-reckoned path (another origin or datum): subtract it"))
+                "dead-reckoned path (another origin or datum, or datos.txt's P0 is off): "
+                "subtract it"))
     tau, med = best_lag(free)
     if tau != 0.0:
         late = "late" if tau > 0 else "early"

@@ -66,6 +66,12 @@ CONSISTENCY_ALPHA = 0.01
 NIS_WINDOW = 10
 """Default window of the NIS test, in fixes."""
 
+ALPHA_MIN = 1e-6
+"""Smallest consistency α: tails below ~1e-9 per window are beyond the FFT law's accuracy."""
+
+NIS_WINDOW_MAX = 1000
+"""Largest window (bounded work: the law of a window's sum is an FFT of 4001·K points)."""
+
 _BINS = 2000
 """Grid cells per term on [0, c) for the capped sum's law (error of a quantile ≲ k·c/4000)."""
 
@@ -100,8 +106,8 @@ def capped_sum_quantiles(d: int, cap: float, k: int, tail: float) -> tuple[float
 
 def window_slices(m: int, window: int) -> list[slice]:
     """The ``ceil(m / window)`` consecutive windows of ``window`` or ``window - 1`` fixes."""
-    if window < 1:
-        raise ValueError(f"the NIS window must be ≥ 1 fix, got {window}")
+    if not 1 <= window <= NIS_WINDOW_MAX:
+        raise ValueError(f"the NIS window must be 1 to {NIS_WINDOW_MAX} fixes, got {window}")
     if m == 0:
         return []
     idx = np.array_split(np.arange(m), math.ceil(m / window))
@@ -116,13 +122,13 @@ def windowed_nis(nis: np.ndarray, *, d: int, gate_alpha: float, window: int = NI
     ``n`` (W,) fixes per window, ``failing`` (…, W) bool, ``consistent`` (…,) bool,
     ``per_window_alpha`` α_w and ``cap`` c.
     """
-    if not 0.0 < alpha < 1.0:
-        raise ValueError(f"the consistency alpha must be in (0, 1), got {alpha!r}")
+    if not ALPHA_MIN <= alpha < 1.0:
+        raise ValueError(f"the consistency alpha must be in [{ALPHA_MIN:g}, 1), got {alpha!r}")
     nis = np.asarray(nis, dtype=float)
     cap = gate_threshold(gate_alpha, d)
     slices = window_slices(nis.shape[-1], window)
     W = len(slices)
-    a_w = 1.0 - (1.0 - alpha) ** (1.0 / W) if W else alpha
+    a_w = -math.expm1(math.log1p(-alpha) / W) if W else alpha  # 1 - (1 - α)^(1/W), exact
     capped = np.minimum(nis, cap)
     stat = np.stack([capped[..., s].sum(axis=-1) for s in slices], axis=-1) if W else \
         np.zeros((*nis.shape[:-1], 0))
@@ -253,5 +259,5 @@ class Consistency(ResultMixin):
                    mean_nis=float("nan") if d["mean_nis"] is None else float(d["mean_nis"]))
 
 
-__all__ = ["CONSISTENCY_ALPHA", "Consistency", "GATE_ALPHA", "NIS_WINDOW",
-           "capped_sum_quantiles", "window_slices", "windowed_nis"]
+__all__ = ["ALPHA_MIN", "CONSISTENCY_ALPHA", "Consistency", "GATE_ALPHA", "NIS_WINDOW",
+           "NIS_WINDOW_MAX", "capped_sum_quantiles", "window_slices", "windowed_nis"]

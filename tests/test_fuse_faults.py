@@ -14,7 +14,14 @@ import pytest
 import scipy.io as sio
 
 from bench.cli import main
-from bench.cli.fuse import CONSISTENCY_ALPHA, EXIT_INCONSISTENT, GATE_ALPHA, NIS_WINDOW
+from bench.cli.fuse import (
+    CONSISTENCY_ALPHA,
+    CONSISTENCY_ALPHA_MIN,
+    EXIT_INCONSISTENT,
+    GATE_ALPHA,
+    NIS_WINDOW,
+    NIS_WINDOW_MAX,
+)
 from calib import innovation_check
 from calib.fusion_arrival import NO_REGION
 from tests.cli import one_line_error
@@ -65,9 +72,11 @@ def _gps(d):
 
 
 def test_cli_defaults_are_the_library_ones():
-    assert (GATE_ALPHA, CONSISTENCY_ALPHA, NIS_WINDOW) == (
+    assert (GATE_ALPHA, CONSISTENCY_ALPHA, NIS_WINDOW, NIS_WINDOW_MAX,
+            CONSISTENCY_ALPHA_MIN) == (
         innovation_check.GATE_ALPHA, innovation_check.CONSISTENCY_ALPHA,
-        innovation_check.NIS_WINDOW)
+        innovation_check.NIS_WINDOW, innovation_check.NIS_WINDOW_MAX,
+        innovation_check.ALPHA_MIN)
 
 
 def test_clean_run_is_consistent_and_decides_the_truth(capsys, linear):
@@ -136,7 +145,8 @@ def test_a_small_offset_is_inconsistent_exit_3_and_no_region(capsys, linear, tmp
 
 def test_bad_doubt_options_are_one_line(capsys, linear):
     for opt, val in (("--gate-alpha", "1"), ("--gate-alpha", "nan"),
-                     ("--consistency-alpha", "0"), ("--nis-window", "0")):
+                     ("--consistency-alpha", "0"), ("--nis-window", "0"),
+                     ("--nis-window", "1e6"), ("--consistency-alpha", "1e-300")):
         assert opt in one_line_error(capsys, *_args(linear, opt, val))
 
 

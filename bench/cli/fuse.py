@@ -38,7 +38,6 @@ from bench.cli.inputs import add_course_inputs, read_calibration_file, read_cour
 from bench.cli.options import (
     OptionError,
     add_force,
-    check_count,
     check_initial_state,
     check_level,
     check_positive,
@@ -52,6 +51,8 @@ EXIT_INCONSISTENT = 3
 GATE_ALPHA = 0.001  # = calib.innovation_check.GATE_ALPHA (not imported: start-up time)
 CONSISTENCY_ALPHA = 0.01  # = calib.innovation_check.CONSISTENCY_ALPHA
 NIS_WINDOW = 10  # = calib.innovation_check.NIS_WINDOW
+NIS_WINDOW_MAX = 1000  # = calib.innovation_check.NIS_WINDOW_MAX
+CONSISTENCY_ALPHA_MIN = 1e-6  # = calib.innovation_check.ALPHA_MIN
 
 
 def _check_nonnegative(value: float, name: str) -> float:
@@ -62,14 +63,19 @@ def _check_nonnegative(value: float, name: str) -> float:
     return float(value)
 
 
-def _check_alpha(value: float, name: str, *, zero: bool) -> float:
+def _check_alpha(value: float, name: str, *, lowest: float) -> float:
+    """A rate in [lowest, 1) (the gate: 0 allowed, no gate; the consistency: ≥ 1e-6)."""
     import math
 
-    lo_ok = value >= 0.0 if zero else value > 0.0
-    if not (math.isfinite(value) and lo_ok and value < 1.0):
-        raise OptionError(f"{name} must be in {'[0' if zero else '(0'}, 1), e.g. 0.01, got "
-                          f"{value:g}")
+    if not (math.isfinite(value) and lowest <= value < 1.0):
+        raise OptionError(f"{name} must be in [{lowest:g}, 1), e.g. 0.01, got {value:g}")
     return float(value)
+
+
+def _check_window(value: int) -> int:
+    if not 1 <= value <= NIS_WINDOW_MAX:
+        raise OptionError(f"--nis-window must be 1 to {NIS_WINDOW_MAX} fixes, got {value}")
+    return int(value)
 
 
 def _cmd_fuse(args: argparse.Namespace) -> int:
@@ -79,10 +85,10 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     from calib.io import read_gps
 
     level = check_level(args.level)
-    doubt = dict(gate_alpha=_check_alpha(args.gate_alpha, "--gate-alpha", zero=True),
+    doubt = dict(gate_alpha=_check_alpha(args.gate_alpha, "--gate-alpha", lowest=0.0),
                  consistency_alpha=_check_alpha(args.consistency_alpha, "--consistency-alpha",
-                                                zero=False),
-                 nis_window=check_count(args.nis_window, "--nis-window", 1))
+                                                lowest=CONSISTENCY_ALPHA_MIN),
+                 nis_window=_check_window(args.nis_window))
     check_initial_state(args)
     sigma_pos = check_positive(args.gps_sigma, "--gps-sigma")
     p0_std = _check_nonnegative(args.p0_std, "--p0-std")
@@ -210,6 +216,7 @@ def register(sub) -> None:
                    help="false-alarm rate of the windowed NIS test of the whole run "
                         f"({CONSISTENCY_ALPHA:g}); inconsistent: no region, exit 3")
     p.add_argument("--nis-window", type=integer, default=NIS_WINDOW, metavar="K",
-                   help=f"fixes per window of the NIS test ({NIS_WINDOW})")
+                   help=f"fixes per window of the NIS test ({NIS_WINDOW}; at most "
+                        f"{NIS_WINDOW_MAX})")
     add_force(p, "an existing --plot / --rrd file")
     p.set_defaults(handler=_cmd_fuse)
