@@ -32,6 +32,7 @@ check. Nothing is corrected silently.
 | time offset | ``p̂(t_j - τ)``, τ over ±¾ run, step ¼ fix interval | ``t_gps`` τ s late |
 | constant offset | ``ν_j - ō``, ``ō`` the S⁻¹-weighted mean of ν | ``pos`` is offset by ō m |
 | gyro in deg/s | the turning free run from ``gyro·π/180`` (and ``·180/π``) | convert ``gyro`` |
+| wrong ψ0 | the path's driven part turned by δ (:func:`heading_offset`) | ψ0 off by δ |
 
 The lag scan interpolates the free run's path and covariance linearly between its nodes (the
 IMU samples, 10 ms apart on the bench). Units: m, m², s, rad/s.
@@ -88,6 +89,7 @@ class FreeRun:
     path_p: np.ndarray
     path_cov: np.ndarray
     R: np.ndarray
+    v0: np.ndarray | None = None
 
     @classmethod
     def of(cls, fusion, z) -> FreeRun:
@@ -98,7 +100,8 @@ class FreeRun:
                    np.asarray(fusion.innovation_covs, float)[:, :2, :2],
                    np.asarray(fusion.times, float), np.asarray(fusion.estimates, float)[:, :2],
                    np.asarray(fusion.covariances, float)[:, :2, :2],
-                   np.asarray(fusion.R, float)[:2, :2])
+                   np.asarray(fusion.R, float)[:2, :2],
+                   np.asarray(fusion.estimates, float)[0, 2:4])
 
     @property
     def p_hat(self) -> np.ndarray:
@@ -153,6 +156,27 @@ def best_lag(free: FreeRun) -> tuple[float, float]:
             tau = float(taus[k] + 0.5 * step * (f[0] - f[2]) / curv)
             return tau, float(med[k])
     return float(taus[k]), float(med[k])
+
+
+def heading_offset(free: FreeRun, psi0: float, source: str) -> tuple[float, str]:
+    """The turning run's alternative "ψ0 is off by δ" as ``(median NIS, message)``.
+
+    A constant heading error δ rotates every world acceleration by δ, so the dead-reckoned
+    path is ``p0 + v0 t + R(δ) d(t)`` with ``d`` the acceleration-driven part (``v0`` world
+    axes, not rotated). δ from the fixes in closed form (2-D Procrustes on
+    ``e_j = z_j - p0 - v0 t_j`` against ``d_j``): ``δ = atan2(Σ d_j × e_j, Σ d_j · e_j)``;
+    the residuals ``e_j - R(δ) d_j`` against the same S_j. ``psi0`` rad, the one given."""
+    t0 = free.path_t[0]
+    base = free.path_p[0] + np.outer(free.t_gps - t0, free.v0)
+    d, e = free.p_hat - base, free.z - base
+    delta = math.atan2(float(np.sum(d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0])),
+                       float(np.sum(d[:, 0] * e[:, 0] + d[:, 1] * e[:, 1])))
+    c, s = math.cos(delta), math.sin(delta)
+    rd = d @ np.array([[c, -s], [s, c]]).T
+    return (free.median_nis(e - rd, free.S),
+            f"{source}: the fixes match the dead-reckoned path turned by {delta:+.3g} rad: the "
+            f"initial heading psi0 = {psi0:g} rad looks off; try psi0 = {psi0 + delta:.4g} rad "
+            "(or give --psi0-sigma)")
 
 
 def explain(free: FreeRun, source: str) -> list[tuple[float, str]]:
@@ -242,5 +266,6 @@ def check_heading(psi0: float, name: str = "psi0") -> float:
     return psi0
 
 
-__all__ = ["FreeRun", "MAX_YAW_RATE", "PRECHECK_ALPHA", "best_lag", "check_fixes",
-           "check_gyro", "check_heading", "explain", "median_threshold"]
+__all__ = ["FreeRun", "MAX_SCAN_FIXES", "MAX_SCAN_LAGS", "MAX_YAW_RATE", "PRECHECK_ALPHA",
+           "best_lag", "check_fixes", "check_gyro", "check_heading", "explain",
+           "heading_offset", "median_threshold"]

@@ -234,11 +234,11 @@ class FusionResult(ResultMixin):
         lines.append(f"  final position ({fp[0]:.3f}, {fp[1]:.3f}) m, std "
                      f"({fs[0]:.3f}, {fs[1]:.3f}) m")
         used = np.asarray(self.fix_used, dtype=bool)
-        if used.any():  # of the fixes used: a rejected one is the gate's, not the filter's
-            lines.append(f"  mean NIS {float(np.mean(nis[used])):.3f} (expected {d}); "
-                         + (f"gate at α = {self.gate_alpha:g}: "
-                            f"{int(np.sum(~self.fix_used))} of {self.fix_used.size} fixes "
-                            "rejected" if self.gate_alpha > 0 else "no innovation gate"))
+        if nis.size:  # the mean of the fixes used: a rejected one is the gate's business
+            gate = (f"gate at α = {self.gate_alpha:g}: {int(np.sum(~used))} of {used.size} "
+                    "fixes rejected" if self.gate_alpha > 0 else "no innovation gate")
+            lines.append(f"  mean NIS {float(np.mean(nis[used])):.3f} (expected {d}); {gate}"
+                         if used.any() else f"  no fix used; {gate}")
         return "\n".join(lines)
 
 

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from calib.calibration import Calibration
-from calib.fix_check import FreeRun, check_fixes, check_gyro, check_heading
+from calib.fix_check import FreeRun, check_fixes, check_gyro, check_heading, heading_offset
 from calib.fusion import FusionResult, fuse
 from calib.fusion_turning import TurningFusionResult, fuse_turning
 from calib.innovation_check import CONSISTENCY_ALPHA, GATE_ALPHA, NIS_WINDOW, Consistency
@@ -191,7 +191,7 @@ def fuse_arrival(acel: Acel, fixes: Fixes, calibration: Calibration,
             return fuse(acel.t, acel.aerr, t_gps, pos, vel_gps=vel,
                         sigma_vel=sigma_vel if vel is not None else None, **common, **kw)
     if check_inputs:
-        _check_inputs(run, pos, fixes.source, acel)
+        _check_inputs(run, pos, fixes.source, acel, psi0)
     res = run(smoother=smoother, gate_alpha=gate_alpha)
     cons = Consistency.of(res, alpha=consistency_alpha, window=nis_window)
     if cons.consistent:
@@ -204,10 +204,11 @@ def fuse_arrival(acel: Acel, fixes: Fixes, calibration: Calibration,
                         float(v0_std), cons)
 
 
-def _check_inputs(run, pos: np.ndarray, source: str, acel: Acel) -> None:
+def _check_inputs(run, pos: np.ndarray, source: str, acel: Acel, psi0: float) -> None:
     """Step 2 of :func:`fuse_arrival`: the free run (every fix rejected: the dead reckoning
     and each fix's innovation against it) and :func:`calib.fix_check.check_fixes`; for a
-    turning run the gyro read in °/s (or rad read as °) is one more alternative."""
+    turning run the gyro read in °/s (or rad read as °) and an initial heading off by a
+    constant (:func:`calib.fix_check.heading_offset`) are more alternatives."""
     def free(**kw) -> FreeRun:
         return FreeRun.of(run(gate_alpha=1.0, keep="all", smoother=False, **kw), pos)
 
@@ -216,8 +217,10 @@ def _check_inputs(run, pos: np.ndarray, source: str, acel: Acel) -> None:
                                               "its 'gyro'")
         return
 
+    base = free()
+
     def gyro_units() -> list[tuple[float, str]]:
-        out = []
+        out = [heading_offset(base, psi0, "psi0")]
         for f, what in ((np.pi / 180.0, "looks like °/s: give rad/s (multiply by π/180)"),
                         (180.0 / np.pi, "looks like ° read as rad: give rad/s (multiply by "
                                         "180/π)")):
@@ -226,7 +229,7 @@ def _check_inputs(run, pos: np.ndarray, source: str, acel: Acel) -> None:
                         "fixes, converted it agrees"))
         return out
 
-    check_fixes(free(), source, alternatives=gyro_units,
+    check_fixes(base, source, alternatives=gyro_units,
                 suspects=", the gyro ('gyro', rad/s) and the initial heading psi0 (rad)")
 
 
