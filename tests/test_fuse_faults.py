@@ -127,9 +127,24 @@ def test_one_200_m_outlier_is_gated_and_the_answer_kept(capsys, linear, tmp_path
     assert rc == 0 and "1 of 60 fixes rejected" in out and "(1 rejected by the gate)" in out
 
 
-def test_a_small_offset_is_inconsistent_exit_3_and_no_region(capsys, linear, tmp_path):
+def test_a_small_offset_is_inconsistent_exit_3_and_no_region(capsys, linear, tmp_path,
+                                                             monkeypatch):
     """+10 m passes the free-run check (the dead reckoning drifts that much) but not the
-    windowed NIS: the result is printed with no region and exit 3."""
+    windowed NIS: the result is printed with no region and exit 3; the figure draws no fused
+    region, says so in its title and circles the rejected fixes."""
+    from matplotlib.patches import Polygon
+
+    import bench.figures.fusion as fig_mod
+
+    figs = []
+    real_save = fig_mod.save_figure
+
+    def keep(fig, *a, **k):
+        figs.append((fig.axes[0].get_title(), fig.axes[0].get_legend_handles_labels()[1],
+                     sum(isinstance(p, Polygon) for p in fig.axes[0].patches)))
+        return real_save(fig, *a, **k)
+
+    monkeypatch.setattr(fig_mod, "save_figure", keep)
     d = _variant(linear, tmp_path / "off10", gps={"pos": _gps(linear)["pos"] + [10.0, 0.0]})
     rc, out, _ = _run(capsys, *_args(d, "--json"))
     assert rc == EXIT_INCONSISTENT == 3
@@ -141,6 +156,11 @@ def test_a_small_offset_is_inconsistent_exit_3_and_no_region(capsys, linear, tmp
     rc, out, _ = _run(capsys, *_args(d, "--plot", png))
     assert rc == 3 and png.stat().st_size > 0
     assert "INCONSISTENT" in out and NO_REGION in out and "only" not in out
+    title, labels, polygons = figs[-1]
+    assert "INCONSISTENT" in title and "no region" in title
+    assert polygons == 1  # the dead reckoning's region only
+    n_rej = len(res["consistency"]["rejected"])
+    assert n_rej > 0 and f"rejected by the gate ({n_rej})" in labels
 
 
 def test_bad_doubt_options_are_one_line(capsys, linear):
