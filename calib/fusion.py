@@ -67,6 +67,7 @@ from calib.kalman import (
     check_times,
     filter_outputs,
     fix_measurements,
+    gate_threshold,
     initial_cov,
     kalman_update,
     nominal_q,
@@ -97,6 +98,9 @@ class FusionResult(ResultMixin):
         (median step, without the data-dependent scale term).  R : (d, d) fix noise.
     noise_var : (2,) accelerometer white-noise variance σ_a², (m/s²)².
     estimate_scale : bool.  dt : nominal IMU step, s.
+    fix_used : (M,) bool, the fix passed the innovation gate and was used in the update
+        (:func:`calib.kalman.gate_threshold`); all True without a gate.
+    gate_alpha : the gate's α (0: no gate): a right fix is rejected with probability α.
     """
 
     _TITLE = "Kalman fusion"
@@ -119,8 +123,15 @@ class FusionResult(ResultMixin):
     noise_var: np.ndarray
     estimate_scale: bool
     dt: float
+    fix_used: np.ndarray | None = None
+    gate_alpha: float = 0.0
 
     def __post_init__(self) -> None:
+        if self.fix_used is None:
+            object.__setattr__(self, "fix_used",
+                               np.ones(np.shape(self.innovations)[:-1], dtype=bool))
+        object.__setattr__(self, "fix_used", readonly(self.fix_used, bool))
+        object.__setattr__(self, "gate_alpha", float(self.gate_alpha))
         object.__setattr__(self, "state_names", tuple(self.state_names))
         for name in ("times", "estimates", "covariances", "t_gps", "innovations",
                      "innovation_covs", "smoothed", "smoothed_covariances", "P0", "Q", "R",
@@ -145,6 +156,12 @@ class FusionResult(ResultMixin):
         """(2, 2) or (R, 2, 2) its covariance, m²."""
         return self.covariances[..., -1, :2, :2].copy()
 
+    @property
+    def n_rejected(self) -> np.ndarray | int:
+        """Fixes the gate rejected (an int, or (R,) for R runs)."""
+        r = np.sum(~self.fix_used, axis=-1)
+        return int(r) if np.ndim(r) == 0 else r
+
     def nis(self) -> np.ndarray:
         """(M,) or (R, M) normalized innovation squared ``νᵀ S⁻¹ ν`` (χ²(d) if consistent)."""
         sol = np.linalg.solve(self.innovation_covs, self.innovations[..., None])[..., 0]
@@ -161,9 +178,11 @@ class FusionResult(ResultMixin):
         d = {name: getattr(self, name).tolist() for name in (
             "times", "estimates", "covariances", "is_fix", "t_gps", "innovations",
             "innovation_covs", "smoothed", "smoothed_covariances", "P0", "Q", "R",
-            "noise_var")}
+            "noise_var", "fix_used")}
         d.update(state_names=list(self.state_names), estimate_scale=self.estimate_scale,
-                 dt=self.dt, final_position=self.final_position.tolist(),
+                 dt=self.dt, gate_alpha=self.gate_alpha,
+                 fixes_rejected=np.asarray(self.n_rejected).tolist(),
+                 final_position=self.final_position.tolist(),
                  final_position_cov=self.final_position_cov.tolist())
         d["units"] = {
             "times": "s", "t_gps": "s", "dt": "s",
@@ -174,6 +193,7 @@ class FusionResult(ResultMixin):
             "Q": "products of the state units", "R": "[m², m², (m/s)², (m/s)²]",
             "innovations": "[m, m, m/s, m/s]", "innovation_covs": "[m², m², (m/s)², (m/s)²]",
             "noise_var": "(m/s²)²", "final_position": "m", "final_position_cov": "m²",
+            "gate_alpha": "1", "fixes_rejected": "count",
         }
         return d
 
@@ -181,13 +201,14 @@ class FusionResult(ResultMixin):
     def from_dict(cls, d: dict) -> FusionResult:
         """Rebuild from :meth:`to_dict` (exact, also through JSON, which keeps no shape for
         the empty smoothed or innovation arrays: they get theirs back here)."""
-        kw = {f.name: d[f.name] for f in fields(cls)}
+        kw = {f.name: d[f.name] for f in fields(cls) if f.name in d}
         est = np.asarray(kw["estimates"], dtype=float)
         runs, n, dm = est.shape[:-2], est.shape[-1], np.shape(kw["R"])[0]
         for name, shape in (("smoothed", (0, n)), ("smoothed_covariances", (0, n, n)),
-                            ("innovations", (0, dm)), ("innovation_covs", (0, dm, dm))):
-            if not np.size(kw[name]):
-                kw[name] = np.zeros((*runs, *shape))
+                            ("innovations", (0, dm)), ("innovation_covs", (0, dm, dm)),
+                            ("fix_used", (0,))):
+            if name in kw and not np.size(kw[name]):
+                kw[name] = np.zeros((*runs, *shape), dtype=bool if name == "fix_used" else float)
         return cls(**kw)
 
     def summary(self) -> str:
@@ -212,8 +233,12 @@ class FusionResult(ResultMixin):
         fs = np.sqrt(np.diag(self.final_position_cov.reshape(-1, 2, 2)[0]))
         lines.append(f"  final position ({fp[0]:.3f}, {fp[1]:.3f}) m, std "
                      f"({fs[0]:.3f}, {fs[1]:.3f}) m")
-        if nis.size:
-            lines.append(f"  mean NIS {float(np.mean(nis)):.3f} (expected {d})")
+        used = np.asarray(self.fix_used, dtype=bool)
+        if nis.size:  # the mean of the fixes used: a rejected one is the gate's business
+            gate = (f"gate at α = {self.gate_alpha:g}: {int(np.sum(~used))} of {used.size} "
+                    "fixes rejected" if self.gate_alpha > 0 else "no innovation gate")
+            lines.append(f"  mean NIS {float(np.mean(nis[used])):.3f} (expected {d}); {gate}"
+                         if used.any() else f"  no fix used; {gate}")
         return "\n".join(lines)
 
 
@@ -238,7 +263,7 @@ def _timeline(t: np.ndarray, t_gps: np.ndarray) -> tuple[np.ndarray, np.ndarray,
 def fuse(t, acc_m, t_gps, pos_gps, *, noise_var, sigma_pos, p0, v0, p0_cov, v0_cov,
          calibration: CalibrationLike | None = None, bias=None, scale=None, cal_cov=None,
          vel_gps=None, sigma_vel=None, estimate_scale=False, smoother=False,
-         keep="all") -> FusionResult:
+         keep="all", gate_alpha: float = 0.0) -> FusionResult:
     """Kalman filter (and RTS smoother) of accelerometer readings with position fixes.
 
     Parameters
@@ -261,6 +286,9 @@ def fuse(t, acc_m, t_gps, pos_gps, *, noise_var, sigma_pos, p0, v0, p0_cov, v0_c
     smoother : also run the RTS smoother over the stored nodes.
     keep : "all" stores every node (IMU times merged with fix times); "fixes" stores the
         start, the fixes and the end only (Monte Carlo: the smoother is exact on them too).
+    gate_alpha : the innovation gate's α (:func:`calib.kalman.gate_threshold`): a fix with
+        ``NIS ≥ χ²_d⁻¹(1 - α)`` is not used; 0 (default): every fix used; 1: none (the free
+        run, dead reckoning with the innovations against it).
 
     Returns
     -------
@@ -300,15 +328,17 @@ def fuse(t, acc_m, t_gps, pos_gps, *, noise_var, sigma_pos, p0, v0, p0_cov, v0_c
     P0 = initial_cov(n, p0_cov, v0_cov, {4: cal.cov[np.ix_(cal_idx, cal_idx)]})
     x0 = np.concatenate([p0, v0, cal.bias] + ([cal.scale] if estimate_scale else []))
 
+    gate = gate_threshold(gate_alpha, Z.shape[-1])
     nodes, hold, fixi = _timeline(t, t_gps)
     step = LinearStep(nodes, hold, acc, cal, sa2, estimate_scale)
-    kept, nu, S_all = run_filter(step, x0, P0, fixi, Z, Rm, keep, smoother)
+    kept, nu, S_all, used = run_filter(step, x0, P0, fixi, Z, Rm, keep, smoother,
+                                       gate=gate)
     dt = float(np.median(np.diff(t)))
     names = STATE_NAMES + (SCALE_NAMES if estimate_scale else ())
     return FusionResult(state_names=names, times=nodes[kept.store], t_gps=t_gps,
-                        **filter_outputs(kept, nu, S_all, batched), P0=P0,
+                        **filter_outputs(kept, nu, S_all, used, batched), P0=P0,
                         Q=nominal_q(n, sa2, 1.0 / (1.0 + cal.scale), dt), R=Rm, noise_var=sa2,
-                        estimate_scale=estimate_scale, dt=dt)
+                        estimate_scale=estimate_scale, dt=dt, gate_alpha=gate_alpha)
 
 
 class LinearStep:

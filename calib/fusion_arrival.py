@@ -24,8 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from calib.calibration import Calibration
+from calib.fix_check import FreeRun, check_fixes, check_gyro, check_heading, heading_offset
 from calib.fusion import FusionResult, fuse
 from calib.fusion_turning import TurningFusionResult, fuse_turning
+from calib.innovation_check import CONSISTENCY_ALPHA, GATE_ALPHA, NIS_WINDOW, Consistency
 from calib.io import Acel, Fixes
 from calib.region import ArrivalRegion, Decision, arrival_region, stated_noise_var
 from calib.results import ResultMixin
@@ -48,6 +50,8 @@ class FusedArrival(ResultMixin):
     decision : :class:`calib.region.Decision` around the filtered final position.
     fixes_used : fixes inside the vehicle run.  fixes_total : fixes in the file.
     p0_std : σ of the initial position per axis, m.  v0_std : of the velocity, m/s.
+    consistency : :class:`calib.innovation_check.Consistency`, the windowed NIS verdict and
+        the gate's count; when not consistent, ``decision`` is withheld (:data:`NO_REGION`).
     """
 
     _TITLE = "Fused arrival"
@@ -60,11 +64,22 @@ class FusedArrival(ResultMixin):
     fixes_total: int
     p0_std: float = 0.0
     v0_std: float = 0.0
+    consistency: Consistency | None = None
+
+    @property
+    def consistent(self) -> bool:
+        """The filter's inputs passed the windowed NIS test (True when not checked)."""
+        return self.consistency is None or self.consistency.consistent
 
     def to_dict(self) -> dict:
-        """The ``fuse --json`` object: ``fusion``, ``decision``, ``units``."""
-        return {"fusion": self.fusion.to_dict(), "decision": self.decision.to_dict(),
-                "units": {f"decision.{k}": u for k, u in Decision.UNITS.items()}}
+        """The ``fuse --json`` object: ``consistent``, ``consistency``, ``fusion``,
+        ``decision``, ``units``."""
+        d = {"consistent": self.consistent, "fusion": self.fusion.to_dict(),
+             "decision": self.decision.to_dict(),
+             "units": {f"decision.{k}": u for k, u in Decision.UNITS.items()}}
+        if self.consistency is not None:
+            d["consistency"] = self.consistency.to_dict()
+        return d
 
     def to_state(self) -> dict:
         """:meth:`to_dict` plus what an exact rebuild needs."""
@@ -76,18 +91,28 @@ class FusedArrival(ResultMixin):
     def from_dict(cls, d: dict) -> FusedArrival:
         """Rebuild from :meth:`to_state` (exact)."""
         kind = TurningFusionResult if "gyro_var" in d["fusion"] else FusionResult
+        cons = d.get("consistency")
         return cls(kind.from_dict(d["fusion"]), Decision.from_dict(d["decision"]),
                    int(d["fixes_used"]), int(d["fixes_total"]), float(d["p0_std"]),
-                   float(d["v0_std"]))
+                   float(d["v0_std"]), None if cons is None else Consistency.from_dict(cons))
 
     def summary(self) -> str:
-        return "\n".join([
-            self.fusion.summary(),
+        fused = self.fusion.summary()
+        if not self.consistent:  # its stated σ is not to be trusted: say so where it is
+            fused = fused.replace(", std (", ", stated std (untrustworthy) (", 1)
+        lines = [
+            fused,
             f"initial uncertainty: σ_p0 = {self.p0_std:g} m, σ_v0 = {self.v0_std:g} m/s per "
             "axis (--p0-std/--v0-std; datos.txt states P0 and V0 without uncertainty)",
-            f"decision: {self.decision.letter or 'undecided'} ({self.decision.reason}); fixes "
-            f"used: {self.fixes_used} of {self.fixes_total}",
-        ])
+        ]
+        if self.consistency is not None:
+            lines.append(self.consistency.verdict())
+        letter = self.decision.letter or ("none" if not self.consistent else "undecided")
+        rej = int(np.sum(~np.asarray(self.fusion.fix_used, dtype=bool)))
+        lines.append(f"decision: {letter} ({self.decision.reason}); fixes used: "
+                     f"{self.fixes_used - rej} of {self.fixes_total}"
+                     + (f" ({rej} rejected by the gate)" if rej else ""))
+        return "\n".join(lines)
 
 
 def fixes_inside(acel: Acel, fixes: Fixes) -> np.ndarray:
@@ -101,12 +126,28 @@ def fixes_inside(acel: Acel, fixes: Fixes) -> np.ndarray:
     return inside
 
 
+NO_REGION = "no region: the filter's inputs are inconsistent"
+"""The decision's reason when the windowed NIS test fails (no region, no letter)."""
+
+
 def fuse_arrival(acel: Acel, fixes: Fixes, calibration: Calibration,
                  candidates: dict[str, np.ndarray], *, p0, v0, level: float, noise_var=None,
                  sigma_pos: float = 3.0, sigma_vel: float | None = None, p0_std: float = 0.0,
                  v0_std: float = 0.0, gyro_var: float = 0.005 ** 2, psi0: float = 0.0,
-                 psi0_var: float = 0.0, smoother: bool = False) -> FusedArrival:
-    """Fuse the vehicle run with the fixes inside it and decide where it arrived.
+                 psi0_var: float = 0.0, smoother: bool = False,
+                 gate_alpha: float = GATE_ALPHA, consistency_alpha: float = CONSISTENCY_ALPHA,
+                 nis_window: int = NIS_WINDOW, check_inputs: bool = True) -> FusedArrival:
+    """Fuse the vehicle run with the fixes inside it and decide where it arrived, doubting
+    the inputs (issue 23):
+
+    1. a turning run's gyro must be plausible (:func:`calib.fix_check.check_gyro`) and
+       ``psi0`` a heading within one turn (:func:`calib.fix_check.check_heading`);
+    2. with ``check_inputs``, the fixes must agree with the dead-reckoned path
+       (:func:`calib.fix_check.check_fixes`: km, swapped columns, time or constant offset,
+       a gyro in °/s named in one line, :class:`calib.input_rules.DataError`);
+    3. the filter runs with the innovation gate at ``gate_alpha``;
+    4. its windowed NIS is tested (:class:`calib.innovation_check.Consistency`); when
+       inconsistent, no region and no decision (:data:`NO_REGION`).
 
     Parameters
     ----------
@@ -122,26 +163,74 @@ def fuse_arrival(acel: Acel, fixes: Fixes, calibration: Calibration,
     gyro_var (rad/s)², psi0 rad, psi0_var rad² : a turning run's gyro noise and initial
         heading (ignored otherwise).
     smoother : also run the RTS smoother.
+    gate_alpha : the innovation gate's α (0: no gate; :mod:`calib.innovation_check`).
+    consistency_alpha : false-alarm rate of the consistency verdict.  nis_window : fixes
+        per window of the NIS test.
+    check_inputs : compare the fixes with the dead-reckoned path first (step 2).
     """
     inside = fixes_inside(acel, fixes)
     nv = stated_noise_var(noise_var, calibration)
     common = dict(calibration=calibration, noise_var=nv, sigma_pos=sigma_pos, p0=p0, v0=v0,
-                  p0_cov=p0_std ** 2, v0_cov=v0_std ** 2, smoother=smoother)
-    if acel.gyro is not None:  # a turning vehicle: the extended filter
+                  p0_cov=p0_std ** 2, v0_cov=v0_std ** 2)
+    t_gps, pos = fixes.t_gps[inside], fixes.pos[inside]
+    turning = acel.gyro is not None
+    if turning:  # a turning vehicle: the extended filter
         if sigma_vel is not None:
             raise ValueError("the turning filter (readings with a gyro) uses position fixes "
                              "only: give no velocity-fix σ")
-        res: FusionResult = fuse_turning(acel.t, acel.aerr, acel.gyro, fixes.t_gps[inside],
-                                         fixes.pos[inside], gyro_var=gyro_var, psi0=psi0,
-                                         psi0_var=psi0_var, **common)
+        check_gyro(acel.gyro, acel.source)
+        psi0 = check_heading(psi0)
+
+        def run(gyro=acel.gyro, **kw) -> FusionResult:
+            return fuse_turning(acel.t, acel.aerr, gyro, t_gps, pos, gyro_var=gyro_var,
+                                psi0=psi0, psi0_var=psi0_var, **common, **kw)
     else:
         vel = fixes.vel[inside] if fixes.vel is not None and sigma_vel is not None else None
-        res = fuse(acel.t, acel.aerr, fixes.t_gps[inside], fixes.pos[inside], vel_gps=vel,
-                   sigma_vel=sigma_vel if vel is not None else None, **common)
-    est = np.asarray(res.final_position, dtype=float).reshape(2)
-    cov = np.asarray(res.final_position_cov, dtype=float).reshape(2, 2)
-    return FusedArrival(res, Decision.at(est, cov, candidates, level), int(inside.sum()),
-                        int(inside.size), float(p0_std), float(v0_std))
+
+        def run(**kw) -> FusionResult:
+            return fuse(acel.t, acel.aerr, t_gps, pos, vel_gps=vel,
+                        sigma_vel=sigma_vel if vel is not None else None, **common, **kw)
+    if check_inputs:
+        _check_inputs(run, pos, fixes.source, acel, psi0)
+    res = run(smoother=smoother, gate_alpha=gate_alpha)
+    cons = Consistency.of(res, alpha=consistency_alpha, window=nis_window)
+    if cons.consistent:
+        est = np.asarray(res.final_position, dtype=float).reshape(2)
+        cov = np.asarray(res.final_position_cov, dtype=float).reshape(2, 2)
+        decision = Decision.at(est, cov, candidates, level)
+    else:
+        decision = Decision.withheld(candidates, level, NO_REGION)
+    return FusedArrival(res, decision, int(inside.sum()), int(inside.size), float(p0_std),
+                        float(v0_std), cons)
+
+
+def _check_inputs(run, pos: np.ndarray, source: str, acel: Acel, psi0: float) -> None:
+    """Step 2 of :func:`fuse_arrival`: the free run (every fix rejected: the dead reckoning
+    and each fix's innovation against it) and :func:`calib.fix_check.check_fixes`; for a
+    turning run the gyro read in °/s (or rad read as °) and an initial heading off by a
+    constant (:func:`calib.fix_check.heading_offset`) are more alternatives."""
+    def free(**kw) -> FreeRun:
+        return FreeRun.of(run(gate_alpha=1.0, keep="all", smoother=False, **kw), pos)
+
+    if acel.gyro is None:
+        check_fixes(free(), source, suspects=", or, for a vehicle that turns, acel.mat needs "
+                                              "its 'gyro'")
+        return
+
+    base = free()
+
+    def gyro_units() -> list[tuple[float, str]]:
+        out = [heading_offset(base, psi0, "psi0")]
+        for f, what in ((np.pi / 180.0, "looks like °/s: give rad/s (multiply by π/180)"),
+                        (180.0 / np.pi, "looks like ° read as rad: give rad/s (multiply by "
+                                        "180/π)")):
+            out.append((free(gyro=acel.gyro * f).median_nis(),
+                        f"{acel.source}: 'gyro' {what}; the path from it disagrees with the "
+                        "fixes, converted it agrees"))
+        return out
+
+    check_fixes(base, source, alternatives=gyro_units,
+                suspects=", the gyro ('gyro', rad/s) and the initial heading psi0 (rad)")
 
 
 def dead_reckoning_region(acel: Acel, calibration: Calibration,
@@ -165,4 +254,5 @@ def dead_reckoning_region(acel: Acel, calibration: Calibration,
     return traj, arrival_region(traj, calibration, candidates, nv, level)
 
 
-__all__ = ["FusedArrival", "dead_reckoning_region", "fixes_inside", "fuse_arrival"]
+__all__ = ["FusedArrival", "NO_REGION", "dead_reckoning_region", "fixes_inside",
+           "fuse_arrival"]

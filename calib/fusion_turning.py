@@ -69,6 +69,7 @@ from calib.kalman import (
     check_times,
     filter_outputs,
     fix_measurements,
+    gate_threshold,
     initial_cov,
     nominal_q,
     run_filter,
@@ -141,7 +142,7 @@ class TurningFusionResult(FusionResult):
 def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, noise_var, gyro_var, sigma_pos, p0, v0,
                  calibration: CalibrationLike | None = None, bias=None, scale=None,
                  cal_cov=None, psi0=0.0, p0_cov=0.0, v0_cov=0.0, psi0_var=0.0,
-                 smoother=False, keep="all") -> TurningFusionResult:
+                 smoother=False, keep="all", gate_alpha: float = 0.0) -> TurningFusionResult:
     """Extended Kalman filter (and RTS smoother) of a turning vehicle (module docstring).
 
     Parameters
@@ -160,6 +161,7 @@ def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, noise_var, gyro_var, sigma_p
         m², (m/s)², and psi0_var, rad²: its covariance.
     smoother : also run the extended RTS smoother.  keep : "all" or "fixes" (start, fixes,
         end), as :func:`calib.fusion.fuse`.
+    gate_alpha : the innovation gate's α, as :func:`calib.fusion.fuse` (0: no gate).
 
     Returns
     -------
@@ -195,14 +197,15 @@ def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, noise_var, gyro_var, sigma_p
     fixi = np.full(N, -1)
     fixi[k_fix] = np.arange(t_gps.shape[0])
     step = TurningStep(t, acc, w, cal, sa2, sg2)
-    kept, nu, S_all = run_filter(step, x0, P0, fixi, Z, Rm, keep, smoother)
+    kept, nu, S_all, used = run_filter(step, x0, P0, fixi, Z, Rm, keep, smoother,
+                                       gate=gate_threshold(gate_alpha, Z.shape[-1]))
     dt = float(np.median(np.diff(t)))
     Qnom = nominal_q(n, sa2, step.c, dt)
     Qnom[4, 4] = sg2 * dt * dt
     return TurningFusionResult(state_names=TURN_STATE_NAMES, times=t[kept.store], t_gps=t_gps,
-                               **filter_outputs(kept, nu, S_all, batched), P0=P0, Q=Qnom,
-                               R=Rm, noise_var=sa2, estimate_scale=False, dt=dt,
-                               gyro_var=sg2)
+                               **filter_outputs(kept, nu, S_all, used, batched), P0=P0,
+                               Q=Qnom, R=Rm, noise_var=sa2, estimate_scale=False, dt=dt,
+                               gyro_var=sg2, gate_alpha=gate_alpha)
 
 
 class TurningStep:

@@ -14,6 +14,12 @@ inverse)::
     ν = z - H x⁻,   S = H P⁻ Hᵀ + R,   K = P⁻ Hᵀ S⁻¹,
     x⁺ = x⁻ + K ν,  P⁺ = (I - K H) P⁻ (I - K H)ᵀ + K R Kᵀ
 
+Innovation gate (issue 23): a fix whose normalized innovation squared ``NIS = νᵀ S⁻¹ ν``
+reaches ``c = χ²_d⁻¹(1 - α)`` (:func:`gate_threshold`) is *rejected*: not used in the update
+(``x⁺ = x⁻``, ``P⁺ = P⁻``), its ν and S still recorded. Under a right model NIS ~ χ²(d), so a
+good fix is rejected with probability exactly α. ``α = 0``: no gate (c = ∞); ``α = 1``: every
+fix rejected (c = 0), the free run: the dead reckoning with each fix's innovation against it.
+
 Rauch–Tung–Striebel smoother, backwards over the stored nodes (``Φ_j`` the product of the
 step Jacobians between stored nodes j and j+1; exact on any subset of nodes that includes
 every fix, since no information enters between them; with the Jacobians at the filtered
@@ -32,6 +38,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
+from scipy import stats
 
 CAL_ORDER = ("bias_x", "scale_x", "bias_y", "scale_y")
 """Order of the calibration covariance (:class:`calib.calibration.Calibration.cov`)."""
@@ -142,16 +149,29 @@ def initial_cov(n: int, p0_cov, v0_cov, blocks: dict[int, np.ndarray]) -> np.nda
         P0[i:i + b.shape[0], i:i + b.shape[0]] = b
     return P0
 
+def gate_threshold(alpha: float, d: int) -> float:
+    """The innovation gate ``c = χ²_d⁻¹(1 - α)`` (module docstring): a fix is used when its
+    NIS is below c. ``alpha`` in [0, 1] (0: no gate, c = ∞; 1: no fix used, c = 0)."""
+    alpha = float(alpha)
+    if not 0.0 <= alpha <= 1.0:
+        raise ValueError(f"the gate's alpha must be in [0, 1], got {alpha!r}")
+    if alpha == 0.0:
+        return float("inf")
+    return float(stats.chi2.isf(alpha, d)) if alpha < 1.0 else 0.0
+
+
 def run_filter(step, x0: np.ndarray, P0: np.ndarray, fixi: np.ndarray, Z: np.ndarray,
-               Rm: np.ndarray, keep: str, smoother: bool
-               ) -> tuple[NodeStore, np.ndarray, np.ndarray]:
+               Rm: np.ndarray, keep: str, smoother: bool, *, gate: float = float("inf")
+               ) -> tuple[NodeStore, np.ndarray, np.ndarray, np.ndarray]:
     """The predict/update loop both filters share, over K nodes for R runs at once.
 
     ``step(k, x, F, Qk)`` predicts from node k-1 to node k (:class:`LinearStep`, the turning
     filter's step); then ``P⁻ = F P Fᵀ + Qk``; at a node with a fix (``fixi[k] ≥ 0``) the
     Joseph-form update :func:`kalman_update` with ``H = [I_d 0]`` (the fixes measure the
-    first d states: positions, then velocities) and ``Rm``. Returns the stored nodes
-    (:class:`NodeStore`), the innovations (R, M, d) and their covariances (R, M, d, d).
+    first d states: positions, then velocities) and ``Rm``, unless the fix's NIS reaches
+    ``gate`` (:func:`gate_threshold`): then the prior is kept. Returns the stored nodes
+    (:class:`NodeStore`), the innovations (R, M, d), their covariances (R, M, d, d) and which
+    fixes were used (R, M) bool.
     """
     Rn, M, d = Z.shape
     n = x0.shape[0]
@@ -162,6 +182,7 @@ def run_filter(step, x0: np.ndarray, P0: np.ndarray, fixi: np.ndarray, Z: np.nda
     P = np.broadcast_to(P0, (Rn, n, n)).copy()
     nu = np.empty((Rn, M, d))
     S_all = np.empty((Rn, M, d, d))
+    used = np.zeros((Rn, M), dtype=bool)
     F = kept.identity()
     Qk = np.zeros((Rn, n, n))
     for k in range(fixi.shape[0]):
@@ -172,17 +193,25 @@ def run_filter(step, x0: np.ndarray, P0: np.ndarray, fixi: np.ndarray, Z: np.nda
         xp, Pp = x.copy(), P.copy()
         m = fixi[k]
         if m >= 0:
-            x, P, nu[:, m], S_all[:, m] = kalman_update(x, P, Z[:, m, :], H, Rm)
+            xu, Pu, nu[:, m], S_all[:, m] = kalman_update(x, P, Z[:, m, :], H, Rm)
+            nis = np.einsum("ri,ri->r", nu[:, m],
+                            np.linalg.solve(S_all[:, m], nu[:, m, :, None])[..., 0])
+            ok = nis < gate  # a rejected fix leaves the prior as it is
+            used[:, m] = ok
+            x = np.where(ok[:, None], xu, x)
+            P = np.where(ok[:, None, None], Pu, P)
         kept.keep(k, x, P, xp, Pp)
-    return kept, nu, S_all
+    return kept, nu, S_all, used
 
 
-def filter_outputs(kept: NodeStore, nu: np.ndarray, S_all: np.ndarray, batched: bool) -> dict:
-    """The per-node fields of a :class:`FusionResult` (filtered, innovations, smoothed),
-    without the run axis for a single run."""
+def filter_outputs(kept: NodeStore, nu: np.ndarray, S_all: np.ndarray, used: np.ndarray,
+                   batched: bool) -> dict:
+    """The per-node fields of a :class:`FusionResult` (filtered, innovations, fixes used,
+    smoothed), without the run axis for a single run."""
     xsm, Psm = kept.smoothed()
     out = {"estimates": kept.x_f, "covariances": kept.P_f, "innovations": nu,
-           "innovation_covs": S_all, "smoothed": xsm, "smoothed_covariances": Psm}
+           "innovation_covs": S_all, "fix_used": used, "smoothed": xsm,
+           "smoothed_covariances": Psm}
     if not batched:
         out = {k: v[0] for k, v in out.items()}
     return {**out, "is_fix": kept.is_fix}
@@ -314,5 +343,5 @@ def rts(x_f, P_f, x_p, P_p, Phi):
 
 
 __all__ = ["CAL_ORDER", "CalibrationLike", "CalibrationPrior", "NodeStore", "as_runs",
-           "check_times", "cov2", "filter_outputs", "fix_measurements", "initial_cov",
-           "kalman_update", "nominal_q", "rts", "run_filter"]
+           "check_times", "cov2", "filter_outputs", "fix_measurements", "gate_threshold",
+           "initial_cov", "kalman_update", "nominal_q", "rts", "run_filter"]

@@ -231,6 +231,13 @@ class Decision(ResultMixin):
                    {k: float(np.sqrt(v)) for k, v in d2.items()},
                    {k: float(np.exp(-0.5 * v)) for k, v in d2.items()}, inside, letter, reason)
 
+    @classmethod
+    def withheld(cls, candidates: dict, level: float, reason: str) -> Decision:
+        """No region and no decision: the estimate is not to be trusted (``reason`` says why,
+        e.g. "no region: the filter's inputs are inconsistent"); no distances either."""
+        return cls(float(level), {k: np.asarray(v, dtype=float) for k, v in candidates.items()},
+                   {}, {}, (), None, reason)
+
     UNITS = {"level": "1", "mahalanobis.*": "1"}
     """Units of :meth:`to_dict` (the ``decision`` object of ``fuse --json``)."""
 

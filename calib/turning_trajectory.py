@@ -43,6 +43,7 @@ import numpy as np
 
 from calib.correct import correct
 from calib.fusion_turning import body_to_world, fuse_turning
+from calib.input_rules import DataError
 from calib.region import Decision, Ellipse
 from calib.results import ResultMixin
 from calib.trajectory import Integrator, check_integrator, cumulative_integral, integrate_twice
@@ -170,6 +171,18 @@ def turning_dead_reckoning(t, acc_m, gyro, bias, scale, p0, v0, *, psi0: float =
     return TurningTrajectory(t=t, heading=psi, acc_body=a_b, acc_world=a_w, pos=pos, vel=vel,
                              p0=p0, v0=v0, psi0=psi0, bias=bias, scale=scale,
                              integrator=integrator)
+
+
+def refuse_turning(acel, command: str) -> None:
+    """The course vehicle's analyses (``trajectory``, ``nmin``: :mod:`calib.trajectory`,
+    world-frame readings, no rotation) refuse a turning run: an ``acel`` (:class:`calib.io.Acel`)
+    with a ``gyro`` holds body-frame readings, and integrating them as world accelerations
+    puts the arrival hundreds of metres off. DataError naming the file and what to use."""
+    if getattr(acel, "gyro", None) is not None:
+        raise DataError(f"{acel.source}: a turning run (it has 'gyro': body-frame readings); "
+                        f"{command} models the course vehicle without rotation and does not "
+                        "model turning: use 'tiltbench fuse' (the extended filter, with the "
+                        "turning dead reckoning in its --plot)")
 
 
 def heading_error(t, psi, t_ref, psi_ref) -> np.ndarray:
@@ -310,4 +323,4 @@ def turning_arrival_region(traj: TurningTrajectory, acc_m, gyro, *, cal_cov, noi
 
 
 __all__ = ["TurningRegion", "TurningTrajectory", "dead_reckoning_path", "heading_error",
-           "turning_arrival_region", "turning_dead_reckoning"]
+           "refuse_turning", "turning_arrival_region", "turning_dead_reckoning"]

@@ -84,13 +84,21 @@ def test_a_calibration_or_its_parts_give_the_same_filter(cal):
 def test_fused_arrival_decides_on_the_filtered_end_and_round_trips(cal):
     t = np.arange(1001) * 0.01
     acel = Acel(t, np.tile(cal.bias, (1001, 1)))  # corrected: at rest
-    fixes = Fixes(np.array([-1.0, 2.0, 5.0, 10.0]), np.array([[0.0, 0.0], [2.0, 6.0],
-                                                             [5.0, 15.0], [10.0, 30.0]]))
+    exact = np.array([[0.0, 0.0], [2.0, 6.0], [5.0, 15.0], [10.0, 30.0]])
+    # fixes with the stated σ = 1 m of noise (noise-free fixes are too good to be true:
+    # their NIS sum is below its band, below)
+    noisy = exact + np.random.default_rng(4).normal(0.0, 1.0, exact.shape)
+    fixes = Fixes(np.array([-1.0, 2.0, 5.0, 10.0]), noisy)
     res = fuse_arrival(acel, fixes, cal, CANDS, p0=[0, 0], v0=[1, 3], level=0.95,
                        sigma_pos=1.0)
     assert (res.fixes_used, res.fixes_total) == (3, 4)  # the fix before t_0 is left out
+    assert res.consistent
     end = np.asarray(res.fusion.final_position)
     assert res.decision == Decision.at(end, res.fusion.final_position_cov, CANDS, 0.95)
+    perfect = fuse_arrival(acel, Fixes(fixes.t_gps, exact), cal, CANDS, p0=[0, 0], v0=[1, 3],
+                           level=0.95, sigma_pos=1.0)
+    assert not perfect.consistent and perfect.decision.letter is None
+    assert perfect.consistency.failing_windows[0]["side"] == "low"
     assert FusedArrival.from_dict(json.loads(json.dumps(res.to_state()))) == res
     assert "fixes used: 3 of 4" in res.summary()
     traj, region = dead_reckoning_region(acel, cal, CANDS, p0=[0, 0], v0=[1, 3], level=0.95)

@@ -224,3 +224,28 @@ def test_cli_generate_turning_then_fuse(capsys, tmp_path):
         assert word in text, word
     assert main(["fuse", *map(str, files), "--gps-vel-sigma", "0.1"]) == 2
     assert "position fixes only" in capsys.readouterr().err
+
+
+def test_gate_and_consistency_rates_of_the_extended_filter(nominal):
+    """On the same 500 right runs, the extended filter's innovation gate rejects at its α_g
+    and the windowed NIS verdict fires at its α, each within the binomial band
+    |p̂ − p| ≤ 4·sqrt(p(1 − p)/n) (n = R·M fixes, or R runs; calib.innovation_check: exact
+    for a linear filter, to first order for this one)."""
+    from calib.innovation_check import windowed_nis
+
+    data, res = nominal
+
+    def within(hits, n, p):
+        return abs(hits / n - p) <= 4.0 * np.sqrt(p * (1.0 - p) / n)
+
+    for alpha in (0.01, 0.2):  # the nominal run has no gate: plain χ²(2k) windows
+        w = windowed_nis(res.nis(), d=2, gate_alpha=0.0, alpha=alpha)
+        assert within(int(np.sum(~w["consistent"])), R_RUNS, alpha), alpha
+    gated = fuse_turning(data["t"], data["acc_m"], data["gyro"], data["t_gps"], data["fixes"],
+                         bias=BIAS_HAT, scale=SCALE_HAT, cal_cov=CAL_COV, noise_var=SIGMA_A2,
+                         gyro_var=SIGMA_G ** 2, sigma_pos=SIGMA_POS, p0=P0_HAT, v0=V0_HAT,
+                         psi0=0.0, p0_cov=P0_COV, v0_cov=V0_COV, psi0_var=PSI0_VAR,
+                         keep="fixes", gate_alpha=0.01)
+    assert within(int(np.sum(~gated.fix_used)), gated.fix_used.size, 0.01)
+    w = windowed_nis(gated.nis(), d=2, gate_alpha=0.01, alpha=0.2)
+    assert within(int(np.sum(~w["consistent"])), R_RUNS, 0.2)

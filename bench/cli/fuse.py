@@ -4,7 +4,8 @@
                    (--calibration cal.json | --ensayo ensayo.mat) [--datos datos.txt]
                    [--gps-sigma M] [--gps-vel-sigma MPS] [--p0-std M] [--v0-std MPS]
                    [--smoother] [--level L] [--json] [--plot F.png] [--rrd F.rrd]
-                   [--truth truth.json] [--force]
+                   [--truth truth.json] [--gate-alpha A] [--consistency-alpha A]
+                   [--nis-window K] [--force]
 
 The calibration comes from ``--calibration`` or is fitted on ``--ensayo`` (as
 ``trajectory``); P0, V0 and the noise variances come from ``--datos`` (else the course
@@ -20,6 +21,13 @@ the stated noise and the calibration covariance, R from the receiver's σ, P0 fr
 calibration covariance and the initial position/velocity σ of ``--p0-std`` / ``--v0-std``
 (default 0: the course gives P0 and V0 exactly; datos.txt states no uncertainty), no
 tuning. The arrival decision uses the fused final position and its covariance.
+
+A filter that doubts its inputs (issue 23, docs/fusion.md "Doubting the inputs"): the fixes
+are first compared with the dead-reckoned path (km, swapped columns, a time or constant
+offset, a gyro in °/s: one line, exit 2); a fix whose NIS reaches χ²₂⁻¹(1 − ``--gate-alpha``)
+is rejected (counted and shown); the windowed NIS is tested at ``--consistency-alpha``. An
+inconsistent run prints its result with ``consistent: false`` and no region, and exits with
+**3** (:data:`EXIT_INCONSISTENT`), distinct from an input error (2).
 """
 
 from __future__ import annotations
@@ -33,8 +41,18 @@ from bench.cli.options import (
     check_initial_state,
     check_level,
     check_positive,
+    integer,
 )
 from bench.cli.output import check_finite, print_files, print_json, refuse_overwrite
+
+EXIT_INCONSISTENT = 3
+"""Exit status of a fused run whose windowed NIS is out of its band (no region printed)."""
+
+GATE_ALPHA = 0.001  # = calib.innovation_check.GATE_ALPHA (not imported: start-up time)
+CONSISTENCY_ALPHA = 0.01  # = calib.innovation_check.CONSISTENCY_ALPHA
+NIS_WINDOW = 10  # = calib.innovation_check.NIS_WINDOW
+NIS_WINDOW_MAX = 1000  # = calib.innovation_check.NIS_WINDOW_MAX
+CONSISTENCY_ALPHA_MIN = 1e-6  # = calib.innovation_check.ALPHA_MIN
 
 
 def _check_nonnegative(value: float, name: str) -> float:
@@ -45,6 +63,21 @@ def _check_nonnegative(value: float, name: str) -> float:
     return float(value)
 
 
+def _check_alpha(value: float, name: str, *, lowest: float) -> float:
+    """A rate in [lowest, 1) (the gate: 0 allowed, no gate; the consistency: ≥ 1e-6)."""
+    import math
+
+    if not (math.isfinite(value) and lowest <= value < 1.0):
+        raise OptionError(f"{name} must be in [{lowest:g}, 1), e.g. 0.01, got {value:g}")
+    return float(value)
+
+
+def _check_window(value: int) -> int:
+    if not 1 <= value <= NIS_WINDOW_MAX:
+        raise OptionError(f"--nis-window must be 1 to {NIS_WINDOW_MAX} fixes, got {value}")
+    return int(value)
+
+
 def _cmd_fuse(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
     from calib.calibration import calibrate
@@ -52,6 +85,10 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     from calib.io import read_gps
 
     level = check_level(args.level)
+    doubt = dict(gate_alpha=_check_alpha(args.gate_alpha, "--gate-alpha", lowest=0.0),
+                 consistency_alpha=_check_alpha(args.consistency_alpha, "--consistency-alpha",
+                                                lowest=CONSISTENCY_ALPHA_MIN),
+                 nis_window=_check_window(args.nis_window))
     check_initial_state(args)
     sigma_pos = check_positive(args.gps_sigma, "--gps-sigma")
     p0_std = _check_nonnegative(args.p0_std, "--p0-std")
@@ -70,21 +107,24 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
     initial = dict(p0=p0, v0=v0, level=level, noise_var=nv, gyro_var=args.gyro_sigma ** 2,
                    psi0=float(args.psi0), psi0_var=float(args.psi0_sigma) ** 2,
                    p0_std=p0_std, v0_std=v0_std)
+    if args.plot or args.rrd:  # a malformed truth file: refused before any work
+        truth, true_path, true_heading = _truth(args)
     res = fuse_arrival(acel, fixes, cal, candidates, sigma_pos=sigma_pos, sigma_vel=sigma_vel,
-                       smoother=args.smoother, **initial)
+                       smoother=args.smoother, **initial, **doubt)
     out = res.to_dict()
     check_finite(out, "the result")
+    status = 0 if res.consistent else EXIT_INCONSISTENT
     if args.plot or args.rrd:
         traj, region = dead_reckoning_region(acel, cal, candidates, **initial)
-        truth, true_path, true_heading = _truth(args)
         # the true path (truth.json beside the data) on the figure; a turning run: its heading
         extra = {"true_heading": true_heading} if turning else {}
-    fused_pos = fixes.pos[fixes_inside(acel, fixes)]  # the fixes the filter used
+    fused_pos = fixes.pos[fixes_inside(acel, fixes)]  # the fixes the filter saw
     if args.plot:
         from bench.figures.fusion import save_fusion_plot
 
         save_fusion_plot(args.plot, traj, region, res.fusion, fused_pos, level,
-                         res.decision.letter, force=args.force, true_path=true_path, **extra)
+                         res.decision.letter, force=args.force, true_path=true_path,
+                         consistency=res.consistency, **extra)
     if args.rrd:
         from bench.record.fusion import record_fusion
 
@@ -92,12 +132,12 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
                       force=args.force, truth=truth, true_path=true_path, **extra)
     if args.json:
         print_json(out)
-        return 0
+        return status
     print(res.summary())
-    if (args.plot or args.rrd) and turning:
+    if (args.plot or args.rrd) and turning and res.consistent:
         print(region.summary())
     print_files([args.plot, args.rrd])
-    return 0
+    return status
 
 
 def _check_turning_options(args: argparse.Namespace) -> None:
@@ -106,31 +146,34 @@ def _check_turning_options(args: argparse.Namespace) -> None:
     if args.gps_vel_sigma is not None:
         raise OptionError("--gps-vel-sigma: the turning filter (acel.mat with 'gyro') uses "
                           "position fixes only")
+    import math
+
     check_positive(args.gyro_sigma, "--gyro-sigma")
-    if not float(args.psi0_sigma) >= 0.0:
-        raise OptionError(f"--psi0-sigma must be >= 0 rad, got {args.psi0_sigma}")
+    if not (math.isfinite(args.psi0_sigma) and args.psi0_sigma >= 0.0):
+        raise OptionError(f"--psi0-sigma must be a finite number >= 0 rad, got "
+                          f"{args.psi0_sigma}")
+    if not math.isfinite(args.psi0):
+        raise OptionError(f"--psi0 must be a finite heading in rad, got {args.psi0}")
+    if abs(args.psi0) > 2 * math.pi:  # more than a turn: degrees, most likely
+        hint = (f" (degrees? {args.psi0:g}° = {math.radians(args.psi0):.6g} rad)"
+                if abs(args.psi0) <= 360 else "")
+        raise OptionError(f"--psi0 {args.psi0:g}: a heading in rad is within ±2π{hint}")
 
 
 def _truth(args: argparse.Namespace):
     """``--truth``, else ``truth.json`` beside ``--acel`` (None if absent): the manifest, its
-    true path (the samples every second, m) and, turning, its heading (t s, ψ rad)."""
+    true path (the samples every second, m) and, turning, its heading (t s, ψ rad); a
+    malformed file is one line (:func:`bench.fusion_truth.read_fusion_truth`)."""
     from pathlib import Path
 
-    import numpy as np
-
-    from bench.validate import load_json
+    from bench.fusion_truth import read_fusion_truth
 
     path = Path(args.truth) if args.truth else Path(args.acel).parent / "truth.json"
     if not path.exists():
         if args.truth:
             raise OptionError(f"--truth {args.truth}: file not found")
         return None, None, None
-    manifest = load_json(path, "truth")
-    samples = manifest.get("vehicle", {}).get("trajectory", {}).get("samples", {})
-    pos, psi, ts = samples.get("pos"), samples.get("heading"), samples.get("t")
-    heading = (None if psi is None or ts is None
-               else (np.asarray(ts, dtype=float), np.asarray(psi, dtype=float)))
-    return manifest, None if pos is None else np.asarray(pos, dtype=float), heading
+    return read_fusion_truth(path)
 
 
 def register(sub) -> None:
@@ -166,5 +209,14 @@ def register(sub) -> None:
                                  "the heading of a turning run (docs/recordings.md)")
     p.add_argument("--truth", help="truth.json for the recording and a turning run's figure "
                                    "(default: truth.json beside --acel, if there is one)")
+    p.add_argument("--gate-alpha", type=float, default=GATE_ALPHA, metavar="A",
+                   help="innovation gate: a fix with NIS >= chi2_d(1 - A) is rejected, a right "
+                        f"fix with probability A ({GATE_ALPHA:g}; 0: no gate)")
+    p.add_argument("--consistency-alpha", type=float, default=CONSISTENCY_ALPHA, metavar="A",
+                   help="false-alarm rate of the windowed NIS test of the whole run "
+                        f"({CONSISTENCY_ALPHA:g}); inconsistent: no region, exit 3")
+    p.add_argument("--nis-window", type=integer, default=NIS_WINDOW, metavar="K",
+                   help=f"fixes per window of the NIS test ({NIS_WINDOW}; at most "
+                        f"{NIS_WINDOW_MAX})")
     add_force(p, "an existing --plot / --rrd file")
     p.set_defaults(handler=_cmd_fuse)

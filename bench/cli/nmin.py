@@ -36,6 +36,7 @@ def _course_steps() -> str:
 
 def _cmd_nmin(args: argparse.Namespace) -> int:
     from calib.nmin import CONFIRM_N_MAX, analyze_nmin  # start-up time of `tiltbench --help`
+    from calib.turning_trajectory import refuse_turning
 
     level = check_level(args.level)
     check_initial_state(args)
@@ -59,6 +60,7 @@ def _cmd_nmin(args: argparse.Namespace) -> int:
                             f"--mc-n {max(mc_n)} --runs {args.runs}")
     cal = read_calibration_file(args)  # None: fit on --ensayo
     ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
+    refuse_turning(acel, "nmin")  # the turning check: its N would be for the wrong path
     prog = Progress("nmin", quiet=args.quiet)
     if cal is not None and ensayo is None and steps:
         prog(f"no --ensayo: the course subsampling (--steps) re-fits the calibration run's "

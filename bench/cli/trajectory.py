@@ -27,12 +27,14 @@ def _cmd_trajectory(args: argparse.Namespace) -> int:
     from calib.region import arrival_region
     from calib.trajectory import compute_trajectory
     from calib.trajectory_report import trajectory_tree
+    from calib.turning_trajectory import refuse_turning
 
     level = check_level(args.level)
     check_initial_state(args)
     refuse_overwrite([args.plot, args.rrd], args.force)
     cal = read_calibration_file(args)  # None: fit on --ensayo
     ensayo, acel, candidates, p0, v0, nv = read_course_inputs(args)
+    refuse_turning(acel, "trajectory")  # no silent answer hundreds of metres off
     if cal is None:
         cal = warnings_to_stderr(lambda: calibrate(ensayo, nv, args.method, args.g))
     traj = compute_trajectory(acel, cal, p0, v0, args.integrator)

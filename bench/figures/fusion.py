@@ -36,7 +36,8 @@ TRUE_COLOR = "black"
 def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | TurningRegion,
                   fused: FusionResult, fixes: np.ndarray, level: float, decision: str | None,
                   *, candidates: Mapping | None = None, true_path: np.ndarray | None = None,
-                  true_heading: tuple[np.ndarray, np.ndarray] | None = None) -> plt.Figure:
+                  true_heading: tuple[np.ndarray, np.ndarray] | None = None,
+                  consistency=None) -> plt.Figure:
     """Dead-reckoned (corrected) path and its level-L region, the fixes (m), the filtered
     path (and the RTS smoothed one when ``fused`` holds it), the fused level-L region of the
     arrival, the candidates, and the true path when ``true_path`` is given.
@@ -46,7 +47,12 @@ def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | 
 
     A turning run: ``region`` a :class:`~calib.turning_trajectory.TurningRegion`, optional
     ``true_path`` (n, 2) m and ``true_heading`` (t s, ψ rad); a heading panel below.
-    ``candidates`` default ``region.candidates``."""
+    ``candidates`` default ``region.candidates``.
+
+    The innovation gate's rejected fixes (``fused.fix_used`` False) are circled in red; with
+    a ``consistency`` (:class:`calib.innovation_check.Consistency`) that is not consistent the
+    fused region is not drawn and the title says so (no region: the inputs are
+    inconsistent)."""
     turning = isinstance(traj, TurningTrajectory)
     if turning and true_heading is not None:
         fig, (ax, axh, axe) = plt.subplots(3, 1, figsize=(8, 11), height_ratios=[3, 1.1, 1.1],
@@ -65,17 +71,23 @@ def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | 
                                   f"{region.decision or 'undecided'})" if turning else "")))
     est = np.asarray(fused.final_position, dtype=float).reshape(2)
     cov = np.asarray(fused.final_position_cov, dtype=float).reshape(2, 2)
-    ell = Ellipse.from_cov(est, cov, level)
-    ax.add_patch(Polygon(ell.boundary(), closed=True, facecolor=to_rgba(FUSED_COLOR, 0.35),
-                         edgecolor=FUSED_COLOR, lw=1.6, zorder=4,
-                         label=f"{100 * level:g} % region, fused "
-                               f"({ell.semi_axes[0]:.2g} × {ell.semi_axes[1]:.2g} m)"))
+    inconsistent = consistency is not None and not consistency.consistent
+    if not inconsistent:  # an inconsistent run has no region to draw
+        ell = Ellipse.from_cov(est, cov, level)
+        ax.add_patch(Polygon(ell.boundary(), closed=True, facecolor=to_rgba(FUSED_COLOR, 0.35),
+                             edgecolor=FUSED_COLOR, lw=1.6, zorder=4,
+                             label=f"{100 * level:g} % region, fused "
+                                   f"({ell.semi_axes[0]:.2g} × {ell.semi_axes[1]:.2g} m)"))
     dr = dead_reckoning_path(traj)
     ax.plot(dr[:, 0], dr[:, 1], color="tab:blue", lw=1.2, zorder=2,
             label="dead reckoning (corrected readings"
                   + (", gyro heading)" if turning else ")"))
     ax.plot(fixes[:, 0], fixes[:, 1], ".", color="0.35", ms=4, zorder=3,
             label=f"position fixes ({fixes.shape[0]})")
+    rejected = ~np.asarray(fused.fix_used, dtype=bool).reshape(-1)
+    if rejected.shape[0] == fixes.shape[0] and rejected.any():
+        ax.plot(fixes[rejected, 0], fixes[rejected, 1], "o", mfc="none", mec="tab:red", ms=9,
+                mew=1.5, zorder=4.5, label=f"rejected by the gate ({int(rejected.sum())})")
     path = np.asarray(fused.estimates)[..., :2].reshape(-1, 2)
     ax.plot(path[:, 0], path[:, 1], color=FUSED_COLOR, lw=1.6, zorder=3,
             label="Kalman filter")
@@ -98,7 +110,13 @@ def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | 
     ax.set_ylabel("y (m)")
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(True, alpha=0.3)
-    ax.set_title(f"Fusion with position fixes — decision: {decision or 'undecided'}")
+    if inconsistent:
+        ax.set_title("Fusion with position fixes — INCONSISTENT inputs: no region",
+                     color="tab:red")
+        ax.text(0.5, 0.02, consistency.verdict(), transform=ax.transAxes, ha="center",
+                va="bottom", fontsize=7, color="tab:red", wrap=True)
+    else:
+        ax.set_title(f"Fusion with position fixes — decision: {decision or 'undecided'}")
     ax.legend(loc="best", fontsize=8)
     if turning:
         _heading_panel(axh, traj, fused, true_heading)
