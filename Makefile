@@ -16,8 +16,10 @@ $(STAMP): pyproject.toml setup.py
 demo: $(STAMP)
 	$(BIN)/tiltbench demo --out demo-out --force
 
+# One pytest worker per core (pytest-xdist), at most 4: some tests start worker processes of
+# their own. `make test` = the README's test command (CI runs it through .ci/run).
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --maxprocesses 4
 
 lint: $(STAMP)
 	$(BIN)/ruff check bench calib validation tests benchmarks tools

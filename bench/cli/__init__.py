@@ -5,6 +5,8 @@ parser and sets ``handler``: a function of the parsed args that returns the exit
 Bad input (:class:`calib.io.DataError` and other ``ValueError``, ``OSError`` such as a
 directory given for a file) is one line on stderr and exit code 2; an existing output without
 ``--force`` (``FileExistsError`` from the library) says "pass --force to overwrite".
+Exit 1 is a graded FAIL (``validate``), exit 3 a result its own consistency check rejects
+(``fuse``: windowed NIS out of its band, docs/fusion.md).
 
 Start-up time: this package imports no domain module at import time (no numpy, scipy, mujoco,
 matplotlib or rerun); each handler imports what it needs when it runs, and option defaults
