@@ -224,7 +224,8 @@ class FusionResult(ResultMixin):
             f"{self.t_gps.shape[0]} fixes ({'position+velocity' if d == 4 else 'position'}), "
             f"scale {'estimated' if self.estimate_scale else 'fixed (folded into Q)'}"
             + (f", {self.n_runs} runs" if self.n_runs else ""),
-            f"  accelerometer noise σ_a² = {self.noise_var.tolist()} (m/s²)²",
+            "  accelerometer noise σ_a² = ["
+            + ", ".join(f"{v:.4g}" for v in self.noise_var) + "] (m/s²)²",
         ]
         lines += mat("P0", self.P0, "SI, products of state units")
         lines += mat("Q per IMU step", self.Q, "SI, products of state units")
