@@ -104,6 +104,23 @@ class Parser(argparse.ArgumentParser):
         """One line on stderr, exit code 2 (argparse prints the usage first: two lines)."""
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
+    def parse_known_args(self, args=None, namespace=None):
+        """argparse's, then :func:`check_number` on every ``type=float`` option given: NaN,
+        ±Inf and absurd magnitudes are refused here, in one line, for every command (each
+        sub-command's parser runs this on its own options)."""
+        namespace, extras = super().parse_known_args(args, namespace)
+        for action in self._actions:
+            value = getattr(namespace, action.dest, None)
+            if action.type is not float or not isinstance(value, float) or \
+                    value is action.default:
+                continue
+            name = max(action.option_strings, key=len, default=action.dest)
+            try:
+                check_number(value, name)
+            except OptionError as exc:
+                self.error(str(exc))
+        return namespace, extras
+
 
 # ---------------------------------------------------------------- option groups
 def add_json(p: argparse.ArgumentParser) -> None:
@@ -162,6 +179,7 @@ MAGNITUDE_LIMITS: dict[str, float] = {
     "--rate": 1e9,    # Hz (sizes are checked separately: bench.limits)
     "--duration": 1e9,  # s
     "--cycles": 1e9,
+    "--psi0": 1e6,    # rad: a heading (resolved to 1e-10 rad at this size)
 }
 """Largest magnitude of each numeric option (each has one meaning across commands)."""
 
@@ -173,6 +191,29 @@ LEVEL_MAX = 1.0 - 1e-12
 """Largest confidence level: the tail 1 − level must be resolved in double precision (its
 spacing near 1 is 1.1e-16; at 1e-12 the quantile is known to 1e-4 relative, and
 (1 + level)/2 of a two-sided quantile stays below 1, so the quantile is finite)."""
+
+
+STD_RANGE = (1e-50, 1e50)
+"""Standard deviations given as options, in their unit: 0 (where the command accepts it) or
+within this range, so that σ² stays within :data:`VARIANCE_RANGE`."""
+
+STD_OPTIONS = ("--gps-sigma", "--gps-vel-sigma", "--gyro-sigma", "--psi0-sigma", "--p0-std",
+               "--v0-std")
+"""Options that are standard deviations (checked against :data:`STD_RANGE`)."""
+
+
+def check_number(value: float, what: str) -> float:
+    """A number option ``what`` as given: finite, within :data:`MAGNITUDE_LIMITS` and, for
+    :data:`STD_OPTIONS`, 0 or within :data:`STD_RANGE` (signs and ranges of meaning, such as
+    a level in (0, 1), are the command's); :class:`OptionError` naming the option."""
+    if not math.isfinite(value):
+        raise OptionError(f"{what} must be a finite number, got {value}")
+    _check_magnitude(value, what)
+    lo, hi = STD_RANGE
+    if what in STD_OPTIONS and value != 0 and not lo <= abs(value) <= hi:
+        raise OptionError(f"{what} is a standard deviation: 0 or between {lo:g} and {hi:g} "
+                          f"(its square must stay finite and normal), got {value:g}")
+    return value
 
 
 def _check_magnitude(value: float, what: str) -> None:
