@@ -42,7 +42,7 @@ from bench.cli import (  # noqa: E402
     trajectory,
     validate,
 )
-from bench.cli.options import Parser, resolve_deferred  # noqa: E402
+from bench.cli.options import Parser, refuse_numbers, resolve_deferred  # noqa: E402
 from bench.cli.output import fit_columns  # noqa: E402
 
 COMMANDS = (generate, calibrate, trajectory, nmin, design, fuse, fusion_study, record, validate,
@@ -90,6 +90,7 @@ def main(argv: list[str] | None = None) -> int:
     warnings.showwarning = _warning_to_stderr
     try:
         with fit_columns(stdout=not getattr(args, "json", False)):  # lines ≤ 100 columns
+            refuse_numbers(args)  # NaN / Inf / absurd numbers, before any work
             return int(args.handler(args) or 0)
     except BrokenPipeError:  # output piped into `head`: not an error
         sys.stderr.close()

@@ -106,20 +106,29 @@ class Parser(argparse.ArgumentParser):
 
     def parse_known_args(self, args=None, namespace=None):
         """argparse's, then :func:`check_number` on every ``type=float`` option given: NaN,
-        ±Inf and absurd magnitudes are refused here, in one line, for every command (each
-        sub-command's parser runs this on its own options)."""
+        ±Inf and absurd magnitudes are found here for every command (each sub-command's
+        parser runs this on its own options) and kept in ``numbers_refused`` for
+        :func:`refuse_numbers`, which ``main`` calls where errors become one line."""
         namespace, extras = super().parse_known_args(args, namespace)
+        refused = list(getattr(namespace, "numbers_refused", []))
         for action in self._actions:
             value = getattr(namespace, action.dest, None)
             if action.type is not float or not isinstance(value, float) or \
                     value is action.default:
                 continue
-            name = max(action.option_strings, key=len, default=action.dest)
             try:
-                check_number(value, name)
+                check_number(value, max(action.option_strings, key=len, default=action.dest))
             except OptionError as exc:
-                self.error(str(exc))
+                refused.append(str(exc))
+        namespace.numbers_refused = refused
         return namespace, extras
+
+
+def refuse_numbers(args: argparse.Namespace) -> None:
+    """Raise :class:`OptionError` for the first numeric option :class:`Parser` refused."""
+    refused = getattr(args, "numbers_refused", [])
+    if refused:
+        raise OptionError(refused[0])
 
 
 # ---------------------------------------------------------------- option groups
@@ -209,11 +218,25 @@ def check_number(value: float, what: str) -> float:
     if not math.isfinite(value):
         raise OptionError(f"{what} must be a finite number, got {value}")
     _check_magnitude(value, what)
+    low = MINIMUM_LIMITS.get(what)
+    if low is not None and 0 < abs(value) < low:
+        raise OptionError(f"{what}: magnitude at least {low:g} (or the command's own rule), "
+                          f"got {value:g}")
     lo, hi = STD_RANGE
     if what in STD_OPTIONS and value != 0 and not lo <= abs(value) <= hi:
         raise OptionError(f"{what} is a standard deviation: 0 or between {lo:g} and {hi:g} "
                           f"(its square must stay finite and normal), got {value:g}")
     return value
+
+
+LEVEL_MIN = 1e-12
+"""Smallest confidence level, the mirror of :data:`LEVEL_MAX`: a region's quantile, area and
+the ratios between areas stay normal numbers (at 1e-300 a ratio of areas was infinite)."""
+
+MINIMUM_LIMITS: dict[str, float] = {
+    "--g": 1e-3,      # m/s²: a comet's surface; below, every reference reading is ~0
+}
+"""Smallest magnitude of a non-zero numeric option (the command says whether 0 is allowed)."""
 
 
 def _check_magnitude(value: float, what: str) -> None:
@@ -312,9 +335,13 @@ def check_positive(value: float, what: str) -> float:
 
 
 def check_level(level: float) -> float:
-    """A confidence level in (0, 1) given as ``--level``, at most :data:`LEVEL_MAX`."""
+    """A confidence level in (0, 1) given as ``--level``, within
+    [:data:`LEVEL_MIN`, :data:`LEVEL_MAX`]."""
     if not 0.0 < level < 1.0:
         raise OptionError(f"--level must be in (0, 1), e.g. 0.95, got {level}")
+    if level < LEVEL_MIN:
+        raise OptionError(f"--level must be at least 1e-12 (a region of smaller probability "
+                          f"has an area that underflows), got {level!r}")
     if level > LEVEL_MAX:
         raise OptionError(f"--level must be at most 1 - 1e-12 (the tail 1 - level is not "
                           f"resolved in double precision beyond), got {level!r}")
