@@ -332,6 +332,59 @@ def writers(f: dict[str, Path]) -> list[Case]:
     return cases
 
 
+SWEEP_VALUES = ("nan", "-inf", "1e300", "1e-300", "-1")
+"""Values tried on every numeric option: NaN/±Inf must be refused; the others must give a
+finite answer or a one-line refusal (-1 is meaningful for some options)."""
+
+
+def option_sweep(f: dict[str, Path]) -> list[Case]:
+    """Every numeric (float) option of every command (``tiltbench X --help``) × the values
+    of :data:`SWEEP_VALUES`, on small valid inputs."""
+    c1, t1 = _course(f, "c1"), _course(f, "t1")
+    ens = {"ensayo.mat": f["c1.ensayo"]}
+    plog, slog = {"log.csv": f["log.poses"]}, {"log.csv": f["log.still"]}
+    design = ["design", "--effects", "misalignment", "--designs", "uniform", "--n", "201",
+              "--json", "--workers", "1", "--quiet"]
+    table = [
+        (["calibrate", "ensayo.mat", "--json"], ens, ("--g", "--level")),
+        (["calibrate", "log.csv", "--poses", "0,90,180,270", "--angle-unit", "deg",
+          "--json"], plog, ("--static-window", "--min-hold")),
+        (["calibrate", "log.csv", "--units", "counts", "--json"], plog, ("--sensitivity",)),
+        (["trajectory", "--ensayo", "ensayo.mat", *VEH, "--json"], c1, ("--level", "--g")),
+        (["nmin", "--ensayo", "ensayo.mat", *VEH, *NMIN_FAST, "--json"], c1, ("--level",)),
+        ([*FUSE, "--ensayo", "ensayo.mat"], c1,
+         ("--gps-sigma", "--gps-vel-sigma", "--p0-std", "--v0-std", "--level")),
+        ([*FUSE, "--ensayo", "ensayo.mat"], t1, ("--gyro-sigma", "--psi0", "--psi0-sigma")),
+        (["gap", "ensayo.mat", "--noise-var", "0.25,0.64", "--json"], ens, ("--rate", "--g")),
+        (["noise", "log.csv", "--json"], slog,
+         ("--rate", "--level", "--alpha", "--static-window", "--static-shift",
+          "--static-var-ratio")),
+        (design, {}, ("--alpha", "--scale")),
+        (["validate", "--truth", "truth.json", "--calibration", "cal.json"],
+         {"truth.json": f["c1.truth"], "cal.json": f["c1.cal"]}, ("--level",)),
+        (["import", "log.csv", "--poses", "0,90,180,270", "--angle-unit", "deg", "--out",
+          "imp", "--json"], plog, ("--g", "--static-window", "--min-hold")),
+        (["generate", "calibration", "--count", "201", "--out", "o", "--json"], {}, ("--g",)),
+        (["generate", "calibration", "--mode", "sweep", "--duration", "2", "--out", "o",
+          "--json"], {}, ("--rate", "--cycles")),
+        (["generate", "vehicle", "--duration", "5", "--gps", "--out", "o", "--json"], {},
+         ("--rate", "--gps-rate", "--gps-sigma", "--gps-vel-sigma", "--gps-latency")),
+        (["generate", "vehicle", "--duration", "5", "--turning", "--out", "o", "--json"], {},
+         ("--gyro-sigma",)),
+        (["generate", "course", "--count", "201", "--duration", "5", "--out", "o", "--json"],
+         {}, ("--min-separation",)),
+    ]
+    cases = []
+    for argv, files, opts in table:
+        for opt in opts:
+            for val in SWEEP_VALUES:
+                expect = "refuse" if val in ("nan", "-inf") else "any"
+                cases.append(Case("opt_sweep", f"{argv[0]} {opt}={val}",
+                                  [*argv, f"{opt}={val}"], files, expect=expect,
+                                  ok_codes=(0, 1, 2) if argv[0] == "validate" else (0, 2)))
+    return cases
+
+
 KINDS = {
     "cal_file": calibration_files,
     "gps_fault": faulty_fixes,
@@ -340,6 +393,7 @@ KINDS = {
     "noise_var": absurd_noise,
     "tiny_run": tiny_runs,
     "option": options,
+    "opt_sweep": option_sweep,
     "writers": writers,
 }
 

@@ -66,10 +66,10 @@ def build(base: Path, seed: int, env: dict) -> dict[str, Path]:
             f[f"{name}.{kind}"] = d / f"{kind}.mat"
         f[f"{name}.datos"] = d / "datos.txt"
         f[f"{name}.truth"] = d / "truth.json"
-        tiltbench(["calibrate", "ensayo.mat", "--datos", "datos.txt", "--save", "cal.json",
-                   "--force"], d, env)
-        tiltbench(["calibrate", "ensayo.mat", "--datos", "datos.txt", "--save", "cal.mat",
-                   "--force"], d, env)
+        for cal in ("cal.json", "cal.mat"):  # (kept between runs, as the sets are)
+            if not (d / cal).exists():
+                tiltbench(["calibrate", "ensayo.mat", "--datos", "datos.txt", "--save", cal],
+                          d, env)
         f[f"{name}.cal"] = d / "cal.json"
         f[f"{name}.calmat"] = d / "cal.mat"
     for name in ("sw", "q1", "q2"):
