@@ -189,6 +189,8 @@ MAGNITUDE_LIMITS: dict[str, float] = {
     "--duration": 1e9,  # s
     "--cycles": 1e9,
     "--psi0": 1e6,    # rad: a heading (resolved to 1e-10 rad at this size)
+    "--static-window": 1e9,  # s (or samples): as --duration; window lengths stay integers
+    "--min-hold": 1e9,       # s (or samples)
 }
 """Largest magnitude of each numeric option (each has one meaning across commands)."""
 

@@ -14,7 +14,7 @@ Classification of one run (a case can carry several faults)
 ``traceback``      stderr holds ``Traceback``
 ``last_resort``    stderr holds a last-resort message: ``please report``, ``would be nan``,
                    ``Singular matrix``, ``OverflowError``
-``multi_line``     a failed run (exit ≠ 0) whose error is not one line (``note:``,
+``multi_line``     an error exit (2, or undocumented) whose error is not one line (``note:``,
                    ``warning:`` and ``[progress]`` lines and their indented continuations aside)
 ``hang``           still running after the timeout (60 s): killed with its process group
 ``leftover``       a hidden file (``.name``, not a ``*.lock``) beside a target that was not
