@@ -157,6 +157,8 @@ OPTION_CASES = [
     (lambda d: ["generate", "vehicle", "--gps", "--out", d / "o"], "--gps-latency", "inf"),
     (lambda d: ["generate", "vehicle", "--gps", "--out", d / "o"], "--gps-sigma", "1e300"),
     (lambda d: ["import", d / "ensayo.mat", "--out", d / "o"], "--min-hold", "nan"),
+    (lambda d: ["calibrate", d / "ensayo.mat"], "--static-window", "1e300"),
+    (lambda d: ["import", d / "ensayo.mat", "--out", d / "o"], "--min-hold", "1e300"),
 ]
 
 
