@@ -190,3 +190,24 @@ def test_design_power_with_a_tiny_stated_variance(capsys):
                              "--workers", "1", "--quiet"))
     powers = [e["power"] for e in obj["effects"]["misalignment"]["per_experiment"]]
     assert powers and all(p == 1.0 for p in powers)
+
+
+def test_monte_carlo_runaway_is_refused_with_its_estimate(capsys):
+    """``design --runs 1e12`` (a simulated effect) planned centuries of CPU; refused in one
+    line with the estimate, before any run (bench.limits.WORK_LIMIT_SECONDS)."""
+    for extra in (["--runs", "1e12"], ["--runs", "40", "--mc-grid", "1e15"]):
+        msg = one_line_error(capsys, "design", "--effects", "saturation", "--designs",
+                             "uniform", "--n", "201", "--workers", "1", "--quiet", *extra)
+        assert "CPU hours" in msg and "--runs" in msg
+
+
+@pytest.mark.parametrize("argv", [
+    ["generate", "calibration", "--count", "201"],
+    ["design", "--effects", "misalignment", "--designs", "uniform"],
+])
+def test_negative_seed_is_refused_by_name(tmp_path, capsys, argv):
+    out = tmp_path / "o"
+    msg = one_line_error(capsys, *argv, "--seed", "-1", "--out", out) if argv[0] == "generate" \
+        else one_line_error(capsys, *argv, "--seed", "-1")
+    assert "--seed" in msg
+    assert not out.exists()

@@ -113,6 +113,8 @@ class Parser(argparse.ArgumentParser):
         refused = list(getattr(namespace, "numbers_refused", []))
         for action in self._actions:
             value = getattr(namespace, action.dest, None)
+            if "--seed" in action.option_strings and isinstance(value, int) and value < 0:
+                refused.append(f"--seed must be >= 0 (a numpy seed), got {value}")
             if action.type is not float or not isinstance(value, float) or \
                     value is action.default:
                 continue
