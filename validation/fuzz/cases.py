@@ -385,6 +385,39 @@ def option_sweep(f: dict[str, Path]) -> list[Case]:
     return cases
 
 
+INT_VALUES = ("-1", "1e15")
+"""Counts tried on every integer option: a negative one and an absurd size (each must be
+refused in one line, or run and end within the hang limit)."""
+
+
+def int_sweep(f: dict[str, Path]) -> list[Case]:
+    """Every count / size / seed option (``tiltbench X --help``) × :data:`INT_VALUES`."""
+    c1 = _course(f, "c1")
+    design = ["design", "--effects", "saturation", "--designs", "uniform", "--n", "201",
+              "--json", "--workers", "1", "--quiet"]
+    nmin = ["nmin", "--ensayo", "ensayo.mat", *VEH, "--quiet", "--workers", "1", "--json"]
+    table = [
+        (design, {}, ("--runs", "--mc-grid", "--seed", "--n")),
+        ([*nmin, "--confirm-runs", "0", "--draws", "0"], c1,
+         ("--runs", "--mc-n", "--steps", "--seed")),
+        ([*nmin, "--confirm-runs", "0"], c1, ("--draws",)),
+        ([*nmin, "--draws", "0"], c1, ("--confirm-runs",)),
+        (["generate", "calibration", "--out", "o", "--json"], {},
+         ("--count", "--positions", "--seed")),
+        (["generate", "calibration", "--positions", "4", "--out", "o", "--json"], {},
+         ("--per-position",)),
+        (["generate", "class", "--out", "o", "--quiet", "--workers", "1"], {}, ("--students",)),
+        (["generate", "course", "--out", "o", "--json"], {}, ("--count",)),
+    ]
+    cases = []
+    for argv, files, opts in table:
+        for opt in opts:
+            for val in INT_VALUES:
+                cases.append(Case("int_sweep", f"{argv[0]} {opt}={val}",
+                                  [*argv, f"{opt}={val}"], files))
+    return cases
+
+
 KINDS = {
     "cal_file": calibration_files,
     "gps_fault": faulty_fixes,
@@ -394,6 +427,7 @@ KINDS = {
     "tiny_run": tiny_runs,
     "option": options,
     "opt_sweep": option_sweep,
+    "int_sweep": int_sweep,
     "writers": writers,
 }
 
