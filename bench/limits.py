@@ -63,6 +63,19 @@ COURSE_SET_DISK_BYTES = 700_000
 student of ``generate class``."""
 
 
+DESIGN_RUN_SECONDS = 0.05
+"""``design`` Monte Carlo: CPU seconds of one run through the gap detection, per simulated
+effect and experiment, at small N (45 ms measured at N = 201, one core)."""
+
+DESIGN_RUN_SAMPLE_SECONDS = 5e-5
+"""… plus this per sample of the experiment (0.12 s a run measured at N = 2001)."""
+
+WORK_LIMIT_SECONDS = 7 * 86400
+"""Longest computation one request may plan: a week of one core. Beyond it a request is a
+runaway (``design --runs 1e12`` planned 1,500 years), refused with the estimate instead of
+running until killed; a long but finishable study stays allowed."""
+
+
 class SizeError(ValueError):
     """A request too large for this machine; the message gives the estimate and the limit.
 
@@ -120,6 +133,16 @@ def check_memory(need: float, what: str) -> float:
                         f"{gib(have)} available, of which one run may use "
                         f"{gib(MEMORY_SHARE * have)} ({MEMORY_SHARE:.0%}); ask for less")
     return need
+
+
+def check_time(seconds: float, what: str) -> float:
+    """Refuse (:class:`SizeError`) a request whose estimated CPU time ``seconds`` (one core)
+    exceeds :data:`WORK_LIMIT_SECONDS`; ``what`` names the options that set it."""
+    if not seconds <= WORK_LIMIT_SECONDS:  # `not <=`: an overflowed estimate refuses
+        raise SizeError(f"{what}: this run needs about {seconds / 3600:,.0f} CPU hours "
+                        f"(estimated); one request may plan at most "
+                        f"{WORK_LIMIT_SECONDS / 86400:.0f} days of one core; ask for less")
+    return seconds
 
 
 def free_disk(path: str | Path) -> int:

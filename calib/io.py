@@ -396,8 +396,10 @@ def read_gps(path: str | os.PathLike) -> Fixes:
     check_finite(t, where, "t_gps")
     check_finite(pos, where, "pos")
     _check_magnitude(t, MAX_ABS_TIME, where, "t_gps", "s")
+    _check_magnitude(pos, MAX_ABS_POSITION, where, "pos", "m")
     if vel is not None:
         check_finite(vel, where, "vel")
+        _check_magnitude(vel, MAX_ABS_VELOCITY, where, "vel", "m/s")
     if t.shape[0] < 1:
         raise DataError(f"{where}: no fixes in 't_gps'")
     check_time(t, where, "t_gps")

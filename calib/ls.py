@@ -401,6 +401,12 @@ def fit_linear(
     return _fit_centred(Hc, M, y, names, sigma2, lambda: design_cond(H))
 
 
+def _chi2(rss: float, s2: float, dof: int, source: Sigma2Source) -> float:
+    """``RSS/σ²``; with σ² estimated as ``RSS/dof`` it is ``dof`` by construction, also on
+    noiseless data (RSS = 0 exactly, where the ratio would divide by zero)."""
+    return float(dof) if source == "estimated" else rss / s2
+
+
 def _sigma2_used(rss: float, dof: int, sigma2: float | None) -> tuple[float, Sigma2Source]:
     """The noise variance a fit uses, (m/s²)²: the given one, else ``RSS/dof``."""
     if sigma2 is None:
@@ -424,7 +430,7 @@ def _fit_centred(Hc: np.ndarray, M: np.ndarray, y: np.ndarray, names: tuple[str,
     return FitResult(
         param_names=tuple(names), params=params, cov=s2 * cov1, residuals=resid,
         sigma2=np.array(s2), sigma2_source=source, dof=dof, rank=rank,
-        cond=cond(), chi2=rss / s2,
+        cond=cond(), chi2=_chi2(rss, s2, dof, source),
     )
 
 
@@ -498,7 +504,7 @@ def _refit(d: _AxisDesign, y: np.ndarray, sigma2: float | None) -> FitResult:
     return FitResult(
         param_names=PARAM_NAMES, params=fac.solve_map @ z, cov=s2 * fac.cov1, residuals=y,
         sigma2=np.array(s2), sigma2_source=source, dof=dof, rank=fac.rank, cond=fac.cond,
-        chi2=rss / s2,
+        chi2=_chi2(rss, s2, dof, source),
     )
 
 
@@ -629,6 +635,12 @@ def fit_joint(
         source = "estimated"
         noise_var = [fit_axis(tita, datos[:, k], ax, None, g).sigma2.item()
                      for k, ax in enumerate(AXES)]
+        for ax, v in zip(AXES, noise_var, strict=True):
+            if not v > 0:  # exact data: no weight can be estimated (a zero variance)
+                raise NotIdentifiableError(
+                    f"axis {ax}: the residuals are exactly zero (noiseless data), so the "
+                    "noise variance of the joint WLS weights cannot be estimated; state the "
+                    "noise variances or fit per axis (OLS)")
     C = _noise_cov(noise_var)
     Li = sla.solve_triangular(np.linalg.cholesky(C), np.eye(2), lower=True)
     means = a_r.mean(axis=0)

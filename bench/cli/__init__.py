@@ -44,7 +44,7 @@ from bench.cli import (  # noqa: E402
     trajectory,
     validate,
 )
-from bench.cli.options import Parser, resolve_deferred  # noqa: E402
+from bench.cli.options import Parser, refuse_numbers, resolve_deferred  # noqa: E402
 from bench.cli.output import command_outputs, fit_columns  # noqa: E402
 
 COMMANDS = (generate, calibrate, trajectory, nmin, design, fuse, fusion_study, record, validate,
@@ -91,8 +91,10 @@ def main(argv: list[str] | None = None) -> int:
     resolve_deferred(args)
     warnings.showwarning = _warning_to_stderr
     try:
-        with fit_columns(stdout=not getattr(args, "json", False)), command_outputs(args):
-            return int(args.handler(args) or 0)  # lines ≤ 100 columns; outputs locked
+        with fit_columns(stdout=not getattr(args, "json", False)):  # lines ≤ 100 columns
+            refuse_numbers(args)  # NaN / Inf / absurd numbers, before any work
+            with command_outputs(args):  # outputs locked, inputs protected, until the end
+                return int(args.handler(args) or 0)
     except BrokenPipeError:  # output piped into `head`: not an error
         sys.stderr.close()
         return 0

@@ -87,6 +87,12 @@ def _cmd_design(args: argparse.Namespace) -> int:
     if args.plot:
         refuse_overwrite([args.plot], args.force)
     exps = [Experiment(d, n, r) for d in designs for n in ns for r in rates]
+    # Monte Carlo work: runs × grid sizes × simulated effects × experiments (bench/limits.py)
+    per_run = sum(limits.DESIGN_RUN_SECONDS + limits.DESIGN_RUN_SAMPLE_SECONDS * e.n
+                  for e in exps) * sum(e in SIMULATED for e in effects)
+    limits.check_time(per_run * args.runs * max(1, args.mc_grid),
+                      f"--runs {args.runs}" + (f" --mc-grid {args.mc_grid}" if args.mc_grid
+                                               else ""))
     res = analyze_design(exps, effects, sizes, nv, args.alpha, args.axis, args.runs,
                          args.seed, mapper=mapper_from_args(args),
                          progress=Progress("design", quiet=args.quiet), mc_grid=args.mc_grid,

@@ -104,6 +104,34 @@ class Parser(argparse.ArgumentParser):
         """One line on stderr, exit code 2 (argparse prints the usage first: two lines)."""
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
+    def parse_known_args(self, args=None, namespace=None):
+        """argparse's, then :func:`check_number` on every ``type=float`` option given: NaN,
+        ±Inf and absurd magnitudes are found here for every command (each sub-command's
+        parser runs this on its own options) and kept in ``numbers_refused`` for
+        :func:`refuse_numbers`, which ``main`` calls where errors become one line."""
+        namespace, extras = super().parse_known_args(args, namespace)
+        refused = list(getattr(namespace, "numbers_refused", []))
+        for action in self._actions:
+            value = getattr(namespace, action.dest, None)
+            if "--seed" in action.option_strings and isinstance(value, int) and value < 0:
+                refused.append(f"--seed must be >= 0 (a numpy seed), got {value}")
+            if action.type is not float or not isinstance(value, float) or \
+                    value is action.default:
+                continue
+            try:
+                check_number(value, max(action.option_strings, key=len, default=action.dest))
+            except OptionError as exc:
+                refused.append(str(exc))
+        namespace.numbers_refused = refused
+        return namespace, extras
+
+
+def refuse_numbers(args: argparse.Namespace) -> None:
+    """Raise :class:`OptionError` for the first numeric option :class:`Parser` refused."""
+    refused = getattr(args, "numbers_refused", [])
+    if refused:
+        raise OptionError(refused[0])
+
 
 # ---------------------------------------------------------------- option groups
 def add_json(p: argparse.ArgumentParser) -> None:
@@ -162,6 +190,9 @@ MAGNITUDE_LIMITS: dict[str, float] = {
     "--rate": 1e9,    # Hz (sizes are checked separately: bench.limits)
     "--duration": 1e9,  # s
     "--cycles": 1e9,
+    "--psi0": 1e6,    # rad: a heading (resolved to 1e-10 rad at this size)
+    "--static-window": 1e9,  # s (or samples): as --duration; window lengths stay integers
+    "--min-hold": 1e9,       # s (or samples)
 }
 """Largest magnitude of each numeric option (each has one meaning across commands)."""
 
@@ -173,6 +204,43 @@ LEVEL_MAX = 1.0 - 1e-12
 """Largest confidence level: the tail 1 − level must be resolved in double precision (its
 spacing near 1 is 1.1e-16; at 1e-12 the quantile is known to 1e-4 relative, and
 (1 + level)/2 of a two-sided quantile stays below 1, so the quantile is finite)."""
+
+
+STD_RANGE = (1e-50, 1e50)
+"""Standard deviations given as options, in their unit: 0 (where the command accepts it) or
+within this range, so that σ² stays within :data:`VARIANCE_RANGE`."""
+
+STD_OPTIONS = ("--gps-sigma", "--gps-vel-sigma", "--gyro-sigma", "--psi0-sigma", "--p0-std",
+               "--v0-std")
+"""Options that are standard deviations (checked against :data:`STD_RANGE`)."""
+
+
+def check_number(value: float, what: str) -> float:
+    """A number option ``what`` as given: finite, within :data:`MAGNITUDE_LIMITS` and, for
+    :data:`STD_OPTIONS`, 0 or within :data:`STD_RANGE` (signs and ranges of meaning, such as
+    a level in (0, 1), are the command's); :class:`OptionError` naming the option."""
+    if not math.isfinite(value):
+        raise OptionError(f"{what} must be a finite number, got {value}")
+    _check_magnitude(value, what)
+    low = MINIMUM_LIMITS.get(what)
+    if low is not None and 0 < abs(value) < low:
+        raise OptionError(f"{what}: magnitude at least {low:g} (or the command's own rule), "
+                          f"got {value:g}")
+    lo, hi = STD_RANGE
+    if what in STD_OPTIONS and value != 0 and not lo <= abs(value) <= hi:
+        raise OptionError(f"{what} is a standard deviation: 0 or between {lo:g} and {hi:g} "
+                          f"(its square must stay finite and normal), got {value:g}")
+    return value
+
+
+LEVEL_MIN = 1e-12
+"""Smallest confidence level, the mirror of :data:`LEVEL_MAX`: a region's quantile, area and
+the ratios between areas stay normal numbers (at 1e-300 a ratio of areas was infinite)."""
+
+MINIMUM_LIMITS: dict[str, float] = {
+    "--g": 1e-3,      # m/s²: a comet's surface; below, every reference reading is ~0
+}
+"""Smallest magnitude of a non-zero numeric option (the command says whether 0 is allowed)."""
 
 
 def _check_magnitude(value: float, what: str) -> None:
@@ -271,9 +339,13 @@ def check_positive(value: float, what: str) -> float:
 
 
 def check_level(level: float) -> float:
-    """A confidence level in (0, 1) given as ``--level``, at most :data:`LEVEL_MAX`."""
+    """A confidence level in (0, 1) given as ``--level``, within
+    [:data:`LEVEL_MIN`, :data:`LEVEL_MAX`]."""
     if not 0.0 < level < 1.0:
         raise OptionError(f"--level must be in (0, 1), e.g. 0.95, got {level}")
+    if level < LEVEL_MIN:
+        raise OptionError(f"--level must be at least 1e-12 (a region of smaller probability "
+                          f"has an area that underflows), got {level!r}")
     if level > LEVEL_MAX:
         raise OptionError(f"--level must be at most 1 - 1e-12 (the tail 1 - level is not "
                           f"resolved in double precision beyond), got {level!r}")

@@ -42,11 +42,20 @@ def critical(alpha: float, df: int) -> float:
     return float(stats.chi2.isf(alpha, df))
 
 
+LAMBDA_SURE = 1e12
+"""Non-centrality beyond which the power is 1 to double precision (:func:`power_from_lambda`)."""
+
+
 def power_from_lambda(lam: float | np.ndarray, df: int, crit: float) -> np.ndarray:
-    """``P(χ²_df(λ) > crit)`` (λ = 0: the central χ², i.e. the false-alarm rate)."""
+    """``P(χ²_df(λ) > crit)`` (λ = 0: the central χ², i.e. the false-alarm rate).
+
+    λ > :data:`LAMBDA_SURE`: exactly 1 (scipy's ``ncx2.sf`` returns NaN from λ ≈ 1e20, e.g. a
+    stated σ² of 1e-50); there the mean df + λ lies ≥ 10⁵ standard deviations
+    ``sqrt(2(df + 2λ))`` above any finite-α critical value (crit < 10⁴ for α ≥ 1e-300).
+    """
     lam = np.asarray(lam, dtype=float)
-    out = stats.ncx2.sf(crit, df, np.maximum(lam, 1e-300))
-    return np.where(lam > 0, out, stats.chi2.sf(crit, df))
+    out = stats.ncx2.sf(crit, df, np.clip(lam, 1e-300, LAMBDA_SURE))
+    return np.where(lam > LAMBDA_SURE, 1.0, np.where(lam > 0, out, stats.chi2.sf(crit, df)))
 
 
 def lambda_for_power(p: float, df: int, crit: float) -> float:

@@ -112,6 +112,8 @@ class NoiseLevel(ProfiledEffect):
         nll0 = ext.nll(state)
         fit = ext.fit(state)
         dof = ext.run.n - 1 - (ext.n_params(state, k) - 1)
+        if dof < 2:  # σ² fitted would leave no degree of freedom (N = 3): not testable
+            return Trial(self.name, axis, state, 0.0, 0.0, nll0, f"chi2({dof})")
         logp = chi2_two_sided_logp(fit.rss[k], dof)
         s2, nll1 = self.profile(ext, state, k)
         new = state.with_axis(k, self.add(state.axes[k], s2))

@@ -5,16 +5,28 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
+SHEPPARD_RATIO = 2.0
+"""σ/lsb from which Sheppard's moments are exact to double precision (see
+:func:`quantized_moments`)."""
+
 
 def quantized_moments(mu: np.ndarray, sigma2: float, lsb: float
                       ) -> tuple[np.ndarray, np.ndarray]:
     """Mean and variance of ``lsb·round((μ + v)/lsb)``, v ~ N(0, σ²), per sample.
 
-    Sums over the lattice points within ±8σ of μ (the rest has probability < 1e-15).
+    Sums over the lattice points within ±8σ of μ (the rest has probability < 1e-15) while
+    σ < :data:`SHEPPARD_RATIO`·lsb, so at most 35 terms. Beyond, the moments are Sheppard's,
+    ``E = μ``, ``Var = σ² + lsb²/12``, exact to double precision: by the Fourier series of the
+    rounding error ``Q(x) − x = (lsb/π) Σₖ (−1)ᵏ/k · sin(2πk x/lsb)`` and
+    ``E sin(2πk(μ+v)/lsb) = sin(2πkμ/lsb)·exp(−2π²k²σ²/lsb²)``, every correction carries
+    ``exp(−2π²σ²/lsb²) < 1e-34`` at σ/lsb ≥ 2. (The sum alone grew as σ/lsb: 16 million
+    normal CDFs per sample for a stated σ² of 100 on a 0.002 lattice, a gap run past 200 s.)
     """
     s = np.sqrt(sigma2)
     if s == 0:
         return lsb * np.floor(mu / lsb + 0.5), np.zeros_like(mu)
+    if s >= SHEPPARD_RATIO * lsb:
+        return np.array(mu, dtype=float), np.full(np.shape(mu), sigma2 + lsb * lsb / 12.0)
     span = int(np.ceil(8 * s / lsb)) + 1
     base = np.floor(mu / lsb + 0.5)
     m1 = np.zeros_like(mu)
