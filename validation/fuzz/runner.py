@@ -51,6 +51,16 @@ class Case:
     inputs_unchanged: tuple[str, ...] = ()
     ok_codes: tuple[int, ...] = (0, 2)
 
+    def __post_init__(self) -> None:
+        verdict = VERDICT_EXIT.get(self.argv[0] if self.argv else "")
+        if verdict is not None and verdict not in self.ok_codes:  # a verdict is never a fault
+            self.ok_codes = (*self.ok_codes, verdict)
+
+
+VERDICT_EXIT = {"validate": 1, "fuse": 3}
+"""Documented exits that are verdicts, not errors: ``validate``'s FAIL and ``fuse``'s
+INCONSISTENT (its windowed NIS out of band: the result printed, no region)."""
+
 
 @dataclass
 class Outcome:
@@ -138,8 +148,9 @@ def run_case(case: Case, root: Path, env: dict) -> Outcome:
     if any(c is None for c in codes):
         faults.append("hang")
     for code, _, e in results:
-        # an error exit (2, or any undocumented code; validate's 1 is a verdict)
-        if code not in (None, 0, 1 if 1 in case.ok_codes else 0) and len(error_lines(e)) != 1:
+        # an error exit (2, or any undocumented code; validate's 1 and fuse's 3 are verdicts)
+        verdict = VERDICT_EXIT.get(case.argv[0] if case.argv else "")
+        if code not in (None, 0, verdict) and len(error_lines(e)) != 1:
             faults.append("multi_line")
             break
     if any(c is not None and c not in case.ok_codes for c in codes):
