@@ -356,3 +356,34 @@ def test_a_dead_zone_is_not_taken_for_a_walk():
     out = analyze_gap(Ensayo(tita, y, None), sd**2)
     assert out.verdict == "unexplained"
     assert all(e.name != "bias_random_walk" for e in out.effects)
+
+
+def test_a_slow_thermal_cycle_is_not_taken_for_a_walk():
+    """A thermal cycle ``sin(2π·1.6 t/T + φ)`` on y (1.6 periods over the run, T = 40 s at
+    100 Hz) on 40 static poses in random order (100 samples each: the specific force jumps, so
+    the cycle is a function of time, not of θ), sized 12 σ of its (mean-removed) signature.
+    The selection takes it for a walk; one tone in place of the walk beats it by more than
+    the margin and the walk adds nothing beyond it (:func:`calib.gap.walk.slow_cycle`):
+    "unexplained", a drifting structure with the cycle's period (25 s), no walk named (the
+    ``walk_rivals`` check may say it first: the tone also adds to the walk beyond chance;
+    ``adequacy.walk[].cycle`` decides "slow_cycle" either way). A cycle slower
+    than the run (0.6 periods) is, within the run, a drift: ``bias_drift`` names it."""
+    for cycles, verdict in ((1.6, "unexplained"), (0.6, "explained")):
+        rng = np.random.default_rng(71)
+        tita = np.repeat(rng.uniform(0.0, 2.0 * np.pi, 40), 100)
+        clock = np.arange(tita.size) / 100.0
+        shape = np.sin(2.0 * np.pi * cycles * clock / clock[-1] + 1.1)
+        shape -= shape.mean()
+        sd = np.array([0.5, 0.8])
+        y = np.column_stack([-G * np.sin(tita), -G * np.cos(tita)]) + sd * rng.standard_normal(
+            (tita.size, 2))
+        y[:, 1] += 12.0 * sd[1] / np.sqrt(float(shape @ shape)) * shape
+        a = analyze_gap(Ensayo(tita, y, None), sd**2, rate=100.0)
+        assert a.verdict == verdict, cycles
+        assert all(e.name != "bias_random_walk" for e in a.effects)
+        if cycles > 1:
+            words = [u["description"] for u in a.unexplained if u["axis"] == "y"]
+            assert any("oscillation" in w and "(period 25" in w for w in words), words
+            assert a.adequacy["walk"][0]["cycle"]["decision"] == "slow_cycle"
+        else:
+            assert ("bias_drift", "y") in a.named
