@@ -387,3 +387,18 @@ def test_a_slow_thermal_cycle_is_not_taken_for_a_walk():
             assert a.adequacy["walk"][0]["cycle"]["decision"] == "slow_cycle"
         else:
             assert ("bias_drift", "y") in a.named
+
+
+def test_a_walk_that_a_slow_cycle_fits_as_well_is_named_with_the_pair():
+    """A true walk (validation catalog run 24: several turns, walk on x) whose path one tone of
+    period 46 s fits as well (AIC gain of the tone 9.4, within the margin, and a walk adds
+    nothing beyond it): the walk is named, "explained", and ``not_identifiable`` says this run
+    cannot tell a walk from a slow cycle."""
+    case = build_case("catalog", "several_turns", [("bias_random_walk", "x")],
+                      np.random.default_rng([2026, 24]))
+    a = default_analyze(case)
+    assert a.verdict == "explained" and ("bias_random_walk", "x") in a.named
+    cycle = a.adequacy["walk"][0]["cycle"]
+    assert cycle["decision"] == "cannot_tell" and cycle["gain"] > 0.0
+    pair = [e for e in a.not_identifiable if "slow_cycle" in e["names"]]
+    assert pair and "cannot tell a walk from a slow cycle on x" in pair[0]["reason"]
