@@ -15,7 +15,8 @@ check                     statistic and reference distribution under the model
                           residuals; exact ``P(g > x) = Σ_j (-1)^{j-1} C(m,j) (1 - jx)^{m-1}``
                           (first term, a bound)
 ``outliers``              largest |z| of the standardised residuals; ``P = 1 - (1 - p₁)^N``
-``heavy_tails``           kurtosis test (D'Agostino), one-sided: heavier tails than Gaussian
+``heavy_tails``           kurtosis test (D'Agostino), one-sided, p doubled (its normal
+                          approximation is liberal in the far tail): heavier tails than Gaussian
                           (both skipped where the rounding is coarser than the noise)
 ``step``                  sup of the CUSUM of the standardised residuals; the sup of a
                           Brownian bridge (Kolmogorov); not on a random-walk axis (a walk
@@ -167,12 +168,20 @@ def _outliers(z: np.ndarray, scale: float, axis: str) -> Check:
                  f"at sample {i})")
 
 
+KURTOSIS_TAIL_FACTOR = 2.0
+"""The kurtosis test's p is multiplied by this. Anscombe & Glynn's normal approximation
+(``scipy.stats.kurtosistest``) is liberal in the far upper tail, where the battery judges it
+(α_check ≈ 1e-4): measured on 2×10⁵ Gaussian samples each, P(p < 1e-4) was 1.5e-4 (N = 300),
+1.4e-4 (600), 1.55e-4 (1200), 1.85e-4 (2000), 0.8e-4 (4001); at 1e-3 within 1.18×, at 1e-2
+exact. Doubling keeps the stated per-check α an upper bound (``tests/test_gap_adequacy.py``)."""
+
+
 def _heavy_tails(z: np.ndarray, axis: str) -> Check | None:
     if z.size < 20:
         return None
     res = stats.kurtosistest(z, alternative="greater")
     excess = float(stats.kurtosis(z))
-    logp = float(stats.norm.logsf(res.statistic))
+    logp = min(0.0, float(np.log(KURTOSIS_TAIL_FACTOR) + stats.norm.logsf(res.statistic)))
     return Check("heavy_tails", axis, float(res.statistic), logp, "kurtosis test z (one-sided)",
                  excess, "", f"heavier tails than Gaussian noise on {axis} "
                  f"(excess kurtosis {excess:.3g})")

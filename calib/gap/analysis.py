@@ -118,13 +118,23 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         criterion["profile"] = profile
     return GapAnalysis(
         effects=tuple(effects),
-        not_identifiable=tuple(not_identifiable(ext, state, sel.candidates, sel.untestable)),
+        not_identifiable=tuple(not_identifiable(ext, state, sel.candidates, sel.untestable))
+        + tuple(_walk_or_cycle(reviews)),
         gap_before=before, gap_after_fit=after, nominal=nominal, final=final,
         residuals_before=resid_before, residuals_after=resid_after, fitted=fitted,
         needs_timing=tuple(needs_timing), criterion=criterion, steps=tuple(steps), g=float(g),
         noise_var=(float(stated[0]), float(stated[1])), verdict=verdict,
         unexplained=tuple(unexplained),
         adequacy={**_adequacy(battery, drifting, reviews), "sponges": sponges})
+
+
+def _walk_or_cycle(reviews: dict[int, WalkReview]) -> list[dict]:
+    """``not_identifiable`` entries of named walks that this run cannot tell from a slow cycle
+    in time (:func:`calib.gap.walk.slow_cycle`)."""
+    return [{"names": ["bias_random_walk", "slow_cycle"], "axis": r.axis,
+             "reason": r.cycle["description"]}
+            for r in reviews.values()
+            if r.earned and r.cycle is not None and r.cycle["decision"] == "cannot_tell"]
 
 
 def _apply_profile(ext: Extensions, sensor: SensorProfile | None,

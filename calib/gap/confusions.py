@@ -23,7 +23,11 @@ reported as not told apart."""
 
 def design_hint(names: list[str]) -> str:
     """Where to compare experiments that would separate a confused pair (printed after the
-    reason in the text report; the JSON ``reason`` is unchanged)."""
+    reason in the text report; the JSON ``reason`` is unchanged). A pair with a shape outside
+    the catalog (``slow_cycle``: :func:`calib.gap.walk.slow_cycle`) has no design to compare:
+    a longer run separates it."""
+    if not all(n in EFFECTS for n in names):
+        return "not a catalog pair: a run several periods of the cycle long separates them"
     return f"compare designs with `tiltbench design --effects {','.join(names)}`"
 
 

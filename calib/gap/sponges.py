@@ -86,7 +86,7 @@ def review_sponges(ext: Extensions, state: ModelState, lattice: list[Lattice],
             # without them the structured effect cannot be fitted on this run: there is no
             # reading to review them on, so they stay as selected, and the report says why
             notes += [{"name": n, "axis": axis, "beside": structured, "named": True,
-                       "statistic": float("nan"), "p_value": float("nan"),
+                       "statistic": None, "p_value": None,  # no test made: JSON null
                        "reason": (f"{n} on {axis} kept beside {' and '.join(structured)}: "
                                   f"without it the model is not identifiable here ({exc})")}
                       for n in sponges]
