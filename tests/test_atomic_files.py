@@ -329,38 +329,34 @@ def _failing_under(root: Path, real, err: int, by_fd: bool):
     return call
 
 
-@pytest.mark.parametrize("option, name", [("--save", "cal.json"), ("--plot", "fit.png"),
-                                          ("--save", "cal.mat")])
-def test_read_only_folder_is_one_line_and_loses_nothing(option, name, tmp_path, files,
-                                                        capsys, monkeypatch):
-    ro = tmp_path / "ro"
-    ro.mkdir()
-    out = ro / name
+FAULTS = {  # the call that fails, whether it takes a descriptor, the errno, the message
+    "read-only": ("open", False, errno.EROFS, "Read-only file system"),
+    "full disk": ("fsync", True, errno.ENOSPC, "No space left on device"),
+}
+
+
+@pytest.mark.parametrize("fault, option, name", [
+    ("read-only", "--save", "cal.json"), ("read-only", "--plot", "fit.png"),
+    ("read-only", "--save", "cal.mat"), ("full disk", "--save", "cal.json"),
+    ("full disk", "--plot", "fit.png")])
+def test_a_failing_disk_is_one_line_and_loses_nothing(fault, option, name, tmp_path, files,
+                                                       capsys, monkeypatch):
+    """A read-only folder (open fails) or a full disk (fsync fails) under the output: one
+    line naming the output and the system's reason, the previous file kept, no leftover."""
+    call, by_fd, err, message = FAULTS[fault]
+    folder = tmp_path / "out"
+    folder.mkdir()
+    out = folder / name
     out.write_bytes(b"the previous result")
-    monkeypatch.setattr(atomic.os, "open", _failing_under(ro, os.open, errno.EROFS, False))
+    real = getattr(os, call)
+    monkeypatch.setattr(atomic.os, call, _failing_under(folder, real, err, by_fd))
     line = one_line_error(capsys, "calibrate", files / "ensayo.mat", *NV, option, out,
                           "--force")
     monkeypatch.undo()
-    assert line.endswith(f"{out}: Read-only file system")
+    assert line.endswith(f"{out}: {message}")
     assert ".tmp" not in line and ".lock" not in line
     assert out.read_bytes() == b"the previous result"
-    assert sorted(os.listdir(ro)) == [name]
-
-
-@pytest.mark.parametrize("option, name", [("--save", "cal.json"), ("--plot", "fit.png")])
-def test_full_disk_is_one_line_and_loses_nothing(option, name, tmp_path, files, capsys,
-                                                 monkeypatch):
-    full = tmp_path / "full"
-    full.mkdir()
-    out = full / name
-    out.write_bytes(b"the previous result")
-    monkeypatch.setattr(atomic.os, "fsync", _failing_under(full, os.fsync, errno.ENOSPC, True))
-    line = one_line_error(capsys, "calibrate", files / "ensayo.mat", *NV, option, out,
-                          "--force")
-    monkeypatch.undo()
-    assert line.endswith(f"{out}: No space left on device") and ".tmp" not in line
-    assert out.read_bytes() == b"the previous result"
-    assert sorted(os.listdir(full)) == [name]
+    assert sorted(os.listdir(folder)) == [name]
 
 
 def test_a_refused_run_leaves_no_folder_it_created(tmp_path, files, capsys):
