@@ -153,7 +153,10 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
         if not used.all():
             rec.log("vehicle/plane/rejected_fixes", rr.Points2D(
                 fixes[~used], radii=rr.Radius.ui_points(4.0), colors=REJECTED_COLOR,
-                labels=[f"rejected: NIS {v:.3g}" for v in nis[~used]], show_labels=True,
+                labels=[f"rejected at {t:.4g} s: NIS {v:.0f}" for t, v in
+                        zip(np.asarray(res.t_gps, float)[~used] - t0, nis[~used],
+                            strict=True)],
+                show_labels=True,
                 draw_order=45.0), static=True)
         rec.log("vehicle/plane/fused/path", rr.LineStrips2D(
             [fused], radii=rr.Radius.ui_points(1.75), colors=FUSED_COLOR, draw_order=30.0),
