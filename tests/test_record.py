@@ -554,6 +554,7 @@ def test_fuse_rrd_of_an_inconsistent_run_has_the_status_and_no_fused_region(gps_
     assert status.startswith("**INCONSISTENT:") and "No fused region" in status
     decision = _component(rrd, "/summary/decision", "TextDocument:text")
     assert decision.startswith("### INCONSISTENT:") and "Fused 99.7% ellipse" not in decision
+    assert "### Fused arrival: none" in decision and "| high |" in decision
     failing = out["consistency"]["failing_windows"]
     tf, sf = _series(rrd, "/fusion/window_nis/failing")
     assert sf.size == len(failing) >= 1

@@ -202,7 +202,7 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
         if truth is not None:
             log_tree(rec, "truth", truth)
         text = _decision_text(decision, None if inconsistent else final, region,
-                              true_arrival(truth), consistency)
+                              true_arrival(truth), consistency, used)
         rec.log("summary/decision", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN),
                 static=True)
     return Path(path)
@@ -297,16 +297,19 @@ def _log_heading(rec, traj: TurningTrajectory, psi: np.ndarray, var: np.ndarray,
 
 def _decision_text(decision: Mapping, final: Ellipse | None,
                    region: ArrivalRegion | TurningRegion, answer: str | None,
-                   consistency: Consistency | None = None) -> str:
-    """The decision view: the verdict first when inconsistent (``final`` None: no fused
-    region), the fused decision, the truth's answer, the distances, the dead reckoning's."""
+                   consistency: Consistency | None = None,
+                   used: np.ndarray | None = None) -> str:
+    """The decision view: the verdict when inconsistent (``final`` None: no fused region,
+    decision none), the fused decision, the truth's answer, the distances, the consistency
+    text (gate count, failing windows), the dead reckoning's decision."""
     da = region.ellipse.semi_axes
     versus = f" against {da[0]:.1f} × {da[1]:.1f} m by dead reckoning."
     lines = []
+    letter = decision.get("decision") or "undecided"
     if consistency is not None and not consistency.consistent:
         lines += [f"### {consistency.verdict()}", ""]
-    lines += [f"### Fused arrival: {decision.get('decision') or 'undecided'}", "",
-              str(decision.get("reason", "")), ""]
+        letter = "none"
+    lines += [f"### Fused arrival: {letter}", "", str(decision.get("reason", "")), ""]
     if final is not None:
         sa = final.semi_axes
         lines += [f"Fused {100 * final.level:g}% ellipse {sa[0]:.2f} × {sa[1]:.2f} m{versus}",
@@ -315,9 +318,15 @@ def _decision_text(decision: Mapping, final: Ellipse | None,
         lines += ["No fused region (inconsistent inputs).", ""]
     if answer is not None:
         lines += [f"True arrival point (truth.json): **{answer}**", ""]
-    lines += ["| candidate | Mahalanobis (fused) |", "|---|---|"]
-    lines += [f"| {k} | {v:.2f} |" for k, v in decision.get("mahalanobis", {}).items()]
-    lines += ["", "#### Dead reckoning", "", decision_markdown(region, answer)]
+    if decision.get("mahalanobis"):
+        lines += ["| candidate | Mahalanobis (fused) |", "|---|---|"]
+        lines += [f"| {k} | {v:.2f} |" for k, v in decision["mahalanobis"].items()]
+        lines += [""]
+    if consistency is not None:
+        lines += ["#### Consistency", "",
+                  _consistency_text(consistency, np.ones(consistency.fixes, bool)
+                                    if used is None else used), ""]
+    lines += ["#### Dead reckoning", "", decision_markdown(region, answer)]
     return "\n".join(lines)
 
 
