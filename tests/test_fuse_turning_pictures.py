@@ -124,8 +124,13 @@ def test_fuse_writes_the_figure_and_the_recording_of_a_turning_run(capsys, turni
               "fusion/innovation/x", "fusion/heading/fused", "fusion/heading/true",
               "fusion/heading/dead_reckoning", "fusion/heading_std",
               "fusion/heading_error/fused", "fusion/heading_error_band/plus",
-              "vehicle/plane/arrival/ellipse", "vehicle/plane/arrival/estimate"):
+              "vehicle/plane/arrival/ellipse", "vehicle/plane/arrival/estimate",
+              "fusion/nis/used", "fusion/window_nis/sum", "fusion/window_nis/band/hi",
+              "summary/consistency"):
         assert e in ents, e
+    # the extended filter's doubts are recorded as `fuse --json` states them
+    assert rep["consistent"] is fused["consistent"] is True
+    assert rep["consistency"] == fused["consistency"]
     assert [e for e in ents if documented(e) is None
             or "fusion" not in documented(e).kinds] == []
     names = [v["name"] for v in read_blueprint(rrd)["views"]]

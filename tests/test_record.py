@@ -439,3 +439,132 @@ def test_generate_vehicle_and_course_rrd_give_truth_json(tmp_path, capsys, kind)
     bp = _assert_blueprint_shows_content(tmp_path / "t.rrd")
     _assert_plane_has_scale(tmp_path / "t.rrd", bp)
     assert any(v["origin"].startswith("calibration") for v in bp["views"]) == (kind == "course")
+
+
+@pytest.fixture(scope="module")
+def gps_course(tmp_path_factory):
+    """The seed-3 course set with a receiver (gps.mat), as tests/test_fuse_faults.py."""
+    out = tmp_path_factory.mktemp("rrdfuse") / "cs"
+    assert main(["generate", "course", "--seed", "3", "--out", str(out), "--gps"]) == 0
+    return out
+
+
+def _fuse_variant(src: Path, dst: Path, change) -> Path:
+    """A copy of the set with gps.mat's ``pos`` replaced by ``change(pos)``."""
+    import scipy.io as sio
+
+    dst.mkdir()
+    for f in ("ensayo.mat", "puntos.mat", "datos.txt", "acel.mat", "truth.json"):
+        shutil.copy(src / f, dst / f)
+    m = {k: v for k, v in sio.loadmat(src / "gps.mat").items() if not k.startswith("__")}
+    m["pos"] = change(np.array(m["pos"], float))
+    sio.savemat(dst / "gps.mat", m)
+    return dst
+
+
+def _fuse_rrd(capsys, d: Path, rrd: Path) -> tuple[int, dict]:
+    rc = main(["fuse", "--acel", str(d / "acel.mat"), "--gps", str(d / "gps.mat"),
+               "--puntos", str(d / "puntos.mat"), "--datos", str(d / "datos.txt"),
+               "--ensayo", str(d / "ensayo.mat"), "--rrd", str(rrd), "--json"])
+    return rc, json.loads(capsys.readouterr().out)
+
+
+def _series(path, entity: str) -> tuple[np.ndarray, np.ndarray]:
+    """(time s, value) of a scalar series logged with send_columns."""
+    t, v = [], []
+    for c in RrdReader(str(path)).stream().to_chunks():
+        b = c.to_record_batch()
+        if c.entity_path == entity and "Scalars:scalars" in b.schema.names:
+            t += [x.total_seconds() for x in b.column("time").to_pylist()]
+            v += [x[0] for x in b.column("Scalars:scalars").to_pylist()]
+    return np.array(t), np.array(v)
+
+
+def _points(path, entity: str) -> np.ndarray:
+    """The (n, 2) positions of a static Points2D entity."""
+    chunk = next(c for c in RrdReader(str(path)).stream().to_chunks()
+                 if c.entity_path == entity)
+    return np.array(chunk.to_record_batch().column("Points2D:positions").to_pylist()[-1],
+                    float).reshape(-1, 2)
+
+
+def test_fuse_rrd_marks_the_one_rejected_outlier_fix(gps_course, tmp_path, capsys):
+    """One fix moved 200 m (σ = 3 m, NIS in the thousands against a gate of 13.8): the
+    recording holds exactly that fix as `rejected_fixes`, at its position and time, with its
+    NIS as label and scalar above the gate; `fixes` holds the 59 others; the run stays
+    consistent with its fused region; the numbers read back equal `fuse --json`'s."""
+    import scipy.io as sio
+
+    k = 30
+
+    def outlier(p):
+        p[k] += [200.0, 0.0]
+        return p
+
+    d = _fuse_variant(gps_course, tmp_path / "outlier", outlier)
+    rrd = tmp_path / "o.rrd"
+    rc, out = _fuse_rrd(capsys, d, rrd)
+    assert rc == 0 and out["consistent"] and out["consistency"]["rejected"] == [k]
+    g = sio.loadmat(d / "gps.mat")
+    t0 = float(np.ravel(sio.loadmat(d / "acel.mat")["t"])[0])
+    t_fix = float(np.ravel(g["t_gps"])[k]) - t0
+    ents = recording_entities(rrd)
+    _assert_documented(ents, {"fusion"})
+    assert {"/vehicle/plane/rejected_fixes", "/fusion/nis/rejected", "/fusion/nis/gate",
+            "/vehicle/plane/fused/arrival", "/vehicle/plane/fused/ellipses"} <= set(ents)
+    assert "/fusion/window_nis/failing" not in ents
+    rejected = _points(rrd, "/vehicle/plane/rejected_fixes")
+    assert rejected.shape == (1, 2)
+    np.testing.assert_allclose(rejected[0], g["pos"][k], atol=1e-3)  # float32 drawing
+    assert _points(rrd, "/vehicle/plane/fixes").shape == (59, 2)
+    tr, nis = _series(rrd, "/fusion/nis/rejected")
+    gate = out["consistency"]["gate"]
+    assert tr.shape == (1,) and abs(tr[0] - t_fix) < 1e-6
+    assert nis[0] > 100 * gate
+    assert f"rejected at {t_fix:.4g} s: NIS {nis[0]:.0f}" in _labels(
+        rrd, "/vehicle/plane/rejected_fixes")
+    tu, _ = _series(rrd, "/fusion/nis/used")
+    assert tu.size == 59 and not np.any(np.isclose(tu, t_fix))
+    assert _component(rrd, "/summary/consistency", "TextDocument:text").startswith(
+        "**consistent:")
+    back = read_recording(rrd)["fusion_report"]
+    assert back["consistent"] is True and back["consistency"] == out["consistency"]
+    assert back["final_position"] == out["fusion"]["final_position"]
+    plane = next(v for v in _assert_blueprint_shows_content(rrd)["views"]
+                 if v["origin"] == "vehicle")
+    assert "1 rejected by the gate red" in plane["name"]
+    assert "vehicle/plane/rejected_fixes" in _shown(plane, rrd)
+
+
+def test_fuse_rrd_of_an_inconsistent_run_has_the_status_and_no_fused_region(gps_course,
+                                                                            tmp_path, capsys):
+    """Every fix +10 m in x passes the dead-reckoning check but the windowed NIS test fails
+    (docs/fusion.md's table, exit 3): the recording says INCONSISTENT (status text, decision
+    text, view names), draws no fused region, marks the failing window above its band, and
+    `record read` gives back the truth and `consistent: false`."""
+    d = _fuse_variant(gps_course, tmp_path / "off10", lambda p: p + [10.0, 0.0])
+    rrd = tmp_path / "i.rrd"
+    rc, out = _fuse_rrd(capsys, d, rrd)
+    assert rc == 3 and out["consistent"] is False
+    ents = set(recording_entities(rrd))
+    _assert_documented(ents, {"fusion"})
+    assert not {"/vehicle/plane/fused/arrival", "/vehicle/plane/fused/ellipses"} & ents
+    assert "/vehicle/plane/fused/path" in ents  # the path is shown, its region is not
+    status = _component(rrd, "/summary/consistency", "TextDocument:text")
+    assert status.startswith("**INCONSISTENT:") and "No fused region" in status
+    decision = _component(rrd, "/summary/decision", "TextDocument:text")
+    assert decision.startswith("### INCONSISTENT:") and "Fused 99.7% ellipse" not in decision
+    assert "### Fused arrival: none" in decision and "| high |" in decision
+    failing = out["consistency"]["failing_windows"]
+    tf, sf = _series(rrd, "/fusion/window_nis/failing")
+    assert sf.size == len(failing) >= 1
+    np.testing.assert_array_equal(sf, [w["nis_sum"] for w in failing])
+    _, hi = _series(rrd, "/fusion/window_nis/band/hi")
+    assert np.all(sf > [w["band"][1] for w in failing]) and hi.size == 2 * len(
+        out["consistency"]["hi"])
+    back = read_recording(rrd)
+    assert back["truth"] == json.loads((d / "truth.json").read_text())
+    assert back["fusion_report"]["consistent"] is False
+    assert back["fusion_report"]["decision"]["decision"] is None
+    names = [v["name"] for v in _assert_blueprint_shows_content(rrd)["views"]]
+    assert any(n.startswith("INCONSISTENT inputs, no fused region") for n in names)

@@ -129,7 +129,8 @@ def _cmd_fuse(args: argparse.Namespace) -> int:
         from bench.record.fusion import record_fusion
 
         record_fusion(args.rrd, traj, region, res.fusion, fused_pos, out["decision"], level,
-                      force=args.force, truth=truth, true_path=true_path, **extra)
+                      force=args.force, truth=truth, true_path=true_path,
+                      consistency=res.consistency, **extra)
     if args.json:
         print_json(out)
         return status
@@ -206,7 +207,9 @@ def register(sub) -> None:
                                   "also the truth and a heading panel)")
     p.add_argument("--rrd", help="write a rerun recording: truth (if known), dead reckoning, "
                                  "fixes, the fused path with its ellipses, the innovations, "
-                                 "the heading of a turning run (docs/recordings.md)")
+                                 "the rejected fixes, the NIS and its windowed test "
+                                 "(INCONSISTENT: no fused region), the heading of a turning "
+                                 "run (docs/recordings.md)")
     p.add_argument("--truth", help="truth.json for the recording and a turning run's figure "
                                    "(default: truth.json beside --acel, if there is one)")
     p.add_argument("--gate-alpha", type=float, default=GATE_ALPHA, metavar="A",

@@ -130,21 +130,33 @@ def vehicle_blueprint(bounds: Any, *, estimated: bool, acc: tuple[str, ...],
 
 
 def fusion_blueprint(bounds: Any, *, level: float, truth: bool, every_s: float | None,
-                     heading: bool = False) -> Any:
+                     heading: bool = False, inconsistent: bool = False,
+                     rejected: int = 0) -> Any:
     """The ``fuse --rrd`` layout: the plane (dead reckoning, fixes, fused path and ellipses,
-    truth) beside the innovations of each axis with their ±σ bounds, the fused position std
-    and the decision. The view names are the legend. ``heading`` (a turning run): a heading
-    view is added."""
+    truth) beside the innovations of each axis with their ±σ bounds, the fused position std,
+    the NIS of each fix with the gate, the windowed NIS with its band and the decision. The
+    view names are the legend. ``heading`` (a turning run): a heading view is added.
+    ``inconsistent``: the plane's name says so and names no fused region. ``rejected``:
+    fixes the gate rejected (named in red)."""
     import rerun.blueprint as rrb
 
     pct = f"{100 * level:g}%"
     every = f" every {every_s:.0f} s" if every_s else ""
-    parts = ["dead reckoning blue", "fixes light grey", f"fused purple ({pct} ellipses{every})",
-             f"{pct} arrival: fused purple, dead reckoning red", "candidates magenta"]
+    parts = ["dead reckoning blue", "fixes light grey"]
+    if rejected:
+        parts.append(f"{rejected} rejected by the gate red")
+    if inconsistent:
+        parts += ["fused purple (no region)", f"{pct} arrival: dead reckoning red"]
+    else:
+        parts += [f"fused purple ({pct} ellipses{every})",
+                  f"{pct} arrival: fused purple, dead reckoning red"]
+    parts.append("candidates magenta")
     if truth:
         parts.insert(0, "true green")
+    head = "INCONSISTENT inputs, no fused region — " if inconsistent else ""
     plane = rrb.Spatial2DView(origin="vehicle", contents=["+ vehicle/plane/**"],
-                              name="plane (m) — " + "; ".join(parts), visual_bounds=bounds)
+                              name=head + "plane (m) — " + "; ".join(parts),
+                              visual_bounds=bounds)
     side = [rrb.TimeSeriesView(origin="fusion", contents=[f"+ fusion/innovation/{a}",
                                                           f"+ fusion/innovation_band/{a}/**"],
                                name=f"innovation {a} (m): ν = fix − prediction, ±σ = "
@@ -152,6 +164,12 @@ def fusion_blueprint(bounds: Any, *, level: float, truth: bool, every_s: float |
             for a in AXES]
     side.append(rrb.TimeSeriesView(origin="fusion/position_std", axis_x=full_time_axis(),
                                    name="std of the fused position (m)"))
+    side.append(rrb.TimeSeriesView(origin="fusion/nis", axis_x=full_time_axis(),
+                                   name="NIS of each fix: used grey, rejected red, gate orange"))
+    side.append(rrb.TimeSeriesView(
+        origin="fusion/window_nis", axis_x=full_time_axis(),
+        name=("INCONSISTENT: " if inconsistent else "")
+             + "windowed NIS Σ min(NIS, c) purple, band orange, out of band red"))
     if heading:
         side.append(rrb.TimeSeriesView(
             origin="fusion/heading", axis_x=full_time_axis(),
@@ -167,7 +185,9 @@ def fusion_blueprint(bounds: Any, *, level: float, truth: bool, every_s: float |
         else:
             side.append(rrb.TimeSeriesView(origin="fusion/heading_std", axis_x=full_time_axis(),
                                            name="std of the fused heading (rad)"))
-    side.append(rrb.TextDocumentView(origin="summary/decision", name="decision"))
+    side.append(rrb.TextDocumentView(origin="summary/decision",
+                                     name="decision — INCONSISTENT" if inconsistent
+                                     else "decision"))
     shares = [2] * (len(side) - 1) + [3]
     layout = rrb.Horizontal(plane, rrb.Vertical(*side, row_shares=shares),
                             column_shares=[3, 2], name="fusion")

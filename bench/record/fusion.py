@@ -10,6 +10,18 @@ the dead-reckoning ``arrival/*``; ``fusion/innovation/{axis}``
 ``fusion/position_std/{axis}`` (filtered, m) on ``time``; ``fusion_report/**`` (the tree of
 :func:`fusion_report`), ``truth/**`` when known, ``summary/decision``.
 
+The filter's doubts (issue 23, docs/fusion.md "Doubting the inputs"): the fixes the
+innovation gate rejected are their own entity ``vehicle/plane/rejected_fixes`` (red, each
+labelled with its NIS) and are not in ``vehicle/plane/fixes`` (the fixes used); on ``time``,
+``fusion/nis/used|rejected`` (NIS = νᵀS⁻¹ν of each fix, dimensionless) with the gate
+``fusion/nis/gate`` (c = χ²_d⁻¹(1 − α_g)), and the windowed test of
+:class:`calib.innovation_check.Consistency`: ``fusion/window_nis/sum`` (T_w = Σ min(NIS, c)
+at each window's mid time), its two-sided band ``fusion/window_nis/band/lo|hi`` (a step over
+each window) and ``fusion/window_nis/failing`` (the windows out of band).
+``summary/consistency`` holds the verdict ("consistent: …" or "INCONSISTENT: …"); an
+inconsistent run has no fused region (no ``fused/arrival``, no ``fused/ellipses``), its
+decision text starts with the verdict and the plane view's name says "INCONSISTENT".
+
 A turning run (dead reckoning :class:`calib.turning_trajectory.TurningTrajectory`, region
 :class:`calib.turning_trajectory.TurningRegion`: the no-fix extended filter's covariance) has
 the same ``arrival/*`` and decision text, and the heading on ``time``: ``fusion/heading/fused``
@@ -40,23 +52,31 @@ from calib.turning_trajectory import TurningTrajectory, dead_reckoning_path, hea
 
 if TYPE_CHECKING:
     from calib.fusion import FusionResult
+    from calib.innovation_check import Consistency
     from calib.region import ArrivalRegion
     from calib.trajectory import Trajectory
     from calib.turning_trajectory import TurningRegion
 
 FUSED_COLOR = (160, 90, 230)
 FIX_COLOR = (210, 210, 210, 200)
+REJECTED_COLOR = (255, 40, 40)
+"""Rejected fixes and failing NIS windows: a red nothing else in the fusion scene uses."""
 MAX_ELLIPSES = 20
 """Ellipses drawn along the fused path: at every k-th fix, k chosen for at most this many."""
 
 
-def fusion_report(res: FusionResult, decision: Mapping, dead_reckoning_std) -> dict:
+def fusion_report(res: FusionResult, decision: Mapping, dead_reckoning_std,
+                  consistency: Consistency | None = None) -> dict:
     """The small tree logged under ``fusion_report/``: final fused position and covariance
     (m, m²), the dead-reckoning std (m; None if not given), the decision, mean
-    NIS, P0/Q/R (SI)."""
+    NIS, P0/Q/R (SI); with a ``consistency``, ``consistent`` and ``consistency`` (its
+    :meth:`~calib.innovation_check.Consistency.to_dict`, the ``fuse --json`` object's)."""
     cov = np.asarray(res.final_position_cov, float).reshape(2, 2)
     nis = res.nis()
-    return {"final_position": np.asarray(res.final_position, float).reshape(2).tolist(),
+    doubt = ({} if consistency is None else
+             {"consistent": consistency.consistent, "consistency": consistency.to_dict()})
+    return {**doubt,
+            "final_position": np.asarray(res.final_position, float).reshape(2).tolist(),
             "final_position_cov": cov.tolist(),
             "final_std": np.sqrt(np.diag(cov)).tolist(),
             "dead_reckoning_std": (None if dead_reckoning_std is None
@@ -76,7 +96,8 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
                   decision: Mapping, level: float, *, force: bool = False,
                   truth: Mapping | None = None, true_path: np.ndarray | None = None,
                   candidates: Mapping | None = None,
-                  true_heading: tuple[np.ndarray, np.ndarray] | None = None) -> Path:
+                  true_heading: tuple[np.ndarray, np.ndarray] | None = None,
+                  consistency: Consistency | None = None) -> Path:
     """Record a fused vehicle run (module docstring for the entities).
 
     Parameters
@@ -89,6 +110,8 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
     truth : ``truth.json`` object, if known.  true_path : (n, 2) true positions, m, if known.
     candidates : name → (2,) m; default ``region.candidates``.
     true_heading : (t s, ψ rad) of the truth, turning run, if known.
+    consistency : the windowed NIS verdict (``fuse_arrival(...).consistency``); not
+        consistent: no fused region is drawn and the verdict leads the texts.
     """
     import rerun as rr
 
@@ -101,14 +124,20 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
     dr = dead_reckoning_path(traj)
     fused = est[:, :2]
     final = Ellipse.from_cov(fused[-1], P[-1, :2, :2], level)
+    inconsistent = consistency is not None and not consistency.consistent
     nodes = _fix_nodes(res)
     every = max(1, int(np.ceil(nodes.size / MAX_ELLIPSES)))
     picked = nodes[::every]
+    fixes = np.asarray(fixes, float).reshape(-1, 2)
+    used = np.asarray(res.fix_used, bool).reshape(-1)
+    if used.shape[0] != fixes.shape[0]:  # the fixes are not the filter's: none marked
+        used = np.ones(fixes.shape[0], bool)
     cand = np.array(list(cands.values()), float)
     box_pts = (dr, fixes, fused, true_path, cand, region.ellipse.boundary(128))
     bp = fusion_blueprint(plane_bounds(*box_pts), level=level, truth=true_path is not None,
                           every_s=float(np.median(np.diff(t[picked]))) if picked.size > 1
-                          else None, heading=turning)
+                          else None, heading=turning, inconsistent=inconsistent,
+                          rejected=int(np.sum(~used)))
     with open_recording(path, force, bp, "fusion") as rec:
         rec.log("vehicle/plane", rr.Transform3D(scale=FLIP_Y), static=True)
         log_grid(rec, "vehicle/plane/grid", plane_box(*box_pts))
@@ -118,17 +147,28 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
                     [np.asarray(p, float)], radii=rr.Radius.ui_points(1.25),
                     colors=COLORS[name], draw_order=order), static=True)
         rec.log("vehicle/plane/fixes", rr.Points2D(
-            fixes, radii=rr.Radius.ui_points(2.5), colors=FIX_COLOR, draw_order=25.0),
+            fixes[used], radii=rr.Radius.ui_points(2.5), colors=FIX_COLOR, draw_order=25.0),
             static=True)
+        nis = np.asarray(res.nis(), float).reshape(-1)
+        if not used.all():
+            rec.log("vehicle/plane/rejected_fixes", rr.Points2D(
+                fixes[~used], radii=rr.Radius.ui_points(4.0), colors=REJECTED_COLOR,
+                labels=[f"rejected at {t:.4g} s: NIS {v:.0f}" for t, v in
+                        zip(np.asarray(res.t_gps, float)[~used] - t0, nis[~used],
+                            strict=True)],
+                show_labels=True,
+                draw_order=45.0), static=True)
         rec.log("vehicle/plane/fused/path", rr.LineStrips2D(
             [fused], radii=rr.Radius.ui_points(1.75), colors=FUSED_COLOR, draw_order=30.0),
             static=True)
-        rec.log("vehicle/plane/fused/ellipses", rr.LineStrips2D(
-            [Ellipse.from_cov(fused[j], P[j, :2, :2], level).boundary(64) for j in picked],
-            radii=rr.Radius.ui_points(1.0), colors=FUSED_COLOR, draw_order=31.0), static=True)
-        rec.log("vehicle/plane/fused/arrival", rr.LineStrips2D(
-            [final.boundary(128)], radii=rr.Radius.ui_points(2.0), colors=FUSED_COLOR,
-            draw_order=33.0), static=True)  # no label: it would overprint the arrival's
+        if not inconsistent:  # an inconsistent filter's covariance is no region to show
+            rec.log("vehicle/plane/fused/ellipses", rr.LineStrips2D(
+                [Ellipse.from_cov(fused[j], P[j, :2, :2], level).boundary(64) for j in picked],
+                radii=rr.Radius.ui_points(1.0), colors=FUSED_COLOR, draw_order=31.0),
+                static=True)
+            rec.log("vehicle/plane/fused/arrival", rr.LineStrips2D(
+                [final.boundary(128)], radii=rr.Radius.ui_points(2.0), colors=FUSED_COLOR,
+                draw_order=33.0), static=True)  # no label: it would overprint the arrival's
         rec.log("vehicle/plane/fused/position", rr.Points2D.from_fields(
             radii=rr.Radius.ui_points(5.0), colors=FUSED_COLOR, draw_order=40.0), static=True)
         rec.send_columns("vehicle/plane/fused/position",
@@ -149,16 +189,80 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
                            "line", COLORS["band"], f"{'+' if sign > 0 else '−'}σ {a}")
             log_series(rec, f"fusion/position_std/{a}", std[:, k], tn, "line",
                        COLORS[f"std_{a}"], f"std {a}")
+        _log_nis(rec, nis, used, tg, res.gate_alpha, nu.shape[-1])
+        if consistency is not None:
+            _log_windows(rec, consistency, t0)
+            rec.log("summary/consistency", rr.TextDocument(
+                _consistency_text(consistency, used), media_type=rr.MediaType.MARKDOWN),
+                static=True)
         if turning:
             _log_heading(rec, traj, est[:, 4], P[:, 4, 4], tn, t0, true_heading)
         log_tree(rec, "fusion_report",
-                 fusion_report(res, decision, region.std))
+                 fusion_report(res, decision, region.std, consistency))
         if truth is not None:
             log_tree(rec, "truth", truth)
-        text = _decision_text(decision, final, region, true_arrival(truth))
+        text = _decision_text(decision, None if inconsistent else final, region,
+                              true_arrival(truth), consistency, used)
         rec.log("summary/decision", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN),
                 static=True)
     return Path(path)
+
+
+def _log_nis(rec, nis: np.ndarray, used: np.ndarray, tg: Mapping, gate_alpha: float,
+             d: int) -> None:
+    """NIS = νᵀS⁻¹ν of each fix on ``time`` (used grey, rejected red) and the gate
+    c = χ²_d⁻¹(1 − α_g), d the fix's dimension."""
+    t = np.asarray(tg[TIME_TIMELINE], float)
+    if used.shape != nis.shape:  # fixes not the filter's (library use): all as used
+        used = np.ones(nis.shape, bool)
+    log_series(rec, "fusion/nis/used", nis[used], {TIME_TIMELINE: t[used]}, "points",
+               FIX_COLOR[:3], "NIS, fix used", 3.0)
+    if not used.all():
+        log_series(rec, "fusion/nis/rejected", nis[~used], {TIME_TIMELINE: t[~used]},
+                   "points", REJECTED_COLOR, "NIS, fix rejected", 5.0)
+    if gate_alpha > 0 and t.size:
+        from calib.kalman import gate_threshold
+
+        c = float(gate_threshold(gate_alpha, d))
+        log_series(rec, "fusion/nis/gate", np.array([c, c]), {TIME_TIMELINE: t[[0, -1]]},
+                   "line", COLORS["band"], f"gate c = {c:.3g} (α = {gate_alpha:g})", 1.5)
+
+
+def _log_windows(rec, cons: Consistency, t0: float) -> None:
+    """The windowed test on ``time``: T_w at each window's mid time, its band as a step over
+    the window (from its first to its last fix) and the failing windows in red."""
+    ts = np.asarray(cons.t_start, float) - t0
+    te = np.asarray(cons.t_end, float) - t0
+    mid = {TIME_TIMELINE: 0.5 * (ts + te)}
+    log_series(rec, "fusion/window_nis/sum", cons.stat, mid, "points", FUSED_COLOR,
+               f"Σ min(NIS, c) over ≤ {cons.window} fixes", 5.0)
+    step = {TIME_TIMELINE: np.column_stack([ts, te]).reshape(-1)}
+    for name, v in (("lo", cons.lo), ("hi", cons.hi)):
+        log_series(rec, f"fusion/window_nis/band/{name}", np.repeat(np.asarray(v, float), 2),
+                   step, "line", COLORS["band"], f"band {name} (α_w = {cons.per_window_alpha:.2g})",
+                   1.5)
+    bad = np.asarray(cons.failing, bool)
+    if bad.any():
+        log_series(rec, "fusion/window_nis/failing", np.asarray(cons.stat)[bad],
+                   {TIME_TIMELINE: mid[TIME_TIMELINE][bad]}, "points", REJECTED_COLOR,
+                   "window out of band", 7.0)
+
+
+def _consistency_text(cons: Consistency, used: np.ndarray) -> str:
+    """The verdict (one line, as ``fuse`` prints it), the gate's count and the failing
+    windows (Markdown)."""
+    gate = (f"Innovation gate at α = {cons.gate_alpha:g} (NIS ≥ {cons.gate:.3g}): "
+            f"{int(np.sum(~used))} of {used.size} fixes rejected."
+            if cons.gate_alpha > 0 else "No innovation gate.")
+    lines = [f"**{cons.verdict()}**", "", gate]
+    if not cons.consistent:
+        lines += ["", "No fused region: the filter's stated σ does not describe these fixes.",
+                  "", "| window (s) | fixes | Σ min(NIS, c) | band | side |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| {w['t_start']:g}–{w['t_end']:g} | {w['fixes']} | {w['nis_sum']:.3g} | "
+                  f"{w['band'][0]:.3g}–{w['band'][1]:.3g} | {w['side']} |"
+                  for w in cons.failing_windows]
+    return "\n".join(lines)
 
 
 def _log_heading(rec, traj: TurningTrajectory, psi: np.ndarray, var: np.ndarray,
@@ -191,19 +295,38 @@ def _log_heading(rec, traj: TurningTrajectory, psi: np.ndarray, var: np.ndarray,
                    COLORS["band"], f"{'+' if sign > 0 else '−'}σ", 1.0)
 
 
-def _decision_text(decision: Mapping, final: Ellipse, region: ArrivalRegion | TurningRegion,
-                   answer: str | None) -> str:
-    sa = final.semi_axes
+def _decision_text(decision: Mapping, final: Ellipse | None,
+                   region: ArrivalRegion | TurningRegion, answer: str | None,
+                   consistency: Consistency | None = None,
+                   used: np.ndarray | None = None) -> str:
+    """The decision view: the verdict when inconsistent (``final`` None: no fused region,
+    decision none), the fused decision, the truth's answer, the distances, the consistency
+    text (gate count, failing windows), the dead reckoning's decision."""
     da = region.ellipse.semi_axes
     versus = f" against {da[0]:.1f} × {da[1]:.1f} m by dead reckoning."
-    lines = [f"### Fused arrival: {decision.get('decision') or 'undecided'}", "",
-             str(decision.get("reason", "")), "",
-             f"Fused {100 * final.level:g}% ellipse {sa[0]:.2f} × {sa[1]:.2f} m{versus}", ""]
+    lines = []
+    letter = decision.get("decision") or "undecided"
+    if consistency is not None and not consistency.consistent:
+        lines += [f"### {consistency.verdict()}", ""]
+        letter = "none"
+    lines += [f"### Fused arrival: {letter}", "", str(decision.get("reason", "")), ""]
+    if final is not None:
+        sa = final.semi_axes
+        lines += [f"Fused {100 * final.level:g}% ellipse {sa[0]:.2f} × {sa[1]:.2f} m{versus}",
+                  ""]
+    else:
+        lines += ["No fused region (inconsistent inputs).", ""]
     if answer is not None:
         lines += [f"True arrival point (truth.json): **{answer}**", ""]
-    lines += ["| candidate | Mahalanobis (fused) |", "|---|---|"]
-    lines += [f"| {k} | {v:.2f} |" for k, v in decision.get("mahalanobis", {}).items()]
-    lines += ["", "#### Dead reckoning", "", decision_markdown(region, answer)]
+    if decision.get("mahalanobis"):
+        lines += ["| candidate | Mahalanobis (fused) |", "|---|---|"]
+        lines += [f"| {k} | {v:.2f} |" for k, v in decision["mahalanobis"].items()]
+        lines += [""]
+    if consistency is not None:
+        lines += ["#### Consistency", "",
+                  _consistency_text(consistency, np.ones(consistency.fixes, bool)
+                                    if used is None else used), ""]
+    lines += ["#### Dead reckoning", "", decision_markdown(region, answer)]
     return "\n".join(lines)
 
 

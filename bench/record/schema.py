@@ -137,24 +137,49 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
     EntityDoc("summary/decision", "TextDocument (Markdown)", "static",
               "arrival decision, distances to the candidates (fusion: fused and dead "
               "reckoning)", ("vehicle", "fusion")),
-    EntityDoc("vehicle/plane/fixes", "Points2D", "static", "position fixes used by `fuse`, m",
+    EntityDoc("vehicle/plane/fixes", "Points2D", "static",
+              "position fixes used by `fuse` (inside the run, not rejected by the gate), m",
               ("fusion",)),
+    EntityDoc("vehicle/plane/rejected_fixes", "Points2D (labels)", "static",
+              "fixes the innovation gate rejected (NIS ≥ c), red, each labelled with its NIS, m",
+              ("fusion",), optional=True),
     EntityDoc("vehicle/plane/fused/path", "LineStrips2D", "static",
               "Kalman-filtered path (every node), m", ("fusion",)),
     EntityDoc("vehicle/plane/fused/position", "Points2D", "time",
               "filtered position at the current time, m", ("fusion",)),
     EntityDoc("vehicle/plane/fused/ellipses", "LineStrips2D", "static",
-              "filtered confidence ellipses at the stated level at every k-th fix (≤ 20), m",
-              ("fusion",)),
+              "filtered confidence ellipses at the stated level at every k-th fix (≤ 20), m; "
+              "absent when the run is inconsistent", ("fusion",), optional=True),
     EntityDoc("vehicle/plane/fused/arrival", "LineStrips2D", "static",
               "fused arrival ellipse at the stated level (unlabelled: the decision view gives "
-              "its size), m", ("fusion",)),
+              "its size), m; absent when the run is inconsistent", ("fusion",), optional=True),
     EntityDoc("fusion/innovation/{axis}", "Scalars + SeriesPoints", "time",
               "innovation ν = fix − predicted position at each fix, m", ("fusion",)),
     EntityDoc("fusion/innovation_band/{axis}/{k}", "Scalars + SeriesLines", "time",
               "±sqrt(S_ii) of the innovation (k = plus, minus), m", ("fusion",)),
     EntityDoc("fusion/position_std/{axis}", "Scalars + SeriesLines", "time",
               "std of the filtered position, m", ("fusion",)),
+    EntityDoc("fusion/nis/used", "Scalars + SeriesPoints", "time",
+              "NIS = νᵀS⁻¹ν of each fix the filter used (χ²_d under a right model), "
+              "dimensionless", ("fusion",)),
+    EntityDoc("fusion/nis/rejected", "Scalars + SeriesPoints", "time",
+              "NIS of each fix the gate rejected (red), dimensionless", ("fusion",),
+              optional=True),
+    EntityDoc("fusion/nis/gate", "Scalars + SeriesLines", "time",
+              "the gate c = χ²_d⁻¹(1 − α_g) over the fixes' span (`--gate-alpha` > 0), "
+              "dimensionless", ("fusion",), optional=True),
+    EntityDoc("fusion/window_nis/sum", "Scalars + SeriesPoints", "time",
+              "windowed NIS test: T_w = Σ min(NIS, c) over each window of ≤ K fixes, at the "
+              "window's mid time, dimensionless", ("fusion",)),
+    EntityDoc("fusion/window_nis/band/{k}", "Scalars + SeriesLines", "time",
+              "two-sided band of T_w at Šidák's α_w (k = lo, hi), a step from each window's "
+              "first to its last fix, dimensionless", ("fusion",)),
+    EntityDoc("fusion/window_nis/failing", "Scalars + SeriesPoints", "time",
+              "T_w of the windows out of their band (red), dimensionless", ("fusion",),
+              optional=True),
+    EntityDoc("summary/consistency", "TextDocument (Markdown)", "static",
+              "the consistency verdict (\"consistent: …\" or \"INCONSISTENT: …\", as `fuse` "
+              "prints it), the gate's count and the failing windows", ("fusion",)),
     EntityDoc("fusion/heading/{k}", "Scalars + SeriesLines", "time",
               "turning run: heading ψ, k = fused (filtered), dead_reckoning (gyro integrated) "
               "or true (truth.json, every second), rad", ("fusion",), optional=True),
@@ -168,7 +193,8 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
               "minus), rad", ("fusion",), optional=True),
     EntityDoc("fusion_report/**", "Scalars | TextDocument, + json_type, json_path", "static",
               "final fused position, covariance and std, dead reckoning's std, fixes, mean "
-              "NIS, P0/Q/R, decision (read back under \"fusion_report\")", ("fusion",)),
+              "NIS, P0/Q/R, decision, `consistent` and `consistency` (as `fuse --json`; read "
+              "back under \"fusion_report\")", ("fusion",)),
     EntityDoc("gap/{axis}/residual_{k}", "Scalars + SeriesPoints", "sample, theta_urad",
               "discrepancy workflow: residual before / after adding the named effects, m/s² "
               "(bench/gap/recording.py)", ("gap",)),
