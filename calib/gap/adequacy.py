@@ -32,7 +32,8 @@ check                     statistic and reference distribution under the model
 ``lattice``               readings on a lattice the model does not have
 ``walk_whiteness``        (random-walk axes) Ljung-Box of the innovations, ``χ²(h)``
 ``rival_shapes``          (axes with named effects) a polynomial, periodic or step path of
-                          the bias in place of the named effects: its likelihood ratio over
+                          the bias, or a gain differing by the sign of the specific force,
+                          in place of the named effects: its likelihood ratio over
                           them against χ²(extra parameters), Bonferroni over the search
                           (:func:`_rivals`)
 ``gap_noise``             the gap after (:func:`calib.diagnostics.gap_measure` of the final
@@ -47,9 +48,11 @@ consistent (``adequacy.consistent``) exactly when every check on it passes, so "
 "nothing detected" are never stated beside a gap after that is not consistent with noise.
 
 Family-wise error: every check with a p-value is run at ``α_check = family_alpha / m`` with m
-the number of such checks on the run (Bonferroni), so on a run that the model describes the
-battery fails with probability ≤ ``family_alpha`` (default 0.005; with the selection's 0.005,
-a clean run is named or called unexplained with probability ≤ 1 %).
+the number of such checks on the run (Bonferroni; weighted for the few checks in
+:data:`CHECK_WEIGHTS`, at ``w·family_alpha/Σw``, ``alpha_check`` the level of weight 1), so
+on a run that the model describes the battery fails with probability ≤ ``family_alpha``
+(default 0.005; with the selection's 0.005, a clean run is named or called unexplained with
+probability ≤ 1 %).
 Every check has a p-value; ``rival_shapes`` runs only where effects are named.
 """
 
@@ -86,6 +89,19 @@ MIN_GROUP = 30
 
 OUTLIER_Z = 5.0
 """|z| counted as an outlier in the description."""
+
+CHECK_WEIGHTS = {"walk_spectrum": 8.0}
+"""Weights of the weighted Bonferroni rule (check i at ``w_i·family_alpha/Σw``, so the levels
+still sum to ``family_alpha``); every other check weighs 1. ``walk_spectrum`` (the flicker
+floor of a named walk's path, :mod:`calib.gap.walk`) weighs 8: faint 1/f noise is absorbed
+by a walk with its Allan floor at p ≈ 1e-3–1e-4, just above the plain per-check level
+(≈ 1.3e-4 over ≈ 37 checks), while a true walk fails it at p < 1e-3 in 0.13 % of runs
+(:func:`calib.gap.walk.flicker_test`): the walk's own spectrum gets ≈ 9e-4, the other
+checks ≈ 1.1e-4. It runs only where a walk is named, so clean runs are unaffected."""
+
+SHAPE_FAMILIES = 4.0
+"""Shape families of ``rival_shapes`` (polynomial, sinusoid, step, sign asymmetry): the
+Bonferroni factor beside each one's search."""
 
 
 @dataclass(frozen=True)
@@ -314,11 +330,13 @@ def _rivals(ext: Extensions, state: ModelState, k: int) -> Check | None:
     walk counts :func:`calib.gap.selection.walk_cost` parameters) is removed, and in its
     place, each alone: a polynomial in time (degree 1 … 4: 4 parameters), one sinusoid at the
     periodogram peak (amplitude and phase: 2, searched over m frequencies) and one step of
-    the bias at the CUSUM peak (size: 1, searched over N - 1 places). ``D = LR_shape -
+    the bias at the CUSUM peak (size: 1, searched over N - 1 places), and a gain that differs
+    by the sign of the axis' own specific force (``max(A_r, 0)`` beside the scale's ``A_r``:
+    1, no search; IEEE Std 1293 scale asymmetry, not in the catalog). ``D = LR_shape -
     LR_named`` is the likelihood ratio of the shape over the named set. When the named set is
     right and the shape contains it (the worst case: nested), ``D ≲ χ²(d)`` with ``d = k_shape
-    - p_named`` (at least 1), maximised over the search: ``p = min(1, 3·m_search·P(χ²_d ≥ D))``
-    (Bonferroni over the three shapes and the search). A small p says a shape outside the
+    - p_named`` (at least 1), maximised over the search: ``p = min(1, 4·m_search·P(χ²_d ≥ D))``
+    (Bonferroni over the four shapes and the search). A small p says a shape outside the
     catalog explains the data better than the named effects, which are bending to follow it.
     """
     axis = AXES[k]
@@ -342,7 +360,7 @@ def _rivals(ext: Extensions, state: ModelState, k: int) -> Check | None:
             return
         d = max(n_par - cost, 1.0)
         lr_d = fit[0] - lr_named
-        logp = 0.0 if lr_d <= 0 else min(0.0, float(np.log(3.0 * searched)
+        logp = 0.0 if lr_d <= 0 else min(0.0, float(np.log(SHAPE_FAMILIES * searched)
                                                     + stats.chi2.logsf(lr_d, d)))
         shapes.append((logp, what, size, lr_d, d))
 
@@ -366,6 +384,16 @@ def _rivals(ext: Extensions, state: ModelState, k: int) -> Check | None:
     if step is not None:
         where = f"t = {run.tcol[i]:.4g} s" if run.time_unit == "s" else f"sample {i}"
         add(step, 1, run.n - 1, f"a step of the bias at {where}", abs(float(step[2][0])))
+    # A gain that differs for positive and negative specific force (scale asymmetry): the
+    # column max(A_r, 0) beside the scale's A_r, no search. K2's A_r² follows |A_r| on a
+    # stop-and-go run and the walk takes the rest, so the named pair mimics it.
+    a = run.a_ref[:, k]
+    if np.min(a) < 0.0 < np.max(a):
+        asym = space.test(np.maximum(a, 0.0)[:, None])
+        if asym is not None:
+            add(asym, 1, 1, f"a gain on {axis} that differs for positive and negative specific "
+                f"force by {float(asym[2][0]):+.3g}", abs(float(asym[2][0])) * float(np.max(
+                    np.abs(a))))
     if not shapes:
         return None
     logp, shape, size, lr_d, d = min(shapes)
@@ -456,11 +484,10 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
             found.append(_gap_signatures(gaps[axis], axis))
         checks += [c for c in found if c is not None]
     checks += list(extra or ())
-    m = len(checks)
-    alpha_check = family_alpha / max(m, 1)
-    log_a = float(np.log(alpha_check))
+    weights = [CHECK_WEIGHTS.get(c.name, 1.0) for c in checks]
+    alpha_check = family_alpha / max(sum(weights), 1.0)
     out = []
-    for c in checks:
-        failed = c.logp < log_a
+    for c, w in zip(checks, weights, strict=True):
+        failed = c.logp < float(np.log(w * alpha_check))
         out.append(Check(**{**c.__dict__, "failed": bool(failed)}))
     return Battery(tuple(out), float(family_alpha), float(alpha_check))
