@@ -109,7 +109,10 @@ def test_exact_run_joint_wls_is_refused_in_one_line(tmp_path, capsys):
 def test_small_runs_gap(tmp_path, capsys, n):
     """N = 3 used to divide by zero (σ² named with no degree of freedom left)."""
     path = _ensayo(tmp_path / "e.mat", n, np.random.default_rng(n))
-    _clean_result(*run(capsys, "gap", path, "--noise-var", "0.25,0.64", "--json"))
+    res = _clean_result(*run(capsys, "gap", path, "--noise-var", "0.25,0.64", "--json"))
+    # bias and scale only: nothing to find, and no noise level named without a dof for it
+    assert res["verdict"] == "nothing_detected"
+    assert res["effects"] == []
 
 
 # ---------------------------------------------------------------- numeric options
