@@ -11,7 +11,7 @@ import numpy as np
 from scipy import linalg as sla
 from scipy import optimize, stats
 
-from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G
+from calib.conventions import AXES, JOINT_PARAM_NAMES, G
 from calib.input_rules import DataError
 from calib.lackoffit import LackOfFit
 from calib.ls import FitResult, NotIdentifiableError, PoorlyIdentifiedWarning
@@ -21,7 +21,7 @@ from calib.multiposition.shared import (
     SAME_POSE_STD,
     SPAN_FRACTION,
     UNIDENTIFIED_STD,
-    FitIntervals,
+    PoseFit,
     Poses,
     Sigma2Source,
     distinct_orientations,
@@ -37,7 +37,7 @@ plane (e.g. a 3-axis IMU lying with z up): it is left out, with a warning."""
 
 
 @dataclass(frozen=True, eq=False)
-class MultiPositionFit(FitIntervals, ResultMixin):
+class MultiPositionFit(PoseFit, ResultMixin):
     """Bias and scale of both axes from held poses with θ unknown (:mod:`calib.multiposition`).
 
     Attributes
@@ -91,34 +91,12 @@ class MultiPositionFit(FitIntervals, ResultMixin):
             object.__setattr__(self, name, readonly(getattr(self, name)))
         object.__setattr__(self, "param_names", tuple(self.param_names))
 
-    @property
-    def std(self) -> np.ndarray:
-        """(4,) standard deviations of ``params``."""
-        return np.sqrt(np.diag(self.cov))
-
-    @property
-    def n(self) -> int:
-        """Samples used (held poses only)."""
-        return int(self.poses.n.sum())
-
-    @property
-    def bias(self) -> np.ndarray:
-        return self.params[[0, 2]]
-
-    @property
-    def scale(self) -> np.ndarray:
-        return self.params[[1, 3]]
-
     def summary(self, level: float = 0.95) -> str:
         out = [f"Calibration: multi-position (θ unknown, gravity norm), g = {self.g} m/s², "
                f"N = {self.n}, {self.poses.count} poses",
                *self.param_table(level)]
-        s2 = ", ".join(f"{v:.4g}" for v in self.sigma2)
-        src = ("given" if self.sigma2_source == "given"
-               else f"estimated within poses, dof {self.sigma2_dof}")
-        fit_line = (f"χ²/dof = {self.chi2_dof:.4f}; dof = {self.dof}" if self.dof > 0 else
-                    "dof = 0: 4 poses fit the ellipse exactly (5 or more test the fit)")
-        out.append(f"σ² = {s2} (m/s²)² ({src}); {fit_line}")
+        out.append(self.sigma2_line(
+            "", "dof = 0: 4 poses fit the ellipse exactly (5 or more test the fit)"))
         out.append(f"identifiability: {self.poses.count} poses, largest gap between pose "
                    f"directions {np.degrees(self.max_gap):.1f}°, rank {self.rank}, "
                    f"cond = {self.cond:.3g}")
@@ -130,10 +108,6 @@ class MultiPositionFit(FitIntervals, ResultMixin):
         if self.lack_of_fit is not None:
             out.append(self.lack_of_fit.summary())
         return "\n".join(out)
-
-    @property
-    def chi2_dof(self) -> float:
-        return self.chi2 / self.dof if self.dof > 0 else float("nan")
 
     def to_dict(self) -> dict:
         return {
@@ -166,25 +140,16 @@ class MultiPositionFit(FitIntervals, ResultMixin):
         ``joint``, the per-axis marginal blocks in ``fits`` — what ``--save cal.json`` and
         ``trajectory --calibration`` use.
 
-        The fits' χ² is that of the samples, as for the least squares: every held sample
-        against its pose's model value, ``Σ_ij (m_ij − model_i)² / σ² = (SS_within +
-        Σ n_i r_i²) / σ²`` per axis, with ``dof = N − P`` (samples less the poses' means);
-        finite also for P = 4 poses, where the pose means fit exactly. Residuals: the pose
-        means' (P per axis), m/s². The joint test of the fit is :attr:`lack_of_fit`."""
+        The fits' χ² is that of the samples, as for the least squares
+        (:meth:`~calib.multiposition.shared.PoseFit.plane_fits`); finite also for P = 4
+        poses, where the pose means fit exactly. The joint test of the fit is
+        :attr:`lack_of_fit`."""
         from calib.calibration import Calibration
 
-        chi2 = (self.poses.ss_within
-                + np.sum(self.poses.n[:, None] * self.residuals**2, axis=0)) / self.sigma2
-        dof = self.sigma2_dof
-        extra = {"sigma2_dof": self.sigma2_dof} if self.sigma2_source == "estimated" else {}
-        fits = {}
-        for k, a in enumerate(AXES):
-            sl = slice(2 * k, 2 * k + 2)
-            fits[a] = FitResult(PARAM_NAMES, self.params[sl], self.cov[sl, sl],
-                                self.residuals[:, k], self.sigma2[k], self.sigma2_source,
-                                dof, 2, self.cond, float(chi2[k]), dict(extra))
+        fits, chi2, extra = self.plane_fits()
         joint = FitResult(JOINT_PARAM_NAMES, self.params, self.cov, self.residuals,
-                          self.sigma2, self.sigma2_source, 2 * dof, self.rank, self.cond,
+                          self.sigma2, self.sigma2_source, 2 * self.sigma2_dof, self.rank,
+                          self.cond,
                           float(chi2.sum()), {**extra, "angles": self.angles.tolist(),
                                               "angles_std": self.angles_std.tolist()})
         return Calibration("multiposition", self.g, fits, self.n, joint=joint)

@@ -39,11 +39,68 @@ same line) cannot identify its scale: refused, naming ``scale_<axis>``."""
 Sigma2Source = Literal["given", "estimated"]
 
 
-class FitIntervals:
-    """Intervals and the parameter table of a multi-position fit (planar or 3-axis): the
-    fit provides ``params``, ``std``, ``param_names``, ``sigma2_source`` and ``sigma2_dof``.
-    Normal quantiles when σ² was given, Student t with the pure-error dof when it was
-    estimated within the poses."""
+class PoseFit:
+    """What a multi-position fit (planar or 3-axis) shares: parameters ordered
+    ``[bias, scale]`` per axis, intervals, the parameter table, the σ² line and the tilt-plane
+    fits of :meth:`to_calibration`. The fit provides ``params``, ``cov``, ``param_names``,
+    ``poses``, ``residuals`` (per pose mean, m/s²), ``sigma2``, ``sigma2_source``,
+    ``sigma2_dof``, ``chi2``, ``dof`` and ``cond``. Intervals: normal quantiles when σ² was
+    given, Student t with the pure-error dof when it was estimated within the poses."""
+
+    @property
+    def std(self) -> np.ndarray:
+        """Standard deviations of ``params`` (the units of each)."""
+        return np.sqrt(np.diag(self.cov))
+
+    @property
+    def n(self) -> int:
+        """Samples used (held poses only)."""
+        return int(self.poses.n.sum())
+
+    @property
+    def bias(self) -> np.ndarray:
+        """Bias of each axis, m/s² (the fit's axis order)."""
+        return self.params[0::2]
+
+    @property
+    def scale(self) -> np.ndarray:
+        """Scale-factor error of each axis, dimensionless."""
+        return self.params[1::2]
+
+    @property
+    def chi2_dof(self) -> float:
+        return self.chi2 / self.dof if self.dof > 0 else float("nan")
+
+    def sigma2_line(self, per: str, exact: str) -> str:
+        """``σ² = … (m/s²)²<per> (given | estimated within poses, dof k); χ²/dof …`` —
+        ``exact`` replaces the χ² part when dof = 0."""
+        s2 = ", ".join(f"{v:.4g}" for v in self.sigma2)
+        src = ("given" if self.sigma2_source == "given"
+               else f"estimated within poses, dof {self.sigma2_dof}")
+        fit = f"χ²/dof = {self.chi2_dof:.4f}; dof = {self.dof}" if self.dof > 0 else exact
+        return f"σ² = {s2} (m/s²)²{per} ({src}); {fit}"
+
+    def plane_fits(self) -> tuple[dict, np.ndarray, dict]:
+        """The tilt-plane axes' :class:`~calib.ls.FitResult` (x, y), the χ² of the samples
+        per axis and the ``extra`` of the fits, for :meth:`to_calibration`.
+
+        χ² of every held sample against its pose's model value,
+        ``Σ_ij (m_ij − model_i)² / σ² = (SS_within + Σ n_i r_i²) / σ²`` per axis, with
+        ``dof = N − P`` (samples less the poses' means): finite also when the pose means fit
+        exactly. Residuals: the pose means' (P per axis), m/s²."""
+        from calib.conventions import AXES, PARAM_NAMES
+        from calib.ls import FitResult
+
+        chi2 = (self.poses.ss_within
+                + np.sum(self.poses.n[:, None] * self.residuals**2, axis=0)) / self.sigma2
+        extra = {"sigma2_dof": self.sigma2_dof} if self.sigma2_source == "estimated" else {}
+        fits = {}
+        for k, a in enumerate(AXES):
+            sl = slice(2 * k, 2 * k + 2)
+            fits[a] = FitResult(PARAM_NAMES, self.params[sl], self.cov[sl, sl],
+                                self.residuals[:, k], self.sigma2[k], self.sigma2_source,
+                                self.sigma2_dof, 2, self.cond, float(chi2[k]), dict(extra))
+        return fits, chi2, extra
 
     def quantile(self, level: float) -> float:
         """Two-sided quantile: normal (σ² given) or Student t with ``sigma2_dof``."""

@@ -11,7 +11,7 @@ import numpy as np
 from scipy import linalg as sla
 from scipy import optimize, stats
 
-from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G
+from calib.conventions import JOINT_PARAM_NAMES, G
 from calib.input_rules import DataError
 from calib.lackoffit import LackOfFit
 from calib.ls import FitResult, NotIdentifiableError, PoorlyIdentifiedWarning
@@ -21,7 +21,7 @@ from calib.multiposition.shared import (
     SAME_POSE_STD,
     SPAN_FRACTION,
     UNIDENTIFIED_STD,
-    FitIntervals,
+    PoseFit,
     Poses,
     Sigma2Source,
     distinct_orientations,
@@ -61,7 +61,7 @@ def quantization_step(values: np.ndarray) -> float:
 
 
 @dataclass(frozen=True, eq=False)
-class MultiPosition3DFit(FitIntervals, ResultMixin):
+class MultiPosition3DFit(PoseFit, ResultMixin):
     """Bias and scale of three axes from held poses, no angle reference
     (:func:`fit_multiposition3d`).
 
@@ -122,39 +122,11 @@ class MultiPosition3DFit(FitIntervals, ResultMixin):
             object.__setattr__(self, name, readonly(getattr(self, name)))
         object.__setattr__(self, "param_names", tuple(self.param_names))
 
-    @property
-    def std(self) -> np.ndarray:
-        """(6,) standard deviations of ``params``."""
-        return np.sqrt(np.diag(self.cov))
-
-    @property
-    def n(self) -> int:
-        return int(self.poses.n.sum())
-
-    @property
-    def bias(self) -> np.ndarray:
-        """(3,) m/s², x, y, n."""
-        return self.params[[0, 2, 4]]
-
-    @property
-    def scale(self) -> np.ndarray:
-        """(3,) x, y, n."""
-        return self.params[[1, 3, 5]]
-
-    @property
-    def chi2_dof(self) -> float:
-        return self.chi2 / self.dof if self.dof > 0 else float("nan")
-
     def summary(self, level: float = 0.95) -> str:
         out = [f"Calibration: multi-position, 3 axes (gravity norm, no angle reference), "
                f"g = {self.g} m/s², N = {self.n}, {self.poses.count} poses",
                *self.param_table(level)]
-        s2 = ", ".join(f"{v:.4g}" for v in self.sigma2)
-        src = ("given" if self.sigma2_source == "given"
-               else f"estimated within poses, dof {self.sigma2_dof}")
-        fit_line = (f"χ²/dof = {self.chi2_dof:.4f}; dof = {self.dof}" if self.dof > 0
-                    else "dof = 0")
-        out.append(f"σ² = {s2} (m/s²)² per sample ({src}); {fit_line}")
+        out.append(self.sigma2_line(" per sample", "dof = 0"))
         if np.any(self.quantization > 0):
             qs = ", ".join(f"{v:.4g}" for v in self.quantization)
             out.append(f"quantization step q = {qs} m/s²: each pose mean's variance is "
@@ -212,20 +184,12 @@ class MultiPosition3DFit(FitIntervals, ResultMixin):
         the directions marginalised), as :meth:`MultiPositionFit.to_calibration`; the normal
         axis's bias and scale ride along in the joint fit's ``extra["normal"]``.
 
-        Per axis χ² of the samples ``(SS_within + Σ n_i r_i²) / σ²`` with ``dof = N − P``,
-        residuals the pose means' (m/s²)."""
+        Per axis χ² of the samples with ``dof = N − P``, residuals the pose means' (m/s²):
+        :meth:`~calib.multiposition.shared.PoseFit.plane_fits`."""
         from calib.calibration import Calibration
 
-        chi2 = (self.poses.ss_within
-                + np.sum(self.poses.n[:, None] * self.residuals**2, axis=0)) / self.sigma2
+        fits, chi2, extra = self.plane_fits()
         dof = self.sigma2_dof
-        extra = {"sigma2_dof": self.sigma2_dof} if self.sigma2_source == "estimated" else {}
-        fits = {}
-        for k, a in enumerate(AXES):
-            sl = slice(2 * k, 2 * k + 2)
-            fits[a] = FitResult(PARAM_NAMES, self.params[sl], self.cov[sl, sl],
-                                self.residuals[:, k], self.sigma2[k], self.sigma2_source,
-                                dof, 2, self.cond, float(chi2[k]), dict(extra))
         normal = {"params": self.params[4:].tolist(), "std": self.std[4:].tolist(),
                   "param_names": list(self.param_names[4:])}
         joint = FitResult(JOINT_PARAM_NAMES, self.params[:4], self.cov[:4, :4],
