@@ -101,6 +101,14 @@ def write_sensorlogger(path: Path, seed: int = 3) -> Path:
 
 def _imu_messages(typestore, seed: int):
     t_ns, _, acc, gyro, _ = simulated(seed)
+    # bag time differs from the stamp: the stamp is used
+    yield from imu_messages(typestore, t_ns, acc, gyro, bag_offset_ns=1234)
+
+
+def imu_messages(typestore, t_ns: np.ndarray, acc: np.ndarray, gyro: np.ndarray,
+                 bag_offset_ns: int = 0):
+    """``(bag time ns, sensor_msgs/Imu)`` of each sample: stamp ``t_ns``, acceleration
+    ``acc`` (N, 3) m/s², rate ``gyro`` (N, 3) rad/s; ROS 1 headers get a ``seq``."""
     Imu = typestore.types["sensor_msgs/msg/Imu"]
     Header = typestore.types["std_msgs/msg/Header"]
     Time = typestore.types["builtin_interfaces/msg/Time"]
@@ -116,7 +124,7 @@ def _imu_messages(typestore, seed: int):
                   angular_velocity_covariance=np.zeros(9),
                   linear_acceleration=Vec(x=acc[k, 0], y=acc[k, 1], z=acc[k, 2]),
                   linear_acceleration_covariance=np.zeros(9))
-        yield int(t_ns[k]) + 1234, msg  # bag time differs from the stamp: the stamp is used
+        yield int(t_ns[k]) + bag_offset_ns, msg
 
 
 def write_ros2(path: Path, topics=("/imu",), seed: int = 3) -> Path:

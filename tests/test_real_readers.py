@@ -36,6 +36,7 @@ import scipy.io
 from calib.logs import LogOptions, read_log
 from calib.ls import fit_axis
 from tests.cli import one_line_error, run
+from tests.logfixtures import imu_messages, seconds
 from tests.reference import real_data as ref
 
 G = 9.8  # m/s²: the readers' default g, used for the unit g and for A_r
@@ -120,10 +121,6 @@ def test_one_command_import_agrees_with_the_six_position_reference(capsys, tmp_p
         assert abs(fit.params[j] - want[name]) <= bound, (name, fit.params[j], want[name])
 
 
-def _seconds(t_ns: np.ndarray) -> np.ndarray:
-    return (t_ns // 1_000_000_000).astype(float) + (t_ns % 1_000_000_000).astype(float) * 1e-9
-
-
 def _yei_si() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The YEI readings in SI, read with plain csv: ``(t_ns, acc m/s², gyro rad/s)``."""
     spec = ref.SPECS[YEI.name]
@@ -143,7 +140,7 @@ def _write_formats(d: Path) -> dict[str, Path]:
     from rosbags.typesys import Stores, get_typestore
 
     t_ns, acc, gyro = _yei_si()
-    t = _seconds(t_ns)
+    t = seconds(t_ns)
     num = np.vectorize(repr)
     paths = {}
     head = "time (s),ax (m/s^2),ay (m/s^2),az (m/s^2),gx (rad/s),gy (rad/s),gz (rad/s)"
@@ -159,21 +156,10 @@ def _write_formats(d: Path) -> dict[str, Path]:
     scipy.io.savemat(d / "yei.mat", {"acc": acc, "time": t.reshape(-1, 1)})
     paths["mat"] = d / "yei.mat"
     ts = get_typestore(Stores.ROS2_HUMBLE)
-    Imu, Header = ts.types["sensor_msgs/msg/Imu"], ts.types["std_msgs/msg/Header"]
-    Time, Quat = ts.types["builtin_interfaces/msg/Time"], ts.types["geometry_msgs/msg/Quaternion"]
-    Vec = ts.types["geometry_msgs/msg/Vector3"]
     with Writer(d / "bag", version=8) as w:
-        conn = w.add_connection("/imu", Imu.__msgtype__, typestore=ts)
-        for k in range(t_ns.size):
-            stamp = Time(sec=int(t_ns[k] // 1_000_000_000), nanosec=int(t_ns[k] % 1_000_000_000))
-            msg = Imu(header=Header(stamp=stamp, frame_id="imu"),
-                      orientation=Quat(x=0.0, y=0.0, z=0.0, w=1.0),
-                      orientation_covariance=np.zeros(9),
-                      angular_velocity=Vec(x=gyro[k, 0], y=gyro[k, 1], z=gyro[k, 2]),
-                      angular_velocity_covariance=np.zeros(9),
-                      linear_acceleration=Vec(x=acc[k, 0], y=acc[k, 1], z=acc[k, 2]),
-                      linear_acceleration_covariance=np.zeros(9))
-            w.write(conn, int(t_ns[k]), ts.serialize_cdr(msg, Imu.__msgtype__))
+        conn = w.add_connection("/imu", "sensor_msgs/msg/Imu", typestore=ts)
+        for t, msg in imu_messages(ts, t_ns, acc, gyro):
+            w.write(conn, t, ts.serialize_cdr(msg, "sensor_msgs/msg/Imu"))
     paths["ros2"] = d / "bag"
     return paths
 
