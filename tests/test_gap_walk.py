@@ -239,6 +239,29 @@ def test_sponge_review_beside_a_rail_clipped_after_the_noise_does_not_crash():
     assert res.verdict == "unexplained"
 
 
+def test_a_refined_saturation_limit_stays_inside_the_range_it_clips():
+    """A fractional harmonic of θ on a rocking run whose swings grow (a case made like the
+    independent set's, with a new id in its *tune* part): the selection names a saturation
+    whose refinement window (±5 % of L) reached above every |A_r|, where the limit clips
+    nothing, its Gauss-Newton column is zero and the report's fit raised "cannot identify
+    y.d_limit" (the command failed). The refined limit now stays at or below the highest
+    level that clips, and the run is reported unexplained."""
+    from calib.gap import analyze_gap
+    from calib.io import validate_ensayo
+    from validation.independent.cases import OOC, CaseDef, build, case_by_id, split_of
+
+    case = CaseDef(OOC, "fractional_harmonic", "y", "growing_rock", "rate", rate=100, n=6001,
+                   noise=3, z=10, extra={"nu": 2.5})
+    assert split_of(case.case_id) == "tune" and case.case_id not in case_by_id()
+    motion, datos, truth = build(case, seed=0)
+    res = analyze_gap(validate_ensayo(motion.theta, datos, motion.t), truth["noise_var"])
+    assert res.verdict == "unexplained"
+    a_max = float(np.max(np.abs(datos[:, 1]))) + 1.0  # loose: |A_r| ≤ g, readings ≈ g + noise
+    for e in res.effects:
+        if e.name == "saturation":
+            assert e.params["limit"] < a_max
+
+
 def test_a_vibration_at_a_whole_tooth_count_is_found():
     """A 23-tooth drive: ``a·(|ω|/max|ω|)·sin(23θ)`` on x of a timed two-turn run of varying
     rate, sized 10 σ of its own signature (``a²·Σ(speed²·sin²)/σ² = 100``): a whole order

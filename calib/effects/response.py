@@ -190,6 +190,9 @@ class Saturation(ProfiledEffect):
             grid = np.sort(self.levels(ext, k))
         else:
             grid = st.limit * np.linspace(1 - window, 1 + window, 7)
+            levels = self.levels(ext, k)
+            if levels.size:  # a limit above every |A_r| clips nothing: the effect would vanish
+                grid = np.unique(np.minimum(grid, float(np.max(levels))))  # and its column be 0
         if grid.size == 0:
             return float("inf"), ext.nll(state)
         lim, val = minimise(f, grid)
