@@ -490,7 +490,9 @@ def test_to_dict_layout_and_json():
     assert {"effects", "not_identifiable", "gap_before", "gap_after", "verdict",
             "unexplained", "adequacy"} <= set(d)
     assert d["verdict"] in ("explained", "unexplained", "nothing_detected")
-    assert all(c["name"] and c["axis"] in AXES for c in d["adequacy"]["checks"])
+    assert all(c["name"] and c["axis"] in (*AXES, "both") for c in d["adequacy"]["checks"])
+    assert [c["axis"] for c in d["adequacy"]["checks"] if c["name"] == "cross_correlation"] == [
+        "both"]
     (e,) = d["effects"]
     assert set(e) == {"name", "axis", "params", "std", "statistic", "p_value", "tentative"}
     assert e["tentative"] == (d["verdict"] == "unexplained")

@@ -24,8 +24,11 @@ check                     statistic and reference distribution under the model
 ``trend``                 Legendre polynomials of degree 2 … 4 in time added: ``χ²(3)``
 ``variance_time``,        Bartlett's test of equal variance over 8 equal-count time segments
 ``variance_angle``        and over 8 bins of θ mod 2π: ``χ²(7)``
-``hysteresis``            the direction of the last motion (up +1 / down -1) added:
-                          ``χ²(1)`` (only when θ moves both ways)
+``hysteresis``            the direction of the last motion d (up +1 / down -1) and
+                          ``d·dA_r/dθ`` (backlash: a tilt that depends on the direction)
+                          added: ``χ²(2)`` (only when θ moves both ways)
+``gain_drift``            ``A_r·P1(t)``, ``A_r·P2(t)`` added (a gain that changes during
+                          the run): ``χ²(2)``
 ``rate``                  ω and |ω| added (timed runs with a varying rate): ``χ²(≤ 2)``
 ``timing``                a delay that changes during the run: ``dA_r/dt`` times Legendre
                           P1, P2 of time added (timed runs): ``χ²(≤ 2)``
@@ -36,6 +39,8 @@ check                     statistic and reference distribution under the model
                           in place of the named effects: its likelihood ratio over
                           them against χ²(extra parameters), Bonferroni over the search
                           (:func:`_rivals`)
+``cross_correlation``     (axis ``both``) the two axes' white residuals (innovations on a
+                          walk axis) correlated: Fisher's z, N(0, 1), two-sided
 ``gap_noise``             the gap after (:func:`calib.diagnostics.gap_measure` of the final
                           residuals) against the **stated** noise: ``Σr²/σ² ~ χ²(dof)``,
                           two-sided (not where a noise level is named: its σ² is the model's)
@@ -70,8 +75,9 @@ from calib.gap.selection import walk_cost
 from calib.gap.space import (
     AxisSpace,
     Check,
+    backlash_columns,
+    gain_drift_columns,
     legendre_in_time,
-    motion_direction,
     spectral_peak,
 )
 
@@ -117,7 +123,8 @@ class Battery:
         return tuple(c for c in self.checks if c.failed)
 
     def axis_passed(self, axis: str) -> bool:
-        return not any(c.failed for c in self.checks if c.axis == axis)
+        """No check on ``axis`` (or on both axes together) failed."""
+        return not any(c.failed for c in self.checks if c.axis in (axis, "both"))
 
     def to_dict(self) -> dict:
         return {"family_alpha": float(self.family_alpha),
@@ -249,18 +256,32 @@ def _variance(z: np.ndarray, order: np.ndarray, name: str, what: str, axis: str,
                  f"{sd.max():.3g} m/s² over {len(groups)} groups")
 
 
-def _hysteresis(space: AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
-    d = motion_direction(tita)
-    if d is None:
+def _hysteresis(space: AxisSpace, run, k: int, axis: str) -> Check | None:
+    cols = backlash_columns(run, k)
+    if cols is None:
         return None
-    res = _chi2_check(space, d[:, None], "hysteresis", axis)
+    res = _chi2_check(space, cols, "hysteresis", axis)
     if res is None:
         return None
     stat, dof, coef, logp = res
-    size = float(2.0 * abs(coef[0]))
+    size = float(2.0 * np.max(np.abs(cols @ coef)))  # the largest up-minus-down difference
     return Check("hysteresis", axis, stat, logp, f"chi2({dof})", size, "m/s²",
-                 f"the reading on {axis} depends on the direction of motion (up minus down "
-                 f"{2.0 * coef[0]:+.3g} m/s²)")
+                 f"the reading on {axis} depends on the direction of the last motion (up minus "
+                 f"down {2.0 * coef[0]:+.3g} m/s² and {np.degrees(2.0 * coef[1]):+.3g}° of "
+                 "tilt: hysteresis, or backlash of the drive)")
+
+
+def _gain_drift(space: AxisSpace, run, k: int, axis: str) -> Check | None:
+    cols = gain_drift_columns(run, k)
+    res = _chi2_check(space, cols, "gain_drift", axis)
+    if res is None:
+        return None
+    stat, dof, coef, logp = res
+    ends = float(np.max(np.abs(legendre_in_time(run, (1, 2)) @ coef)))
+    return Check("gain_drift", axis, stat, logp, f"chi2({dof})",
+                 float(np.max(np.abs(cols @ coef))), "m/s²",
+                 f"the gain on {axis} changes during the run by up to {ends:.3g} "
+                 f"({1e6 * ends:.3g} ppm): a scale factor drifting with time or temperature")
 
 
 def _rate(space: AxisSpace, run, axis: str) -> Check | None:
@@ -403,6 +424,38 @@ def _rivals(ext: Extensions, state: ModelState, k: int) -> Check | None:
                  f"m/s²) than by {' + '.join(named)}: a shape the catalog does not have")
 
 
+def _cross_correlation(residuals: np.ndarray, innovations: dict, state: ModelState
+                       ) -> Check | None:
+    """The two axes' noises correlated (a common-mode disturbance: a vibration or a supply
+    ripple that moves both readings, which the model takes as independent).
+
+    Per axis the white series under the model: the residuals, or on a random-walk axis the
+    filter's normalised innovations (the smoothed residuals of a walk are autocorrelated,
+    which would widen the correlation's spread). Under the model the axes are independent and
+    at least one series is white, so Fisher's ``z = atanh(r)·sqrt(n - 3)`` is N(0, 1):
+    two-sided p. Axis ``both``: a failure makes neither axis consistent."""
+    series = []
+    for k in range(2):
+        if state.axes[k].q > 0 and k in innovations:
+            series.append(np.asarray(innovations[k], dtype=float))
+        else:
+            series.append(np.asarray(residuals[:, k], dtype=float))
+    n = min(s.size for s in series)
+    a, b = (s[:n] - s[:n].mean() for s in series)
+    den = float(np.sqrt((a @ a) * (b @ b)))
+    if n < 10 or den <= 0.0:
+        return None
+    r = float(np.clip((a @ b) / den, -0.999999, 0.999999))
+    z = float(np.arctanh(r) * np.sqrt(n - 3))
+    logp = float(np.log(2.0) + stats.norm.logsf(abs(z)))
+    return Check("cross_correlation", "both", z, min(logp, 0.0),
+                 "Fisher z of the correlation of the two axes' noise, N(0, 1), two-sided",
+                 abs(r), "1",
+                 f"the noise of x and y is correlated (r = {r:+.3f}): a common disturbance "
+                 "(vibration, supply ripple, a shared reference) moves both readings at once; "
+                 "the model takes their noises as independent")
+
+
 def _gap_noise(gm: GapMeasure, sigma2: float, axis: str) -> Check | None:
     """The gap after's χ² against the stated noise, two-sided (the yardstick's first half)."""
     if gm.dof <= 0:
@@ -470,7 +523,8 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
             _variance(z, np.arange(run.n), "variance_time", "time", axis, scale),
             _variance(z, np.argsort(np.mod(run.tita, 2.0 * np.pi), kind="stable"),
                       "variance_angle", "θ", axis, scale),
-            _hysteresis(space, run.tita, axis),
+            _hysteresis(space, run, k, axis),
+            _gain_drift(space, run, k, axis),
             _rate(space, run, axis),
             _timing(space, ext, st, k, axis),
             _lattice(lattice[k], st.lsb, axis),
@@ -483,6 +537,9 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
                 found.append(_gap_noise(gaps[axis], st.sigma2_stated + st.lsb**2 / 12.0, axis))
             found.append(_gap_signatures(gaps[axis], axis))
         checks += [c for c in found if c is not None]
+    corr = _cross_correlation(residuals, innovations, state)
+    if corr is not None:
+        checks.append(corr)
     checks += list(extra or ())
     weights = [CHECK_WEIGHTS.get(c.name, 1.0) for c in checks]
     alpha_check = family_alpha / max(sum(weights), 1.0)

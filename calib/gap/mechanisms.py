@@ -91,11 +91,13 @@ def drive_orders(turns: float) -> np.ndarray:
 
 
 def resolved_order(tita: np.ndarray) -> float:
-    """The highest order ν of θ the run's angles resolve: ``π / (largest gap between its
-    sorted distinct angles)`` (half a period per gap at most; above it ``cos νθ`` at the
-    visited angles aliases onto a lower order, or is any pattern over a few poses)."""
+    """The highest order ν of θ the run's angles resolve: ``π / (median gap between its
+    sorted distinct angles)`` (half a period per typical gap at most; above it ``cos νθ`` at
+    the visited angles aliases onto a lower order, or is any pattern over a few poses). The
+    median, not the largest gap: a few poses spread unevenly over two turns (one wide gap)
+    still resolve an order 2.5 that the wide gap alone would exclude."""
     u = np.unique(np.asarray(tita, dtype=float))
-    gap = float(np.max(np.diff(u))) if u.size > 1 else np.inf
+    gap = float(np.median(np.diff(u))) if u.size > 1 else np.inf
     return float(np.pi / gap) if gap > 0 else np.inf
 
 

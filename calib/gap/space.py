@@ -207,6 +207,29 @@ def legendre_in_time(run, degrees: tuple[int, ...]) -> np.ndarray:
     return np.column_stack([np.polynomial.legendre.Legendre.basis(d)(x) for d in degrees])
 
 
+def gain_drift_columns(run, k: int) -> np.ndarray:
+    """(N, 2) ``A_r·P1(t)``, ``A_r·P2(t)``: a gain (scale factor) of axis k that changes during
+    the run (linearly, or bending once) — a temperature coefficient of the scale, not in the
+    catalog (whose scale is one number). ``A_r`` the axis' own reference (m/s²), P Legendre of
+    time on [-1, 1] (:func:`legendre_in_time`): a coefficient c is a gain change of ±c at the
+    ends of the run."""
+    return run.a_ref[:, k][:, None] * legendre_in_time(run, (1, 2))
+
+
+def backlash_columns(run, k: int) -> np.ndarray | None:
+    """(N, 2) ``d``, ``d·dA_r/dθ`` with d = ±1 the direction of the last motion
+    (:func:`motion_direction`), or None when θ does not move both ways: a reading that depends
+    on the direction the table last moved, as an offset (hysteresis of the bias) and as an
+    angle (backlash of the drive: the table stops ``b`` short of the encoder's θ, so
+    ``A_r(θ - d·b) ≈ A_r - d·b·dA_r/dθ``; course signs: ``dA_x/dθ = -g cos θ = A_y``,
+    ``dA_y/dθ = g sin θ = -A_x``)."""
+    d = motion_direction(run.tita)
+    if d is None:
+        return None
+    slope = run.a_ref[:, 1] if k == 0 else -run.a_ref[:, 0]
+    return np.column_stack([d, d * slope])
+
+
 def motion_direction(tita: np.ndarray) -> np.ndarray | None:
     """+1 after an upward move, -1 after a downward one (held samples keep the last)."""
     d = np.sign(np.diff(tita, prepend=tita[0]))

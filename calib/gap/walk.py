@@ -23,6 +23,10 @@ selection named on an axis before it may explain anything (issue 20, item 1):
                        band (:func:`walk_band`: the frequencies a walk can follow)
    ``two_sinusoids``   the two strongest peaks in that band                         6
    ``direction``       direction of the last motion (±1)                            1
+   ``backlash``        d and ``d·dA_r/dθ``, d the direction of the last motion      2
+                       (an offset and a tilt that depend on it: backlash)
+   ``gain_drift``      ``A_r·P1``, ``A_r·P2`` of time (a gain drifting in time)     2
+   ``gain_step``       ``A_r`` times a step, at the best of a grid of places        2
    ``step``            one step of the bias, at the best of a grid of places        2
    ``two_steps``       two steps (greedy on the grid, then the first re-placed)     4
    ``bump``            a Gaussian bump, centre and width on a grid                  3
@@ -87,7 +91,9 @@ from calib.gap.mechanisms import (
 from calib.gap.space import (
     AxisSpace,
     Check,
+    backlash_columns,
     fisher_g_logp,
+    gain_drift_columns,
     legendre_in_time,
     motion_direction,
     spectral_peak,
@@ -395,6 +401,55 @@ def _drive_angle(space: AxisSpace, run) -> Rival | None:
                  np.column_stack([np.cos(v * th), np.sin(v * th)]), len(orders))
 
 
+def _backlash(space: AxisSpace, run, k: int) -> Rival | None:
+    """The reading depends on the direction of the last motion as an offset and as an angle
+    (:func:`calib.gap.space.backlash_columns`): a drive's backlash, which a walk follows move
+    by move on a back-and-forth run."""
+    cols = backlash_columns(run, k)
+    fit = None if cols is None else space.test(cols)
+    if fit is None:
+        return None
+    off, ang = 2.0 * float(fit[2][0]), 2.0 * float(fit[2][1])
+    return Rival("backlash", fit[0], float(fit[1]), float(2.0 * np.max(np.abs(cols @ fit[2]))),
+                 f"the reading on {AXES[k]} depends on the direction of the last motion: up "
+                 f"minus down {off:+.3g} m/s² and {np.degrees(ang):+.3g}° of tilt (backlash "
+                 "of the drive, or hysteresis)", cols, 1)
+
+
+def _gain_step(space: AxisSpace, run, k: int) -> Rival | None:
+    """The axis' gain steps once during the run: ``A_r·[sample > i]`` at the best of the step
+    grid (charge 2: the size and the place)."""
+    n = run.n
+    a = run.a_ref[:, k]
+    grid = np.unique(np.linspace(2, n - 3, GRID).astype(int))
+
+    def col(i):
+        return (a * (np.arange(n) > i))[:, None]
+
+    best = _best_on_grid(space, col, grid)
+    if best is None:
+        return None
+    i, c = int(best[1]), float(best[2][0])
+    return Rival("gain_step", best[0], 2.0, abs(c) * float(np.max(np.abs(a))),
+                 f"the gain on {AXES[k]} steps by {c:+.3g} ({1e6 * c:+.3g} ppm) at "
+                 f"{_where(run, i)}", col(i), grid.size)
+
+
+def _gain_drift(space: AxisSpace, run, k: int) -> Rival | None:
+    """The axis' gain changes during the run (:func:`calib.gap.space.gain_drift_columns`): a
+    temperature coefficient of the scale factor, which a walk follows as a bias that swings
+    with the specific force."""
+    cols = gain_drift_columns(run, k)
+    fit = space.test(cols)
+    if fit is None:
+        return None
+    ends = float(np.max(np.abs(legendre_in_time(run, (1, 2)) @ fit[2])))
+    return Rival("gain_drift", fit[0], float(fit[1]), float(np.max(np.abs(cols @ fit[2]))),
+                 f"the gain on {AXES[k]} changes during the run by up to {ends:.3g} "
+                 f"({1e6 * ends:.3g} ppm; a scale factor drifting with time or temperature)",
+                 cols, 1)
+
+
 def _settling(space: AxisSpace, run) -> Rival | None:
     """A settling transient after the stops (:func:`calib.gap.mechanisms.settling`)."""
     hold = stops(run)
@@ -471,6 +526,8 @@ def rivals(ext: Extensions, reduced: ModelState, k: int, band: float | None = No
             out.append(Rival("direction", fit[0], 1.0, abs(2.0 * float(fit[2][0])),
                              f"the reading depends on the direction of the last motion (up "
                              f"minus down {2.0 * float(fit[2][0]):+.3g} m/s²)", d[:, None], 1))
+    out += [r for r in (_backlash(space, run, k), _gain_drift(space, run, k),
+                        _gain_step(space, run, k)) if r is not None]
     out += _steps(space, run)
     for r in (_bump(space, run), _near_zero_g(space, ext, k), _drive_angle(space, run),
               _settling(space, run), _response_bend(space, ext, k)):
