@@ -281,7 +281,7 @@ def _gain_drift(space: AxisSpace, run, k: int, axis: str) -> Check | None:
     return Check("gain_drift", axis, stat, logp, f"chi2({dof})",
                  float(np.max(np.abs(cols @ coef))), "m/s²",
                  f"the gain on {axis} changes during the run by up to {ends:.3g} "
-                 f"({1e6 * ends:.3g} ppm): a scale factor drifting with time or temperature")
+                 f"({1e6 * ends:.0f} ppm): a scale factor drifting with time or temperature")
 
 
 def _rate(space: AxisSpace, run, axis: str) -> Check | None:

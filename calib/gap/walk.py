@@ -431,7 +431,7 @@ def _gain_step(space: AxisSpace, run, k: int) -> Rival | None:
         return None
     i, c = int(best[1]), float(best[2][0])
     return Rival("gain_step", best[0], 2.0, abs(c) * float(np.max(np.abs(a))),
-                 f"the gain on {AXES[k]} steps by {c:+.3g} ({1e6 * c:+.3g} ppm) at "
+                 f"the gain on {AXES[k]} steps by {c:+.3g} ({1e6 * c:+.0f} ppm) at "
                  f"{_where(run, i)}", col(i), grid.size)
 
 
@@ -446,7 +446,7 @@ def _gain_drift(space: AxisSpace, run, k: int) -> Rival | None:
     ends = float(np.max(np.abs(legendre_in_time(run, (1, 2)) @ fit[2])))
     return Rival("gain_drift", fit[0], float(fit[1]), float(np.max(np.abs(cols @ fit[2]))),
                  f"the gain on {AXES[k]} changes during the run by up to {ends:.3g} "
-                 f"({1e6 * ends:.3g} ppm; a scale factor drifting with time or temperature)",
+                 f"({1e6 * ends:.0f} ppm; a scale factor drifting with time or temperature)",
                  cols, 1)
 
 
