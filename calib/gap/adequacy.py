@@ -24,6 +24,8 @@ check                     statistic and reference distribution under the model
 ``trend``                 Legendre polynomials of degree 2 … 4 in time added: ``χ²(3)``
 ``variance_time``,        Bartlett's test of equal variance over 8 equal-count time segments
 ``variance_angle``        and over 8 bins of θ mod 2π: ``χ²(7)``
+``variance_force``        squared residuals against ``A_r²`` (and ``|ω|`` when timed and
+                          moving): Koenker's ``n·R² ~ χ²(k)`` (noise that follows the load)
 ``hysteresis``            the direction of the last motion d (up +1 / down -1) and
                           ``d·dA_r/dθ`` (backlash: a tilt that depends on the direction)
                           added: ``χ²(2)`` (only when θ moves both ways)
@@ -254,6 +256,41 @@ def _variance(z: np.ndarray, order: np.ndarray, name: str, what: str, axis: str,
                  f"Bartlett chi2({len(groups) - 1})", float(sd.max() - sd.min()), "m/s²",
                  f"the noise on {axis} changes with {what}: std from {sd.min():.3g} to "
                  f"{sd.max():.3g} m/s² over {len(groups)} groups")
+
+
+def _variance_force(z: np.ndarray, run, k: int, axis: str, scale: float) -> Check | None:
+    """Noise whose variance follows the specific force or the rate (a gain noise, a
+    vibration that grows with speed): Koenker's studentised Breusch-Pagan test, ``n·R²`` of
+    the squared standardised residuals regressed on ``A_r²`` and, on a timed moving run,
+    ``|ω|``: ``χ²(k)`` under the model (any noise law with a finite fourth moment). Smooth
+    dependence is what the 8-bin Bartlett test of ``variance_angle`` sees only coarsely."""
+    regs = [run.a_ref[:, k] ** 2]
+    if run.omega is not None and np.ptp(np.abs(run.omega)) > 1e-9:
+        regs.append(np.abs(np.asarray(run.omega, dtype=float)))
+    x = np.column_stack(regs)
+    x = x - x.mean(axis=0)
+    keep = np.ptp(x, axis=0) > 1e-9 * np.maximum(np.max(np.abs(x), axis=0), 1e-300)
+    if not np.any(keep) or z.size < 50:
+        return None
+    x = x[:, keep]
+    e2 = z * z
+    u = e2 - e2.mean()
+    if not float(u @ u) > 0.0:
+        return None
+    coef, *_ = np.linalg.lstsq(x, u, rcond=None)
+    fitted = x @ coef
+    r2 = float(fitted @ fitted) / float(u @ u)
+    stat = z.size * r2
+    dof = int(np.linalg.matrix_rank(x))
+    logp = float(stats.chi2.logsf(stat, dof))
+    var = float(np.var(z))
+    ratio = float(np.max(fitted + e2.mean()) / max(np.min(fitted + e2.mean()), 1e-3 * var))
+    what = "the specific force" + (" and the rate" if dof > 1 else "")
+    return Check("variance_force", axis, stat, logp, f"Koenker n·R², chi2({dof})",
+                 float(np.sqrt(max(ratio, 0.0))) * scale - scale, "m/s²",
+                 f"the noise on {axis} grows with {what}: its variance changes by a factor "
+                 f"of about {ratio:.3g} over the run (a gain noise, or a vibration that grows "
+                 "with the load or the speed)")
 
 
 def _hysteresis(space: AxisSpace, run, k: int, axis: str) -> Check | None:
@@ -523,6 +560,7 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
             _variance(z, np.arange(run.n), "variance_time", "time", axis, scale),
             _variance(z, np.argsort(np.mod(run.tita, 2.0 * np.pi), kind="stable"),
                       "variance_angle", "θ", axis, scale),
+            None if coarse else _variance_force(z, run, k, axis, scale),
             _hysteresis(space, run, k, axis),
             _gain_drift(space, run, k, axis),
             _rate(space, run, axis),

@@ -216,6 +216,14 @@ def gain_drift_columns(run, k: int) -> np.ndarray:
     return run.a_ref[:, k][:, None] * legendre_in_time(run, (1, 2))
 
 
+def tilt_drift_columns(run, k: int) -> np.ndarray:
+    """(N, 2) ``dA_r/dθ·P1(t)``, ``dA_r/dθ·P2(t)``: a tilt (a rotation of the mount or the
+    sensor) that creeps during the run — the catalog's tilt and misalignment are constant.
+    Course signs: ``dA_x/dθ = A_y``, ``dA_y/dθ = -A_x`` (m/s² per rad)."""
+    slope = run.a_ref[:, 1] if k == 0 else -run.a_ref[:, 0]
+    return slope[:, None] * legendre_in_time(run, (1, 2))
+
+
 def backlash_columns(run, k: int) -> np.ndarray | None:
     """(N, 2) ``d``, ``d·dA_r/dθ`` with d = ±1 the direction of the last motion
     (:func:`motion_direction`), or None when θ does not move both ways: a reading that depends

@@ -27,6 +27,9 @@ selection named on an axis before it may explain anything (issue 20, item 1):
                        (an offset and a tilt that depend on it: backlash)
    ``gain_drift``      ``A_r·P1``, ``A_r·P2`` of time (a gain drifting in time)     2
    ``gain_step``       ``A_r`` times a step, at the best of a grid of places        2
+   ``tilt_drift``      ``dA_r/dθ·P1``, ``dA_r/dθ·P2`` of time (a creeping tilt)     2
+   ``warm_up``         ``e^{-(t - t₀)/T}`` from the start, T on a grid              2
+   ``heating``         the travel so far ``∫|dθ|`` (normalised), timed moving runs  1
    ``step``            one step of the bias, at the best of a grid of places        2
    ``two_steps``       two steps (greedy on the grid, then the first re-placed)     4
    ``bump``            a Gaussian bump, centre and width on a grid                  3
@@ -97,11 +100,15 @@ from calib.gap.space import (
     legendre_in_time,
     motion_direction,
     spectral_peak,
+    tilt_drift_columns,
 )
 from calib.input_rules import DataError
 
 GRID = 120
 """Places on the grid of the step, two-step and bump rivals."""
+
+WARM_UP = (0.01, 0.02, 0.04, 0.08, 0.15, 0.3, 0.6)
+"""Time constants of the warm-up rival, fractions of the run."""
 
 WIDTHS = (0.01, 0.03, 0.08, 0.2)
 """Widths of the bump rival, fractions of the run."""
@@ -435,6 +442,55 @@ def _gain_step(space: AxisSpace, run, k: int) -> Rival | None:
                  f"{_where(run, i)}", col(i), grid.size)
 
 
+def _tilt_drift(space: AxisSpace, run, k: int) -> Rival | None:
+    """A tilt that creeps during the run (:func:`calib.gap.space.tilt_drift_columns`)."""
+    cols = tilt_drift_columns(run, k)
+    fit = space.test(cols)
+    if fit is None:
+        return None
+    most = float(np.max(np.abs(legendre_in_time(run, (1, 2)) @ fit[2])))
+    return Rival("tilt_drift", fit[0], float(fit[1]), float(np.max(np.abs(cols @ fit[2]))),
+                 f"the tilt of {AXES[k]} creeps during the run by up to {np.degrees(most):.3g}° "
+                 "(the mount or the sensor turning slowly)", cols, 1)
+
+
+def _warm_up(space: AxisSpace, run) -> Rival | None:
+    """A transient from the start of the run, ``e^{-(t - t₀)/T}`` with T on a grid of
+    :data:`WARM_UP` fractions of the run (charge 2: the size and T): a sensor warming up
+    after power-on, which a walk follows as a drift that slows down."""
+    tc = run.tcol - run.tcol[0]
+    span = float(tc[-1]) or 1.0
+    grid = [f * span for f in WARM_UP]
+    best = _best_on_grid(space, lambda tconst: np.exp(-tc / tconst)[:, None], grid)
+    if best is None:
+        return None
+    tconst, amp = float(best[1]), float(best[2][0])
+    return Rival("warm_up", best[0], 2.0, abs(amp),
+                 f"a transient from the start: {amp:+.3g} m/s² at the start, decaying with a "
+                 f"time constant of about {tconst:.3g} {_time_unit(run)} (a warm-up after "
+                 "power-on)", np.exp(-tc / tconst)[:, None], len(grid))
+
+
+def _heating(space: AxisSpace, run) -> Rival | None:
+    """A bias that follows the motion done so far, ``∫|ω|dt`` normalised to 1 at the end
+    (charge 1, no search): a motor or bearing that warms the sensor while the table moves,
+    and not while it holds. Only for runs with rates that hold and move."""
+    if run.omega is None or np.ptp(np.abs(run.omega)) <= 1e-9:
+        return None
+    h = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(run.tita)))])
+    if not h[-1] > 0:
+        return None
+    col = (h / h[-1])[:, None]
+    fit = space.test(col)
+    if fit is None:
+        return None
+    amp = float(fit[2][0])
+    return Rival("heating", fit[0], 1.0, abs(amp),
+                 f"a bias that grows with the motion done so far ({amp:+.3g} m/s² over the "
+                 "run's total travel, nothing while the table holds): the drive warming the "
+                 "sensor", col, 1)
+
+
 def _gain_drift(space: AxisSpace, run, k: int) -> Rival | None:
     """The axis' gain changes during the run (:func:`calib.gap.space.gain_drift_columns`): a
     temperature coefficient of the scale factor, which a walk follows as a bias that swings
@@ -527,7 +583,8 @@ def rivals(ext: Extensions, reduced: ModelState, k: int, band: float | None = No
                              f"the reading depends on the direction of the last motion (up "
                              f"minus down {2.0 * float(fit[2][0]):+.3g} m/s²)", d[:, None], 1))
     out += [r for r in (_backlash(space, run, k), _gain_drift(space, run, k),
-                        _gain_step(space, run, k)) if r is not None]
+                        _gain_step(space, run, k), _tilt_drift(space, run, k),
+                        _warm_up(space, run), _heating(space, run)) if r is not None]
     out += _steps(space, run)
     for r in (_bump(space, run), _near_zero_g(space, ext, k), _drive_angle(space, run),
               _settling(space, run), _response_bend(space, ext, k)):
