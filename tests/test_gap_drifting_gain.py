@@ -4,8 +4,8 @@ load (issue 20).
 Mechanisms that neither validation set had, which the walk absorbed or a noise level
 "explained" (measured before the checks existed on 14 runs each, seven designs of the
 independent generator: scale drift 14/14 named a walk, backlash 6/10, a gain step 1/14,
-correlated noise 14/14 named a noise level on both axes, a warm-up 6/14 a walk, load noise (0.6 σ·|A_r|/g)
-13/14 a noise level or nothing). The runs are a clean run of the
+correlated noise 14/14 named a noise level on both axes, a warm-up 6/14 a walk, load noise
+(0.6 σ·|A_r|/g) 13/14 a noise level or nothing). The runs are a clean run of the
 independent generator (``validation.independent``: its own designs and sensor chain) with the
 mechanism added from its physics here, sized 10 σ beyond the catalog's linear signatures:
 
