@@ -200,7 +200,7 @@ class WalkReview:
     def cycle_wins(self) -> bool:
         """A slow cycle is preferred to the walk by the charged likelihood (beyond
         :data:`CYCLE_MARGIN`) and the walk adds nothing beyond it."""
-        return self.cycle is not None and self.cycle["decision"] == "slow_cycle"
+        return self.cycle is not None and self.cycle["decision"] in ("slow_cycle", "structure")
 
     @property
     def criterion(self) -> float:
@@ -875,6 +875,73 @@ def walk_beyond(ext: Extensions, e: np.ndarray, sigma2: float, q: float, k: int,
     return float(lr), float(np.log(0.5) + stats.chi2.logsf(lr, 1)) if lr > 0 else 0.0
 
 
+STRUCTURED = ("backlash", "gain_drift", "gain_step", "tilt_drift", "warm_up", "heating",
+              "drive_angle", "settling", "response_bend", "near_zero_g", "direction")
+"""Rivals with a physical shape (a function of θ, of the specific force, of the motion, or a
+fixed law in time) that may replace a walk by :func:`structured_drift`; the generic ones
+(polynomials, tones, steps, bumps) may not."""
+
+Q_REFIT = (0.25, 0.5, 1.0, 2.0)
+"""Factors of the walk's q over which the walk is refitted on top of a rival."""
+
+
+def walk_beyond_refit(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
+                      cols: np.ndarray) -> tuple[float, float]:
+    """Is a walk still needed once a rival shape is in the model? (LR, log p), with **every**
+    linear parameter of the model refitted (unlike :func:`walk_beyond`, which keeps the other
+    named effects at their values with the walk).
+
+    ``-2 log L`` with the rival's columns added is ``nll(model) - ΔRSS`` (the columns' gain in
+    the model's whitened system, :class:`calib.gap.space.AxisSpace`): without the walk
+    (``reduced``) and with it, q on :data:`Q_REFIT` times its fitted value (the best of them:
+    the walk's LR beyond the rival is at most this much understated by the grid). q = 0 is on
+    the boundary: ``LR ~ ½χ²₀ + ½χ²₁``."""
+    axis_q = state.axes[k]
+    fit0 = AxisSpace(ext, reduced, k).test(cols)
+    base = ext.nll(reduced) - (fit0[0] if fit0 is not None else 0.0)
+    best = np.inf
+    for f in Q_REFIT:
+        s_q = state.with_axis(k, replace(axis_q, q=axis_q.q * f))
+        val = ext.safe_nll(s_q)
+        if not np.isfinite(val):
+            continue
+        fit = AxisSpace(ext, s_q, k).test(cols)
+        best = min(best, val - (fit[0] if fit is not None else 0.0))
+    lr = max(float(base - best), 0.0) if np.isfinite(best) else 0.0
+    return lr, float(np.log(0.5) + stats.chi2.logsf(lr, 1)) if lr > 0 else 0.0
+
+
+def structured_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
+                     found: list[Rival], walk_criterion: float, fixed_q: bool) -> dict | None:
+    """A structured rival (:data:`STRUCTURED`) that beats the walk in its place by more than
+    the slow cycle's margins (``D > CYCLE_MARGIN`` and ``D > CYCLE_SHARE·(LR_w - 2·c_w)``)
+    while a walk adds nothing beyond it (:func:`walk_beyond_refit` at
+    :data:`WALK_BEYOND_ALPHA`): the drift is that shape, not a walk (decision
+    ``"structure"``). A drift that creeps smoothly (a tilt or a gain drifting in time) is
+    followed by a walk so closely that the rival adds little on top of it (``walk_rivals``
+    does not fire), yet the rival alone describes all of it with a fixed shape. The margins
+    are the slow cycle's (:func:`slow_cycle`), whose rival — one tone over the run — mimics a
+    Brownian path far better than these shapes do. With a sensor profile (q fixed) the walk
+    is known noise: nothing to decide."""
+    if fixed_q:
+        return None
+    for r in sorted((r for r in found if r.name in STRUCTURED and r.cols is not None
+                     and r.criterion > walk_criterion), key=lambda r: -r.criterion):
+        gain = float(r.criterion - walk_criterion)
+        share = gain / max(walk_criterion, 1e-300)
+        if not (gain > CYCLE_MARGIN and share > CYCLE_SHARE):
+            return None
+        lr, logp = walk_beyond_refit(ext, state, reduced, k, r.cols)
+        if logp >= np.log(WALK_BEYOND_ALPHA):
+            return {"decision": "structure", "gain": gain, "share": float(share),
+                    "walk_beyond_lr": float(lr), "walk_beyond_p": float(np.exp(logp)),
+                    "size": float(r.size),
+                    "description": f"{r.description}, not a walk: this fixed shape fits the "
+                                   f"drift better than the walk (AIC gain {gain:.3g}) and a "
+                                   "walk adds nothing beyond it"}
+    return None
+
+
 def slow_cycle(ext: Extensions, e: np.ndarray, sigma2: float, q: float, k: int,
                found: list[Rival], walk_criterion: float, fixed_q: bool) -> dict | None:
     """A slow cycle in time or a walk? Decided by the charged likelihood.
@@ -937,6 +1004,7 @@ def review_walk(ext: Extensions, state: ModelState, k: int, e: np.ndarray,
     if rc is not None:
         checks.append(rc)
     fixed = k in getattr(ext, "walk_bounds", {})
-    cycle = slow_cycle(ext, e, st.sigma2_eff, st.q, k, found, lr - 2.0 * charge, fixed)
+    cycle = (structured_drift(ext, state, reduced, k, found, lr - 2.0 * charge, fixed)
+             or slow_cycle(ext, e, st.sigma2_eff, st.q, k, found, lr - 2.0 * charge, fixed))
     return WalkReview(axis, lr, charge, tuple(found), tuple(checks), profile=fixed,
                       cycle=cycle)
