@@ -5,7 +5,8 @@ Mechanisms that neither validation set had, which the walk absorbed or a noise l
 "explained" (measured before the checks existed on 14 runs each, seven designs of the
 independent generator: scale drift 14/14 named a walk, backlash 6/10, a gain step 1/14,
 correlated noise 14/14 named a noise level on both axes, a warm-up 6/14 a walk, load noise
-(0.6 σ·|A_r|/g) 13/14 a noise level or nothing). The runs are a clean run of the
+(0.6 σ·|A_r|/g) 13/14 a noise level or nothing, a creeping tilt 12/14 a walk or catalog
+effects, heating 12/13 a walk). The runs are a clean run of the
 independent generator (``validation.independent``: its own designs and sensor chain) with the
 mechanism added from its physics here, sized 10 σ beyond the catalog's linear signatures:
 
@@ -15,6 +16,8 @@ mechanism added from its physics here, sized 10 σ beyond the catalog's linear s
 * a gain step: ``A_r·(1 + s·[t > t₀])``;
 * common-mode noise: one white series times 0.8 σ added to both axes;
 * a warm-up: ``e^{-t/T}`` from the start, T = 15 % of the run;
+* a creeping tilt: ``dA_r/dθ·c·u`` (a tilt growing linearly in time);
+* heating: a bias proportional to the travel so far ``∫|dθ|`` (nothing while holding);
 * noise that follows the load: white noise of σ·|A_r|/g added (variance up to 2× at 1 g).
 
 Expected: verdict "unexplained", no walk named, the words saying what was seen. And on clean
@@ -57,7 +60,10 @@ def _run(mechanism: str, design: str, timing: str, k: int, seed: int):
         shape = {"scale_drift": a[:, k] * u,
                  "backlash": slope * motion.last_dir,
                  "gain_step": a[:, k] * (u > 0.1),
-                 "warm_up": np.exp(-(u + 0.5) / 0.15)}[mechanism]
+                 "warm_up": np.exp(-(u + 0.5) / 0.15),
+                 "tilt_drift": slope * u,
+                 "heating": np.cumsum(np.abs(np.diff(motion.theta, prepend=motion.theta[0])))
+                 }[mechanism]
         basis = np.column_stack([np.ones(motion.n), a[:, k],
                                  catalog_columns(motion)["xy"[k]]])
         q, _ = np.linalg.qr(basis)
@@ -76,6 +82,8 @@ def _run(mechanism: str, design: str, timing: str, k: int, seed: int):
     ("common_noise", "stop_and_go", "rate", 0, "noise of x and y is correlated"),
     ("warm_up", "backforth_dwell", "rate", 0, "a warm-up after power-on"),
     ("load_noise", "slow_fast_turns", "rate", 1, "noise on y grows with the specific force"),
+    ("tilt_drift", "stop_and_go", "rate", 0, "the tilt of x creeps during the run"),
+    ("heating", "backforth_dwell", "rate", 1, "grows with the motion done so far"),
 ])
 def test_the_mechanism_is_unexplained_and_said(mechanism, design, timing, k, words):
     res = _run(mechanism, design, timing, k, seed=k + 3)
