@@ -442,16 +442,23 @@ def _gain_step(space: AxisSpace, run, k: int) -> Rival | None:
                  f"{_where(run, i)}", col(i), grid.size)
 
 
-def _tilt_drift(space: AxisSpace, run, k: int) -> Rival | None:
-    """A tilt that creeps during the run (:func:`calib.gap.space.tilt_drift_columns`)."""
-    cols = tilt_drift_columns(run, k)
+def _in_time(space: AxisSpace, run, name: str, cols: np.ndarray, words) -> Rival | None:
+    """A rival whose columns are a signature times ``P1(t)``, ``P2(t)`` (a creeping tilt, a
+    drifting gain): ``words(c)`` says it with ``c`` the largest change over the run of the
+    parameter that drifts (the coefficient polynomial's largest |value|)."""
     fit = space.test(cols)
     if fit is None:
         return None
     most = float(np.max(np.abs(legendre_in_time(run, (1, 2)) @ fit[2])))
-    return Rival("tilt_drift", fit[0], float(fit[1]), float(np.max(np.abs(cols @ fit[2]))),
-                 f"the tilt of {AXES[k]} creeps during the run by up to {np.degrees(most):.3g}° "
-                 "(the mount or the sensor turning slowly)", cols, 1)
+    return Rival(name, fit[0], float(fit[1]), float(np.max(np.abs(cols @ fit[2]))),
+                 words(most), cols, 1)
+
+
+def _tilt_drift(space: AxisSpace, run, k: int) -> Rival | None:
+    """A tilt that creeps during the run (:func:`calib.gap.space.tilt_drift_columns`)."""
+    return _in_time(space, run, "tilt_drift", tilt_drift_columns(run, k),
+                    lambda c: f"the tilt of {AXES[k]} creeps during the run by up to "
+                              f"{np.degrees(c):.3g}° (the mount or the sensor turning slowly)")
 
 
 def _warm_up(space: AxisSpace, run) -> Rival | None:
@@ -495,15 +502,10 @@ def _gain_drift(space: AxisSpace, run, k: int) -> Rival | None:
     """The axis' gain changes during the run (:func:`calib.gap.space.gain_drift_columns`): a
     temperature coefficient of the scale factor, which a walk follows as a bias that swings
     with the specific force."""
-    cols = gain_drift_columns(run, k)
-    fit = space.test(cols)
-    if fit is None:
-        return None
-    ends = float(np.max(np.abs(legendre_in_time(run, (1, 2)) @ fit[2])))
-    return Rival("gain_drift", fit[0], float(fit[1]), float(np.max(np.abs(cols @ fit[2]))),
-                 f"the gain on {AXES[k]} changes during the run by up to {ends:.3g} "
-                 f"({1e6 * ends:.0f} ppm; a scale factor drifting with time or temperature)",
-                 cols, 1)
+    return _in_time(space, run, "gain_drift", gain_drift_columns(run, k),
+                    lambda c: f"the gain on {AXES[k]} changes during the run by up to {c:.3g} "
+                              f"({1e6 * c:.0f} ppm; a scale factor drifting with time or "
+                              "temperature)")
 
 
 def _settling(space: AxisSpace, run) -> Rival | None:
