@@ -487,7 +487,7 @@ def _cross_correlation(residuals: np.ndarray, innovations: dict, state: ModelSta
     logp = float(np.log(2.0) + stats.norm.logsf(abs(z)))
     return Check("cross_correlation", "both", z, min(logp, 0.0),
                  "Fisher z of the correlation of the two axes' noise, N(0, 1), two-sided",
-                 abs(r), "1",
+                 abs(r), "",
                  f"the noise of x and y is correlated (r = {r:+.3f}): a common disturbance "
                  "(vibration, supply ripple, a shared reference) moves both readings at once; "
                  "the model takes their noises as independent")
