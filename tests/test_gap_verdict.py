@@ -57,15 +57,11 @@ def _all(cases) -> list[str]:
         return [line for lines in ex.map(_contradictions, cases, chunksize=4) for line in lines]
 
 
-def test_verdict_and_consistency_agree_on_a_subset_of_the_set():
-    cases = validation_set(0)[::6]
-    assert {c.kind for c in cases} == {"catalog", "clean", "out_of_catalog"}
-    assert _all(cases) == []
-
-
 @pytest.mark.slow
 def test_verdict_and_consistency_agree_on_every_run_of_the_set():
-    assert _all(validation_set(0)) == []
+    cases = validation_set(0)
+    assert {c.kind for c in cases} == {"catalog", "clean", "out_of_catalog"}
+    assert _all(cases) == []
 
 
 def test_bench_never_states_explained_beside_an_inconsistent_resimulated_gap():

@@ -123,10 +123,6 @@ def _check_walks(count: int) -> None:
     assert rejected <= max_wrong(len(reviews), FAMILY_ALPHA), (rejected, len(reviews))
 
 
-def test_true_walks_keep_their_name_small():
-    _check_walks(8)
-
-
 @pytest.mark.slow
 def test_true_walks_keep_their_name():
     """R = 60 walk runs (8-20 σ, six timed designs): walks named and rejected by the review."""
