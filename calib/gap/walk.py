@@ -192,9 +192,10 @@ class WalkReview:
     profile: bool = False
     failed: tuple[str, ...] = field(default=())
     cycle: dict | None = None
-    """A slow cycle in time against the walk (:func:`slow_cycle`): ``{"decision":
-    "slow_cycle" | "cannot_tell", "gain", "walk_beyond_lr", "walk_beyond_p", "description"}``,
-    or None when the walk beats every sinusoid by AIC or is needed beyond it."""
+    """A structured drift or a slow cycle in time against the walk (:func:`structured_drift`,
+    :func:`slow_cycle`): ``{"decision": "structure" | "slow_cycle" | "cannot_tell", "gain",
+    "walk_beyond_lr", "walk_beyond_p", "description"}``, or None when the walk beats them by
+    AIC or is needed beyond them."""
 
     @property
     def cycle_wins(self) -> bool:
@@ -242,7 +243,9 @@ class WalkReview:
                    f"({self.criterion:.4g}) and adds to it beyond chance")
             size, stat = best.size, best.criterion - self.criterion
         elif self.cycle_wins and not self.failed:
-            why = (f"a slow cycle beats the random walk by {self.cycle['gain']:.4g} after "
+            what = ("a slow cycle" if self.cycle["decision"] == "slow_cycle"
+                    else "a fixed shape")
+            why = (f"{what} beats the random walk by {self.cycle['gain']:.4g} after "
                    f"their charges (more than {CYCLE_MARGIN:g} and {self.cycle['share']:.0%} of "
                    f"the walk's own gain) and a walk adds nothing beyond it "
                    f"(LR {self.cycle['walk_beyond_lr']:.3g})")
