@@ -78,7 +78,9 @@ from calib.gap.space import (
     AxisSpace,
     Check,
     backlash_columns,
+    drift_extent,
     gain_drift_columns,
+    gain_drift_words,
     legendre_in_time,
     spectral_peak,
 )
@@ -314,11 +316,9 @@ def _gain_drift(space: AxisSpace, run, k: int, axis: str) -> Check | None:
     if res is None:
         return None
     stat, dof, coef, logp = res
-    ends = float(np.max(np.abs(legendre_in_time(run, (1, 2)) @ coef)))
     return Check("gain_drift", axis, stat, logp, f"chi2({dof})",
                  float(np.max(np.abs(cols @ coef))), "m/s²",
-                 f"the gain on {axis} changes during the run by up to {ends:.3g} "
-                 f"({1e6 * ends:.0f} ppm): a scale factor drifting with time or temperature")
+                 gain_drift_words(axis, drift_extent(run, coef)))
 
 
 def _rate(space: AxisSpace, run, axis: str) -> Check | None:

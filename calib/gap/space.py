@@ -19,7 +19,7 @@ from math import comb
 import numpy as np
 from scipy import linalg as sla
 
-from calib.effects import Extensions, ModelState
+from calib.effects import SIGN_P, Extensions, ModelState
 
 COLLINEAR_TOL = 1e-6
 """A test column whose part outside the model is below this fraction of its norm is dropped."""
@@ -207,6 +207,25 @@ def legendre_in_time(run, degrees: tuple[int, ...]) -> np.ndarray:
     return np.column_stack([np.polynomial.legendre.Legendre.basis(d)(x) for d in degrees])
 
 
+def tilt_slope(run, k: int) -> np.ndarray:
+    """(N,) ``dA_r/dθ`` of axis k, m/s² per rad: the other axis' reference signed as in a
+    rotation by +δ (:data:`calib.effects.SIGN_P`; course signs ``dA_x/dθ = -g cos θ = A_y``,
+    ``dA_y/dθ = g sin θ = -A_x``)."""
+    return SIGN_P[k] * run.a_ref[:, 1 - k]
+
+
+def drift_extent(run, coef: np.ndarray) -> float:
+    """The largest |change| over the run of a parameter drifting as ``c₁P1(t) + c₂P2(t)``
+    (the coefficients of :func:`gain_drift_columns` or :func:`tilt_drift_columns`)."""
+    return float(np.max(np.abs(legendre_in_time(run, (1, 2)) @ np.asarray(coef)[:2])))
+
+
+def gain_drift_words(axis: str, change: float) -> str:
+    """A drifting gain in words (the ``gain_drift`` check and the walk's rival)."""
+    return (f"the gain on {axis} changes during the run by up to {change:.3g} "
+            f"({1e6 * change:.0f} ppm): a scale factor drifting with time or temperature")
+
+
 def gain_drift_columns(run, k: int) -> np.ndarray:
     """(N, 2) ``A_r·P1(t)``, ``A_r·P2(t)``: a gain (scale factor) of axis k that changes during
     the run (linearly, or bending once) — a temperature coefficient of the scale, not in the
@@ -219,9 +238,8 @@ def gain_drift_columns(run, k: int) -> np.ndarray:
 def tilt_drift_columns(run, k: int) -> np.ndarray:
     """(N, 2) ``dA_r/dθ·P1(t)``, ``dA_r/dθ·P2(t)``: a tilt (a rotation of the mount or the
     sensor) that creeps during the run — the catalog's tilt and misalignment are constant.
-    Course signs: ``dA_x/dθ = A_y``, ``dA_y/dθ = -A_x`` (m/s² per rad)."""
-    slope = run.a_ref[:, 1] if k == 0 else -run.a_ref[:, 0]
-    return slope[:, None] * legendre_in_time(run, (1, 2))
+    ``dA_r/dθ`` from :func:`tilt_slope` (m/s² per rad)."""
+    return tilt_slope(run, k)[:, None] * legendre_in_time(run, (1, 2))
 
 
 def backlash_columns(run, k: int) -> np.ndarray | None:
@@ -229,13 +247,11 @@ def backlash_columns(run, k: int) -> np.ndarray | None:
     (:func:`motion_direction`), or None when θ does not move both ways: a reading that depends
     on the direction the table last moved, as an offset (hysteresis of the bias) and as an
     angle (backlash of the drive: the table stops ``b`` short of the encoder's θ, so
-    ``A_r(θ - d·b) ≈ A_r - d·b·dA_r/dθ``; course signs: ``dA_x/dθ = -g cos θ = A_y``,
-    ``dA_y/dθ = g sin θ = -A_x``)."""
+    ``A_r(θ - d·b) ≈ A_r - d·b·dA_r/dθ``, :func:`tilt_slope`)."""
     d = motion_direction(run.tita)
     if d is None:
         return None
-    slope = run.a_ref[:, 1] if k == 0 else -run.a_ref[:, 0]
-    return np.column_stack([d, d * slope])
+    return np.column_stack([d, d * tilt_slope(run, k)])
 
 
 def motion_direction(tita: np.ndarray) -> np.ndarray | None:

@@ -95,8 +95,10 @@ from calib.gap.space import (
     AxisSpace,
     Check,
     backlash_columns,
+    drift_extent,
     fisher_g_logp,
     gain_drift_columns,
+    gain_drift_words,
     legendre_in_time,
     motion_direction,
     spectral_peak,
@@ -452,9 +454,8 @@ def _in_time(space: AxisSpace, run, name: str, cols: np.ndarray, words) -> Rival
     fit = space.test(cols)
     if fit is None:
         return None
-    most = float(np.max(np.abs(legendre_in_time(run, (1, 2)) @ fit[2])))
     return Rival(name, fit[0], float(fit[1]), float(np.max(np.abs(cols @ fit[2]))),
-                 words(most), cols, 1)
+                 words(drift_extent(run, fit[2])), cols, 1)
 
 
 def _tilt_drift(space: AxisSpace, run, k: int) -> Rival | None:
@@ -506,9 +507,7 @@ def _gain_drift(space: AxisSpace, run, k: int) -> Rival | None:
     temperature coefficient of the scale factor, which a walk follows as a bias that swings
     with the specific force."""
     return _in_time(space, run, "gain_drift", gain_drift_columns(run, k),
-                    lambda c: f"the gain on {AXES[k]} changes during the run by up to {c:.3g} "
-                              f"({1e6 * c:.0f} ppm; a scale factor drifting with time or "
-                              "temperature)")
+                    lambda c: gain_drift_words(AXES[k], c))
 
 
 def _settling(space: AxisSpace, run) -> Rival | None:
