@@ -425,18 +425,24 @@ class Extensions:
             r = r / np.sqrt(st.sigma2_eff)
         return r, names, cond
 
-    def axis_system(self, k: int, st: AxisState, tilt: bool
-                    ) -> tuple[np.ndarray, np.ndarray, list[str], float, np.ndarray | None]:
-        """Whitened system of axis k: (yw, Hw, names, log det Σ_Δ, whitened tilt column)."""
+    def axis_parts(self, k: int, st: AxisState, tilt: bool) -> tuple[np.ndarray, list[str]]:
+        """The unwhitened system of axis k: (N, 1 + p [+ 1]) columns ``[y - r, r, effect
+        columns…, tilt column]`` (m/s²; the tilt column when ``tilt``) and the names of the
+        p model columns (``scale`` first)."""
         r = self.reference(k, st.tau, st.limit)
         names, cols = self.columns(k, st)
         parts = [self.run.datos[:, k] - r, r, *cols]
         if tilt:
             parts.append(self.tilt_column(k, st))
-        w = self.whiten(st, np.column_stack(parts))
-        p = 2 + len(cols)
-        return (w[:, 0], w[:, 1:p], ["scale", *names], self._logdet(st),
-                (w[:, p] if tilt else None))
+        return np.column_stack(parts), ["scale", *names]
+
+    def axis_system(self, k: int, st: AxisState, tilt: bool
+                    ) -> tuple[np.ndarray, np.ndarray, list[str], float, np.ndarray | None]:
+        """Whitened system of axis k: (yw, Hw, names, log det Σ_Δ, whitened tilt column)."""
+        parts, names = self.axis_parts(k, st, tilt)
+        w = self.whiten(st, parts)
+        p = 1 + len(names)
+        return (w[:, 0], w[:, 1:p], names, self._logdet(st), (w[:, p] if tilt else None))
 
     # --- likelihood ----------------------------------------------------------------------
 

@@ -19,7 +19,8 @@ is a catalog effect, so none is ever named).
     or belt ratio, or a tooth count), searched on a grid of fractional ν up to
     :data:`DRIVE_ORDERS`' top and of whole ν up to :data:`MAX_TEETH` (a gear of up to 48
     teeth), ``ΔRSS ~ χ²(2)``, Bonferroni over the grid; with timing also
-    the same columns times ``|ω|/max|ω|`` (a vibration growing with the drive speed). The
+    the same columns times ``|ω|/max|ω|`` (a vibration growing with the drive speed; only
+    when the speed varies, :data:`SPEED_CV`). The
     integer orders up to the ``harmonics`` check's last (6) are left out (1 and 2 are the
     catalog's scale, K2 and cross-axis; 3–6 the ``harmonics`` check's); a whole tooth count
     above them is a harmonic of θ nothing else looks for, so it is on the grid.
@@ -72,6 +73,11 @@ up to :data:`LAST_HARMONIC` are excluded."""
 
 MAX_TEETH = 48
 """Whole orders (tooth counts) are searched from :data:`LAST_HARMONIC` + 1 up to this."""
+
+SPEED_CV = 0.1
+"""The drive-speed variant of the drive-angle check is searched only when ``|ω|`` varies by
+more than this coefficient of variation: below it ``|ω|/max|ω|·cos νθ`` correlates with
+``cos νθ`` at more than ``1/sqrt(1 + 0.1²)`` ≈ 0.995 (a constant sweep's ramps)."""
 
 LAST_HARMONIC = 6
 """The highest integer order tested elsewhere (``harmonics`` check of the adequacy battery:
@@ -213,8 +219,12 @@ def drive_angle(space: AxisSpace, run, axis: str) -> Check | None:
     if not orders:
         return None
     speed = None
-    if run.omega is not None and np.ptp(np.abs(run.omega)) > 1e-9:
-        speed = np.abs(run.omega) / max(float(np.max(np.abs(run.omega))), 1e-300)
+    if run.omega is not None:
+        w = np.abs(run.omega)
+        # a speed that hardly changes (coefficient of variation below SPEED_CV) gives the
+        # same columns twice: the variant adds a test and no power
+        if float(np.std(w)) > SPEED_CV * float(np.mean(w)):
+            speed = w / max(float(np.max(w)), 1e-300)
     variants = [("", 1.0)] + ([] if speed is None else
                               [(" growing with the drive speed", speed[:, None])])
     grid = [(v, label, w) for label, w in variants for v in orders]

@@ -1,0 +1,98 @@
+"""The batched grid scan of the adequacy checks gives what one test per block gives.
+
+``AxisSpace.scan`` is a fast path: with q = 0 it works in the centred image of the whitened
+rows (``Extensions.white``), a pair of columns has its QR written out from the Gram matrix,
+and blocks are whitened together. Each must give the ΔRSS that ``AxisSpace.test`` (pivoted QR
+in the whitened rows, one block at a time) gives, for single columns, pairs and triples, a
+block inside the model (ΔRSS 0), with and without a walk, and after ``without``. Data from
+numpy only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from calib.conventions import G
+from calib.effects import Extensions, ModelState
+from calib.effects.run import RunData
+from calib.gap.space import AxisSpace
+
+STATED = (0.25, 0.64)
+
+
+def _space(q: float, linear: tuple[str, ...] = ()) -> tuple[AxisSpace, RunData]:
+    rng = np.random.default_rng(7)
+    n = 4000
+    t = np.arange(n) / 100.0
+    th = np.linspace(0.0, 4.0 * np.pi, n)
+    datos = np.column_stack([-G * np.sin(th) * 1.01 + 0.05, -G * np.cos(th) * 0.99])
+    datos += rng.normal(0.0, np.sqrt(STATED), (n, 2))
+    datos[:, 0] += 0.2 * np.sin(7.3 * th)  # something for the scan to find
+    run = RunData.build(th, datos, G, t=t)
+    ext = Extensions(run, np.array([1.01, 0.99]))
+    state = ModelState.nominal(STATED)
+    st = state.axes[0]
+    state = state.with_axis(0, type(st)(linear=linear, q=q, sigma2_stated=st.sigma2_stated))
+    return AxisSpace(ext, state, 0), run
+
+
+def _one_by_one(space: AxisSpace, make, grid) -> np.ndarray:
+    out = []
+    for g in grid:
+        fit = space.test(make(g))
+        out.append(0.0 if fit is None else fit[0])
+    return np.array(out)
+
+
+@pytest.mark.parametrize("q", [0.0, 0.05])
+@pytest.mark.parametrize("width", [1, 2, 3])
+def test_scan_gives_the_delta_rss_of_each_block(q, width):
+    space, run = _space(q)
+    th, tc = run.tita, run.tcol
+
+    def make(v):
+        cols = [np.cos(v * th), np.sin(v * th), tc * np.cos(v * th)][:width]
+        return np.column_stack(cols)
+
+    grid = list(np.linspace(3.1, 9.7, 23))
+    scanned = space.scan(make, grid)
+    assert scanned.shape == (len(grid),)
+    np.testing.assert_allclose(scanned, _one_by_one(space, make, grid), rtol=1e-7, atol=1e-9)
+    assert grid[int(np.argmax(scanned))] == pytest.approx(7.3, abs=0.3)
+
+
+@pytest.mark.parametrize("q", [0.0, 0.05])
+def test_a_block_inside_the_model_adds_nothing_and_a_partial_one_its_new_part(q):
+    space, run = _space(q)
+    th = run.tita
+    inside = run.a_ref[:, 0]  # the scale column of axis x, already in the model
+
+    def make(kind):
+        if kind == "inside":
+            return np.column_stack([inside, 2.0 * inside])
+        if kind == "half":
+            return np.column_stack([inside, np.sin(7.3 * th)])
+        return np.column_stack([np.sin(7.3 * th), inside])
+
+    grid = ["inside", "half", "half-reversed"]
+    scanned = space.scan(make, grid)
+    assert scanned[0] == pytest.approx(0.0, abs=1e-6)
+    np.testing.assert_allclose(scanned[1:], _one_by_one(space, make, grid)[1:], rtol=1e-6)
+    assert scanned[1] > 10.0
+
+
+@pytest.mark.parametrize("q", [0.0, 0.05])
+def test_scan_after_without_sees_what_is_left(q):
+    space, run = _space(q)
+    th = run.tita
+
+    def make(v):
+        return np.column_stack([np.cos(v * th), np.sin(v * th)])
+
+    grid = list(np.linspace(3.1, 9.7, 23))
+    left = space.without(make(7.3))
+    scanned = left.scan(make, grid)
+    np.testing.assert_allclose(scanned, _one_by_one(left, make, grid), rtol=1e-7, atol=1e-9)
+    assert scanned[int(np.argmin(np.abs(np.array(grid) - 7.3)))] < 1e-6
+    assert scanned.max() < space.scan(make, grid).max()
