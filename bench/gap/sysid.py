@@ -75,6 +75,13 @@ def _sysid() -> Any:
     return mujoco.sysid
 
 
+def preload_sysid() -> None:
+    """Import ``mujoco.sysid`` ahead of its first use (the gap run does it on the thread of
+    the nominal re-simulation, while the analysis runs: the refinement then does not wait
+    for the import)."""
+    _sysid()
+
+
 def _param_name(effect: EffectSpec) -> str:
     return f"{effect.name}_{effect.axis}"
 
