@@ -16,7 +16,7 @@ import pytest
 from calib.conventions import G
 from calib.effects import Extensions, ModelState
 from calib.effects.run import RunData
-from calib.gap.space import AxisSpace
+from calib.gap.space import AxisSpace, order_columns
 
 STATED = (0.25, 0.64)
 
@@ -96,3 +96,13 @@ def test_scan_after_without_sees_what_is_left(q):
     np.testing.assert_allclose(scanned, _one_by_one(left, make, grid), rtol=1e-7, atol=1e-9)
     assert scanned[int(np.argmin(np.abs(np.array(grid) - 7.3)))] < 1e-6
     assert scanned.max() < space.scan(make, grid).max()
+
+
+def test_order_columns_are_cos_and_sin_of_the_order_whatever_the_sequence():
+    th = np.linspace(-3.0, 40.0, 5001)
+    cols = order_columns(th)
+    step = np.arange(0.5, 12.0, 0.03)
+    asked = list(step) + [7.0, 8.0, 9.0, 0.5, 0.53, 0.53] + list(step[::-1])
+    worst = max(np.max(np.abs(cols(v) - np.column_stack([np.cos(v * th), np.sin(v * th)])))
+                for v in asked)
+    assert worst < 32 * 1e-15 * np.max(np.abs(th)) * 4  # ORDER_CHAIN products (space.py)

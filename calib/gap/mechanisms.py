@@ -51,7 +51,7 @@ from scipy import stats
 
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
-from calib.gap.space import AxisSpace, Check
+from calib.gap.space import AxisSpace, Check, order_columns
 
 RING_FREQS = np.geomspace(0.5, 25.0, 24)
 """Frequencies (Hz) of the ringing grid (those below the Nyquist frequency / 2 are used)."""
@@ -230,8 +230,10 @@ def drive_angle(space: AxisSpace, run, axis: str) -> Check | None:
     grid = [(v, label, w) for label, w in variants for v in orders]
     tests = len(grid)
 
+    at = order_columns(th)
+
     def cols(g):
-        return np.column_stack([np.cos(g[0] * th), np.sin(g[0] * th)]) * g[2]
+        return at(g[0]) * g[2]
 
     g = grid[int(np.argmax(space.scan(cols, grid)))]
     fit = space.test(cols(g))

@@ -101,6 +101,7 @@ from calib.gap.space import (
     gain_drift_words,
     legendre_in_time,
     motion_direction,
+    order_columns,
     spectral_peak,
     tilt_drift_columns,
 )
@@ -402,8 +403,7 @@ def _drive_angle(space: AxisSpace, run) -> Rival | None:
         return None
     top = resolved_order(th)
     orders = [v for v in drive_orders(turns) if v * turns >= 1.0 and v <= top]
-    best = _best_on_grid(space, lambda v: np.column_stack([np.cos(v * th), np.sin(v * th)]),
-                         orders)
+    best = _best_on_grid(space, order_columns(th), orders)
     if best is None:
         return None
     amp, v = float(np.hypot(*best[2])), float(best[1])
