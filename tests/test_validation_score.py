@@ -8,6 +8,8 @@ error rates, never from individual files:
   verdict "explained" in ≥ 95 % (the issue's bar), and the gap after consistent with the
   stated noise in ≥ 95 %;
 * every out-of-catalog case is called "unexplained";
+* on every run the verdict agrees with the per-axis consistency (one verdict, issue 20 item 3;
+  :func:`validation.score.contradictions`);
 * clean runs: the selection names something with probability ≤ family α = 0.005 and the
   adequacy battery fails with probability ≤ 0.005 (Bonferroni bounds), so the number of
   clean runs named (or called unexplained) must not exceed the 0.999 quantile of
@@ -54,6 +56,13 @@ def test_catalog_effects_named_right(rows):
     assert len(cat) >= 40
     assert sum(r["right"] for r in cat) >= 0.95 * len(cat), wrong
     assert sum(r["gap_ok"] for r in cat) >= 0.95 * len(cat)
+
+
+def test_verdict_and_consistency_agree_on_every_run_of_the_set(rows):
+    """One verdict, never contradicting itself (issue 20, item 3): over every run of the set
+    (:func:`validation.score.contradictions`)."""
+    assert {r["kind"] for r in rows} == {"catalog", "clean", "out_of_catalog"}
+    assert [line for r in rows for line in r["contradictions"]] == []
 
 
 def test_every_out_of_catalog_case_is_unexplained(rows):

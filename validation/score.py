@@ -18,6 +18,8 @@ Rules
   verdict; clean: nothing named); none for out-of-catalog runs, whose names are tentative.
 * ``gap_ok`` (reported, not part of "right"): every axis of ``gap_after_fit`` is consistent
   with noise (``GapMeasure.consistent()``), or the verdict is ``"explained"``.
+* ``contradictions`` (reported; the tests require none): where the verdict contradicts the
+  analysis' own per-axis consistency (:func:`contradictions`, issue 20, item 3).
 
 Error rates, for a test that must not tune thresholds to files: the analysis states its
 family false-alarm probability α (``criterion["family_alpha"]``, 0.005 by default) for a clean
@@ -103,7 +105,47 @@ def judge(case: Case, analysis) -> dict:
     return {"id": case.id, "kind": case.kind, "design": case.design, "n": case.n,
             "expected": sorted(case.expected), "named": sorted(named), "verdict": verdict,
             "right": bool(right), "names_ok": names_ok, "gap_ok": bool(gap_ok),
-            "size_sigma": dict(case.size_sigma)}
+            "size_sigma": dict(case.size_sigma),
+            "contradictions": (contradictions(case.id, analysis)
+                               if getattr(analysis, "adequacy", None) else [])}
+
+
+def contradictions(case_id: str, analysis) -> list[str]:
+    """Where the verdict contradicts the per-axis consistency (one verdict, issue 20 item 3).
+
+    The verdict and ``adequacy["consistent"]`` come from the same battery (the gap after's χ²
+    against the stated noise and its signatures are checks of it), so on every run:
+    "explained" or "nothing_detected" ⇒ every axis consistent and the gap after's χ²/dof
+    inside its two-sided band at the battery's per-check level (unless a noise level is
+    named on that axis); "explained" ⇒ something named, "nothing_detected" ⇒ nothing;
+    "unexplained" ⇒ at least one axis not consistent and every failed check names its axis
+    ("x", "y" or "both"). Returns one line per contradiction (none: consistent)."""
+    from calib.conventions import AXES
+
+    out = []
+    verdict = analysis.verdict
+    consistent = analysis.adequacy["consistent"]
+    alpha = analysis.adequacy["alpha_check"]
+    if verdict in ("explained", "nothing_detected"):
+        if not all(consistent.values()):
+            out.append(f"{case_id}: verdict {verdict} but consistent = {consistent}")
+        for k, ax in enumerate(AXES):
+            gm = analysis.gap_after_fit[ax]
+            lo, hi = gm.chi2_band(alpha)
+            if not analysis.final.state.axes[k].noise_free and not lo <= gm.chi2_dof <= hi:
+                out.append(f"{case_id}: verdict {verdict} but χ²/dof {ax} = "
+                           f"{gm.chi2_dof:.4g} outside [{lo:.4g}, {hi:.4g}]")
+    if verdict == "explained" and not analysis.effects:
+        out.append(f"{case_id}: explained with nothing named")
+    if verdict == "nothing_detected" and analysis.effects:
+        out.append(f"{case_id}: nothing detected but {analysis.named} named")
+    if verdict == "unexplained":
+        if all(consistent.values()):
+            out.append(f"{case_id}: unexplained but every axis consistent")
+        if not analysis.unexplained or any(u["axis"] not in (*AXES, "both")
+                                           for u in analysis.unexplained):
+            out.append(f"{case_id}: unexplained without an axis-named signature")
+    return out
 
 
 def max_wrong(count: int, rate: float, confidence: float = 0.999) -> int:
@@ -154,7 +196,10 @@ class Score:
             out += [f"| {s[by]} | {s['cases']} | {s['right']} | {s['rate']:.0%} | "
                     f"{s['names_ok']} | {s['gap_ok']} |" for s in self.summary(by)]
         total = sum(r["right"] for r in self.rows)
-        out += ["", f"{total}/{len(self.rows)} right; analysis time {self.seconds:.1f} s"]
+        contra = [line for r in self.rows for line in r.get("contradictions", [])]
+        out += ["", f"{total}/{len(self.rows)} right; {len(contra)} contradictions between "
+                    f"the verdict and the per-axis consistency; analysis time "
+                    f"{self.seconds:.1f} s", *contra]
         return "\n".join(out)
 
 
