@@ -101,9 +101,14 @@ class AxisSpace:
 
     def scan(self, make, grid) -> np.ndarray:
         """ΔRSS of each column block ``make(g)`` (N, c) of a grid, batched: the blocks are
-        whitened together and each projected off the model (batched QR); a block of rank < c
-        counts its independent part (its ΔRSS is then the least-squares one, by QR of the
-        projected block). Use :meth:`test` on the best for its rank and coefficients."""
+        whitened together (with q = 0 in the centred image, see ``__init__``) and each
+        projected off the model; single columns by ``(zᵀr)²/‖z‖²``, pairs by their QR written
+        from the Gram matrix (:func:`_pair_drss`), wider blocks by a batched QR. A column
+        whose part outside the model and the block's earlier columns is below
+        :data:`COLLINEAR_TOL` of its whitened norm is not counted (so a block of rank < c
+        gives the ΔRSS of its independent part). Equal to :meth:`test` block by block
+        (``tests/test_gap_space.py``); use :meth:`test` on the best for its rank and
+        coefficients."""
         grid = list(grid)
         out = np.zeros(len(grid))
         if not grid:
