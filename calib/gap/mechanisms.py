@@ -9,7 +9,8 @@ is a catalog effect, so none is ever named).
     A lightly damped mode excited when the table stops (timed runs with holds). After each
     stop ``i`` (θ held after moving, ``s_i`` the sign of the move that stopped) the columns
     ``Σ_i s_i·e^{-ζω τ_i}·(cos ω_d τ_i, sin ω_d τ_i)`` and the same unsigned (``τ_i`` the time
-    since the stop, within the hold; ``ω_d = ω·sqrt(1 - ζ²)``) are added to the final model
+    since the stop, from the stop on: the mode rings on through the hold and the next moves
+    until it has decayed; ``ω_d = ω·sqrt(1 - ζ²)``) are added to the final model
     (GLS in its whitened space, :class:`calib.gap.space.AxisSpace`): ``ΔRSS ~ χ²(4)``,
     maximised over a grid of frequencies and damping ratios, Bonferroni over the grid. Reported:
     frequency, damping ratio, initial amplitude (the damped-mode fit on the segments after the
@@ -62,6 +63,9 @@ RING_DAMPING = (0.02, 0.05, 0.1, 0.2, 0.4)
 SETTLE_TIMES = np.geomspace(1e-3, 0.25, 16)
 """Time constants T of the settling grid, fractions of the run's span (those of at least two
 samples are used)."""
+
+RING_FLOOR = 1e-6
+"""A ring's columns stop where its envelope has decayed to this fraction of its start."""
 
 MIN_HOLD = 5
 """Fewest held samples after a stop for it to count."""
@@ -133,7 +137,10 @@ def _ring_columns(run, hold: list[tuple[int, int, float]], f: float, zeta: float
     z = np.zeros((run.n, 4))
     w = 2.0 * np.pi * f
     wd = w * np.sqrt(1.0 - zeta**2)
-    for i, j, s in hold:
+    # the mode rings on through the next moves until it has decayed (to RING_FLOOR)
+    last = float(np.log(1.0 / RING_FLOOR) / (zeta * w))
+    for i, _, s in hold:
+        j = int(np.searchsorted(run.t, run.t[i - 1] + last, side="right"))
         tau = run.t[i - 1:j] - run.t[i - 1]  # from the last moving sample
         env = np.exp(-zeta * w * tau)
         c, si = env * np.cos(wd * tau), env * np.sin(wd * tau)
