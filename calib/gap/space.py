@@ -102,8 +102,8 @@ class AxisSpace:
     def scan(self, make, grid) -> np.ndarray:
         """ΔRSS of each column block ``make(g)`` (N, c) of a grid, batched: the blocks are
         whitened together (with q = 0 in the centred image, see ``__init__``) and each
-        projected off the model; single columns and pairs from their Gram matrices
-        (:func:`_small_blocks_drss`), wider blocks by a batched QR. A column
+        projected off the model, each block's QR written from its Gram matrix
+        (:func:`_blocks_drss`). A column
         whose part outside the model and the block's earlier columns is below
         :data:`COLLINEAR_TOL` of its whitened norm is not counted (so a block of rank < c
         gives the ΔRSS of its independent part). Equal to :meth:`test` block by block
@@ -120,19 +120,7 @@ class AxisSpace:
             blocks = [b.reshape(b.shape[0], -1) for b in blocks]
             c = blocks[0].shape[1]
             zw = self._image(np.concatenate(blocks, axis=1), self._cheap is not None)
-            if c <= 2:  # Gram matrices of the projected columns, without forming them
-                out[a:a + len(blocks)] = _small_blocks_drss(zw, qh, rw, c)
-                continue
-            # a column counts when its part outside the model (and the block's earlier
-            # columns) is above COLLINEAR_TOL of its whitened norm, as in :meth:`test`
-            norms = np.linalg.norm(zw, axis=0).reshape(len(blocks), c)
-            zp = zw - qh @ (qh.T @ zw)
-            stack = zp.reshape(zp.shape[0], len(blocks), c).transpose(1, 0, 2)
-            q, r = np.linalg.qr(stack)
-            d = np.abs(np.diagonal(r, axis1=1, axis2=2))
-            ok = d > COLLINEAR_TOL * np.maximum(norms, 1e-300)
-            proj = np.einsum("gnc,n->gc", q, rw) * ok
-            out[a:a + len(blocks)] = np.sum(proj * proj, axis=1)
+            out[a:a + len(blocks)] = _blocks_drss(zw, qh, rw, c)
         return out
 
     def test(self, z: np.ndarray) -> tuple[float, int, np.ndarray] | None:
@@ -156,37 +144,41 @@ class AxisSpace:
         return float(proj @ proj), rank, coef
 
 
-def _small_blocks_drss(zw: np.ndarray, qh: np.ndarray, rw: np.ndarray, c: int) -> np.ndarray:
-    """ΔRSS of the blocks of ``c`` = 1 or 2 whitened columns ``zw`` (N, J·c) for the residual
-    rw (orthogonal to the model's basis qh), from inner products only: with ``A = qhᵀ zw``
-    the projected columns ``zp = zw − qh A`` have ``zpᵀ zp = zwᵀ zw − Aᵀ A`` and
-    ``zpᵀ rw = zwᵀ rw``. One column: ``ΔRSS = (zpᵀr)²/‖zp‖²``; a pair: its QR written out
-    from the Gram matrix (``R = [[d1, g12/d1], [0, d2]]``, ``d1² = g11``, ``d2² = g22 −
-    g12²/g11``), ``ΔRSS = ‖R⁻ᵀ zpᵀ rw‖²``. A column whose diagonal is below
-    :data:`COLLINEAR_TOL` of its whitened norm is not counted, as in :meth:`AxisSpace.test`
-    (the subtraction loses ~1e-15 of ‖zw‖², far below the 1e-12 that test keeps). What the
-    batched QR of the projected blocks gives, in two passes over the columns instead of
-    five."""
+def _blocks_drss(zw: np.ndarray, qh: np.ndarray, rw: np.ndarray, c: int) -> np.ndarray:
+    """ΔRSS of the blocks of ``c`` whitened columns ``zw`` (N, J·c) for the residual rw
+    (orthogonal to the model's basis qh), from inner products only.
+
+    With ``A = qhᵀ zw`` the projected columns ``zp = zw − qh A`` have the Gram matrix
+    ``G = zwᵀ zw − Aᵀ A`` and ``zpᵀ rw = zwᵀ rw = b``. Each block's R factor is built from G
+    column by column (Cholesky, vectorised over the blocks): ``R_lj = (G_lj − Σ_{m<l} R_ml
+    R_mj)/R_ll``, ``R_jj² = G_jj − Σ_{l<j} R_lj²``; then ``x = R⁻ᵀ b`` by forward
+    substitution and ``ΔRSS = ‖x‖²`` — what the QR of the projected block gives, without
+    forming it. A column whose ``R_jj`` is below :data:`COLLINEAR_TOL` of its whitened norm
+    (it lies in the model and the block's earlier columns) is not counted, as in
+    :meth:`AxisSpace.test` (the subtractions lose ~1e-15 of ‖zw‖², far below the 1e-12 kept).
+    """
     a = qh.T @ zw
-    nw = np.einsum("ng,ng->g", zw, zw)
-    gram = nw - np.einsum("pg,pg->g", a, a)
-    b = zw.T @ rw
+    b = (zw.T @ rw).reshape(-1, c)
+    nw = np.einsum("ng,ng->g", zw, zw).reshape(-1, c)
     tol2 = COLLINEAR_TOL ** 2 * nw
-    if c == 1:
-        ok = gram > tol2
-        return np.where(ok, b * b / np.where(ok, gram, 1.0), 0.0)
-    g11, g22 = gram[0::2], gram[1::2]
-    g12 = (np.einsum("ng,ng->g", zw[:, 0::2], zw[:, 1::2])
-           - np.einsum("pg,pg->g", a[:, 0::2], a[:, 1::2]))
-    b1, b2 = b[0::2], b[1::2]
-    ok1 = g11 > tol2[0::2]
-    d1 = np.sqrt(np.where(ok1, g11, 1.0))
-    x1 = np.where(ok1, b1 / d1, 0.0)
-    r12 = np.where(ok1, g12 / d1, 0.0)
-    d2sq = g22 - r12 * r12
-    ok2 = d2sq > tol2[1::2]
-    x2 = np.where(ok2, (b2 - r12 * x1) / np.sqrt(np.where(ok2, d2sq, 1.0)), 0.0)
-    return x1 * x1 + x2 * x2
+
+    def gram(i: int, j: int) -> np.ndarray:
+        return (np.einsum("ng,ng->g", zw[:, i::c], zw[:, j::c])
+                - np.einsum("pg,pg->g", a[:, i::c], a[:, j::c]))
+
+    r = np.zeros((c, c, b.shape[0]))  # r[l, j]: R_lj of every block
+    ok = np.zeros((c, b.shape[0]), dtype=bool)
+    x = np.zeros((c, b.shape[0]))
+    for j in range(c):
+        for m in range(j):
+            r[m, j] = np.where(ok[m], (gram(m, j) - np.sum(r[:m, m] * r[:m, j], axis=0))
+                               / np.where(ok[m], r[m, m], 1.0), 0.0)
+        d2 = (nw[:, j] - np.einsum("pg,pg->g", a[:, j::c], a[:, j::c])
+              - np.sum(r[:j, j] ** 2, axis=0))
+        ok[j] = d2 > tol2[:, j]
+        r[j, j] = np.sqrt(np.where(ok[j], d2, 1.0))
+        x[j] = np.where(ok[j], (b[:, j] - np.sum(r[:j, j] * x[:j], axis=0)) / r[j, j], 0.0)
+    return np.sum(x * x, axis=0)
 
 
 def _project(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
