@@ -103,12 +103,11 @@ class AxisSpace:
         """ΔRSS of each column block ``make(g)`` (N, c) of a grid, batched: the blocks are
         whitened together (with q = 0 in the centred image, see ``__init__``) and each
         projected off the model, each block's QR written from its Gram matrix
-        (:func:`_blocks_drss`). A column
-        whose part outside the model and the block's earlier columns is below
-        :data:`COLLINEAR_TOL` of its whitened norm is not counted (so a block of rank < c
-        gives the ΔRSS of its independent part). Equal to :meth:`test` block by block
-        (``tests/test_gap_space.py``); use :meth:`test` on the best for its rank and
-        coefficients."""
+        (:func:`_blocks_drss`). A column whose part outside the model and the block's
+        earlier columns is below :data:`COLLINEAR_TOL` of its whitened norm is not counted
+        (so a block of rank < c gives the ΔRSS of its independent part). Equal to
+        :meth:`test` block by block (``tests/test_gap_space.py``); use :meth:`test` on the
+        best for its rank and coefficients."""
         grid = list(grid)
         out = np.zeros(len(grid))
         if not grid:
