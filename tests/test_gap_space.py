@@ -1,8 +1,8 @@
 """The batched grid scan of the adequacy checks gives what one test per block gives.
 
 ``AxisSpace.scan`` is a fast path: with q = 0 it works in the centred image of the whitened
-rows (``Extensions.white``), a pair of columns has its QR written out from the Gram matrix,
-and blocks are whitened together. Each must give the ΔRSS that ``AxisSpace.test`` (pivoted QR
+rows (``Extensions.white``), each block's QR is written out from its Gram matrix, and blocks
+are whitened together. Each must give the ΔRSS that ``AxisSpace.test`` (pivoted QR
 in the whitened rows, one block at a time) gives, for single columns, pairs and triples, a
 block inside the model (ΔRSS 0), with and without a walk, and after ``without``. Data from
 numpy only.
@@ -21,7 +21,7 @@ from calib.gap.space import AxisSpace, order_columns
 STATED = (0.25, 0.64)
 
 
-def _space(q: float, linear: tuple[str, ...] = ()) -> tuple[AxisSpace, RunData]:
+def _space(q: float) -> tuple[AxisSpace, RunData]:
     rng = np.random.default_rng(7)
     n = 4000
     t = np.arange(n) / 100.0
@@ -33,7 +33,7 @@ def _space(q: float, linear: tuple[str, ...] = ()) -> tuple[AxisSpace, RunData]:
     ext = Extensions(run, np.array([1.01, 0.99]))
     state = ModelState.nominal(STATED)
     st = state.axes[0]
-    state = state.with_axis(0, type(st)(linear=linear, q=q, sigma2_stated=st.sigma2_stated))
+    state = state.with_axis(0, type(st)(q=q, sigma2_stated=st.sigma2_stated))
     return AxisSpace(ext, state, 0), run
 
 

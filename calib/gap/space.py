@@ -77,16 +77,21 @@ class AxisSpace:
 
     def __init__(self, ext: Extensions, state: ModelState, k: int) -> None:
         st = state.axes[k]
-        parts, _ = ext.axis_parts(k, st, state.tilt)
-        self.qh, self.rw = _project(ext.whiten(st, parts))
+        self._parts, _ = ext.axis_parts(k, st, state.tilt)
+        self.qh, self.rw = _project(ext.whiten(st, self._parts))
         self.ext, self.st = ext, st
-        # With q = 0, L⁻¹Δ is an isometry of centring and dividing by σ (Extensions.white):
-        # the same inner products without the banded solve and the differencing. The grid
-        # scans (:meth:`scan`) work in that image; everything else in the whitened rows.
-        self._cheap = _project(ext.white(st, parts)) if st.q == 0 else None
+        self._cheap: tuple[np.ndarray, np.ndarray] | None = None
 
-    def _image(self, z: np.ndarray, cheap: bool) -> np.ndarray:
-        return self.ext.white(self.st, z) if cheap else self.ext.whiten(self.st, z)
+    def _scan_system(self) -> tuple[np.ndarray, np.ndarray]:
+        """(model basis, residual) in the image the grid scans use, that of
+        :meth:`Extensions.white`: with q = 0, L⁻¹Δ is an isometry of centring and dividing by σ
+        (the same inner products without the banded solve and the differencing), made on the
+        first scan; otherwise the whitened rows themselves."""
+        if self.st.q > 0:
+            return self.qh, self.rw
+        if self._cheap is None:
+            self._cheap = _project(self.ext.white(self.st, self._parts))
+        return self._cheap
 
     def without(self, z: np.ndarray) -> AxisSpace:
         """A copy whose residual has the columns of z projected out as well (to look for
@@ -94,14 +99,14 @@ class AxisSpace:
         z = np.asarray(z, dtype=float).reshape(z.shape[0], -1)
         out = copy(self)
         out.rw = _residual_without(self.qh, self.rw, self.ext.whiten(self.st, z))
-        if self._cheap is not None:
-            q, r = self._cheap
+        if self.st.q == 0:
+            q, r = self._scan_system()
             out._cheap = (q, _residual_without(q, r, self.ext.white(self.st, z)))
         return out
 
     def scan(self, make, grid) -> np.ndarray:
         """ΔRSS of each column block ``make(g)`` (N, c) of a grid, batched: the blocks are
-        whitened together (with q = 0 in the centred image, see ``__init__``) and each
+        whitened together (with q = 0 in the centred image, :meth:`_scan_system`) and each
         projected off the model, each block's QR written from its Gram matrix
         (:func:`_blocks_drss`). A column whose part outside the model and the block's
         earlier columns is below :data:`COLLINEAR_TOL` of its whitened norm is not counted
@@ -112,13 +117,13 @@ class AxisSpace:
         out = np.zeros(len(grid))
         if not grid:
             return out
-        qh, rw = self._cheap if self._cheap is not None else (self.qh, self.rw)
+        qh, rw = self._scan_system()
         chunk = max(1, int(3e6 // (rw.size * 4)))
         for a in range(0, len(grid), chunk):
             blocks = [np.asarray(make(g), dtype=float) for g in grid[a:a + chunk]]
             blocks = [b.reshape(b.shape[0], -1) for b in blocks]
             c = blocks[0].shape[1]
-            zw = self._image(np.concatenate(blocks, axis=1), self._cheap is not None)
+            zw = self.ext.white(self.st, np.concatenate(blocks, axis=1))
             out[a:a + len(blocks)] = _blocks_drss(zw, qh, rw, c)
         return out
 

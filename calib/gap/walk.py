@@ -202,8 +202,9 @@ class WalkReview:
 
     @property
     def cycle_wins(self) -> bool:
-        """A slow cycle is preferred to the walk by the charged likelihood (beyond
-        :data:`CYCLE_MARGIN`) and the walk adds nothing beyond it."""
+        """A slow cycle or a fixed shape (:func:`structured_drift`) is preferred to the walk
+        by the charged likelihood (beyond :data:`CYCLE_MARGIN`) and the walk adds nothing
+        beyond it."""
         return self.cycle is not None and self.cycle["decision"] in ("slow_cycle", "structure")
 
     @property
