@@ -37,9 +37,9 @@ from pathlib import Path
 
 import numpy as np
 
-from calib.atomic import atomic_dir, write_text
-from calib.io import DataError, dumps
-from calib.runs import Mapper, serial_map
+from calib.files.atomic import atomic_dir, write_text
+from calib.files.course import DataError, dumps
+from calib.stats.runs import Mapper, serial_map
 from calib.units import nest, with_units
 
 STUDENT_FILES = ("ensayo.mat", "acel.mat", "puntos.mat", "datos.txt")
@@ -140,7 +140,7 @@ def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = Fal
         The class directory is written as one set: see the comment in the body.
     config : :class:`bench.course.CourseConfig` shared by all sets (default: the course's).
     prefix : folder prefix.  progress : called as ``progress(done, count)`` (students).
-    mapper : where the students' sets are made (:mod:`calib.runs`; a local process pool or a
+    mapper : where the students' sets are made (:mod:`calib.stats.runs`; a local process pool or a
         Dask cluster from :mod:`bench.sweep`); the files do not depend on it.
     """
     from bench.dataset import truth_units, versions
@@ -155,7 +155,7 @@ def generate_class(out: str | Path, count: int, seed: int = 0, force: bool = Fal
         raise FileExistsError(f"{out}: {clash[0]}{' and others' if len(clash) > 1 else ''} "
                               "already exist(s)")
     folders, rows, truths, digests = {}, [], {}, {}
-    # The class is one set (calib.atomic.atomic_dir): written beside OUT and swapped in
+    # The class is one set (calib.files.atomic.atomic_dir): written beside OUT and swapped in
     # whole. The truth of a student is kept in memory and goes to the answer key only; it
     # is never written inside a student folder, not even for a moment. Student folders are
     # replaced whole (nothing of an old folder is carried into the new one).

@@ -43,8 +43,8 @@ from bench.vehicle import (
     VehicleRun,
     make_vehicle_run,
 )
-from calib.atomic import atomic_dir
 from calib.conventions import G
+from calib.files.atomic import atomic_dir
 
 COURSE_FILES = ("ensayo.mat", "acel.mat", "puntos.mat", "datos.txt", "truth.json")
 LETTERS = ("A", "B", "C", "D")
@@ -241,12 +241,12 @@ def write_course_files(course: CourseSet, folder: str | Path, truth: bool = True
 
 def write_course(course: CourseSet, out: str | Path, force: bool = False) -> dict[str, str]:
     """Write the five files (six with ``gps.mat``) into ``out`` as one set
-    (:func:`calib.atomic.atomic_dir`).
+    (:func:`calib.files.atomic.atomic_dir`).
 
     The files go to a temporary directory beside ``out``, which replaces ``out`` as a whole
     when complete: an interrupted run leaves the old set or the new one, never a mix; other
     files in ``out`` are kept. Refuses to overwrite without ``force`` (before writing) and
-    while another run writes ``out`` (:class:`calib.atomic.OutputBusyError`).
+    while another run writes ``out`` (:class:`calib.files.atomic.OutputBusyError`).
     """
     out = Path(out)
     owned = COURSE_FILES + (() if course.gps is None else (GPS_FILE,))

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import scipy.io
 
-from calib.io import atomic_write_bytes, atomic_write_text, dumps
+from calib.files.course import atomic_write_bytes, atomic_write_text, dumps
 
 MAT_HEADER_LEN = 116  # MATLAB v5: 116 bytes of descriptive text, space padded
 

@@ -7,11 +7,11 @@ Steps (each timed; its start and end go to the optional progress callback):
 2. calibrate ``ensayo.mat`` (per-axis OLS, noise variances from ``datos.txt``: the same as
    ``tiltbench calibrate OUT/data/ensayo.mat --datos OUT/data/datos.txt --json``);
 3. correct and integrate ``acel.mat``, confidence region of the arrival point and decision
-   (``tiltbench trajectory``), N analysis (:mod:`calib.nmin`);
+   (``tiltbench trajectory``), N analysis (:mod:`calib.vehicle.nmin`);
 4. validate the estimates against ``truth.json`` (:mod:`bench.validate`) and check the
    honesty of the intervals on fresh synthetic calibrations with the same design (Monte
    Carlo pass rate of the joint test against its level);
-5. fusion with position fixes (:func:`calib.fusion.fuse`): on a generated set, fixes of the
+5. fusion with position fixes (:func:`calib.fusion.linear.fuse`): on a generated set, fixes of the
    default receiver (:class:`bench.gnss.Receiver`: 1 Hz, σ = 3 m) simulated on the same MuJoCo
    run with the seed's receiver stream (the fixes ``tiltbench generate course --seed S --gps``
    writes); on course files, their ``gps.mat`` if there is one (else the step says it is
@@ -36,10 +36,10 @@ from typing import Any
 
 import numpy as np
 
-from calib.atomic import atomic_dir, write_text
-from calib.calibration import Calibration, calibrate
+from calib.calibration.tilt_plane import Calibration, calibrate
 from calib.conventions import AXES, G
-from calib.io import (
+from calib.files.atomic import atomic_dir, write_text
+from calib.files.course import (
     Acel,
     Ensayo,
     dumps,
@@ -48,10 +48,10 @@ from calib.io import (
     read_ensayo,
     read_puntos,
 )
-from calib.region import ArrivalRegion, arrival_region
-from calib.runs import Mapper, serial_map
-from calib.trajectory import Trajectory, compute_trajectory
-from calib.trajectory_report import trajectory_tree
+from calib.stats.runs import Mapper, serial_map
+from calib.vehicle.region import ArrivalRegion, arrival_region
+from calib.vehicle.report import trajectory_tree
+from calib.vehicle.trajectory import Trajectory, compute_trajectory
 
 DEFAULT_SEED = 0
 """Seed of the embedded demo (the generators' default seed)."""
@@ -158,8 +158,8 @@ def coverage_check(truth: dict, runs: int = COVERAGE_RUNS, level: float = COVERA
     Each run redraws the readings of the truth's design (θ rebuilt from ``truth.json``) with
     the course model and the true parameters (numpy, no MuJoCo: the static table reproduces
     ``[-g sin θ, -g cos θ]`` to 1e-15), calibrates with known σ² and applies the joint test.
-    The runs are the batched engine :func:`calib.montecarlo.simulate_calibrations` (run k's
-    stream: ``SeedSequence(seed, spawn_key=(7, k))``; ``mapper`` and the chunking do not
+    The runs are the batched engine :func:`calib.calibration.montecarlo.simulate_calibrations` (run
+    k's stream: ``SeedSequence(seed, spawn_key=(7, k))``; ``mapper`` and the chunking do not
     change the numbers). The joint test
     ``d² = eᵀΣ⁻¹e ≤ χ²₄(level)`` and the per-parameter ``|z| ≤ q`` are evaluated for all runs
     at once; the constants of the test (quantiles, the std check, which is the same for
@@ -168,7 +168,7 @@ def coverage_check(truth: dict, runs: int = COVERAGE_RUNS, level: float = COVERA
     ``4·sqrt(level(1 − level)/runs)``.
     """
     from bench.validate import design_theta, true_sensor_params, validate
-    from calib.montecarlo import simulate_calibrations
+    from calib.calibration.montecarlo import simulate_calibrations
 
     tp = true_sensor_params(truth)
     if tp is None:
@@ -209,7 +209,7 @@ def fusion_step(ana: CourseAnalysis, fixes, data_dir: Path, seed: int | None) ->
     receiver (σ = 3 m for a gps.mat, the default receiver's).
     """
     from bench.gnss import Receiver
-    from calib.fusion import fuse
+    from calib.fusion.linear import fuse
 
     if fixes is not None:
         t_gps, pos, sigma, rate = fixes.t_gps, fixes.pos, fixes.receiver.pos_sigma_m, \
@@ -217,7 +217,7 @@ def fusion_step(ana: CourseAnalysis, fixes, data_dir: Path, seed: int | None) ->
         source = (f"simulated on the generated run (default receiver, seed {seed}; "
                   f"`tiltbench generate course --seed {seed} --gps` writes the same fixes)")
     elif (data_dir / "gps.mat").exists():
-        from calib.io import read_gps
+        from calib.files.course import read_gps
 
         g = read_gps(data_dir / "gps.mat")
         t = ana.acel.t
@@ -437,7 +437,7 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
     progress : called with one line of text at the start and at the end of each step (None:
         silent); the command line passes :class:`bench.cli.progress.Progress`.
     formats : figure formats written side by side ("png", "svg").
-    mapper : where the coverage check's runs execute (:mod:`calib.runs`; same numbers).
+    mapper : where the coverage check's runs execute (:mod:`calib.stats.runs`; same numbers).
     record : write and read back ``demo.rrd``. Without rerun-sdk (the ``rrd`` extra) the
         recording is skipped and everything else written; ``recording_skipped`` says why.
     """
@@ -455,7 +455,7 @@ def run_demo(out: str | Path = "demo-out", seed: int = DEFAULT_SEED, force: bool
                None if recording_available() else RRD_EXTRA_MISSING)
     record = skipped is None
     owned = _prepare(out, force, generate, formats, record)
-    # The output directory is one set (calib.atomic.atomic_dir): everything is written to a
+    # The output directory is one set (calib.files.atomic.atomic_dir): everything is written to a
     # temporary directory beside OUT (`work`) and replaces OUT's outputs as a whole at the
     # end; an interrupted demo leaves the old outputs or the new ones, never a mix.
     with atomic_dir(out, force, owned=owned) as work:
@@ -514,8 +514,8 @@ def _jsonable(obj: Any) -> Any:
 
 def _nmin(ana: CourseAnalysis) -> dict:
     """Design and a-posteriori N, and the course question's fixed-run N
-    (:func:`calib.nmin.fixed_run_nmin`, 10⁵ draws, seed 0; shared with the nmin figure)."""
-    from calib.nmin import PositionCovModel, design_nmin, fixed_run_nmin, posterior_nrange
+    (:func:`calib.vehicle.nmin.fixed_run_nmin`, 10⁵ draws, seed 0; shared with the nmin figure)."""
+    from calib.vehicle.nmin import PositionCovModel, design_nmin, fixed_run_nmin, posterior_nrange
 
     reg = ana.region
     truth = reg.decision or min(reg.mahalanobis, key=reg.mahalanobis.get)

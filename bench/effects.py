@@ -43,7 +43,7 @@ from bench.terms import (
 )
 from bench.tilt import CalibrationConfig
 from calib.conventions import AXES, EFFECT_NAMES, EFFECTS, PER_AXIS, EffectInfo, G, Timing
-from calib.io import DataError
+from calib.files.course import DataError
 
 CATALOG = EFFECTS
 """The effect vocabulary (:data:`calib.conventions.EFFECTS`), under the bench's old name."""
@@ -124,7 +124,7 @@ def parse_effect_option(text: str) -> EffectSpec:
 
     Examples: ``misalignment:x:delta=0.02``, ``tilt_offset:both:delta=0.01``,
     ``lever_arm:y:pos_x=0.2,pos_z=0.05``, ``bias_drift:x:rate_per_sample=1e-4``.
-    Raises :class:`calib.io.DataError` naming the option and what is wrong.
+    Raises :class:`calib.files.course.DataError` naming the option and what is wrong.
     """
     where = f"--effect {text!r}"
     parts = text.strip().split(":")
@@ -200,7 +200,7 @@ def apply_effects(config: CalibrationConfig, effects) -> CalibrationConfig:
 
     Checks that the run can show the effect: ``lowpass_lag``, ``lever_arm`` and the per-second
     forms of ``bias_drift`` / ``bias_random_walk`` need a sweep (sample times); a static run
-    gets :class:`calib.io.DataError` with the fix. The result serializes the effects into
+    gets :class:`calib.files.course.DataError` with the fix. The result serializes the effects into
     ``truth.json`` through ``config.to_dict()`` (table edits and sensor terms).
     """
     effects = list(effects)

@@ -7,12 +7,12 @@ Setup (one truth per IMU rate, noise redrawn per run)
   20 s segments of ``COURSE_PROFILE``, P0 = (0, 0) m, V0 = (1, 3) m/s) simulated once by
   MuJoCo per IMU rate (100 Hz, 50 Hz): ``t``, ``pos``, ``vel``, true specific force ``acc``.
 * **Calibration**: one course calibration run (20001 angles, ``COURSE_SENSOR``) fitted once
-  (:func:`calib.calibration.calibrate`, σ² known): estimate ``(b̂, ŝ)`` with covariance
+  (:func:`calib.calibration.tilt_plane.calibrate`, σ² known): estimate ``(b̂, ŝ)`` with covariance
   ``C_cal``. Each run draws the sensor's **true** bias and scale around the estimate,
   ``(b, s) ~ N((b̂, ŝ), C_cal)``: the calibration error of a random student, with the
   distribution the filter and the dead-reckoning region assume.
 * **Per run** (its own stream ``SeedSequence(seed, spawn_key=(STUDY_STREAM,)).spawn(R)[k]``,
-  :func:`calib.runs.run_seeds`; the same R streams in every scenario — common random numbers,
+  :func:`calib.stats.runs.run_seeds`; the same R streams in every scenario — common random numbers,
   so scenario differences are paired): the sensor's true (b, s) (4 normals), the initial-state
   error ``(p̂0 − p0, v̂0 − v0) ~ N(0, diag(σ_p0², σ_p0², σ_v0², σ_v0²))`` (4 normals), the
   readings ``A_m = (1 + s)·acc + b + v``, ``v ~ N(0, σ_a²)`` (:func:`bench.vehicle.
@@ -20,12 +20,12 @@ Setup (one truth per IMU rate, noise redrawn per run)
 
 Methods (all four see the same run)
 -----------------------------------
-* ``dead_reckoning``: :func:`calib.trajectory.correct_and_integrate` from ``(p̂0, v̂0)``;
-  covariance of the end point from :func:`calib.region.arrival_region` (noise + calibration)
+* ``dead_reckoning``: :func:`calib.vehicle.trajectory.correct_and_integrate` from ``(p̂0, v̂0)``;
+  covariance of the end point from :func:`calib.vehicle.region.arrival_region` (noise + calibration)
   plus the initial-state terms ``P_p0 + T² P_v0`` (T the run's duration).
 * ``fixes``: the fixes themselves as a position estimate (error at the fix epochs; std σ per
   axis; the region of the **last** fix — in the outage scenario that fix is 21 s old).
-* ``filter``, ``smoother``: :func:`calib.fusion.fuse` (Q from σ_a² and C_cal, R = σ² I,
+* ``filter``, ``smoother``: :func:`calib.fusion.linear.fuse` (Q from σ_a² and C_cal, R = σ² I,
   P0 from σ_p0, σ_v0 and C_cal), filtered and RTS-smoothed.
 
 Scenarios (:data:`SCENARIOS`): IMU 100 / 50 Hz × fixes 1 / 10 Hz; no fix in the last 20 s;
@@ -42,7 +42,7 @@ Numbers per method and scenario (:class:`StudyRow`)
   for ``fixes``) and every run, m (2-D error).
 * ``final_std_m``: stated per-axis std of the final position, ``sqrt(tr P/2)``, m (mean over
   runs); ``area_m2``: the stated level-L ellipse's area ``π χ²₂(L) sqrt(det P)``
-  (:meth:`calib.region.Ellipse.area`), m².
+  (:meth:`calib.vehicle.region.Ellipse.area`), m².
 * ``nees``: mean over runs of the final-position NEES ``eᵀ P⁻¹ e`` (2 dof); if the stated P is
   right, R·NEES ~ χ²(2R), and the band is its two-sided quantiles at α = 6.3e-5 (≈ ±4σ,
   docs/conventions.md); ``nees_ok``: inside. ``coverage``: share of runs whose true end point
@@ -87,7 +87,7 @@ from bench.fusion_study_result import (
     StudyRow,
     describe_ranges,
 )
-from calib.consistency import (
+from calib.stats.consistency import (
     NEES_ALPHA,
     coverage_band,
     mean_nees_band,
@@ -95,8 +95,8 @@ from calib.consistency import (
     out_ranges,
     path_band,
 )
-from calib.region import Ellipse
-from calib.runs import Mapper, chunk_ranges, run_seeds, serial_map
+from calib.stats.runs import Mapper, chunk_ranges, run_seeds, serial_map
+from calib.vehicle.region import Ellipse
 
 STUDY_STREAM = 15
 """Spawn key of the study's per-run streams under the user's seed."""
@@ -180,13 +180,13 @@ def _receiver(scn: Scenario, t_end: float, sigma: float):
 def _run_chunk(task: dict) -> dict:
     """Runs ``task['seeds']`` of one scenario: sums and per-run final errors of every method.
 
-    Module-level and picklable (mapper contract, :mod:`calib.runs`)."""
+    Module-level and picklable (mapper contract, :mod:`calib.stats.runs`)."""
     from bench.gnss import simulate_fixes
     from bench.sensors import SensorErrorModel
     from bench.vehicle import apply_sensor_errors
-    from calib.fusion import fuse
-    from calib.region import arrival_region
-    from calib.trajectory import correct_and_integrate
+    from calib.fusion.linear import fuse
+    from calib.vehicle.region import arrival_region
+    from calib.vehicle.trajectory import correct_and_integrate
 
     scn: Scenario = task["scenario"]
     t, pos, vel, acc = (task[k] for k in ("t", "pos", "vel", "acc"))
@@ -303,7 +303,7 @@ def _row(scenario: str, method: str, parts: list[dict], level: float,
     std = float(np.mean(np.sqrt(np.trace(P, axis1=-2, axis2=-1) / 2.0)))
     area = float(np.mean([Ellipse.from_cov(np.zeros(2), c, level).area for c in P]))
     lo, hi = mean_nees_band(2, runs)
-    from calib.region import chi2_2dof
+    from calib.vehicle.region import chi2_2dof
 
     cov = float(np.mean(nees <= chi2_2dof(level)))
     cband = coverage_band(level, runs)
@@ -330,8 +330,8 @@ def study_inputs(config: StudyConfig) -> dict:
     """Truth per IMU rate (MuJoCo, once) and the calibration (fitted once)."""
     from bench.tilt import CalibrationConfig, generate_calibration
     from bench.vehicle import COURSE_SENSOR, VehicleConfig, simulate_vehicle
-    from calib.calibration import calibrate
-    from calib.io import Ensayo
+    from calib.calibration.tilt_plane import calibrate
+    from calib.files.course import Ensayo
 
     nv = np.array([COURSE_SENSOR.x.noise_var, COURSE_SENSOR.y.noise_var])
     run = generate_calibration(CalibrationConfig(sensor=COURSE_SENSOR), int(config.seed))
@@ -347,7 +347,7 @@ def run_study(config: StudyConfig | None = None, mapper: Mapper = serial_map,
               progress: Callable[[str], None] | None = None,
               count: Callable[[int, int], None] | None = None) -> StudyResult:
     """Run the comparison (module docstring). ``mapper`` runs the tasks (one per scenario and
-    chunk of runs; :mod:`calib.runs`); ``progress`` gets lines, ``count(done, total)`` task
+    chunk of runs; :mod:`calib.stats.runs`); ``progress`` gets lines, ``count(done, total)`` task
     counts. Same ``(seed, runs)`` → same numbers, whatever the mapper or chunk size."""
     config = config or StudyConfig()
     if progress:

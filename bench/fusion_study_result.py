@@ -1,6 +1,6 @@
 """What :mod:`bench.fusion_study` reports: a row per method and scenario, the NEES along the
 path, and the whole study with its table (text, Markdown, JSON); definitions of every number
-in :mod:`bench.fusion_study`'s docstring, the bands in :mod:`calib.consistency`.
+in :mod:`bench.fusion_study`'s docstring, the bands in :mod:`calib.stats.consistency`.
 
 Units SI: s, m, m/s; areas m²; NEES and coverage dimensionless.
 """
@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from calib.consistency import NEES_ALPHA
 from calib.results import ResultMixin
+from calib.stats.consistency import NEES_ALPHA
 
 METHODS = ("dead_reckoning", "fixes", "filter", "smoother")
 """The four methods compared, in the order of the table."""
@@ -89,7 +89,7 @@ class PathNees:
     """Mean NEES over the runs at every fix epoch of one scenario and method (module
     docstring): ``t`` s, ``nees`` position (2 dof), ``nees4`` position+velocity (4 dof, empty
     when the method states no velocity covariance), each with its per-epoch Bonferroni band
-    (:func:`calib.consistency.path_band`)."""
+    (:func:`calib.stats.consistency.path_band`)."""
 
     scenario: str
     method: str

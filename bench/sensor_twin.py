@@ -1,5 +1,6 @@
-"""The twin of a measured sensor: a :class:`calib.sensor_profile.SensorProfile` (``sensor.json``)
-turned into the bench's sensor error model, and static logs of it on the MuJoCo table.
+"""The twin of a measured sensor: a :class:`calib.noise.sensor_profile.SensorProfile`
+(``sensor.json``) turned into the bench's sensor error model, and static logs of it on the MuJoCo
+table.
 
 Per axis, the profile's terms become (docs/noise.md):
 
@@ -29,7 +30,7 @@ import numpy as np
 from bench.sensors import AxisErrors, SensorErrorModel
 from bench.terms import BiasInstability, BiasRandomWalk, Quantization
 from calib.conventions import AXES
-from calib.sensor_profile import SensorProfile
+from calib.noise.sensor_profile import SensorProfile
 
 
 def _value(terms, k: int) -> float | None:

@@ -10,8 +10,8 @@ The base terms (bias, scale, white noise) are fields of :class:`AxisErrors`. Fur
 terms (IEEE K2, cross-axis, drift, quantization, ...) are :class:`bench.terms.ErrorTerm` objects
 added one by one to ``AxisErrors.terms``; each knows its vocabulary name, its stage in the
 signal chain and how to apply itself, so new effects need no change here. The forward model
-``(1 + scale)·a + bias`` is :func:`calib.correct.apply_errors` (one home for both sides).
-Signal chain per axis:
+``(1 + scale)·a + bias`` is :func:`calib.calibration.correct.apply_errors` (one home for both
+sides). Signal chain per axis:
 
     stage "response" (deterministic, on the true input) → scale & bias → white noise
     → stage "output" (on the noisy reading: low-pass, quantization, ...)
@@ -34,8 +34,8 @@ from bench.terms import (  # noqa: F401  (ErrorTerm, Stage, register_term: publi
     Stage,
     register_term,
 )
+from calib.calibration.correct import apply_errors
 from calib.conventions import AXES
-from calib.correct import apply_errors
 
 
 @dataclass(frozen=True)

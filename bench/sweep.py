@@ -1,11 +1,11 @@
 """Where the runs of a long sweep execute: this process, a local process pool, or a Dask cluster.
 
-Each returns a mapper with the signature of :class:`calib.runs.Mapper`
+Each returns a mapper with the signature of :class:`calib.stats.runs.Mapper`
 (``mapper(fn, tasks, progress=None) -> [fn(t) for t in tasks]``, in task order), so the domain
 functions that take a ``mapper`` run unchanged on any of them. Results do not depend on where
-they ran: every run draws from its own ``SeedSequence`` stream (:mod:`calib.runs`).
+they ran: every run draws from its own ``SeedSequence`` stream (:mod:`calib.stats.runs`).
 
-* ``workers=1`` — in this process (:func:`calib.runs.serial_map`).
+* ``workers=1`` — in this process (:func:`calib.stats.runs.serial_map`).
 * ``workers=k > 1`` — a local ``concurrent.futures.ProcessPoolExecutor`` with k processes
   (the default for long sweeps: ``os.cpu_count()``), started by a fork server; BLAS is kept at
   one thread per process so the processes do not fight over the cores.
@@ -19,7 +19,7 @@ import os
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from calib.runs import Mapper, serial_map
+from calib.stats.runs import Mapper, serial_map
 
 CONNECT_TIMEOUT = "10s"
 """How long a sweep waits for the dask scheduler before it gives up with an OSError."""
@@ -30,7 +30,7 @@ def default_workers() -> int:
     return max(1, os.cpu_count() or 1)
 
 
-POOL_PRELOAD = ("numpy", "scipy.linalg", "calib.montecarlo", "bench.classset")
+POOL_PRELOAD = ("numpy", "scipy.linalg", "calib.calibration.montecarlo", "bench.classset")
 """Modules the fork server imports once, so the pool's processes start with them loaded."""
 
 

@@ -34,8 +34,8 @@ from typing import ClassVar, Literal, Protocol
 import numpy as np
 from scipy.signal import fftconvolve
 
-from calib.allan_model import flicker_coefficients
 from calib.filters import lowpass, uniform_step
+from calib.noise.allan_model import flicker_coefficients
 
 Stage = Literal["response", "output"]
 
@@ -244,12 +244,12 @@ class BiasRandomWalk:
 class BiasInstability:
     """Bias instability (flicker noise of the bias), additive at the bias level:
     ``b_k = B · Σ_{j=0}^{N-1} f_j w_{k-j}``, ``f`` Kasdin's fractional-integration filter for
-    α = 1 (:func:`calib.allan_model.flicker_coefficients`), ``w`` standard normal.
+    α = 1 (:func:`calib.noise.allan_model.flicker_coefficients`), ``w`` standard normal.
 
     Why this model: its one-sided spectrum is ``S(f) ≈ B²/(π f)`` for f ≪ fs (IEEE Std 952's
     ``h_{-1} = B²/π``), so its Allan deviation has the flat floor ``√(2 ln2/π)·B = 0.664·B``
     at every τ from a few samples to the record length — exactly the term ``tiltbench noise``
-    fits (:mod:`calib.allan_model`), not an approximation of it by a few Gauss–Markov
+    fits (:mod:`calib.noise.allan_model`), not an approximation of it by a few Gauss–Markov
     corners. The filter's memory is N samples (a stationary process over the run: 2N − 1
     normals drawn, the first N − 1 as the run's past). Per sample: B does not depend on the
     sample rate, so the term needs no sample times.

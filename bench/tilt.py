@@ -37,7 +37,7 @@ from bench.model import (
     tilt_table,
 )
 from bench.sensors import SensorErrorModel
-from calib.io import Ensayo
+from calib.files.course import Ensayo
 
 TWO_PI = 2.0 * np.pi
 

@@ -56,7 +56,7 @@ from bench.validate_inputs import (
     true_sensor_params,
 )
 from calib.conventions import AXES, JOINT_PARAM_NAMES, G, reference_accel
-from calib.io import DataError
+from calib.files.course import DataError
 from calib.results import ResultMixin
 from calib.units import with_units
 
@@ -130,9 +130,9 @@ def design_cov(theta: np.ndarray, noise_var, g: float = G) -> np.ndarray:
     """4×4 covariance of per-axis OLS ``[bias_x, scale_x, bias_y, scale_y]``, σ² known.
 
     ``σ_a² (H_aᵀH_a)⁻¹`` per axis with ``H_a = [1, A_r,a(θ)]`` (computed by
-    :func:`calib.ls.fit_linear` through QR, never by inverting HᵀH); zero across axes.
+    :func:`calib.calibration.ls.fit_linear` through QR, never by inverting HᵀH); zero across axes.
     """
-    from calib.ls import fit_linear
+    from calib.calibration.ls import fit_linear
 
     theta = np.asarray(theta, dtype=float)
     a_r = reference_accel(theta, g)

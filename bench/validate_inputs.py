@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from calib.conventions import AXES, G
-from calib.io import DataError
+from calib.files.course import DataError
 
 # --- The JSON inputs, checked against a schema -----------------------------------------------
 # One JSON Schema (draft 2020-12, checked by the ``jsonschema`` package) per object validate

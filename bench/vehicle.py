@@ -60,8 +60,8 @@ from bench.model import (
 )
 from bench.sensors import SensorErrorModel
 from calib.conventions import AXES, G
-from calib.io import Acel
-from calib.trajectory import COURSE_P0, COURSE_V0, integrate_twice
+from calib.files.course import Acel
+from calib.vehicle.trajectory import COURSE_P0, COURSE_V0, integrate_twice
 
 YAW_JOINT = "yaw"
 YAW_DRIVE = "drive_yaw"

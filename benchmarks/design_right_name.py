@@ -34,8 +34,8 @@ GAIN = 0.97
 def independent(task) -> bool:
     from calib.design import Experiment
     from calib.design.montecarlo import right_name
+    from calib.files.course import Ensayo
     from calib.gap import analyze_gap
-    from calib.io import Ensayo
     from validation.effects import AxisSpec, Draws, Run, Spec, readings
 
     name, size, seed, i = task

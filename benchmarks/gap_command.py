@@ -87,8 +87,8 @@ def time_analysis(path: Path) -> dict:
 
 
 def _analysis_cell(path: str) -> dict:
+    from calib.files.course import read_ensayo
     from calib.gap import analyze_gap
-    from calib.io import read_ensayo
 
     ensayo = read_ensayo(path)
     noise = tuple(float(v) for v in NOISE_VAR.split(","))

@@ -43,7 +43,7 @@ def make_run(shape: str, n: int):
     """(Ensayo, noise_var) of a run shape (module docstring), seeded by the shape."""
     import numpy as np
 
-    from calib.io import Ensayo
+    from calib.files.course import Ensayo
 
     rng = np.random.default_rng(1 if shape == "effects" else 2)  # 1: the issue's script
     g = 9.80665

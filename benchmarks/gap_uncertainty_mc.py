@@ -126,8 +126,8 @@ def _fisher_std_logq(ext, state, k: int) -> float:
 
 def replicate(job: tuple[str, int, int, float, str, float | None, bool]) -> dict:
     from calib.effects import Extensions, RunData
+    from calib.files.course import Ensayo
     from calib.gap import analyze_gap
-    from calib.io import Ensayo
 
     effect, i, n, size, design, value, candidates = job
     rng = np.random.default_rng([SEED, EFFECTS.index(effect), i])

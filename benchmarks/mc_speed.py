@@ -1,5 +1,5 @@
-"""Speed of the batched Monte Carlo (calib.montecarlo) as ratios against the RNG bound, all
-measured in the same run.
+"""Speed of the batched Monte Carlo (calib.calibration.montecarlo) as ratios against the RNG bound,
+all measured in the same run.
 
     python benchmarks/mc_speed.py            # or: make bench
     python benchmarks/mc_speed.py --quick    # fewer runs and repeats (≈ 10 s)
@@ -38,10 +38,10 @@ from timing import best_of  # noqa: E402  (benchmarks/timing.py, beside this scr
 
 from bench.sweep import process_map  # noqa: E402
 from calib import Ensayo, calibrate  # noqa: E402
+from calib.calibration.correct import apply_errors  # noqa: E402
+from calib.calibration.montecarlo import simulate_calibrations  # noqa: E402
 from calib.conventions import reference_accel  # noqa: E402
-from calib.correct import apply_errors  # noqa: E402
-from calib.montecarlo import simulate_calibrations  # noqa: E402
-from calib.runs import chunk_ranges, serial_map  # noqa: E402
+from calib.stats.runs import chunk_ranges, serial_map  # noqa: E402
 
 N = 20001
 BIAS, SCALE, NV = (0.0767, -0.0175), (-0.0301, 0.0100), (0.25, 0.64)

@@ -7,7 +7,8 @@
    baseline of a Python loop calling ``mj_forward`` once per sample.
 2. Held positions (100 positions × 200 samples): one physics evaluation per distinct pose
    against one per sample (the same loop baseline).
-3. Calibration fit (N = 20001): ``calib.ls.fit_axis`` (centred design, one Householder QR of
+3. Calibration fit (N = 20001): ``calib.calibration.ls.fit_axis`` (centred design, one Householder
+QR of
    the augmented design for solution, rank and covariance, plus the condition number) against
    the MATLAB-style normal equations ``inv(HᵀH)Hᵀy`` — the price of the safe numerics.
 
@@ -29,8 +30,8 @@ from timing import best_of  # noqa: E402  (benchmarks/timing.py, beside this scr
 
 from bench.model import ACC_SENSORS, tilt_table  # noqa: E402
 from bench.tilt import ThetaDesign, static_readings  # noqa: E402
+from calib.calibration.ls import fit_axis  # noqa: E402
 from calib.conventions import reference_accel  # noqa: E402
-from calib.ls import fit_axis  # noqa: E402
 
 
 def loop_forward(theta: np.ndarray) -> np.ndarray:

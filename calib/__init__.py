@@ -7,7 +7,7 @@ Conventions (stated once, used everywhere)
 ------------------------------------------
 * SI units: accelerations in m/s², time in s, positions in m, angles in **radians** — any
   finite value (several turns, negative, past 2π); degrees are told from the readings, never
-  from a range (:mod:`calib.angles`).
+  from a range (:mod:`calib.files.angles`).
 * ``g`` = 9.8 m/s² unless the user gives another value (:data:`calib.conventions.G`).
 * Columns: x first, then y. ``datos`` is (N, 2) = [A_mx, A_my].
 * Course tilt-table convention (reference accelerations, specific force along each sensitive
@@ -26,30 +26,46 @@ Conventions (stated once, used everywhere)
 
 Types
 -----
-:class:`calib.io.Ensayo`  ``tita`` (N,) rad, ``datos`` (N, 2) m/s², optional ``t`` (N,) s.
-:class:`calib.io.Acel`    ``t`` (M,) s, ``aerr`` (M, 2) m/s² (vehicle run, uncorrected).
+:class:`calib.files.course.Ensayo`  ``tita`` (N,) rad, ``datos`` (N, 2) m/s², optional ``t`` (N,) s.
+:class:`calib.files.course.Acel`    ``t`` (M,) s, ``aerr`` (M, 2) m/s² (vehicle run, uncorrected).
 
 Public API (``import calib`` is cheap: every name below is imported on first use)
 -------------------------------------------------------------------------------
 Readers      :func:`read_ensayo`, :func:`read_acel`, :func:`read_puntos`, :func:`read_datos`
-             → :class:`Ensayo`, :class:`Acel` (``calib.io``)
-Fits         :func:`fit_axis`, :func:`fit_joint` → :class:`FitResult` (``calib.ls``);
-             :func:`calibrate` → :class:`Calibration` (``calib.calibration``)
-Correction   :func:`correct` — ``(A_m - bias) / (1 + scale)`` (``calib.correct``)
-Trajectory   :func:`compute_trajectory` → :class:`Trajectory` (``calib.trajectory``)
-Arrival      :func:`arrival_region` → :class:`ArrivalRegion` (``calib.region``);
-             :func:`analyze_nmin` → ``NminResult`` (``calib.nmin``)
+             → :class:`Ensayo`, :class:`Acel` (``calib.files.course``)
+Fits         :func:`fit_axis`, :func:`fit_joint` → :class:`FitResult` (``calib.calibration.ls``);
+             :func:`calibrate` → :class:`Calibration` (``calib.calibration.tilt_plane``)
+Correction   :func:`correct` — ``(A_m - bias) / (1 + scale)`` (``calib.calibration.correct``)
+Trajectory   :func:`compute_trajectory` → :class:`Trajectory` (``calib.vehicle.trajectory``)
+Arrival      :func:`arrival_region` → :class:`ArrivalRegion` (``calib.vehicle.region``);
+             :func:`analyze_nmin` → ``NminResult`` (``calib.vehicle.nmin``)
 Gap          :func:`analyze_gap` → :class:`GapAnalysis` (``calib.gap``)
 Fusion       :func:`fuse` → :class:`FusionResult` — Kalman filter and RTS smoother with
-             position fixes (``calib.fusion``; the turning vehicle: ``calib.fusion_turning``)
-Files        :func:`save_calibration`, :func:`load_calibration` (``calib.calfile``)
-Monte Carlo  :func:`simulate_calibrations` → :class:`MonteCarloResult` (``calib.montecarlo``)
+             position fixes (``calib.fusion.linear``; the turning vehicle: ``calib.fusion.turning``)
+Files        :func:`save_calibration`, :func:`load_calibration` (``calib.calibration.calfile``)
+Monte Carlo  :func:`simulate_calibrations` → :class:`MonteCarloResult`
+             (``calib.calibration.montecarlo``)
 Design       :func:`analyze_design` → ``DesignResult`` (``calib.design``)
 
 Every result type is frozen, compares by value (``==``), renders in a notebook
 (``_repr_markdown_``) and round-trips: ``T.from_dict(x.to_state()) == x`` (see
-:mod:`calib.results`). ``calib.correct`` names the function; the module is
-``sys.modules["calib.correct"]`` (``from calib.correct import apply_errors``).
+:mod:`calib.results`).
+
+Layout (wings by job; each wing's docstring lists its modules)
+--------------------------------------------------------------
+Ground (this folder)  ``conventions`` (G, signs, effect vocabulary), ``numerics``, ``filters``,
+                      ``results``, ``units``, ``input_rules`` (reader errors and limits),
+                      ``exports`` (lazy exports)
+``stats/``        Monte Carlo runs, NEES/coverage bands, proportions, residual diagnostics
+``files/``        course files read strictly, atomic writes
+``logs/``         measured logs: readers per format, held poses, θ from the gyro, checks
+``noise/``        Allan deviation, noise terms, the sensor profile
+``calibration/``  least squares, tilt-plane, multi-position, lack of fit, ``cal.json``
+``fusion/``       Kalman filters, fix and innovation checks
+``vehicle/``      trajectory, dead reckoning, arrival region, fused arrival, N
+``effects/``, ``gap/``, ``design/``  the discrepancy workflow
+
+A wing imports only the ground and the wings below it (``tests/test_imports.py``, rule (h)).
 
 Example
 -------
@@ -68,31 +84,31 @@ import types
 from calib.exports import install_lazy_exports
 
 _EXPORTS: dict[str, str] = {
-    "read_ensayo": "calib.io:read_ensayo",
-    "read_acel": "calib.io:read_acel",
-    "read_puntos": "calib.io:read_puntos",
-    "read_datos": "calib.io:read_datos",
-    "Ensayo": "calib.io:Ensayo",
-    "Acel": "calib.io:Acel",
-    "fit_axis": "calib.ls:fit_axis",
-    "fit_joint": "calib.ls:fit_joint",
-    "FitResult": "calib.ls:FitResult",
-    "calibrate": "calib.calibration:calibrate",
-    "Calibration": "calib.calibration:Calibration",
-    "correct": "calib.correct:correct",
-    "compute_trajectory": "calib.trajectory:compute_trajectory",
-    "Trajectory": "calib.trajectory:Trajectory",
-    "arrival_region": "calib.region:arrival_region",
-    "ArrivalRegion": "calib.region:ArrivalRegion",
-    "analyze_nmin": "calib.nmin:analyze_nmin",
+    "read_ensayo": "calib.files.course:read_ensayo",
+    "read_acel": "calib.files.course:read_acel",
+    "read_puntos": "calib.files.course:read_puntos",
+    "read_datos": "calib.files.course:read_datos",
+    "Ensayo": "calib.files.course:Ensayo",
+    "Acel": "calib.files.course:Acel",
+    "fit_axis": "calib.calibration.ls:fit_axis",
+    "fit_joint": "calib.calibration.ls:fit_joint",
+    "FitResult": "calib.calibration.ls:FitResult",
+    "calibrate": "calib.calibration.tilt_plane:calibrate",
+    "Calibration": "calib.calibration.tilt_plane:Calibration",
+    "correct": "calib.calibration.correct:correct",
+    "compute_trajectory": "calib.vehicle.trajectory:compute_trajectory",
+    "Trajectory": "calib.vehicle.trajectory:Trajectory",
+    "arrival_region": "calib.vehicle.region:arrival_region",
+    "ArrivalRegion": "calib.vehicle.region:ArrivalRegion",
+    "analyze_nmin": "calib.vehicle.nmin:analyze_nmin",
     "analyze_gap": "calib.gap:analyze_gap",
     "GapAnalysis": "calib.gap:GapAnalysis",
-    "fuse": "calib.fusion:fuse",
-    "FusionResult": "calib.fusion:FusionResult",
-    "save_calibration": "calib.calfile:save_calibration",
-    "load_calibration": "calib.calfile:load_calibration",
-    "simulate_calibrations": "calib.montecarlo:simulate_calibrations",
-    "MonteCarloResult": "calib.montecarlo:MonteCarloResult",
+    "fuse": "calib.fusion.linear:fuse",
+    "FusionResult": "calib.fusion.linear:FusionResult",
+    "save_calibration": "calib.calibration.calfile:save_calibration",
+    "load_calibration": "calib.calibration.calfile:load_calibration",
+    "simulate_calibrations": "calib.calibration.montecarlo:simulate_calibrations",
+    "MonteCarloResult": "calib.calibration.montecarlo:MonteCarloResult",
     "analyze_design": "calib.design:analyze_design",
 }
 """Public name → ``"module:attribute"`` (PEP 562 lazy exports)."""
@@ -103,30 +119,30 @@ __all__ = list(_EXPORTS)
 def _module(name: str) -> types.ModuleType:
     """Import one of the exporting modules. Plain import statements, no ``importlib``: the
     import-rule test (``tests/test_imports.py``) sees every edge."""
-    if name == "calib.io":
-        import calib.io
-    elif name == "calib.ls":
-        import calib.ls
-    elif name == "calib.calibration":
-        import calib.calibration
-    elif name == "calib.correct":
-        import calib.correct
-    elif name == "calib.trajectory":
-        import calib.trajectory
-    elif name == "calib.region":
-        import calib.region
-    elif name == "calib.nmin":
-        import calib.nmin
+    if name == "calib.calibration.calfile":
+        import calib.calibration.calfile
+    elif name == "calib.calibration.correct":
+        import calib.calibration.correct
+    elif name == "calib.calibration.ls":
+        import calib.calibration.ls
+    elif name == "calib.calibration.montecarlo":
+        import calib.calibration.montecarlo
+    elif name == "calib.calibration.tilt_plane":
+        import calib.calibration.tilt_plane
+    elif name == "calib.design":
+        import calib.design
+    elif name == "calib.files.course":
+        import calib.files.course
+    elif name == "calib.fusion.linear":
+        import calib.fusion.linear
     elif name == "calib.gap":
         import calib.gap
-    elif name == "calib.fusion":
-        import calib.fusion
-    elif name == "calib.calfile":
-        import calib.calfile
-    elif name == "calib.montecarlo":
-        import calib.montecarlo
-    elif name == "calib.design":
-        import calib.design  # noqa: F401
+    elif name == "calib.vehicle.nmin":
+        import calib.vehicle.nmin
+    elif name == "calib.vehicle.region":
+        import calib.vehicle.region
+    elif name == "calib.vehicle.trajectory":
+        import calib.vehicle.trajectory  # noqa: F401
     return sys.modules[name]
 
 

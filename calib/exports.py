@@ -13,9 +13,9 @@ from collections.abc import Callable, Mapping
 
 
 class _Package(types.ModuleType):
-    """Keeps an exported function when its same-named submodule is imported (``calib.correct``,
-    ``bench.validate``): the import system would otherwise replace the attribute with the
-    module."""
+    """Keeps an exported function when its same-named submodule is imported
+    (``calib.calibration.correct``, ``bench.validate``): the import system would otherwise replace
+    the attribute with the module."""
 
     def __setattr__(self, name: str, value) -> None:
         if (name in self.__dict__.get("_EXPORTS", ()) and isinstance(value, types.ModuleType)

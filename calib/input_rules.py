@@ -1,7 +1,8 @@
 """What the readers share: their exceptions and the numeric limits of file values.
 
-A module of its own, importing nothing from ``calib``, so that :mod:`calib.io`,
-:mod:`calib.datos_txt` and :mod:`calib.degeneracy` can all use it without an import circle.
+A module of its own, importing nothing from ``calib``, so that :mod:`calib.files.course`,
+:mod:`calib.files.datos_txt` and :mod:`calib.files.degeneracy` can all use it without an import
+circle.
 """
 
 from __future__ import annotations

@@ -45,9 +45,9 @@ def _isolated_home(tmp_path_factory, monkeypatch):
 def course(course_dir):
     """The course files read and calibrated the course way (σ² = 0.25, 0.64, per-axis OLS):
     ``(ensayo, acel, puntos, calibration, trajectory)``."""
-    from calib.calibration import calibrate
-    from calib.io import read_acel, read_ensayo, read_puntos
-    from calib.trajectory import compute_trajectory
+    from calib.calibration.tilt_plane import calibrate
+    from calib.files.course import read_acel, read_ensayo, read_puntos
+    from calib.vehicle.trajectory import compute_trajectory
     from tests.reference import course_2009 as ref
 
     ensayo = read_ensayo(course_dir / "ensayo.mat")

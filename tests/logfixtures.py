@@ -1,5 +1,5 @@
 """Measured-log fixtures for the reader tests: one simulated multi-pose IMU log (numpy only,
-fixed seed, known pose boundaries) written in every format :func:`calib.logs.read_log` reads.
+fixed seed, known pose boundaries) written in every format :func:`calib.logs.reader.read_log` reads.
 
 The log: a 3-axis accelerometer and gyro at 100 Hz, held at :data:`ANGLES_DEG` in turn for
 :data:`HOLD` samples each, turned between them in :data:`TURN` samples; the tilt plane is the

@@ -1,4 +1,5 @@
-"""Allan deviation and the noise-term fit (:mod:`calib.allan`, :mod:`calib.allan_model`).
+"""Allan deviation and the noise-term fit (:mod:`calib.noise.allan`,
+:mod:`calib.noise.allan_model`).
 
 Checks: the exact moments against the known discrete formulas and against Monte Carlo; the
 fit's intervals cover at their level and "resolved" fires at its α on white noise alone
@@ -20,7 +21,8 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from calib.allan import (
+from calib.input_rules import DataError
+from calib.noise.allan import (
     AxisNoise,
     NoiseCharacterization,
     TermFit,
@@ -31,7 +33,7 @@ from calib.allan import (
     quantization_step,
     sample_rate_of,
 )
-from calib.allan_model import (
+from calib.noise.allan_model import (
     FLICKER_FLOOR,
     allan_moments,
     avar_covariance,
@@ -39,8 +41,7 @@ from calib.allan_model import (
     terms_from_theta,
     theta_from_terms,
 )
-from calib.input_rules import DataError
-from calib.sensor_profile import SensorProfile, load_profile, save_profile
+from calib.noise.sensor_profile import SensorProfile, load_profile, save_profile
 
 
 def alpha_fp_limit(r: int, alpha: float = 0.05) -> float:
@@ -53,7 +54,7 @@ RATE = 100.0
 
 
 def simulate(rng, n, theta):
-    """Readings of the model's three unit processes scaled by θ (calib.allan_model)."""
+    """Readings of the model's three unit processes scaled by θ (calib.noise.allan_model)."""
     y = np.sqrt(theta[0]) * rng.standard_normal(n)
     if theta[1] > 0:
         y += np.sqrt(theta[1]) * signal.fftconvolve(rng.standard_normal(2 * n - 1),
@@ -269,9 +270,9 @@ def test_long_logs_are_block_averaged(monkeypatch):
     """Above MAX_FIT_SAMPLES the fit runs on block means (r = 2^k): τ starts at r/fs and the
     white density is unchanged (its 99 % interval covers σ/√fs); quantization, mean and n are
     the raw log's."""
-    import calib.allan
+    import calib.noise.allan
 
-    monkeypatch.setattr(calib.allan, "MAX_FIT_SAMPLES", 4096)
+    monkeypatch.setattr(calib.noise.allan, "MAX_FIT_SAMPLES", 4096)
     rng = np.random.default_rng(SEED + 8)
     y = 0.001 * np.round(0.02 * rng.standard_normal((16384, 1)) / 0.001)
     res = characterize_noise(y, RATE, level=0.99)

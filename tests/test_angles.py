@@ -1,5 +1,5 @@
 """Input domain of θ: any finite angle in radians is valid; degrees are told from the readings
-(:mod:`calib.angles`), never from a range of θ.
+(:mod:`calib.files.angles`), never from a range of θ.
 
 Every file here is made from the course equations with numpy, not by the bench:
 ``A_rx = -g sin θ``, ``A_ry = -g cos θ``, ``datos = bias + (1 + scale)·A_r + v``,
@@ -19,9 +19,9 @@ import scipy.io
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from calib.angles import compare_angle_units
-from calib.calibration import calibrate
-from calib.io import DataError, read_ensayo
+from calib.calibration.tilt_plane import calibrate
+from calib.files.angles import compare_angle_units
+from calib.files.course import DataError, read_ensayo
 from tests.cli import run as _run
 
 G = 9.8

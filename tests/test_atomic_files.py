@@ -25,7 +25,7 @@ from pathlib import Path
 import pytest
 
 from bench.cli import main
-from calib import atomic
+from calib.files import atomic
 from tests.cli import one_line_error, run
 
 NV = ("--noise-var", "0.25,0.64")
@@ -54,7 +54,7 @@ from bench.cli import main
 sys.exit(main(sys.argv[1:]))
 """
 
-HOLDER = ("import sys\nfrom calib.atomic import output_lock\n"
+HOLDER = ("import sys\nfrom calib.files.atomic import output_lock\n"
           "with output_lock(sys.argv[1]):\n"
           "    print('locked', flush=True)\n"
           "    sys.stdin.read()\n")
@@ -204,7 +204,7 @@ def test_kill_before_the_rename_leaves_the_old_file_and_the_next_run_cleans(
     rc, _, err = run(capsys, "calibrate", files / "ensayo.mat", *NV, option, out, "--force")
     assert rc == 0, err
     assert _leftovers(tmp_path) == []  # the killed run's temporary and lock are gone
-    from calib.calfile import load_calibration
+    from calib.calibration.calfile import load_calibration
 
     assert load_calibration(out).fits["x"].params.shape == (2,)  # one whole result
 

@@ -1,5 +1,6 @@
-"""The calibration file (``calibrate --save``, :mod:`calib.calfile`, docs/calibration-file.md):
-exact round trip, the same trajectory as re-fitting, clear refusals, the .mat export."""
+"""The calibration file (``calibrate --save``, :mod:`calib.calibration.calfile`,
+docs/calibration-file.md): exact round trip, the same trajectory as re-fitting, clear refusals, the
+.mat export."""
 
 from __future__ import annotations
 
@@ -11,9 +12,9 @@ import pytest
 import scipy.io
 
 from bench.cli import main
-from calib.calfile import FILE_UNITS, FORMAT, FORMAT_VERSION, load_calibration
-from calib.calibration import calibrate
-from calib.io import read_datos, read_ensayo
+from calib.calibration.calfile import FILE_UNITS, FORMAT, FORMAT_VERSION, load_calibration
+from calib.calibration.tilt_plane import calibrate
+from calib.files.course import read_datos, read_ensayo
 from calib.units import missing_units
 from tests.cli import one_line_error as _error
 from tests.cli import run as _run

@@ -1,9 +1,10 @@
 """One calibration, checked on load (issue 23 part 1, docs/calibration-file.md).
 
-Every command reads a calibration file through :func:`calib.calfile.load_calibration_file`
-and sees the same numbers; an edit of any readable block is refused ("checksum/consistency
-failed"), never graded; impossible numbers (|ρ| > 1, n = 0, σ² ≤ 0, a gain of 0 …) and
-empty or garbage files are one line naming the file and the field.
+Every command reads a calibration file through
+:func:`calib.calibration.calfile.load_calibration_file` and sees the same numbers; an edit of any
+readable block is refused ("checksum/consistency failed"), never graded; impossible numbers (|ρ| >
+1, n = 0, σ² ≤ 0, a gain of 0 …) and empty or garbage files are one line naming the file and the
+field.
 """
 
 from __future__ import annotations
@@ -15,12 +16,12 @@ import numpy as np
 import pytest
 import scipy.io
 
-import calib.calfile as calfile
+import calib.calibration.calfile as calfile
 from bench.cli import main
-from calib.calfile import FORMAT_VERSION, load_calibration, save_calibration
-from calib.calibration import calibrate
+from calib.calibration.calfile import FORMAT_VERSION, load_calibration, save_calibration
+from calib.calibration.tilt_plane import calibrate
+from calib.files.course import Ensayo
 from calib.input_rules import DataError
-from calib.io import Ensayo
 from tests.cli import one_line_error as _error
 from tests.cli import run as _run
 
@@ -131,7 +132,7 @@ def test_every_consumer_reads_the_same_calibration(small, capsys, monkeypatch, n
 
 def test_the_cli_has_no_other_calibration_reader():
     """No command module opens a calibration file by itself: they name only the one reader
-    (``load_calibration`` / ``load_calibration_file``) of :mod:`calib.calfile`."""
+    (``load_calibration`` / ``load_calibration_file``) of :mod:`calib.calibration.calfile`."""
     from pathlib import Path
 
     import bench

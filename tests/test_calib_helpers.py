@@ -1,5 +1,5 @@
-"""calib.binning, calib.propagation, calib.trajectory_report: the equations the recordings and
-figures draw, in calib (numpy/scipy only)."""
+"""calib.stats.binning, calib.vehicle.propagation, calib.vehicle.report: the equations the
+recordings and figures draw, in calib (numpy/scipy only)."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from calib.binning import binned_mean
-from calib.propagation import position_cov_along
-from calib.region import arrival_region
-from calib.trajectory_report import ELLIPSE_KEYS, trajectory_tree
+from calib.stats.binning import binned_mean
+from calib.vehicle.propagation import position_cov_along
+from calib.vehicle.region import arrival_region
+from calib.vehicle.report import ELLIPSE_KEYS, trajectory_tree
 from tests.reference import course_2009 as ref
 
 
@@ -83,7 +83,7 @@ def test_trajectory_tree(run):
 
 
 def test_calib_helpers_import_no_bench_nor_drawing():
-    code = ("import sys, calib.binning, calib.propagation, calib.trajectory_report; "
+    code = ("import sys, calib.stats.binning, calib.vehicle.propagation, calib.vehicle.report; "
             "bad = sorted(m for m in sys.modules if m.split('.')[0] in "
             "{'bench', 'mujoco', 'rerun', 'matplotlib'}); print(bad); assert not bad")
     subprocess.run([sys.executable, "-c", code], check=True)

@@ -1,8 +1,8 @@
 """``tiltbench calibrate`` on measured logs: the log options, the lack-of-fit report, the
 multi-position method (θ unknown) chosen automatically or given, and their refusals.
 
-Logs with θ unknown are built in memory (:class:`calib.logs.ImuLog`) and handed to the
-command through ``calib.logs.read_log`` (what ``--format`` readers return), so these tests do
+Logs with θ unknown are built in memory (:class:`calib.logs.reader.ImuLog`) and handed to the
+command through ``calib.logs.reader.read_log`` (what ``--format`` readers return), so these tests do
 not depend on any particular file reader.
 """
 
@@ -13,10 +13,10 @@ import json
 import numpy as np
 import pytest
 
-import calib.logs
-from calib.calfile import load_calibration
+import calib.logs.reader
+from calib.calibration.calfile import load_calibration
 from calib.conventions import G
-from calib.logs import ImuLog
+from calib.logs.reader import ImuLog
 from calib.units import missing_units
 from tests.cli import one_line_error, run
 
@@ -41,7 +41,8 @@ def held_log(deg, n=300, seed=0, theta=False, k2=0.0, source="hand.csv"):
 def serve(monkeypatch):
     """``serve(log)``: every ``read_log`` returns ``log`` (whatever the path)."""
     def _serve(log: ImuLog) -> None:
-        monkeypatch.setattr(calib.logs, "read_log", lambda path, options=None, expect=None: log)
+        monkeypatch.setattr(calib.logs.reader, "read_log",
+                            lambda path, options=None, expect=None: log)
     return _serve
 
 
@@ -178,8 +179,8 @@ def test_generated_positions_set_end_to_end(capsys, tmp_path, course_dir):
 def test_course_file_is_unchanged(capsys, course_dir):
     """The course sweep (θ known, never repeated): the same output as the library's
     per-axis OLS, no lack-of-fit line, no method line."""
-    from calib.calibration import calibrate
-    from calib.io import read_ensayo
+    from calib.calibration.tilt_plane import calibrate
+    from calib.files.course import read_ensayo
 
     rc, out, err = run(capsys, "calibrate", course_dir / "ensayo.mat", "--noise-var",
                        "0.25,0.64")

@@ -187,7 +187,7 @@ def test_trajectory_note_shows_the_initial_state_used(capsys, ensayo, vehicle_fi
 
 
 def test_unwritable_output_names_the_requested_file(capsys, tmp_path, monkeypatch, ensayo):
-    import calib.atomic as calib_atomic
+    import calib.files.atomic as calib_atomic
 
     def deny(dir=None, prefix="", suffix=""):
         raise PermissionError(13, "Permission denied", f"{dir}/{prefix}XXXX{suffix}")

@@ -19,7 +19,7 @@ import scipy.io
 
 from bench.cli import main
 from bench.gap import run_gap
-from calib.io import read_ensayo
+from calib.files.course import read_ensayo
 
 DATA = Path(__file__).resolve().parent.parent / "data"
 

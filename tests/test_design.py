@@ -255,8 +255,8 @@ def _independent_right(task) -> bool:
     calib.design.signals), analysed by the whole gap workflow."""
     from calib.design import Experiment
     from calib.design.montecarlo import right_name
+    from calib.files.course import Ensayo
     from calib.gap import analyze_gap
-    from calib.io import Ensayo
     from validation.effects import AxisSpec, Draws, Run, Spec, readings
 
     name, size, seed, i = task

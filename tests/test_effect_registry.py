@@ -27,9 +27,9 @@ from calib.effects import (
     register,
     stated_variances,
 )
+from calib.files.course import Ensayo
 from calib.gap import analyze_gap
 from calib.gap.estimates import Reporter
-from calib.io import Ensayo
 
 
 def test_registry_covers_the_vocabulary_once_in_catalog_order():

@@ -34,8 +34,8 @@ from bench.effects import (
 from bench.sensors import AxisErrors, SensorContext, SensorErrorModel
 from bench.tilt import CalibrationConfig, SweepProfile, ThetaDesign, generate_calibration
 from calib.conventions import reference_accel
+from calib.files.course import DataError
 from calib.filters import lowpass
-from calib.io import DataError
 
 G = 9.8
 BIAS, SCALE = (0.07, -0.04), (-0.02, 0.015)
@@ -396,8 +396,8 @@ def test_bounded_caches_survive_eviction_during_one_request(monkeypatch):
     (a walk profile in the DCT basis on a lever-arm run once raised KeyError): the answer
     must not depend on the cache sizes."""
     from calib.effects import engine
+    from calib.files.course import Ensayo
     from calib.gap import analyze_gap
-    from calib.io import Ensayo
 
     rng = np.random.default_rng(4)
     n = 1500

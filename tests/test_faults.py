@@ -22,7 +22,7 @@ from pathlib import Path
 import pytest
 
 from bench.cli import main
-from calib import atomic
+from calib.files import atomic
 
 # small sets: the faults, not the physics, are under test
 COURSE = ["generate", "course", "--count", "201", "--duration", "5"]

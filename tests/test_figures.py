@@ -18,7 +18,7 @@ from bench.figures import (
     write_vehicle_figures,
 )
 from bench.tilt import CalibrationConfig, ThetaDesign, generate_calibration
-from calib.calibration import calibrate
+from calib.calibration.tilt_plane import calibrate
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -307,11 +307,11 @@ def every_figure(course_analysis, small_cal):
     """Each public figure function rendered from a result object (issue 22, part 4)."""
     import bench.figures as figs
     from bench import fusion_study
-    from calib.allan import characterize_noise
+    from calib.calibration.multiposition import fit_multiposition, pose_statistics
     from calib.design import Experiment, analyze_design
-    from calib.fusion import fuse
-    from calib.multiposition import fit_multiposition, pose_statistics
-    from calib.runs import serial_map
+    from calib.fusion.linear import fuse
+    from calib.noise.allan import characterize_noise
+    from calib.stats.runs import serial_map
     from tests.test_multiposition import SIGMA2, samples
 
     ana = course_analysis

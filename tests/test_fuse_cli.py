@@ -74,11 +74,11 @@ def test_fuse_plot_shows_the_fused_region_smaller_than_dead_reckoning(capsys, co
     from matplotlib.patches import Polygon
 
     from bench.figures.fusion import fusion_figure
-    from calib.calibration import calibrate
-    from calib.fusion import fuse
-    from calib.io import read_acel, read_datos, read_ensayo, read_gps, read_puntos
-    from calib.region import arrival_region
-    from calib.trajectory import compute_trajectory
+    from calib.calibration.tilt_plane import calibrate
+    from calib.files.course import read_acel, read_datos, read_ensayo, read_gps, read_puntos
+    from calib.fusion.linear import fuse
+    from calib.vehicle.region import arrival_region
+    from calib.vehicle.trajectory import compute_trajectory
 
     d = read_datos(course / "datos.txt")
     acel, fixes = read_acel(course / "acel.mat"), read_gps(course / "gps.mat")

@@ -22,8 +22,8 @@ from bench.cli.fuse import (
     NIS_WINDOW,
     NIS_WINDOW_MAX,
 )
-from calib import innovation_check
-from calib.fusion_arrival import NO_REGION
+from calib.fusion import innovation_check
+from calib.vehicle.arrival import NO_REGION
 from tests.cli import one_line_error
 from tests.cli import run as _run
 

@@ -1,5 +1,5 @@
-"""Pictures of a fused turning run: the turning dead reckoning (calib.turning_trajectory) against
-MuJoCo's truth, and ``tiltbench fuse --plot/--rrd`` on a generated turning course set.
+"""Pictures of a fused turning run: the turning dead reckoning (calib.vehicle.turning_trajectory)
+against MuJoCo's truth, and ``tiltbench fuse --plot/--rrd`` on a generated turning course set.
 
 Dead reckoning against the truth. The bench holds the world acceleration ``a_k = R(ψ_k) A_k``
 over each step ``[t_k, t_k+1)`` (bench.vehicle) and its yaw acceleration likewise, so the
@@ -15,7 +15,8 @@ dead reckoning must equal the truth plus e_k up to floating-point rounding (1e-9
 steps of ~1e-13 m each; measured 3e-11 m), and lie within the bound. With a wrong calibration
 the path drifts by the double integral of ``R(ψ) (Â - A_r)``: at the end
 ``Σ_k w_k R(ψ_k) (Â_k - A_r,k)`` with the trajectory weights ``w``
-(:func:`calib.trajectory.double_integral_weights`) — an independent route to the same number.
+(:func:`calib.vehicle.trajectory.double_integral_weights`) — an independent route to the same
+number.
 """
 
 from __future__ import annotations
@@ -27,10 +28,14 @@ import pytest
 
 from bench.cli import main
 from bench.vehicle import VehicleConfig, simulate_vehicle
-from calib.correct import apply_errors, correct
-from calib.fusion_turning import body_to_world
-from calib.trajectory import double_integral_weights
-from calib.turning_trajectory import TurningTrajectory, heading_error, turning_dead_reckoning
+from calib.calibration.correct import apply_errors, correct
+from calib.fusion.turning import body_to_world
+from calib.vehicle.trajectory import double_integral_weights
+from calib.vehicle.turning_trajectory import (
+    TurningTrajectory,
+    heading_error,
+    turning_dead_reckoning,
+)
 
 BIAS = np.array([0.08, -0.05])    # m/s², true
 SCALE = np.array([-0.03, 0.02])   # true
@@ -146,10 +151,10 @@ def test_turning_figure_has_the_dead_reckoning_region_and_a_heading_panel(turnin
     from matplotlib.patches import Polygon
 
     from bench.figures.fusion import fusion_figure
-    from calib.calibration import calibrate
-    from calib.fusion_turning import fuse_turning
-    from calib.io import read_acel, read_datos, read_ensayo, read_gps, read_puntos
-    from calib.turning_trajectory import turning_arrival_region
+    from calib.calibration.tilt_plane import calibrate
+    from calib.files.course import read_acel, read_datos, read_ensayo, read_gps, read_puntos
+    from calib.fusion.turning import fuse_turning
+    from calib.vehicle.turning_trajectory import turning_arrival_region
 
     d = read_datos(turning_set / "datos.txt")
     acel, fixes = read_acel(turning_set / "acel.mat"), read_gps(turning_set / "gps.mat")

@@ -1,7 +1,8 @@
-"""Consistency of the linear Kalman fusion (calib.fusion), on data written from the equations.
+"""Consistency of the linear Kalman fusion (calib.fusion.linear), on data written from the
+equations.
 
-Generator (independent of bench and of calib.fusion): constant-acceleration segments of 5 s on
-the IMU grid (the true acceleration is constant over each IMU step), position and velocity in
+Generator (independent of bench and of calib.fusion.linear): constant-acceleration segments of 5 s
+on the IMU grid (the true acceleration is constant over each IMU step), position and velocity in
 closed form (``p += v h + a h²/2``), readings ``A_m = a (1 + s) + b + v`` with white
 ``v ~ N(0, σ_a²)``, fixes ``p(t_gps) + N(0, σ_pos²)`` at times offset from the IMU samples.
 The true bias and scale are drawn around the calibration estimate with the calibration
@@ -20,8 +21,8 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from calib.fusion import FusionResult, fuse
-from calib.trajectory import correct_and_integrate
+from calib.fusion.linear import FusionResult, fuse
+from calib.vehicle.trajectory import correct_and_integrate
 
 SEED = 20261122
 R_RUNS = 500

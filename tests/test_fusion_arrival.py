@@ -1,6 +1,6 @@
-"""The fusion wing's shared pieces: the decision value (calib.region.Decision), the fused
-arrival (calib.fusion_arrival), the calibration taken as one value by both filters, the σ²
-fallback, and the nmin vehicle case (calib.nmin.VehicleCase)."""
+"""The fusion wing's shared pieces: the decision value (calib.vehicle.region.Decision), the fused
+arrival (calib.vehicle.arrival), the calibration taken as one value by both filters, the σ²
+fallback, and the nmin vehicle case (calib.vehicle.nmin.VehicleCase)."""
 
 from __future__ import annotations
 
@@ -9,15 +9,21 @@ import json
 import numpy as np
 import pytest
 
-from calib.calibration import calibrate
-from calib.fusion import fuse
-from calib.fusion_arrival import FusedArrival, dead_reckoning_region, fuse_arrival
-from calib.fusion_turning import fuse_turning
-from calib.io import Acel, Ensayo, Fixes
-from calib.kalman import CalibrationPrior
-from calib.nmin import VehicleCase
-from calib.region import Decision, arrival_region, decide, squared_distances, stated_noise_var
-from calib.trajectory import compute_trajectory
+from calib.calibration.tilt_plane import calibrate
+from calib.files.course import Acel, Ensayo, Fixes
+from calib.fusion.kalman import CalibrationPrior
+from calib.fusion.linear import fuse
+from calib.fusion.turning import fuse_turning
+from calib.vehicle.arrival import FusedArrival, dead_reckoning_region, fuse_arrival
+from calib.vehicle.nmin import VehicleCase
+from calib.vehicle.region import (
+    Decision,
+    arrival_region,
+    decide,
+    squared_distances,
+    stated_noise_var,
+)
+from calib.vehicle.trajectory import compute_trajectory
 
 CANDS = {"A": np.array([10.0, 30.0]), "B": np.array([60.0, 30.0]), "C": np.array([12.0, 33.0])}
 

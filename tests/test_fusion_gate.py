@@ -1,6 +1,6 @@
 """The filter that doubts its inputs, on clean runs (issue 23): the innovation gate rejects
 right fixes at its stated rate α_g, and the windowed NIS verdict fires at its stated
-false-alarm rate α (calib.innovation_check). Monte Carlo from the equations of the course
+false-alarm rate α (calib.fusion.innovation_check). Monte Carlo from the equations of the course
 vehicle (the generator of tests/test_fusion.py: 60 s at 50 Hz, 59 fixes at 1 Hz, σ = 3 m),
 R = 500 runs, fixed seed.
 
@@ -18,8 +18,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from calib.fusion import fuse
-from calib.innovation_check import (
+from calib.fusion.innovation_check import (
     CONSISTENCY_ALPHA,
     GATE_ALPHA,
     Consistency,
@@ -27,7 +26,8 @@ from calib.innovation_check import (
     window_slices,
     windowed_nis,
 )
-from calib.kalman import gate_threshold
+from calib.fusion.kalman import gate_threshold
+from calib.fusion.linear import fuse
 from tests.test_fusion import (
     BIAS_HAT,
     CAL_COV,

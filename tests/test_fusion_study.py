@@ -16,8 +16,8 @@ from scipy.stats import chi2
 from bench import fusion_study
 from bench.cli import main
 from bench.fusion_study import Scenario, StudyConfig, StudyResult, run_study
-from calib.consistency import mean_nees_band
-from calib.runs import serial_map
+from calib.stats.consistency import mean_nees_band
+from calib.stats.runs import serial_map
 from calib.units import missing_units
 
 FEW = (Scenario("base"), Scenario("outage", outage_s=20.0), Scenario("R /10", r_factor=0.1))

@@ -1,4 +1,4 @@
-"""Consistency of the extended Kalman fusion of a turning vehicle (calib.fusion_turning).
+"""Consistency of the extended Kalman fusion of a turning vehicle (calib.fusion.turning).
 
 Truth: the MuJoCo turning vehicle (bench.vehicle, ``turning=True``), simulated ONCE at 50 Hz for
 60 s: world acceleration ``a_w = R(ψ) A_body`` (MuJoCo's body-frame accelerometers rotated by
@@ -35,7 +35,7 @@ from scipy.stats import chi2
 
 from bench.cli import main
 from bench.vehicle import VehicleConfig, simulate_vehicle
-from calib.fusion_turning import TurningFusionResult, fuse_turning
+from calib.fusion.turning import TurningFusionResult, fuse_turning
 from calib.units import missing_units
 
 SEED = 20261123
@@ -229,9 +229,9 @@ def test_cli_generate_turning_then_fuse(capsys, tmp_path):
 def test_gate_and_consistency_rates_of_the_extended_filter(nominal):
     """On the same 500 right runs, the extended filter's innovation gate rejects at its α_g
     and the windowed NIS verdict fires at its α, each within the binomial band
-    |p̂ − p| ≤ 4·sqrt(p(1 − p)/n) (n = R·M fixes, or R runs; calib.innovation_check: exact
+    |p̂ − p| ≤ 4·sqrt(p(1 − p)/n) (n = R·M fixes, or R runs; calib.fusion.innovation_check: exact
     for a linear filter, to first order for this one)."""
-    from calib.innovation_check import windowed_nis
+    from calib.fusion.innovation_check import windowed_nis
 
     data, res = nominal
 

@@ -93,7 +93,7 @@ def test_small_runs_calibrate(tmp_path, capsys, n, noise):
 def test_exact_run_joint_wls_is_refused_in_one_line(tmp_path, capsys):
     """The joint WLS weights by the estimated σ²: zero on exact data (these four θ leave the
     y residuals exactly 0, checked first), refused by name instead of a division."""
-    from calib.ls import fit_axis
+    from calib.calibration.ls import fit_axis
 
     tita = np.linspace(0.0, 6.28, 4)
     datos = np.column_stack([-9.8 * np.sin(tita), -9.8 * np.cos(tita)]) + 0.1

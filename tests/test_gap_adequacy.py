@@ -15,9 +15,9 @@ import pytest
 from scipy import signal
 
 from calib.conventions import AXES, G
+from calib.files.course import Ensayo
 from calib.gap import analyze_gap
 from calib.gap.flexibility import tridiagonal_inverse_diagonal, walk_effective_dof
-from calib.io import Ensayo
 
 STATED = (0.25, 0.64)
 RATE = 100.0

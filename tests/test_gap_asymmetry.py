@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 from calib.conventions import G
+from calib.files.course import Ensayo
 from calib.gap import analyze_gap
 from calib.gap.adequacy import CHECK_WEIGHTS
-from calib.io import Ensayo
 from validation import designs
 from validation.score import max_wrong
 

@@ -67,7 +67,7 @@ from bench.tilt import (
     write_calibration,
 )
 from calib.conventions import AXES, reference_accel
-from calib.io import read_ensayo
+from calib.files.course import read_ensayo
 
 NOISE = (0.25, 0.64)
 Z = 4.0
@@ -220,7 +220,7 @@ def test_clean_bench_datasets_rarely_name_an_effect(monkeypatch):
 
 
 def test_course_file_names_nothing_and_is_consistent(course_dir):
-    from calib.io import read_datos
+    from calib.files.course import read_datos
 
     ensayo = read_ensayo(course_dir / "ensayo.mat")
     nv = read_datos(course_dir / "datos.txt").noise_var
@@ -241,7 +241,7 @@ SIGMA_MIN = float(np.sqrt(min(NOISE)))
 
 def _z_shift(err: np.ndarray) -> np.ndarray:
     """Largest change a deterministic error ``err`` (N, 2) can make to any signature z of
-    ``calib.diagnostics`` (a projection of r/σ on a unit vector): ‖err‖/σ per axis."""
+    ``calib.stats.diagnostics`` (a projection of r/σ on a unit vector): ‖err‖/σ per axis."""
     return np.linalg.norm(err, axis=0) / SIGMA_MIN
 
 

@@ -34,12 +34,12 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from calib.calibration import calibrate
+from calib.calibration.tilt_plane import calibrate
 from calib.conventions import AXES
-from calib.diagnostics import detect_lattice, gap_measure, hinge_levels
 from calib.effects import Extensions, ModelState, RunData, lowpass
+from calib.files.course import Ensayo, read_ensayo
 from calib.gap import analyze_gap, predict, q_uncertainty
-from calib.io import Ensayo, read_ensayo
+from calib.stats.diagnostics import detect_lattice, gap_measure, hinge_levels
 
 G = 9.8
 TWO_PI = 2.0 * np.pi
@@ -545,7 +545,7 @@ def test_lowpass_matches_the_catalog_equation():
 
 
 def test_calib_never_imports_bench_or_mujoco():
-    code = ("import sys, calib.gap, calib.effects, calib.diagnostics; "
+    code = ("import sys, calib.gap, calib.effects, calib.stats.diagnostics; "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('bench', 'mujoco')]; "
             "assert not bad, bad")
     subprocess.run([sys.executable, "-c", code], check=True)

@@ -75,8 +75,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from calib.files.course import Ensayo
 from calib.gap import analyze_gap
-from calib.io import Ensayo
 
 G = 9.8
 TWO_PI = 2.0 * np.pi

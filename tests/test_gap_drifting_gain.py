@@ -31,8 +31,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from calib.files.course import validate_ensayo
 from calib.gap import analyze_gap
-from calib.io import validate_ensayo
 
 
 def _run(mechanism: str, design: str, timing: str, k: int, seed: int):

@@ -15,7 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from calib.io import Ensayo
+from calib.files.course import Ensayo
 from validation.cases import build_case
 from validation.score import contradictions
 

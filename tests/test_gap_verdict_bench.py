@@ -184,7 +184,7 @@ def test_stop_and_go_lever_arm_is_named_and_the_gap_shrinks(lever_stop_and_go, c
 def test_a_gap_that_does_not_shrink_says_why(lever_stop_and_go):
     """Each reason of ``shrink`` (``docs/gap.md``), forced on the lever-arm stop-and-go
     report by making χ²/dof after no smaller than before on y."""
-    from calib.io import read_ensayo
+    from calib.files.course import read_ensayo
 
     report = run_gap(read_ensayo(lever_stop_and_go), NOISE, 9.8)
     assert report.shrink()["y"]["shrunk"]
@@ -396,11 +396,11 @@ def test_recording_reads_the_verdict_back(misaligned_report, tmp_path):
 
 
 def _raw_signature_names() -> list[str]:
-    """The signature names of :mod:`calib.diagnostics` (its docstring's table), read
+    """The signature names of :mod:`calib.stats.diagnostics` (its docstring's table), read
     independently of the figure's own dictionary of words."""
-    import calib.diagnostics
+    import calib.stats.diagnostics
 
-    doc = calib.diagnostics.__doc__
+    doc = calib.stats.diagnostics.__doc__
     table = doc[doc.index("Signatures"):doc.index("Marginal regression")]
     return sorted(set(re.findall(r"``([a-z][a-z0-9_]*)``", table)))
 
@@ -408,7 +408,7 @@ def _raw_signature_names() -> list[str]:
 @pytest.mark.parametrize("verdict", ["explained", "unexplained"])
 def test_gap_figure_shares_y_and_speaks_in_words(misaligned_report, verdict):
     """Before and after panels of an axis share their y limits (the same scale shows what
-    shrank); no signature name of calib.diagnostics appears raw in any text of the figure;
+    shrank); no signature name of calib.stats.diagnostics appears raw in any text of the figure;
     the title gives each effect's estimate ± std with its unit."""
     import matplotlib.pyplot as plt
 

@@ -24,11 +24,11 @@ from multiprocessing import get_context
 import numpy as np
 import pytest
 
+from calib.files.course import Ensayo
 from calib.gap import analyze_gap
 from calib.gap.mechanisms import LAST_HARMONIC, RING_FREQS, drive_orders
 from calib.gap.walk import allan_slope, flicker_test
-from calib.io import Ensayo
-from calib.sensor_profile import NoiseTerm, SensorProfile, save_profile
+from calib.noise.sensor_profile import NoiseTerm, SensorProfile, save_profile
 from tests.cli import run
 from validation import designs
 from validation.cases import build_case, mechanism_cases
@@ -224,8 +224,8 @@ def test_sponge_review_beside_a_rail_clipped_after_the_noise_does_not_crash():
     independent set's *tune* part): the sponge review standardises only the readings away
     from the rail, and the walk's likelihood then steps over the readings left out (it
     raised a shape error). The clip is not a catalog effect: the verdict says unexplained."""
+    from calib.files.course import validate_ensayo
     from calib.gap import analyze_gap
-    from calib.io import validate_ensayo
     from validation.independent.cases import build, case_by_id, split_of
 
     case_id = "ooc-asymmetricclip-x-randomposes-none-n4001-s0"
@@ -242,8 +242,8 @@ def test_a_refined_saturation_limit_stays_inside_the_range_it_clips():
     nothing, its Gauss-Newton column is zero and the report's fit raised "cannot identify
     y.d_limit" (the command failed). The refined limit now stays at or below the highest
     level that clips, and the run is reported unexplained."""
+    from calib.files.course import validate_ensayo
     from calib.gap import analyze_gap
-    from calib.io import validate_ensayo
     from validation.independent.cases import OOC, CaseDef, build, case_by_id, split_of
 
     case = CaseDef(OOC, "fractional_harmonic", "y", "growing_rock", "rate", rate=100, n=6001,

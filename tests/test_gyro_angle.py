@@ -1,5 +1,5 @@
 """θ(t) from the gyro about the tilt axis, anchored to the held poses (``--theta-source gyro``,
-:mod:`calib.gyro_angle`): a simulated log with a known θ(t) is recovered within a bound derived
+:mod:`calib.logs.gyro_angle`): a simulated log with a known θ(t) is recovered within a bound derived
 below; closure errors beyond the bound and a gyro of the wrong sign are refused in one line;
 the shipped YEI 3-Space log (data/real/) closes within the bound and keeps every sample.
 
@@ -22,9 +22,9 @@ import numpy as np
 import pytest
 import scipy.io
 
-from calib.gyro_angle import CLOSURE_BOUND_DEG, hold_runs, theta_from_gyro
 from calib.input_rules import DataError
-from calib.logs import LogOptions, read_log
+from calib.logs.gyro_angle import CLOSURE_BOUND_DEG, hold_runs, theta_from_gyro
+from calib.logs.reader import LogOptions, read_log
 from tests import logfixtures as fx
 from tests.cli import one_line_error, run
 from tests.reference import real_data as ref

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 import scipy.io
 
-from calib.io import read_acel
-from calib.logs import read_log
+from calib.files.course import read_acel
+from calib.logs.reader import read_log
 from tests import logfixtures as fx
 from tests.cli import one_line_error, run
 
@@ -236,7 +236,7 @@ def test_gap_reads_a_log_as_it_reads_its_import(capsys, tmp_path, files):
 
 
 def test_label_column_with_poses_in_order_of_appearance(tmp_path):
-    from calib.logs import LogOptions
+    from calib.logs.reader import LogOptions
 
     rng = np.random.default_rng(8)
     labels = ["p1"] * 50 + ["-1"] * 10 + ["p2"] * 50 + ["-1"] * 10 + ["p3"] * 50

@@ -17,7 +17,12 @@
     ``import p.q`` or ``from p import m`` — what another file needs is public there;
 (g) the second, independent generator ``validation/independent/`` imports nothing of
     ``validation`` outside itself (written from the physics alone, it must not share the first
-    generator's effects, designs or cases).
+    generator's effects, designs or cases);
+(h) ``calib`` is built of wings: its top level holds ``__init__.py``, the ground modules
+    (:data:`CALIB_GROUND`, at most 8) and the wing packages of :data:`WING_USES`, each with a
+    docstring that says what it holds. The ground imports only the ground; a wing imports the
+    ground, itself and the wings :data:`WING_USES` lists for it — nothing else, so the wings
+    stack without arrows back up (``TYPE_CHECKING`` imports count: a tie is a tie).
 
 Every import counts, also inside functions (a deferred import is still a dependency); only
 ``if TYPE_CHECKING:`` blocks are skipped by (a), (b), (e) and (g) (annotations, never
@@ -273,6 +278,78 @@ def check_independent_imports(mods: dict[str, Module], root: Path) -> list[str]:
     return sorted(set(bad))
 
 
+CALIB_GROUND = frozenset({"conventions", "numerics", "filters", "results", "units", "exports",
+                          "input_rules"})
+"""The ground of ``calib``: modules at its top level that every wing may use."""
+
+WING_USES: dict[str, frozenset[str]] = {
+    "stats": frozenset(),
+    "files": frozenset(),
+    "logs": frozenset({"files"}),
+    "noise": frozenset({"files", "logs"}),
+    "calibration": frozenset({"stats", "files", "logs"}),
+    "fusion": frozenset(),
+    "vehicle": frozenset({"stats", "files", "calibration", "fusion"}),
+    "effects": frozenset({"stats", "calibration"}),
+    "gap": frozenset({"stats", "files", "noise", "calibration", "effects"}),
+    "design": frozenset({"stats", "files", "calibration", "effects", "gap"}),
+}
+"""Wing of ``calib`` → the other wings it may import (besides the ground and itself)."""
+
+
+def _wing(name: str) -> str | None:
+    """``calib.<wing>…`` → the wing or ground module name; None for ``calib`` itself."""
+    parts = name.split(".")
+    return parts[1] if len(parts) > 1 else None
+
+
+def check_wing_layout(root: Path, ground=CALIB_GROUND, uses=WING_USES) -> list[str]:
+    """(h), the layout: only ``__init__.py``, ground modules and documented wings at the top."""
+    bad = []
+    if len(ground) > 8:
+        bad.append(f"{len(ground)} ground modules (at most 8)")
+    for path in sorted((root / "calib").iterdir()):
+        if path.name.startswith((".", "__pycache__")) or path.name == "__init__.py":
+            continue
+        if path.is_file() and path.suffix == ".py":
+            if path.stem not in ground:
+                bad.append(f"calib/{path.name} is neither ground nor inside a wing")
+        elif path.is_dir():
+            init = path / "__init__.py"
+            if path.name not in uses:
+                bad.append(f"calib/{path.name}/ is not a wing of WING_USES")
+            elif not init.exists() or not ast.get_docstring(ast.parse(init.read_text("utf-8"))):
+                bad.append(f"calib/{path.name}/__init__.py has no docstring saying what it holds")
+    return bad
+
+
+def check_wing_imports(mods: dict[str, Module], root: Path, ground=CALIB_GROUND,
+                       uses=WING_USES) -> list[str]:
+    """(h), the arrows: every import of a ``calib`` module by a ground module or a wing."""
+    bad = []
+    graph = import_graph(mods, typing=True)
+    for name, targets in graph.items():
+        if not _under(name, "calib") or name == "calib":
+            continue
+        own = _wing(name)
+        for target in sorted(targets):
+            if not _under(target, "calib"):
+                continue
+            other = _wing(target)
+            if other == own or other in ground:
+                continue
+            if own in ground:
+                why = "the ground imports only the ground"
+            elif other is None:
+                why = "a wing does not import the package's lazy exports"
+            elif other not in uses.get(own, ()):
+                why = f"wing {own!r} may use only {sorted(uses.get(own, ()))} and the ground"
+            else:
+                continue
+            bad.append(f"{mods[name].path.relative_to(root)} imports {target}: {why}")
+    return sorted(set(bad))
+
+
 # --- the rules on the real tree -------------------------------------------------------------
 
 def _private(name: str) -> bool:
@@ -370,6 +447,12 @@ def test_no_private_name_crosses_a_file():
     assert PRIVATE_ALLOWED <= seen, f"remove from PRIVATE_ALLOWED: {PRIVATE_ALLOWED - seen}"
 
 
+def test_calib_is_built_of_wings_that_import_only_downwards():
+    assert not check_wing_layout(REPO), "\n".join(check_wing_layout(REPO))
+    bad = check_wing_imports(_real(), REPO)
+    assert not bad, "imports across the wings of calib (rule h):\n" + "\n".join(bad)
+
+
 def test_validation_generators_import_neither_bench_nor_calib():
     mods = scan(REPO, ("validation",))
     assert "validation.cases" in mods and "validation.score" in mods  # the rule sees the files
@@ -427,7 +510,7 @@ def test_checker_b_finds_argparse_and_cli_imports_outside_the_cli_package(tmp_pa
         "bench/cli/generate.py": "import argparse\nfrom bench import vehicle\n",
         "bench/vehicle.py": "def add_options(p):\n    from bench.cli.generate import x\n",
         "bench/course.py": "from argparse import Namespace\n",
-        "calib/io.py": "import numpy\n",
+        "calib/files/course.py": "import numpy\n",
     })
     bad = check_cli_imports(mods, tmp_path)
     assert bad == ["bench/course.py:1 imports argparse",
@@ -437,7 +520,7 @@ def test_checker_b_finds_argparse_and_cli_imports_outside_the_cli_package(tmp_pa
 def test_checker_c_finds_importlib_and_dunder_import(tmp_path):
     mods = _tree(tmp_path, {
         "bench/a.py": "import importlib\nm = importlib.import_module('calib')\n",
-        "bench/b.py": "def f():\n    return __import__('calib.io')\n",
+        "bench/b.py": "def f():\n    return __import__('calib.files.course')\n",
         "calib/c.py": "from importlib import import_module\n",
         "calib/d.py": "import builtins\nx = builtins.__import__\n",
         "calib/ok.py": "import numpy as np\n",
@@ -498,7 +581,8 @@ def test_checker_d_finds_circles_that_only_annotations_close(tmp_path):
 def test_checker_e_finds_bench_calib_and_scorer_imports_in_validation_generators(tmp_path):
     _tree(tmp_path, {
         "validation/__init__.py": "",
-        "validation/effects.py": "import numpy as np\ndef f():\n    from calib.io import Ensayo\n",
+        "validation/effects.py": ("import numpy as np\ndef f():\n"
+                                  "    from calib.files.course import Ensayo\n"),
         "validation/designs.py": "from bench import model\nimport mujoco\n",
         "validation/cases.py": "from validation import effects, score\n",
         "validation/sweep.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
@@ -508,7 +592,7 @@ def test_checker_e_finds_bench_calib_and_scorer_imports_in_validation_generators
     bad = check_validation_imports(scan(tmp_path, ("validation",)), tmp_path)
     assert bad == ["validation/cases.py:1 imports validation.score",
                    "validation/designs.py:1 imports bench",
-                   "validation/effects.py:3 imports calib.io"], bad
+                   "validation/effects.py:3 imports calib.files.course"], bad
 
 
 def test_checker_f_finds_private_names_taken_from_another_file(tmp_path):
@@ -577,3 +661,30 @@ def test_checker_g_finds_imports_of_the_first_generator_in_the_independent_one(t
         ("validation.independent.score", (), 9))
     assert check_validation_imports(mods, tmp_path) == [
         "validation/independent/generate.py:9 imports validation.independent.score"]
+
+
+def test_checker_h_finds_arrows_across_wings_and_stray_top_level_modules(tmp_path):
+    uses = {"files": frozenset(), "vehicle": frozenset({"files"}), "empty": frozenset()}
+    mods = _tree(tmp_path, {
+        "calib/conventions.py": "def f():\n    from calib.vehicle import region\n",
+        "calib/stray.py": "",
+        "calib/files/__init__.py": '"""Files."""\n',
+        "calib/files/course.py": "from calib.vehicle.region import decide\nimport numpy\n",
+        "calib/files/atomic.py": "from calib.files import course\nfrom calib import conventions\n",
+        "calib/vehicle/__init__.py": '"""Vehicle."""\n',
+        "calib/vehicle/region.py": "from calib.files.course import read\nfrom calib import x\n",
+        "calib/empty/__init__.py": "",
+        "calib/unknown/__init__.py": '"""Not listed."""\n',
+    })
+    bad = check_wing_imports(mods, tmp_path, ground=frozenset({"conventions"}), uses=uses)
+    assert any("calib/files/course.py imports calib.vehicle.region" in b for b in bad), bad
+    assert any("calib/conventions.py imports calib.vehicle" in b for b in bad), bad
+    assert any("calib/vehicle/region.py imports calib:" in b for b in bad), bad
+    assert not any("atomic.py" in b or "files.course:" in b for b in bad), bad
+    layout = check_wing_layout(tmp_path, ground=frozenset({"conventions"}), uses=uses)
+    assert "calib/stray.py is neither ground nor inside a wing" in layout, layout
+    assert "calib/unknown/ is not a wing of WING_USES" in layout, layout
+    assert any("calib/empty/__init__.py has no docstring" in b for b in layout), layout
+    assert not any("files" in b or "vehicle" in b for b in layout), layout
+    assert check_wing_layout(tmp_path, ground=frozenset(map(str, range(9))), uses=uses)[0] == \
+        "9 ground modules (at most 8)"

@@ -2,7 +2,7 @@
 complete truth manifest, a stable split, and its physics checked against first principles.
 
 The generator imports numpy/scipy only (tests/test_imports.py); this test may import calib to
-read what it writes (``calib.io.read_ensayo``) and to check the effect vocabulary.
+read what it writes (``calib.files.course.read_ensayo``) and to check the effect vocabulary.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import scipy.io
 import scipy.signal
 
 from calib.conventions import EFFECTS
-from calib.io import read_ensayo
+from calib.files.course import read_ensayo
 from validation.independent import cases, designs, effects, generate, physics, score
 
 # Floats produced twice by the same code on the same machine agree to the last bit; the

@@ -1,4 +1,5 @@
-"""calib.lackoffit: pure error and lack of fit (Draper & Smith), and its use in calibrate."""
+"""calib.calibration.lackoffit: pure error and lack of fit (Draper & Smith), and its use in
+calibrate."""
 
 from __future__ import annotations
 
@@ -8,17 +9,17 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from calib.calfile import calibration_document, load_calibration, save_calibration
-from calib.calibration import Calibration, calibrate
-from calib.conventions import G
-from calib.io import Ensayo, read_ensayo
-from calib.lackoffit import (
+from calib.calibration.calfile import calibration_document, load_calibration, save_calibration
+from calib.calibration.lackoffit import (
     LackOfFit,
     groups_from,
     lack_of_fit,
     pure_error,
     pure_error_variance,
 )
+from calib.calibration.tilt_plane import Calibration, calibrate
+from calib.conventions import G
+from calib.files.course import Ensayo, read_ensayo
 from calib.units import missing_units
 
 TRUTH = (0.08, -0.03, -0.02, 0.01)
@@ -176,7 +177,7 @@ def test_course_run_is_unchanged(course_dir):
 def test_gap_takes_the_noise_from_the_held_poses(capsys, tmp_path):
     """``gap`` without --noise-var on a held-positions set: the within-pose scatter is the
     stated noise (said on stderr); a sweep (no θ repeats) is still refused in one line."""
-    from calib.io import read_ensayo
+    from calib.files.course import read_ensayo
     from tests.cli import one_line_error, run
 
     out = tmp_path / "set"

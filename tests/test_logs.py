@@ -1,4 +1,4 @@
-"""calib.logs.read_log: every format gives the same readings; units, axes, θ and labels.
+"""calib.logs.reader.read_log: every format gives the same readings; units, axes, θ and labels.
 
 The same simulated log (tests/logfixtures.py: five held poses, 3-axis accelerometer and
 gyro, fixed seed) is written as CSV (comma; semicolon with decimal comma; tab; gzip), a
@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 import scipy.io
 
+from calib.files.course import read_acel, read_ensayo
 from calib.input_rules import DataError
-from calib.io import read_acel, read_ensayo
-from calib.logs import ImuLog, LogOptions, read_log, tilt_axis
+from calib.logs.reader import ImuLog, LogOptions, read_log, tilt_axis
 from tests import logfixtures as fx
 
 MAP = {"datos": "acc", "t": "time"}

@@ -11,16 +11,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import stats
 
-from calib.calibration import calibrate
-from calib.conventions import reference_accel
-from calib.correct import apply_errors, correct
-from calib.io import Ensayo, read_ensayo
-from calib.ls import (
+from calib.calibration.correct import apply_errors, correct
+from calib.calibration.ls import (
     NotIdentifiableError,
     PoorlyIdentifiedWarning,
     fit_axis,
     fit_joint,
 )
+from calib.calibration.tilt_plane import calibrate
+from calib.conventions import reference_accel
+from calib.files.course import Ensayo, read_ensayo
 from tests.reference import course_2009 as ref
 
 G = 9.8

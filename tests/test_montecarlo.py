@@ -1,5 +1,5 @@
-"""calib.montecarlo: the batched engine equals calibrate() run by run, its results do not
-depend on the chunk size, the process pool or a Dask cluster, and its intervals cover."""
+"""calib.calibration.montecarlo: the batched engine equals calibrate() run by run, its results do
+not depend on the chunk size, the process pool or a Dask cluster, and its intervals cover."""
 
 from __future__ import annotations
 
@@ -10,13 +10,13 @@ import pytest
 
 from bench.sweep import dask_map, process_map
 from calib import Ensayo, calibrate
-from calib.montecarlo import (
+from calib.calibration.montecarlo import (
     MonteCarloResult,
     draw_noise,
     simulate_calibrations,
     synthetic_readings,
 )
-from calib.runs import run_seeds
+from calib.stats.runs import run_seeds
 
 THETA = np.linspace(0.0, 2 * np.pi, 2001)
 BIAS, SCALE, NV = [0.0767, -0.0175], [-0.0301, 0.0100], [0.25, 0.64]
@@ -45,7 +45,7 @@ def test_equals_calibrate_run_by_run(mode):
 
 
 def test_stream_of_run_k_is_the_kth_spawned_child():
-    """The seed contract of calib.runs: run k draws from run_seeds(seed, runs, key)[k]."""
+    """The seed contract of calib.stats.runs: run k draws from run_seeds(seed, runs, key)[k]."""
     ss = run_seeds(5, 23, (7,))[11]
     want = np.random.default_rng(ss).standard_normal((2, THETA.size))
     np.testing.assert_array_equal(draw_noise(5, range(11, 12), THETA.size, (7,))[0], want)
@@ -157,17 +157,17 @@ def test_bad_input():
         simulate_calibrations(THETA, BIAS, SCALE, [0.25, -1], 3, 0)
     with pytest.raises(ValueError, match="runs"):
         simulate_calibrations(THETA, BIAS, SCALE, NV, 0, 0)
-    from calib.ls import NotIdentifiableError
+    from calib.calibration.ls import NotIdentifiableError
     with pytest.raises(NotIdentifiableError, match="scale_x"):
         simulate_calibrations(np.zeros(10), BIAS, SCALE, NV, 3, 0)
 
 
 def test_batch_design_on_noise_drawn_elsewhere():
     """The engine's pieces on draws made by the caller (e.g. a run that also draws vehicle
-    readings from the same generator, as calib.nmin does) equal calibrate()."""
+    readings from the same generator, as calib.vehicle.nmin does) equal calibrate()."""
+    from calib.calibration.correct import apply_errors
+    from calib.calibration.montecarlo import batch_design
     from calib.conventions import reference_accel
-    from calib.correct import apply_errors
-    from calib.montecarlo import batch_design
 
     design = batch_design(THETA)
     v = np.random.default_rng(4).standard_normal((2, THETA.size))
@@ -185,7 +185,7 @@ def test_single_fit_design_cache_is_exact():
     """calibrate()/fit_axis cache what depends on θ alone: a warm fit is bit-identical to a
     cold one, and a θ with the same fingerprint (first, middle, last sample) but another
     value elsewhere is not served the cached design."""
-    from calib.ls import _DESIGN_CACHE, fit_axis
+    from calib.calibration.ls import _DESIGN_CACHE, fit_axis
 
     y = synthetic_readings(THETA, BIAS, SCALE, NV, 1, 0)[:, 0]
     _DESIGN_CACHE.clear()

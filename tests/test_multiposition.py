@@ -1,4 +1,5 @@
-"""calib.multiposition: calibration without an angle reference (gravity-norm constraint)."""
+"""calib.calibration.multiposition: calibration without an angle reference (gravity-norm
+constraint)."""
 
 from __future__ import annotations
 
@@ -8,13 +9,9 @@ import warnings
 import numpy as np
 import pytest
 
-from calib.calfile import load_calibration, save_calibration
-from calib.calibration import calibrate
-from calib.conventions import G
-from calib.input_rules import DataError
-from calib.io import Ensayo, read_ensayo
-from calib.ls import NotIdentifiableError, PoorlyIdentifiedWarning
-from calib.multiposition import (
+from calib.calibration.calfile import load_calibration, save_calibration
+from calib.calibration.ls import NotIdentifiableError, PoorlyIdentifiedWarning
+from calib.calibration.multiposition import (
     UNIDENTIFIED_STD,
     MultiPositionFit,
     OutOfPlaneWarning,
@@ -24,6 +21,10 @@ from calib.multiposition import (
     fit_multiposition,
     pose_statistics,
 )
+from calib.calibration.tilt_plane import calibrate
+from calib.conventions import G
+from calib.files.course import Ensayo, read_ensayo
+from calib.input_rules import DataError
 from tests.reference import course_2009 as ref
 
 TRUTH = np.array([0.08, -0.03, -0.02, 0.01])  # [bias_x, scale_x, bias_y, scale_y]

@@ -1,5 +1,5 @@
-"""calib.multiposition 3-axis fit: bias and scale of three axes from held poses in arbitrary
-orientations, no angle reference (gravity norm on the sphere); the log's third axis
+"""calib.calibration.multiposition 3-axis fit: bias and scale of three axes from held poses in
+arbitrary orientations, no angle reference (gravity norm on the sphere); the log's third axis
 (``ImuLog.acc_normal``); ``calibrate`` on the shipped Axivity AX3 log."""
 
 from __future__ import annotations
@@ -11,10 +11,8 @@ import numpy as np
 import pytest
 from scipy import optimize
 
-from calib.conventions import G
-from calib.logs import LogOptions, read_log
-from calib.ls import NotIdentifiableError
-from calib.multiposition import (
+from calib.calibration.ls import NotIdentifiableError
+from calib.calibration.multiposition import (
     POSES_NEEDED_3D,
     MultiPosition3DFit,
     Poses,
@@ -24,6 +22,8 @@ from calib.multiposition import (
     quantization_step,
     three_axis_applies,
 )
+from calib.conventions import G
+from calib.logs.reader import LogOptions, read_log
 from calib.units import missing_units
 from tests.cli import one_line_error, run
 from tests.reference.real_data import REAL_DIR, SPECS, pose_means

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from bench.cli import main
-from calib.calibration import calibrate
-from calib.nmin import (
+from calib.calibration.tilt_plane import calibrate
+from calib.vehicle.nmin import (
     PositionCovModel,
     VehicleCase,
     crossing_n,
@@ -20,7 +20,7 @@ from calib.nmin import (
     synthetic_calibration,
     uniform_design_cov,
 )
-from calib.region import arrival_region, chi2_2dof
+from calib.vehicle.region import arrival_region, chi2_2dof
 from tests.reference import course_2009 as ref
 
 # Course report LS, section 3.2.4: subsampling every 13th sample leaves N = 1539 and the

@@ -14,8 +14,10 @@ import pytest
 
 from bench.cli import main
 from bench.sweep import process_map
-from calib.io import Acel, Ensayo
-from calib.nmin import (
+from calib.files.course import Acel, Ensayo
+from calib.stats.proportion import lower_bound
+from calib.stats.runs import serial_map
+from calib.vehicle.nmin import (
     PositionCovModel,
     VehicleCase,
     analyze_nmin,
@@ -26,11 +28,9 @@ from calib.nmin import (
     redrawn_design,
     uniform_design_cov,
 )
-from calib.nmin.fixed_run import made_and_right
-from calib.proportion import lower_bound
-from calib.region import arrival_region, chi2_2dof, decide, squared_distances
-from calib.runs import serial_map
-from calib.trajectory import correct_and_integrate
+from calib.vehicle.nmin.fixed_run import made_and_right
+from calib.vehicle.region import arrival_region, chi2_2dof, decide, squared_distances
+from calib.vehicle.trajectory import correct_and_integrate
 from tests.reference import course_2009 as ref
 
 LEVEL = 0.997

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.io import loadmat
 
-from calib.sensor_profile import NoiseTerm, SensorProfile, load_profile, save_profile
+from calib.noise.sensor_profile import NoiseTerm, SensorProfile, load_profile, save_profile
 from tests.cli import one_line_error, run
 
 
@@ -92,7 +92,7 @@ def test_noise_takes_a_calibration(static_log, course_dir, tmp_path, capsys):
     assert entry["param_names"] == ["bias_x", "scale_x", "bias_y", "scale_y"]
     assert np.asarray(entry["cov"]).shape == (4, 4)
     assert entry["source"]["name"] == "cal.json" and len(entry["source"]["sha256"]) == 64
-    from calib.calfile import load_calibration
+    from calib.calibration.calfile import load_calibration
 
     assert entry["params"] == load_calibration(cal).params.tolist()
 

@@ -200,12 +200,12 @@ def test_non_finite_output_names_the_field():
 
 def test_last_resort_errors_are_one_line(monkeypatch, course):
     """A fault that escapes the checks is still one line with exit code 2."""
-    import calib.calibration
+    import calib.calibration.tilt_plane
 
     def boom(*a, **k):
         raise OverflowError("math range error")
 
-    monkeypatch.setattr(calib.calibration, "calibrate", boom)
+    monkeypatch.setattr(calib.calibration.tilt_plane, "calibrate", boom)
     msg = _error("calibrate", course["ensayo"], "--noise-var", "0.25,0.64")
     assert "OverflowError" in msg and "calibrate" in msg
 

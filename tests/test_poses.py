@@ -1,4 +1,4 @@
-"""calib.poses.detect_poses on simulated multi-pose logs with known boundaries (numpy + noise,
+"""calib.logs.poses.detect_poses on simulated multi-pose logs with known boundaries (numpy + noise,
 fixed seeds): the right number of poses, each inside its true hold and covering it but for
 the window's reach into the turns, moving samples labelled -1, thresholds from the data."""
 
@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from calib.poses import MARGIN, PoseDetection, detect_poses, window_variance
+from calib.logs.poses import MARGIN, PoseDetection, detect_poses, window_variance
 
 G = 9.8
 

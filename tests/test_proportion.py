@@ -1,10 +1,10 @@
-"""Exact binomial intervals (calib.proportion): known closed forms and their coverage."""
+"""Exact binomial intervals (calib.stats.proportion): known closed forms and their coverage."""
 
 import numpy as np
 import pytest
 from scipy import stats
 
-from calib.proportion import clopper_pearson, lower_bound
+from calib.stats.proportion import clopper_pearson, lower_bound
 
 
 def test_closed_forms_at_the_edges():

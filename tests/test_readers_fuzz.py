@@ -1,7 +1,7 @@
 """Readers under bad and unusual input (issue 11, parts 1 and 4).
 
-Explicit cases for each rule of :mod:`calib.io`, :mod:`calib.datos_txt` and
-:mod:`calib.degeneracy`, through the library and the command line, then property-based tests
+Explicit cases for each rule of :mod:`calib.files.course`, :mod:`calib.files.datos_txt` and
+:mod:`calib.files.degeneracy`, through the library and the command line, then property-based tests
 (hypothesis, ``derandomize=True``) over structurally plausible random ``.mat`` and
 ``datos.txt`` files. Every outcome is either a correct result or a clean error: a
 ``ValueError`` naming the file (library), one ``tiltbench …: error:`` line and exit code 2
@@ -23,8 +23,8 @@ import scipy.sparse
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from calib.calibration import calibrate
-from calib.io import DataError, DataNote, read_acel, read_datos, read_ensayo, read_puntos
+from calib.calibration.tilt_plane import calibrate
+from calib.files.course import DataError, DataNote, read_acel, read_datos, read_ensayo, read_puntos
 from tests.cli import one_line_error
 from tests.cli import run as _run
 

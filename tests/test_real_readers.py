@@ -1,5 +1,5 @@
 """The issue's "How we will know" checks on the shipped real logs (data/real/), from the
-command line in-process (tests/cli.py) and through :func:`calib.logs.read_log`.
+command line in-process (tests/cli.py) and through :func:`calib.logs.reader.read_log`.
 
 * **One command in, agrees with the six-position computation.** ``tiltbench import`` takes the
   YEI 3-Space log (flat, turned over, flat again) with detected held poses and their angles.
@@ -7,7 +7,7 @@ command line in-process (tests/cli.py) and through :func:`calib.logs.read_log`.
   (``y = -z``: ``scale_y = scale_z``, ``bias_y = -bias_z``) is calibrated and the x axis never
   sees gravity change (``A_rx = -g sin θ = 0`` at θ = 0 and 180°): ``calibrate`` refuses the
   run in one line naming ``scale_x``, and the per-axis least squares of the y axis
-  (:func:`calib.ls.fit_axis`, what ``calibrate`` runs per axis) is compared with
+  (:func:`calib.calibration.ls.fit_axis`, what ``calibrate`` runs per axis) is compared with
   ``tests/reference/real_data.six_position`` (plain csv + numpy). Gravity: the readers convert
   g with ``--g`` (9.8 here), so the reference is called with ``g_unit = g = 9.8``.
   Criterion: on the reference's own rows the two are the same computation (equal to 1e-9);
@@ -33,8 +33,8 @@ import numpy as np
 import pytest
 import scipy.io
 
-from calib.logs import LogOptions, read_log
-from calib.ls import fit_axis
+from calib.calibration.ls import fit_axis
+from calib.logs.reader import LogOptions, read_log
 from tests.cli import one_line_error, run
 from tests.logfixtures import imu_messages, seconds
 from tests.reference import real_data as ref

@@ -29,8 +29,8 @@ from bench.record import (
     recording_entities,
 )
 from bench.tilt import CalibrationConfig, ThetaDesign, generate_calibration, write_calibration
-from calib.calibration import calibrate
-from calib.io import read_ensayo
+from calib.calibration.tilt_plane import calibrate
+from calib.files.course import read_ensayo
 
 REPO = Path(__file__).resolve().parents[1]
 RERUN = shutil.which("rerun", path=str(Path(__import__("sys").executable).parent))

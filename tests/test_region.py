@@ -9,9 +9,9 @@ import pytest
 
 from bench.course import CourseConfig, make_course_set
 from bench.vehicle import COURSE_SENSOR, simulate_vehicle
-from calib.calibration import calibrate
-from calib.nmin import synthetic_calibration
-from calib.region import (
+from calib.calibration.tilt_plane import calibrate
+from calib.vehicle.nmin import synthetic_calibration
+from calib.vehicle.region import (
     ArrivalRegion,
     Ellipse,
     arrival_region,
@@ -23,7 +23,7 @@ from calib.region import (
     noise_position_cov,
     position_jacobian,
 )
-from calib.trajectory import (
+from calib.vehicle.trajectory import (
     compute_trajectory,
     correct_and_integrate,
     trapezoid_sum_w2_uniform,

@@ -17,10 +17,10 @@ from bench.sensor_twin import calibration_pairs, make_static_run, twin_sensor, t
 from bench.sensors import SensorErrorModel
 from bench.terms import BiasInstability, BiasRandomWalk, Quantization
 from bench.tilt import static_readings
-from calib.allan import characterize_noise
-from calib.allan_model import FLICKER_FLOOR, allan_moments, avar_covariance
 from calib.conventions import G
-from calib.sensor_profile import NoiseTerm, SensorProfile
+from calib.noise.allan import characterize_noise
+from calib.noise.allan_model import FLICKER_FLOOR, allan_moments, avar_covariance
+from calib.noise.sensor_profile import NoiseTerm, SensorProfile
 
 
 def alpha_fp_limit(r: int, alpha: float = 0.05) -> float:
@@ -130,7 +130,7 @@ def _closed_loop(r: int, n: int, level: float, alpha: float):
 def test_closed_loop_recovers_the_twin():
     """The acceptance loop (issue 19, item 6): R = 200 static logs of 2^14 samples at 100 Hz
     simulated by the bench's sensor terms for the profile above, each characterized by
-    :func:`calib.allan.characterize_noise` (``tiltbench noise``'s library call).
+    :func:`calib.noise.allan.characterize_noise` (``tiltbench noise``'s library call).
 
     Axis x (N = 2e-3, B = 1.5e-3, K = 5e-4): each term's 95 % interval covers the truth at
     0.95 ± 4·sqrt(0.95·0.05/200) = ± 0.062, and B and K are resolved more often than chance

@@ -11,10 +11,11 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 MAX_POSITIONAL = 8
-CHECKED = ["calib/kalman.py", "calib/fusion.py", "calib/fusion_turning.py",
-           "calib/fusion_arrival.py", "calib/region.py", "calib/turning_trajectory.py",
+CHECKED = ["calib/fusion/kalman.py", "calib/fusion/linear.py", "calib/fusion/turning.py",
+           "calib/vehicle/arrival.py", "calib/vehicle/region.py",
+           "calib/vehicle/turning_trajectory.py",
            "calib/numerics.py", *sorted(str(p.relative_to(REPO))
-                                        for p in (REPO / "calib" / "nmin").glob("*.py")),
+                                        for p in (REPO / "calib/vehicle/nmin").glob("*.py")),
            "bench/cli/fuse.py", "bench/cli/nmin.py", "bench/record/fusion.py",
            "bench/validate.py", "bench/validate_inputs.py", "bench/limits.py"]
 

@@ -1,4 +1,4 @@
-"""calib.runs and bench.sweep: chunks, streams, and mappers that keep task order."""
+"""calib.stats.runs and bench.sweep: chunks, streams, and mappers that keep task order."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bench.sweep import make_mapper, process_map
-from calib.runs import chunk_ranges, run_seeds, serial_map
+from calib.stats.runs import chunk_ranges, run_seeds, serial_map
 
 
 def _square(x: int) -> int:

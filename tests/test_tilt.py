@@ -13,8 +13,8 @@ import scipy.io
 from bench.cli import main
 from bench.sensors import AxisErrors, SensorErrorModel
 from bench.tilt import CalibrationConfig, SweepProfile, ThetaDesign, generate_calibration
-from calib.calibration import calibrate
-from calib.io import read_ensayo
+from calib.calibration.tilt_plane import calibrate
+from calib.files.course import read_ensayo
 
 TRUE = SensorErrorModel(AxisErrors(0.08, -0.03, 0.25), AxisErrors(-0.02, 0.01, 0.64))
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from bench.cli import main
-from calib.trajectory import (
+from calib.vehicle.trajectory import (
     INTEGRATORS,
     Trajectory,
     compute_trajectory,
@@ -162,7 +162,7 @@ def test_bad_inputs_raise():
 
 
 def test_calib_never_imports_bench_or_mujoco():
-    code = ("import sys, calib.trajectory, calib.region, calib.nmin; "
+    code = ("import sys, calib.vehicle.trajectory, calib.vehicle.region, calib.vehicle.nmin; "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('bench', 'mujoco')]; "
             "print(bad); sys.exit(1 if bad else 0)")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

@@ -1,4 +1,4 @@
-"""Honesty of the turning dead reckoning's arrival region (calib.turning_trajectory
+"""Honesty of the turning dead reckoning's arrival region (calib.vehicle.turning_trajectory
 ``turning_arrival_region``: the no-fix extended filter's covariance around the dead reckoning).
 
 Truth: the MuJoCo turning vehicle (bench.vehicle, ``turning=True``) simulated ONCE, 60 s at
@@ -32,9 +32,9 @@ import pytest
 from scipy.stats import binom, chi2
 
 from bench.vehicle import VehicleConfig, simulate_vehicle
-from calib.fusion_turning import fuse_turning
-from calib.region import chi2_2dof
-from calib.turning_trajectory import (
+from calib.fusion.turning import fuse_turning
+from calib.vehicle.region import chi2_2dof
+from calib.vehicle.turning_trajectory import (
     TurningRegion,
     turning_arrival_region,
     turning_dead_reckoning,

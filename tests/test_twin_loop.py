@@ -16,7 +16,7 @@ without the code under test where one exists:
   ``tests/reference/real_data.py`` (plain csv + numpy) and its README. Its held poses are 180°
   apart only, so with θ from the poses the tilt plane's x axis never sees gravity change and
   ``calibrate`` refuses naming ``scale_x``; with ``--theta-source gyro`` (θ(t) of every sample
-  integrated from the gyro about the tilt axis, :mod:`calib.gyro_angle`) the turns sweep θ and
+  integrated from the gyro about the tilt axis, :mod:`calib.logs.gyro_angle`) the turns sweep θ and
   both axes are identifiable. The run is then a timed sweep turned by hand: ``gap`` of it
   (``--sensor``: the profile's terms) finds what the twin lacks — whatever it finds, the real
   residuals are far beyond the sensor's noise (taps, the hand's accelerations), while ``gap``
@@ -42,8 +42,8 @@ import numpy as np
 import pytest
 import scipy.io
 
-from calib.gyro_angle import CLOSURE_BOUND_DEG
-from calib.ls import fit_axis
+from calib.calibration.ls import fit_axis
+from calib.logs.gyro_angle import CLOSURE_BOUND_DEG
 from tests import logfixtures as fx
 from tests.cli import one_line_error, run
 from tests.reference import real_data as ref

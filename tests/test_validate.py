@@ -10,9 +10,9 @@ from scipy import stats
 
 from bench.cli import main
 from bench.validate import design_cov, design_theta, parse_estimates, validate
-from calib.calibration import calibrate
+from calib.calibration.tilt_plane import calibrate
 from calib.conventions import reference_accel
-from calib.io import DataError, Ensayo
+from calib.files.course import DataError, Ensayo
 
 G = 9.8
 BIAS = np.array([0.08, -0.02])

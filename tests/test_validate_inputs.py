@@ -14,9 +14,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bench.validate import std_ratio_limits
-from calib.calibration import calibrate
+from calib.calibration.tilt_plane import calibrate
 from calib.conventions import reference_accel
-from calib.io import Ensayo
+from calib.files.course import Ensayo
 from tests.cli import one_line_error
 from tests.cli import run as run_cli
 

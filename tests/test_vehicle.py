@@ -36,8 +36,8 @@ from bench.vehicle import (
     simulate_vehicle,
     vehicle_model,
 )
-from calib.io import read_acel, read_datos, read_ensayo, read_puntos
-from calib.trajectory import integrate_twice
+from calib.files.course import read_acel, read_datos, read_ensayo, read_puntos
+from calib.vehicle.trajectory import integrate_twice
 
 EPS = np.finfo(float).eps
 SMALL_THETA = ThetaDesign(count=501)  # calibration size does not matter for these checks

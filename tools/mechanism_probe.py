@@ -70,8 +70,8 @@ def _shape(mech: str, motion, a: np.ndarray, k: int, u: np.ndarray,
 def probe(arg: tuple[str, int, int, float]) -> tuple | None:
     """(mechanism, design, axis, verdict, named) of one run, or None when the mechanism does
     not apply to the design."""
+    from calib.files.course import validate_ensayo
     from calib.gap import analyze_gap
-    from calib.io import validate_ensayo
     from validation.independent.cases import CL, CaseDef, build
     from validation.independent.effects import catalog_columns
     from validation.independent.physics import static_force

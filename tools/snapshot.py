@@ -536,7 +536,7 @@ def save(flat: dict[str, Leaf], json_path: Path = REFERENCE, npz_path: Path = AR
     null or a list of strings) otherwise; arrays of more than ``BIG`` elements go to a
     compressed npz (``{"npz": key, "scale": s}``, identical arrays stored once), those over
     ``FULL`` as a :class:`Fingerprint`."""
-    from calib.atomic import write_bytes, write_text
+    from calib.files.atomic import write_bytes, write_text
 
     lines, arrays, seen = [], {}, {}
     for k, leaf in sorted(flat.items()):

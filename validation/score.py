@@ -44,8 +44,8 @@ from validation.cases import KINDS, Case, validation_set
 
 def default_analyze(case: Case):
     """:func:`calib.gap.analyze_gap` on the case's run and stated noise variances."""
+    from calib.files.course import Ensayo
     from calib.gap import analyze_gap
-    from calib.io import Ensayo
 
     return analyze_gap(Ensayo(case.tita, case.datos, case.t, source=case.id), case.noise_var)
 

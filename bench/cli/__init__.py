@@ -2,7 +2,7 @@
 
 One module per command (:data:`COMMANDS`); each has ``register(subparsers)``, which adds its
 parser and sets ``handler``: a function of the parsed args that returns the exit code.
-Bad input (:class:`calib.io.DataError` and other ``ValueError``, ``OSError`` such as a
+Bad input (:class:`calib.files.course.DataError` and other ``ValueError``, ``OSError`` such as a
 directory given for a file) is one line on stderr and exit code 2; an existing output without
 ``--force`` (``FileExistsError`` from the library) says "pass --force to overwrite".
 Exit 1 is a graded FAIL (``validate``), exit 3 a result its own consistency check rejects
@@ -107,7 +107,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"tiltbench {args.command}: error: recordings need rerun-sdk, an optional "
               "extra: pip install \"tiltbench[rrd]\"", file=sys.stderr)
         return 2
-    except ValueError as exc:  # calib.io.DataError, bench.cli.options.OptionError, …
+    except ValueError as exc:  # calib.files.course.DataError, bench.cli.options.OptionError, …
         print(f"tiltbench {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except (MemoryError, OverflowError, ZeroDivisionError, FloatingPointError,

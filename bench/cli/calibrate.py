@@ -1,12 +1,13 @@
 """``tiltbench calibrate``: parse, call the library, print.
 
-θ known (a course ``ensayo.mat`` or a log with θ): :func:`calib.calibration.calibrate` (per-axis
-OLS or joint WLS), with the lack-of-fit test and the pure-error σ² when poses or θ values
-repeat (:mod:`calib.lackoffit`). θ unknown with held poses, or ``--method multiposition``:
-:func:`calib.multiposition.fit_multiposition`, compared with the least squares when θ is
+θ known (a course ``ensayo.mat`` or a log with θ): :func:`calib.calibration.tilt_plane.calibrate`
+(per-axis OLS or joint WLS), with the lack-of-fit test and the pure-error σ² when poses or θ values
+repeat (:mod:`calib.calibration.lackoffit`). θ unknown with held poses, or
+``--method multiposition``:
+:func:`calib.calibration.multiposition.fit_multiposition`, compared with the least squares when θ is
 known; a 3-axis log (``ImuLog.acc_normal``) whose poses turn the normal axis, 7 or more, gets
-:func:`calib.multiposition.fit_multiposition3d` instead (bias and scale of all three axes;
-``--noise-var`` then takes three variances). The log is read with the shared log options
+:func:`calib.calibration.multiposition.fit_multiposition3d` instead (bias and scale of all three
+axes; ``--noise-var`` then takes three variances). The log is read with the shared log options
 (:mod:`bench.cli.logopts`).
 """
 
@@ -40,8 +41,8 @@ from bench.cli.output import (
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
     from bench.cli.logopts import read_log_from_args
-    from calib.calibration import calibrate
-    from calib.lackoffit import groups_from
+    from calib.calibration.lackoffit import groups_from
+    from calib.calibration.tilt_plane import calibrate
 
     check_level(args.level)
     check_positive(args.g, "--g")
@@ -114,10 +115,8 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
     compared with the θ-based least squares when θ is known."""
     import numpy as np
 
-    from calib.calibration import calibrate
-    from calib.input_rules import DataError
-    from calib.lackoffit import LOF_ALPHA, groups_from
-    from calib.multiposition import (
+    from calib.calibration.lackoffit import LOF_ALPHA, groups_from
+    from calib.calibration.multiposition import (
         compare_methods,
         fit_multiposition,
         fit_multiposition3d,
@@ -126,6 +125,8 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
         quantization_steps,
         three_axis_applies,
     )
+    from calib.calibration.tilt_plane import calibrate
+    from calib.input_rules import DataError
 
     chosen = "given" if args.method == "multiposition" else "automatic: θ unknown"
     pose = log.pose
@@ -203,7 +204,7 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
 def _save(args: argparse.Namespace, cal) -> None:
     """``--save``: the calibration file (docs/calibration-file.md), or its .mat export."""
     from bench.version import __version__
-    from calib.calfile import save_calibration
+    from calib.calibration.calfile import save_calibration
 
     source = ("given" if args.noise_var is not None else
               "datos.txt" if args.datos else "estimated")

@@ -41,7 +41,7 @@ def _coverage_runs() -> int:
 def _demo_units() -> dict[str, str]:
     """The ``units`` of the ``demo --json`` object (docs/units.md): the estimates' (a
     calibration), the validation's (bias m/s², scale 1, test statistics 1), the coverage's."""
-    from calib.calibration import Calibration
+    from calib.calibration.tilt_plane import Calibration
     from calib.units import nest
 
     units = nest("estimates", Calibration._JSON_UNITS)

@@ -51,9 +51,9 @@ def write_examples(out_dir: str | Path, force: bool = False) -> list[Path]:
 
     Every target is checked before anything is written: an existing file without ``force``
     is :class:`FileExistsError`, so a refused run writes nothing. Each file is written
-    atomically (:func:`calib.atomic.write_bytes`).
+    atomically (:func:`calib.files.atomic.write_bytes`).
     """
-    from calib.atomic import write_bytes
+    from calib.files.atomic import write_bytes
 
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():

@@ -10,13 +10,13 @@
 The calibration comes from ``--calibration`` or is fitted on ``--ensayo`` (as
 ``trajectory``); P0, V0 and the noise variances come from ``--datos`` (else the course
 values, the noise estimated). With a ``gyro`` variable in acel.mat (``generate vehicle
---turning``) the extended filter :func:`calib.fusion_turning.fuse_turning` runs instead
+--turning``) the extended filter :func:`calib.fusion.turning.fuse_turning` runs instead
 (``--gyro-sigma``, ``--psi0``, ``--psi0-sigma``); its ``--plot``/``--rrd`` dead reckoning is
-:func:`calib.turning_trajectory.turning_dead_reckoning` with its level-L region (the no-fix
-extended filter's covariance, :func:`calib.turning_trajectory.turning_arrival_region`), with
+:func:`calib.vehicle.turning_trajectory.turning_dead_reckoning` with its level-L region (the no-fix
+extended filter's covariance, :func:`calib.vehicle.turning_trajectory.turning_arrival_region`), with
 the heading added; the text output then prints the dead reckoning's decision too. The
-work is :func:`calib.fusion_arrival.fuse_arrival` (this module parses and prints); the
-filter is :func:`calib.fusion.fuse` (docs/fusion.md): Q from
+work is :func:`calib.vehicle.arrival.fuse_arrival` (this module parses and prints); the
+filter is :func:`calib.fusion.linear.fuse` (docs/fusion.md): Q from
 the stated noise and the calibration covariance, R from the receiver's σ, P0 from the
 calibration covariance and the initial position/velocity σ of ``--p0-std`` / ``--v0-std``
 (default 0: the course gives P0 and V0 exactly; datos.txt states no uncertainty), no
@@ -48,11 +48,11 @@ from bench.cli.output import check_finite, print_files, print_json, refuse_overw
 EXIT_INCONSISTENT = 3
 """Exit status of a fused run whose windowed NIS is out of its band (no region printed)."""
 
-GATE_ALPHA = 0.001  # = calib.innovation_check.GATE_ALPHA (not imported: start-up time)
-CONSISTENCY_ALPHA = 0.01  # = calib.innovation_check.CONSISTENCY_ALPHA
-NIS_WINDOW = 10  # = calib.innovation_check.NIS_WINDOW
-NIS_WINDOW_MAX = 1000  # = calib.innovation_check.NIS_WINDOW_MAX
-CONSISTENCY_ALPHA_MIN = 1e-6  # = calib.innovation_check.ALPHA_MIN
+GATE_ALPHA = 0.001  # = calib.fusion.innovation_check.GATE_ALPHA (not imported: start-up time)
+CONSISTENCY_ALPHA = 0.01  # = calib.fusion.innovation_check.CONSISTENCY_ALPHA
+NIS_WINDOW = 10  # = calib.fusion.innovation_check.NIS_WINDOW
+NIS_WINDOW_MAX = 1000  # = calib.fusion.innovation_check.NIS_WINDOW_MAX
+CONSISTENCY_ALPHA_MIN = 1e-6  # = calib.fusion.innovation_check.ALPHA_MIN
 
 
 def _check_nonnegative(value: float, name: str) -> float:
@@ -80,9 +80,9 @@ def _check_window(value: int) -> int:
 
 def _cmd_fuse(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
-    from calib.calibration import calibrate
-    from calib.fusion_arrival import dead_reckoning_region, fixes_inside, fuse_arrival
-    from calib.io import read_gps
+    from calib.calibration.tilt_plane import calibrate
+    from calib.files.course import read_gps
+    from calib.vehicle.arrival import dead_reckoning_region, fixes_inside, fuse_arrival
 
     level = check_level(args.level)
     doubt = dict(gate_alpha=_check_alpha(args.gate_alpha, "--gate-alpha", lowest=0.0),

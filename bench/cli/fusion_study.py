@@ -28,7 +28,7 @@ def _cmd_fusion_study(args: argparse.Namespace) -> int:
     from bench import fusion_study
     from bench.cli.options import mapper_from_args
     from bench.cli.progress import Progress
-    from calib.atomic import atomic_dir
+    from calib.files.atomic import atomic_dir
 
     check_count(args.runs, "--runs", 2)
     out = Path(args.out)

@@ -60,7 +60,7 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     ensayo = read_log_from_args(args, args.ensayo, expect="ensayo").to_ensayo()
     nv = noise_var_from_args(args)
     if nv is None:  # held poses repeat θ: their scatter is the noise (pure error)
-        from calib.lackoffit import groups_from, pure_error_variance
+        from calib.calibration.lackoffit import groups_from, pure_error_variance
 
         if groups_from(ensayo.tita) is None:
             raise OptionError(f"{args.ensayo}: the gap is measured against the stated noise; "
@@ -75,7 +75,7 @@ def _cmd_gap(args: argparse.Namespace) -> int:
               file=sys.stderr)
     sensor = None
     if args.sensor is not None:
-        from calib.sensor_profile import load_profile
+        from calib.noise.sensor_profile import load_profile
 
         sensor = load_profile(args.sensor)
     report = run_gap(ensayo, nv, g=args.g, rate=None if ensayo.t is not None else args.rate,

@@ -51,11 +51,11 @@ def sensor_model(args: argparse.Namespace, rate: float | None = None):
 
 
 def sensor_profile(args: argparse.Namespace):
-    """The :class:`calib.sensor_profile.SensorProfile` of ``--sensor``, or None."""
+    """The :class:`calib.noise.sensor_profile.SensorProfile` of ``--sensor``, or None."""
     path = getattr(args, "sensor", None)
     if not path:
         return None
-    from calib.sensor_profile import load_profile
+    from calib.noise.sensor_profile import load_profile
 
     return load_profile(path)
 
@@ -85,7 +85,7 @@ def calibration_config(args: argparse.Namespace):
     check_positive(args.rate, "--rate")
     sensor = sensor_model(args, run_rate)
     # Any finite angle in radians is valid (several turns, negative, past 2π): no range
-    # check here — without readings there is nothing to tell degrees by (calib.angles).
+    # check here — without readings there is nothing to tell degrees by (calib.files.angles).
     start, stop = parse_pair(args.theta_range, "--theta-range")
     if args.theta_list is not None and args.theta_from is not None:
         raise OptionError("give --theta-list or --theta-from, not both")
@@ -121,7 +121,7 @@ def _theta_of(path: str) -> tuple[float, ...]:
     """``--theta-from``: the θ schedule (rad, every sample in order) of a course-format
     ``ensayo.mat`` — a measured run imported with ``tiltbench import`` — so that its twin holds
     the same poses for the same number of samples (docs/real-data.md, the twin loop)."""
-    from calib.io import read_ensayo
+    from calib.files.course import read_ensayo
 
     return tuple(float(v) for v in read_ensayo(path).tita)
 

@@ -5,11 +5,11 @@
     tiltbench import LOG [--format …] [--columns …] [--axes x,y] [--units …]
                      [--poses …] [--angle-unit deg] --out DIR [--force] [--json]
 
-Reads the log (:func:`calib.logs.read_log`, docs/real-data.md), prints what it found — the
+Reads the log (:func:`calib.logs.reader.read_log`, docs/real-data.md), prints what it found — the
 format, which column became what, the units and their conversion, the held poses and the
 thresholds that found them — and writes ``ensayo.mat`` (θ known, or θ unknown with held
 poses: then no ``tita``) or ``acel.mat`` (no poses), plus ``provenance.json``, as one set
-(:func:`calib.logread.export.write_course_set`). ``--json`` prints one object: the files
+(:func:`calib.logs.export.write_course_set`). ``--json`` prints one object: the files
 written and the provenance record.
 """
 
@@ -35,8 +35,8 @@ UNITS = {"provenance.units.g": "m/s²", "provenance.units.acc_to_m_s2": "m/s² p
 def _cmd_import(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
     from bench.version import __version__
-    from calib.logread.export import write_course_set
-    from calib.logs import read_log
+    from calib.logs.export import write_course_set
+    from calib.logs.reader import read_log
 
     check_positive(args.g, "--g")
     log = read_log(args.log, log_options_from_args(args))  # what it found is printed below
@@ -57,7 +57,7 @@ def _cmd_import(args: argparse.Namespace) -> int:
               f"{units.get('gyro_from') or 'none'}")
     poses = prov.get("poses")
     if poses and "detection" in poses:
-        from calib.poses import PoseDetection
+        from calib.logs.poses import PoseDetection
 
         print(PoseDetection.from_dict(poses["detection"]).summary())
     elif poses:

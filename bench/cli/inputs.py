@@ -40,7 +40,9 @@ class _Given(argparse.Action):
 
 
 def _integrators() -> tuple[str, ...]:
-    from calib.trajectory import INTEGRATORS  # imports scipy: read when needed (start-up time)
+    from calib.vehicle.trajectory import (
+        INTEGRATORS,  # imports scipy: read when needed (start-up time)
+    )
 
     return INTEGRATORS
 
@@ -76,8 +78,8 @@ def read_course_inputs(args: argparse.Namespace):
     """Read the files; return ensayo, acel, candidates, p0, v0, noise_var (None = estimate)."""
     import numpy as np
 
-    from calib.io import read_datos, read_puntos
-    from calib.trajectory import COURSE_P0, COURSE_V0
+    from calib.files.course import read_datos, read_puntos
+    from calib.vehicle.trajectory import COURSE_P0, COURSE_V0
 
     check_positive(args.g, "--g")
     # course .mat files are read as before; measured logs through the shared log options
@@ -107,7 +109,7 @@ def read_calibration_file(args: argparse.Namespace):
     path = getattr(args, "calibration", None)
     if not path:
         return None
-    from calib.calfile import load_calibration
+    from calib.calibration.calfile import load_calibration
 
     cal = load_calibration(path)
     given = getattr(args, "given", set())

@@ -1,6 +1,6 @@
 """The log-reading options shared by every command that reads readings (``calibrate``,
 ``gap``, ``trajectory``, ``fuse``, ``noise``, ``import``): parse them into a
-:class:`calib.logs.LogOptions` and read the log with :func:`calib.logs.read_log`.
+:class:`calib.logs.reader.LogOptions` and read the log with :func:`calib.logs.reader.read_log`.
 
 ``--format`` picks the reader (default: recognized from the content); ``--columns`` names the
 columns (``t=…,x=…,y=…,z=…,theta=…,label=…,gyro=…``, ``topic=…`` for a bag); ``--axes`` picks
@@ -103,8 +103,8 @@ def _label_angles(text: str | None) -> dict[str, float] | None:
 
 
 def log_options_from_args(args: argparse.Namespace):
-    """The parsed options as a :class:`calib.logs.LogOptions`."""
-    from calib.logs import LogOptions
+    """The parsed options as a :class:`calib.logs.reader.LogOptions`."""
+    from calib.logs.reader import LogOptions
 
     sens = getattr(args, "sensitivity", None)
     if sens is not None and not sens > 0:
@@ -131,13 +131,13 @@ def log_options_from_args(args: argparse.Namespace):
 
 
 def read_log_from_args(args: argparse.Namespace, path: str, expect: str | None = None):
-    """:func:`calib.logs.read_log` of ``path`` with the command's log options; ``expect``
+    """:func:`calib.logs.reader.read_log` of ``path`` with the command's log options; ``expect``
     (``"ensayo"``/``"acel"``) keeps a course ``.mat`` input on its course reader. When the
     log's held poses were detected, a note on stderr says how many and the thresholds used
     (stdout stays the command's own: one JSON object with ``--json``)."""
     import sys
 
-    from calib.logs import read_log
+    from calib.logs.reader import read_log
 
     log = read_log(path, log_options_from_args(args), expect=expect)
     poses = log.provenance.get("poses") or {}

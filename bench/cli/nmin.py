@@ -1,5 +1,5 @@
 """``tiltbench nmin``: how many calibration samples are needed to decide the arrival point
-(:mod:`calib.nmin`). ``--json`` prints exactly one JSON object on stdout; progress goes to
+(:mod:`calib.vehicle.nmin`). ``--json`` prints exactly one JSON object on stdout; progress goes to
 stderr.
 
 ``--calibration cal.json|cal.mat`` replaces ``--ensayo``: the estimates, σ² and N come from
@@ -29,14 +29,17 @@ from bench.cli.progress import Progress
 
 
 def _course_steps() -> str:
-    from calib.nmin import COURSE_STEPS  # imports scipy: read when needed (start-up time)
+    from calib.vehicle.nmin import COURSE_STEPS  # imports scipy: read when needed (start-up time)
 
     return ",".join(map(str, COURSE_STEPS))
 
 
 def _cmd_nmin(args: argparse.Namespace) -> int:
-    from calib.nmin import CONFIRM_N_MAX, analyze_nmin  # start-up time of `tiltbench --help`
-    from calib.turning_trajectory import refuse_turning
+    from calib.vehicle.nmin import (  # start-up time of `tiltbench --help`
+        CONFIRM_N_MAX,
+        analyze_nmin,
+    )
+    from calib.vehicle.turning_trajectory import refuse_turning
 
     level = check_level(args.level)
     check_initial_state(args)

@@ -1,8 +1,8 @@
 """``tiltbench noise STATIC_LOG``: Allan deviation and noise terms of a static log
-(:mod:`calib.allan`), a log–log figure (``--plot``), the sensor profile (``--save
-sensor.json``, :mod:`calib.sensor_profile`) with a calibration's bias/scale if given
+(:mod:`calib.noise.allan`), a log–log figure (``--plot``), the sensor profile (``--save
+sensor.json``, :mod:`calib.noise.sensor_profile`) with a calibration's bias/scale if given
 (``--calibration cal.json``). ``--json`` prints one object: the
-:class:`calib.allan.NoiseCharacterization` with its ``units``, plus the files written.
+:class:`calib.noise.allan.NoiseCharacterization` with its ``units``, plus the files written.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ def _calibration_entry(path: str) -> dict:
     file's name and sha256."""
     from pathlib import Path
 
-    from calib.calfile import file_sha256, load_calibration
+    from calib.calibration.calfile import file_sha256, load_calibration
 
     cal = load_calibration(path)
     return {"param_names": ["bias_x", "scale_x", "bias_y", "scale_y"],
@@ -33,8 +33,8 @@ def _static_reading(args: argparse.Namespace):
     not one held pose."""
     import numpy as np
 
-    from calib.allan import check_static, sample_rate_of
     from calib.input_rules import DataError
+    from calib.noise.allan import check_static, sample_rate_of
 
     log = read_log_from_args(args, args.log)
     if args.rate is not None and not (np.isfinite(args.rate) and args.rate > 0):
@@ -55,8 +55,8 @@ def _static_reading(args: argparse.Namespace):
 
 def _cmd_noise(args: argparse.Namespace) -> int:
     from bench import __version__
-    from calib.allan import characterize_noise
-    from calib.sensor_profile import save_profile
+    from calib.noise.allan import characterize_noise
+    from calib.noise.sensor_profile import save_profile
 
     level = check_level(args.level)
     alpha = args.alpha

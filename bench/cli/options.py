@@ -5,7 +5,7 @@ students of a class; ``--g``: gravity in m/s²; ``--force``: overwrite existing 
 ``--json``: one JSON object on stdout and nothing else there).
 
 Start-up time: nothing here imports numpy, scipy or mujoco at module level. Defaults that are
-domain constants (``calib.conventions.G``, ``calib.nmin.COURSE_STEPS``, …) are
+domain constants (``calib.conventions.G``, ``calib.vehicle.nmin.COURSE_STEPS``, …) are
 :class:`Deferred`: read when the command runs or when its help is printed, so that
 ``tiltbench --help`` does not import the domain (about a second with scipy and mujoco).
 """
@@ -22,8 +22,9 @@ from typing import Any
 class OptionError(ValueError):
     """An option value that cannot be used; the message names the option and the fix.
 
-    (A ``ValueError``, like :class:`calib.io.DataError`, so ``main`` reports both the same way;
-    not ``DataError`` itself because importing ``calib.io`` imports numpy: start-up time.)
+    (A ``ValueError``, like :class:`calib.files.course.DataError`, so ``main`` reports both the same
+    way; not ``DataError`` itself because importing ``calib.files.course`` imports numpy: start-up
+    time.)
     """
 
 DEFAULT_BIAS = "0.08,-0.02"
@@ -367,7 +368,7 @@ def noise_var_from_args(args: argparse.Namespace):
     if args.noise_var is not None:
         return parse_variances(args.noise_var)
     if args.datos:
-        from calib.io import read_datos
+        from calib.files.course import read_datos
 
         return read_datos(args.datos).noise_var
     return None
@@ -385,7 +386,7 @@ def add_sweep_options(p: argparse.ArgumentParser) -> None:
 
 
 def mapper_from_args(args: argparse.Namespace):
-    """The :class:`calib.runs.Mapper` chosen by :func:`add_sweep_options`."""
+    """The :class:`calib.stats.runs.Mapper` chosen by :func:`add_sweep_options`."""
     from bench.sweep import make_mapper
 
     workers = getattr(args, "workers", None)

@@ -7,7 +7,7 @@ longer line at spaces with a hanging indent (error lines, printed after it, stay
 
 Outputs are claimed before any work (:func:`command_outputs`, around every command in
 ``main``): each output named on the command line (:data:`OUTPUT_OPTIONS`) is locked
-(:func:`calib.atomic.holding`) until the command ends, so a second run writing the same file
+(:func:`calib.files.atomic.holding`) until the command ends, so a second run writing the same file
 or folder is refused at once ("another tiltbench run is writing F (pid N)") instead of
 replacing the first one's result; stale temporaries of killed runs are removed; and no
 output may be one of the command's input files (same file by inode: another spelling, a
@@ -73,10 +73,11 @@ def check_finite(obj: Any, what: str) -> None:
 
 
 def json_text(obj: Any, what: str = "the JSON output") -> str:
-    """``obj`` as stable JSON (:func:`calib.io.dumps`), refused if a number is not finite."""
+    """``obj`` as stable JSON (:func:`calib.files.course.dumps`), refused if a number is not
+    finite."""
     import json
 
-    from calib.io import dumps
+    from calib.files.course import dumps
 
     text = dumps(obj)
     if "NaN" in text or "Infinity" in text:  # the only spellings json.dumps gives them
@@ -85,8 +86,8 @@ def json_text(obj: Any, what: str = "the JSON output") -> str:
 
 
 def print_json(obj: Any) -> None:
-    """``obj`` as stable JSON (:func:`calib.io.dumps`) on stdout; NaN or ±Infinity anywhere
-    is an error naming the field (:func:`check_finite`), and nothing is printed."""
+    """``obj`` as stable JSON (:func:`calib.files.course.dumps`) on stdout; NaN or ±Infinity
+    anywhere is an error naming the field (:func:`check_finite`), and nothing is printed."""
     print(json_text(obj), end="")
 
 
@@ -180,7 +181,7 @@ def _remove_if_empty(folder: Path) -> None:
 
 
 def _claim(path: str | Path, stack: contextlib.ExitStack) -> None:
-    from calib.atomic import clean_stale, holding, holds_lock, refuse_input
+    from calib.files.atomic import clean_stale, holding, holds_lock, refuse_input
 
     if "\0" in os.fspath(path):  # the system would say "embedded null byte", naming nothing
         raise ValueError(f"{os.fspath(path)!r}: a file name cannot hold a NUL character; "
@@ -213,9 +214,9 @@ def claim_outputs(paths: Iterable[str | Path | None]) -> Iterator[None]:
 @contextlib.contextmanager
 def command_outputs(args: argparse.Namespace) -> Iterator[None]:
     """Around a command (``main``): its input files protected
-    (:func:`calib.atomic.inputs_protected`) and its outputs claimed (:func:`claim_outputs`)
+    (:func:`calib.files.atomic.inputs_protected`) and its outputs claimed (:func:`claim_outputs`)
     until it ends, before any work."""
-    from calib.atomic import inputs_protected
+    from calib.files.atomic import inputs_protected
 
     with inputs_protected(input_paths(args)), claim_outputs(output_paths(args)):
         yield
@@ -226,11 +227,11 @@ def refuse_overwrite(paths: Iterable[str | Path | None], force: bool = False) ->
 
     None entries are skipped. A directory is never a valid output file (ValueError); an
     input of the command never is, even with ``--force``
-    (:class:`calib.atomic.InputAsOutputError`); an existing file needs ``--force``
+    (:class:`calib.files.atomic.InputAsOutputError`); an existing file needs ``--force``
     (FileExistsError, worded by ``main``). Inside :func:`claim_outputs` (every command run by
     ``main``) each path is also locked until the command ends.
     """
-    from calib.atomic import refuse_input
+    from calib.files.atomic import refuse_input
 
     for p in paths:
         if p is None:

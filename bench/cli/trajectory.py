@@ -1,9 +1,9 @@
 """``tiltbench trajectory``: calibrate on the ensayo (or read ``--calibration cal.json``),
 correct and integrate the vehicle run, decide the arrival point with its confidence region
-(:mod:`calib.region`).
+(:mod:`calib.vehicle.region`).
 
 ``--json`` prints exactly one JSON object on stdout (the tree of
-``calib.trajectory_report.trajectory_tree``).
+``calib.vehicle.report.trajectory_tree``).
 """
 
 from __future__ import annotations
@@ -23,11 +23,11 @@ from bench.cli.output import (
 
 def _cmd_trajectory(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
-    from calib.calibration import calibrate
-    from calib.region import arrival_region
-    from calib.trajectory import compute_trajectory
-    from calib.trajectory_report import trajectory_tree
-    from calib.turning_trajectory import refuse_turning
+    from calib.calibration.tilt_plane import calibrate
+    from calib.vehicle.region import arrival_region
+    from calib.vehicle.report import trajectory_tree
+    from calib.vehicle.trajectory import compute_trajectory
+    from calib.vehicle.turning_trajectory import refuse_turning
 
     level = check_level(args.level)
     check_initial_state(args)

@@ -2,8 +2,8 @@
 
 The estimates are ``--estimates est.json`` (any tool, docs/validate.md) or
 ``--calibration cal.json`` (``calibrate --save``: read and checked by
-:func:`calib.calfile.load_calibration_file`, the reader of every command, and graded through
-its ``calibrate --json`` object; with ``--ensayo`` too, that file must be the one the
+:func:`calib.calibration.calfile.load_calibration_file`, the reader of every command, and graded
+through its ``calibrate --json`` object; with ``--ensayo`` too, that file must be the one the
 calibration was fitted on, by SHA-256).
 """
 
@@ -34,7 +34,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         truth = student_truth(truth, args.student)
         truth_name = f"{args.truth} (students[{idx}].truth)"
     if args.calibration:
-        from calib.calfile import file_sha256, load_calibration_file
+        from calib.calibration.calfile import file_sha256, load_calibration_file
 
         # the one reader of every command: validate grades the numbers trajectory, nmin and
         # fuse use (the calibrate --json object of the checked calibration, not a copy)
@@ -48,7 +48,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         est, est_name = load_json(args.estimates, "estimates file"), str(args.estimates)
     theta, src = None, None
     if args.ensayo:
-        from calib.io import read_ensayo
+        from calib.files.course import read_ensayo
 
         theta, src = read_ensayo(args.ensayo).tita, str(args.ensayo)
     result = validate(truth, est, args.level, args.std, theta, src,

@@ -36,8 +36,8 @@ figure, said in the legend (docs/python-api.md, section 6):
 
 One module per figure, ``save`` for writing and ``write`` for the figure sets; this package
 selects the Agg backend and re-exports their public names (no module here imports from it).
-Binned means come from :func:`calib.binning.binned_mean`, the covariance along the run from
-:func:`calib.propagation.position_cov_along`.
+Binned means come from :func:`calib.stats.binning.binned_mean`, the covariance along the run from
+:func:`calib.vehicle.propagation.position_cov_along`.
 """
 
 from __future__ import annotations

@@ -8,16 +8,16 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
-from calib.binning import binned_mean
 from calib.conventions import AXES
+from calib.stats.binning import binned_mean
 
 if TYPE_CHECKING:
-    from calib.trajectory import Trajectory
+    from calib.vehicle.trajectory import Trajectory
 
 
 def _bin_half_width(t: np.ndarray, y: np.ndarray, bins: int, q: float) -> np.ndarray:
     """``q·s/√n`` per bin, m/s²: s the sample std within the bin (ddof 1), n its samples —
-    the same equal-count groups of consecutive t as :func:`calib.binning.binned_mean`."""
+    the same equal-count groups of consecutive t as :func:`calib.stats.binning.binned_mean`."""
     groups = [g for g in np.array_split(np.argsort(t, kind="stable"), bins) if g.size]
     return np.array([q * np.std(y[g], ddof=1) / np.sqrt(g.size) if g.size > 1 else np.nan
                      for g in groups])

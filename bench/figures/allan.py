@@ -9,12 +9,12 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from bench.figures.save import save_figure
-from calib.allan_model import FLICKER_FLOOR
+from calib.noise.allan_model import FLICKER_FLOOR
 
 if TYPE_CHECKING:
     from pathlib import Path
 
-    from calib.allan import AxisNoise, NoiseCharacterization
+    from calib.noise.allan import AxisNoise, NoiseCharacterization
 
 _TERM_STYLE = {  # name → (label, colour)
     "white_noise_density": ("white noise N, slope −½", "tab:blue"),

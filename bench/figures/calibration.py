@@ -5,14 +5,15 @@ Every band and interval of one figure is at the same level L (``level``, 95 % un
 said in the legend and the title:
 
 * the fitted line ``scale·A_r + bias`` with its confidence band ``± q·std(line)``,
-  ``var(line) = [A_r 1] Cov [A_r 1]ᵀ`` (the fit's covariance, :class:`calib.ls.FitResult`);
+  ``var(line) = [A_r 1] Cov [A_r 1]ᵀ`` (the fit's covariance,
+  :class:`calib.calibration.ls.FitResult`);
 * the binned mean with ``± q·σ/√n``, n the samples per bin (equal-count bins) and σ the
   per-sample noise std the fit used;
 * the estimates box: ``estimate ± q·std`` (the half-width of the level-L interval; the
   command line prints std itself).
 
-``q`` is the fit's two-sided quantile (:meth:`calib.ls.FitResult.quantile`: normal when σ² is
-given, Student t when estimated). The residual panels also draw ±σ, the per-sample noise: a
+``q`` is the fit's two-sided quantile (:meth:`calib.calibration.ls.FitResult.quantile`: normal when
+σ² is given, Student t when estimated). The residual panels also draw ±σ, the per-sample noise: a
 spread of the data, not the uncertainty of an estimate.
 """
 
@@ -28,12 +29,12 @@ from matplotlib.figure import Figure
 
 from bench.figures.parameters import true_params
 from bench.figures.save import save_figure
-from calib.binning import binned_mean
 from calib.conventions import AXES, reference_accel
+from calib.stats.binning import binned_mean
 
 if TYPE_CHECKING:
-    from calib.calibration import Calibration
-    from calib.io import Ensayo
+    from calib.calibration.tilt_plane import Calibration
+    from calib.files.course import Ensayo
 
 FIGURE_BINS = 60
 """Bins of the binned means in the calibration figure (equal sample counts)."""

@@ -1,8 +1,8 @@
 """Figure of a fused vehicle run: dead reckoning, the position fixes, the Kalman path and the
 fused level-L arrival region next to the dead-reckoning one, with the candidates.
 
-A turning run (dead reckoning :class:`calib.turning_trajectory.TurningTrajectory`, region
-:class:`calib.turning_trajectory.TurningRegion`) draws its region the same way, may show the
+A turning run (dead reckoning :class:`calib.vehicle.turning_trajectory.TurningTrajectory`, region
+:class:`calib.vehicle.turning_trajectory.TurningRegion`) draws its region the same way, may show the
 true path, and gets a second panel: the heading ψ of the filter ±σ, of the dead reckoning and
 of the truth when known."""
 
@@ -18,10 +18,10 @@ from matplotlib.patches import Polygon
 
 from bench.figures.save import FORMATS, save_figure
 from bench.figures.trajectory import BOX_COLOR, REGION_COLOR
-from calib.fusion import FusionResult
-from calib.region import ArrivalRegion, Ellipse
-from calib.trajectory import Trajectory
-from calib.turning_trajectory import (
+from calib.fusion.linear import FusionResult
+from calib.vehicle.region import ArrivalRegion, Ellipse
+from calib.vehicle.trajectory import Trajectory
+from calib.vehicle.turning_trajectory import (
     TurningRegion,
     TurningTrajectory,
     dead_reckoning_path,
@@ -45,13 +45,13 @@ def fusion_figure(traj: Trajectory | TurningTrajectory, region: ArrivalRegion | 
     Both regions are drawn at the same level, so their sizes compare directly: the fixes
     remove the integrated vehicle noise that dominates dead reckoning.
 
-    A turning run: ``region`` a :class:`~calib.turning_trajectory.TurningRegion`, optional
+    A turning run: ``region`` a :class:`~calib.vehicle.turning_trajectory.TurningRegion`, optional
     ``true_path`` (n, 2) m and ``true_heading`` (t s, ψ rad); a heading panel below.
     ``candidates`` default ``region.candidates``.
 
     The innovation gate's rejected fixes (``fused.fix_used`` False) are circled in red; with
-    a ``consistency`` (:class:`calib.innovation_check.Consistency`) that is not consistent the
-    fused region is not drawn and the title says so (no region: the inputs are
+    a ``consistency`` (:class:`calib.fusion.innovation_check.Consistency`) that is not consistent
+    the fused region is not drawn and the title says so (no region: the inputs are
     inconsistent)."""
     turning = isinstance(traj, TurningTrajectory)
     if turning and true_heading is not None:

@@ -117,7 +117,7 @@ def path_nees_panel(ax, result, dof: int = 2) -> None:
     (dashed) and ÷10 (solid); the nominal's per-epoch Bonferroni band shaded (the mis-set
     scenarios have the same fix epochs and run count, hence the same band), its expected
     value ``dof`` dotted."""
-    from calib.consistency import NEES_ALPHA
+    from calib.stats.consistency import NEES_ALPHA
 
     scns = result.config["scenarios"]
     names = {p.scenario for p in result.paths if p.method == "filter"}

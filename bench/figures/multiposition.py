@@ -21,7 +21,7 @@ from matplotlib.patches import Ellipse
 from bench.figures.save import save_figure
 
 if TYPE_CHECKING:
-    from calib.multiposition import MultiPositionFit
+    from calib.calibration.multiposition import MultiPositionFit
 
 ERROR_ELLIPSE_SIZE = 0.03
 """The largest drawn error ellipse's semi-axis, as a fraction of g (sets the magnification)."""

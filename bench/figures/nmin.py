@@ -11,7 +11,8 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
 from calib.conventions import G
-from calib.nmin import (
+from calib.stats.proportion import clopper_pearson
+from calib.vehicle.nmin import (
     PositionCovModel,
     design_nmin,
     fixed_run_nmin,
@@ -19,11 +20,10 @@ from calib.nmin import (
     redrawn_design,
     redrawn_probability,
 )
-from calib.proportion import clopper_pearson
-from calib.region import chi2_2dof
+from calib.vehicle.region import chi2_2dof
 
 if TYPE_CHECKING:
-    from calib.region import ArrivalRegion
+    from calib.vehicle.region import ArrivalRegion
 
 
 def nmin_figure(region: ArrivalRegion, n_data: int, g: float = G,
@@ -32,9 +32,9 @@ def nmin_figure(region: ArrivalRegion, n_data: int, g: float = G,
     """Mahalanobis distance of each candidate against the calibration size N (top), and
     P(decision made and right) against N (bottom).
 
-    Bottom: the course question (this vehicle run given, :func:`calib.nmin.fixed_run_nmin`;
+    Bottom: the course question (this vehicle run given, :func:`calib.vehicle.nmin.fixed_run_nmin`;
     ``fixed_run`` is its result, computed here with ``draws`` draws when None) and the design
-    question with the vehicle noise redrawn (:func:`calib.nmin.redrawn_probability`, which
+    question with the vehicle noise redrawn (:func:`calib.vehicle.nmin.redrawn_probability`, which
     never exceeds L), the level line and both answers marked.
 
     Both probability curves are Monte Carlo estimates from ``draws`` draws: each point carries
@@ -42,8 +42,8 @@ def nmin_figure(region: ArrivalRegion, n_data: int, g: float = G,
     probability axis is a logit scale, so 0.5, 0.9, 0.99 and 0.999 are equally spaced and no
     part of the curves is cut off.
 
-    Top: uses :class:`calib.nmin.PositionCovModel` (``Σ_P(N) = A/N + B``, θ uniform) built from the
-    region; a candidate is inside the level-L region while its distance is below
+    Top: uses :class:`calib.vehicle.nmin.PositionCovModel` (``Σ_P(N) = A/N + B``, θ uniform) built
+    from the region; a candidate is inside the level-L region while its distance is below
     ``r = sqrt(χ²₂(L))``. Marks the data's N, the design N (all regions disjoint) and the
     a-posteriori N range with the estimate held fixed; the dashed curves leave out the
     vehicle noise (the course reports' assumption).

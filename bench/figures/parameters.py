@@ -9,7 +9,7 @@ import matplotlib.pyplot as plt
 from matplotlib.figure import Figure
 
 if TYPE_CHECKING:
-    from calib.calibration import Calibration
+    from calib.calibration.tilt_plane import Calibration
 
 
 def true_params(truth: Mapping | None) -> dict[str, float] | None:

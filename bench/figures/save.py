@@ -8,7 +8,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 from matplotlib.figure import Figure
 
-from calib.io import atomic_write_bytes
+from calib.files.course import atomic_write_bytes
 
 FORMATS = {".png": "png", ".svg": "svg"}
 """File extension → matplotlib format."""

@@ -11,8 +11,8 @@ from matplotlib.colors import to_rgba
 from matplotlib.patches import Polygon, Rectangle
 
 from bench.figures.save import FORMATS, save_figure
-from calib.region import ArrivalRegion
-from calib.trajectory import Trajectory
+from calib.vehicle.region import ArrivalRegion
+from calib.vehicle.trajectory import Trajectory
 
 Z_REGION, Z_PATH, Z_BOX, Z_CANDIDATE, Z_ESTIMATE, Z_TRUE = 1, 2, 3, 4, 5, 6
 """Drawing order: the true arrival last, so it is never hidden under its candidate's cross."""
@@ -22,8 +22,8 @@ BOX_COLOR = "tab:red"
 
 def course_box_patches(region: ArrivalRegion) -> list[Rectangle]:
     """The course's 3σ box bound around each candidate: the axis-aligned rectangle
-    ``c ± (δP_x, δP_y)`` (m) of :func:`calib.region.course_box_bound` (a per-axis bound, so a
-    box, not an ellipse)."""
+    ``c ± (δP_x, δP_y)`` (m) of :func:`calib.vehicle.region.course_box_bound` (a per-axis bound, so
+    a box, not an ellipse)."""
     dx, dy = (float(v) for v in region.course_box_bound)
     return [Rectangle((float(c[0]) - dx, float(c[1]) - dy), 2 * dx, 2 * dy, fill=False,
                       edgecolor=BOX_COLOR, lw=1.0, ls="--", zorder=Z_BOX)

@@ -9,13 +9,13 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from calib.conventions import AXES
-from calib.propagation import position_cov_along
-from calib.region import Ellipse
+from calib.vehicle.propagation import position_cov_along
+from calib.vehicle.region import Ellipse
 
 if TYPE_CHECKING:
-    from calib.calibration import Calibration
-    from calib.region import ArrivalRegion
-    from calib.trajectory import Trajectory
+    from calib.calibration.tilt_plane import Calibration
+    from calib.vehicle.region import ArrivalRegion
+    from calib.vehicle.trajectory import Trajectory
 
 
 def uncertainty_growth_figure(traj: Trajectory, region: ArrivalRegion, cal: Calibration,
@@ -24,8 +24,8 @@ def uncertainty_growth_figure(traj: Trajectory, region: ArrivalRegion, cal: Cali
     """Ellipses at the region's level growing along the corrected path; std against time.
 
     The covariance at each time is the arrival-point model applied to the trajectory
-    truncated there (:func:`calib.propagation.position_cov_along`); the right panel splits the
-    standard deviation into the calibration part and the vehicle-noise part.
+    truncated there (:func:`calib.vehicle.propagation.position_cov_along`); the right panel splits
+    the standard deviation into the calibration part and the vehicle-noise part.
     """
     m = traj.t.shape[0]
     fig, (ax, sx) = plt.subplots(1, 2, figsize=(13, 5.8), constrained_layout=True,

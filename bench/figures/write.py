@@ -18,10 +18,10 @@ from bench.figures.uncertainty import uncertainty_growth_figure
 from calib.conventions import AXES
 
 if TYPE_CHECKING:
-    from calib.calibration import Calibration
-    from calib.io import Ensayo
-    from calib.region import ArrivalRegion
-    from calib.trajectory import Trajectory
+    from calib.calibration.tilt_plane import Calibration
+    from calib.files.course import Ensayo
+    from calib.vehicle.region import ArrivalRegion
+    from calib.vehicle.trajectory import Trajectory
 
 
 def write_calibration_figures(out: str | Path, cal: Calibration, ensayo: Ensayo,
@@ -47,7 +47,8 @@ def write_vehicle_figures(out: str | Path, traj: Trajectory, region: ArrivalRegi
                           ) -> dict[str, Path]:
     """``trajectory`` (helper figure of ``trajectory --plot``), ``acceleration``,
     ``uncertainty_growth`` and ``nmin`` figures in ``out``; ``fixed_run``: the
-    :func:`calib.nmin.fixed_run_nmin` result if already computed (else the figure draws it)."""
+    :func:`calib.vehicle.nmin.fixed_run_nmin` result if already computed (else the figure draws
+    it)."""
     out = Path(out)
     paths = {"trajectory": save_figure(trajectory_figure(traj, region, truth=true_final),
                                        out / f"trajectory.{fmt}", force),

@@ -38,8 +38,9 @@ The package holds one job per module (none imports from this ``__init__``):
 =============================== ===============================================================
 
 The equations are the estimation side's: the linear fit of bias and scale is
-:func:`calib.ls.fit_linear`, the forward model :func:`calib.correct.apply_errors`, the
-random-walk filter :func:`calib.filters.walk_filter`, the low-pass
+:func:`calib.calibration.ls.fit_linear`, the forward model
+:func:`calib.calibration.correct.apply_errors`, the random-walk filter
+:func:`calib.filters.walk_filter`, the low-pass
 :func:`calib.filters.lowpass` (through :class:`bench.terms.LowpassLag`).
 """
 

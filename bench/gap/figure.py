@@ -10,8 +10,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bench.gap.report import GapReport, shrink_word
-from calib.binning import binned_mean
 from calib.conventions import AXES, EFFECTS
+from calib.stats.binning import binned_mean
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -39,7 +39,7 @@ SIGNATURE_WORDS = {
     "rate_sq": "ω² (centripetal, lever arm)",
     "accel": "angular acceleration (lever arm)",
 }
-"""Signature names of :mod:`calib.diagnostics` in words, as the figure shows them."""
+"""Signature names of :mod:`calib.stats.diagnostics` in words, as the figure shows them."""
 BINS = 72
 BOX_LINES = 14
 """Lines of the verdict box under the caption; the rest is counted and left to gap.md."""

@@ -2,8 +2,8 @@
 
 The bench's true specific force goes through the axis' response terms (:mod:`bench.terms`),
 the nominal parameters are fitted linearly (:func:`fit_bias_scale`: the centred least squares
-of :func:`calib.ls.fit_linear`, the estimation side's), and the forward model is
-:func:`calib.correct.apply_errors`.
+of :func:`calib.calibration.ls.fit_linear`, the estimation side's), and the forward model is
+:func:`calib.calibration.correct.apply_errors`.
 
 Noise model of the "after" gap: the extended model's noise variance (``noise_level`` if
 named, else the stated one); with ``quantization`` the mean and variance of the rounded
@@ -21,11 +21,11 @@ from typing import Any
 import numpy as np
 
 from bench.sensors import SensorContext, SensorErrorModel
+from calib.calibration.correct import apply_errors
+from calib.calibration.ls import NotIdentifiableError
 from calib.conventions import AXES, PARAM_NAMES
-from calib.correct import apply_errors
 from calib.filters import walk_filter
 from calib.gap import quantized_moments
-from calib.ls import NotIdentifiableError
 
 
 def response(a_phys: np.ndarray, t: np.ndarray | None, sensor: SensorErrorModel,
@@ -66,8 +66,8 @@ def fit_bias_scale(y: np.ndarray, x: np.ndarray) -> tuple[float, float, np.ndarr
 
     The course's per-axis model ``y - x = bias + scale·x`` with the simulated response ``x``
     in place of the reference ``A_r``, on the centred design ``[1, x - x̄]`` as
-    :func:`calib.ls.fit_linear` solves it. Its two columns are orthogonal, so the QR factor
-    is diagonal and the solution is two projections, ``scale = ⟨x - x̄, y - x⟩ / ‖x - x̄‖²``
+    :func:`calib.calibration.ls.fit_linear` solves it. Its two columns are orthogonal, so the QR
+    factor is diagonal and the solution is two projections, ``scale = ⟨x - x̄, y - x⟩ / ‖x - x̄‖²``
     and ``bias = mean(y - x) - scale·x̄`` (the same numbers as ``fit_linear`` to rounding,
     without its covariance and condition number, which are not used here: this runs once
     per candidate of the ``mujoco.sysid`` fit, ≈ 10× faster).

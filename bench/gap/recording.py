@@ -27,8 +27,8 @@ from bench.record import (
     plot_bounds,
     time_panel,
 )
-from calib.binning import binned_mean
 from calib.conventions import AXES
+from calib.stats.binning import binned_mean
 
 PathLike = str | os.PathLike
 

@@ -41,11 +41,11 @@ from bench.gap.writers import check_outputs, write_report
 from bench.model import ACC_SENSORS, ENCODER, TableEdits
 from bench.sensors import AxisErrors, SensorErrorModel
 from calib.conventions import AXES, G
-from calib.diagnostics import gap_measure
 from calib.effects import stated_variances
+from calib.files.course import Ensayo
 from calib.gap import GapAnalysis, analyze_gap
-from calib.io import Ensayo
-from calib.sensor_profile import SensorProfile
+from calib.noise.sensor_profile import SensorProfile
+from calib.stats.diagnostics import gap_measure
 
 PathLike = str | os.PathLike
 Progress = Callable[[str], None] | None
@@ -60,7 +60,7 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
 
     Parameters
     ----------
-    ensayo : :class:`calib.io.Ensayo` (θ rad, readings m/s², optional t s; time order).
+    ensayo : :class:`calib.files.course.Ensayo` (θ rad, readings m/s², optional t s; time order).
     noise_var : (2,) stated noise variances [σx², σy²], (m/s²)².
     g : gravity, m/s² (default :data:`calib.conventions.G`).
     rate : sample rate, Hz, of a run without ``t`` (samples in time order).

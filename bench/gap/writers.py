@@ -11,8 +11,8 @@ from bench.dataset import write_json
 from bench.gap.figure import save_gap_figure
 from bench.gap.report import GapReport, shrink_word
 from bench.model import edit_tilt_table, load_spec
-from calib.atomic import atomic_dir, write_text
 from calib.conventions import AXES
+from calib.files.atomic import atomic_dir, write_text
 from calib.gap.confusions import design_hint
 from calib.units import format_p, format_stat
 
@@ -130,7 +130,7 @@ def write_model_after(report: GapReport, path: PathLike, force: bool = False) ->
 def write_report(report: GapReport, out_dir: PathLike, force: bool = False) -> dict[str, str]:
     """Write ``gap.json``, ``gap.md``, ``gap.png``, ``gap.svg``, ``model_after.xml``.
 
-    The directory is written as one set (:func:`calib.atomic.atomic_dir`): into a temporary
+    The directory is written as one set (:func:`calib.files.atomic.atomic_dir`): into a temporary
     directory beside ``out_dir`` that replaces the report as a whole when complete (other
     files in ``out_dir`` are kept); refused while another run writes ``out_dir``.
     """

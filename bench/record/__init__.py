@@ -14,9 +14,9 @@ from it):
 * :mod:`bench.record.series` — generic named-series recordings (discrepancy workflow);
 * :mod:`bench.record.reader` — trees, entities and blueprint read back.
 
-The equations live in calib: binned means (:func:`calib.binning.binned_mean`), the
-covariance along the run (:func:`calib.propagation.position_cov_along`) and the
-``trajectory --json`` object (:func:`calib.trajectory_report.trajectory_tree`).
+The equations live in calib: binned means (:func:`calib.stats.binning.binned_mean`), the
+covariance along the run (:func:`calib.vehicle.propagation.position_cov_along`) and the
+``trajectory --json`` object (:func:`calib.vehicle.report.trajectory_tree`).
 
 Every recording is written with its own :class:`rerun.RecordingStream` (never the global one),
 so one process can write several; the file is written to a temporary name beside the target

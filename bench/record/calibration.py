@@ -27,16 +27,16 @@ from bench.record.stream import (
     open_recording,
 )
 from bench.record.summary import parameters_markdown, truth_manifest
-from calib.binning import binned_mean
+from calib.calibration.correct import apply_errors
 from calib.conventions import AXES, reference_accel
-from calib.correct import apply_errors
+from calib.stats.binning import binned_mean
 
 if TYPE_CHECKING:
     import rerun as rr
 
     from bench.tilt import CalibrationRun
-    from calib.calibration import Calibration
-    from calib.io import Ensayo
+    from calib.calibration.tilt_plane import Calibration
+    from calib.files.course import Ensayo
 
 CURVE_POINTS = 2000
 """Smooth model curves (fit, true) are logged on at most about this many samples."""
@@ -249,7 +249,7 @@ def record_calibration(cal: Calibration, ensayo: Ensayo, path: str | os.PathLike
 
     Parameters
     ----------
-    cal : the calibration (:func:`calib.calibration.calibrate`).
+    cal : the calibration (:func:`calib.calibration.tilt_plane.calibrate`).
     ensayo : the run it was fitted on (θ rad, readings m/s²).
     path : output ``.rrd`` (written atomically).
     force : replace an existing file.

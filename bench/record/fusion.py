@@ -15,16 +15,16 @@ innovation gate rejected are their own entity ``vehicle/plane/rejected_fixes`` (
 labelled with its NIS) and are not in ``vehicle/plane/fixes`` (the fixes used); on ``time``,
 ``fusion/nis/used|rejected`` (NIS = νᵀS⁻¹ν of each fix, dimensionless) with the gate
 ``fusion/nis/gate`` (c = χ²_d⁻¹(1 − α_g)), and the windowed test of
-:class:`calib.innovation_check.Consistency`: ``fusion/window_nis/sum`` (T_w = Σ min(NIS, c)
+:class:`calib.fusion.innovation_check.Consistency`: ``fusion/window_nis/sum`` (T_w = Σ min(NIS, c)
 at each window's mid time), its two-sided band ``fusion/window_nis/band/lo|hi`` (a step over
 each window) and ``fusion/window_nis/failing`` (the windows out of band).
 ``summary/consistency`` holds the verdict ("consistent: …" or "INCONSISTENT: …"); an
 inconsistent run has no fused region (no ``fused/arrival``, no ``fused/ellipses``), its
 decision text starts with the verdict and the plane view's name says "INCONSISTENT".
 
-A turning run (dead reckoning :class:`calib.turning_trajectory.TurningTrajectory`, region
-:class:`calib.turning_trajectory.TurningRegion`: the no-fix extended filter's covariance) has
-the same ``arrival/*`` and decision text, and the heading on ``time``: ``fusion/heading/fused``
+A turning run (dead reckoning :class:`calib.vehicle.turning_trajectory.TurningTrajectory`, region
+:class:`calib.vehicle.turning_trajectory.TurningRegion`: the no-fix extended filter's covariance)
+has the same ``arrival/*`` and decision text, and the heading on ``time``: ``fusion/heading/fused``
 (filtered ψ, rad) with ``fusion/heading_std`` (σ_ψ, rad),
 ``fusion/heading/dead_reckoning`` (the gyro integrated) and, when the truth is known,
 ``fusion/heading/true`` (truth.json, every second) and the errors at its samples
@@ -47,15 +47,15 @@ from bench.record.stream import COLORS, TIME_TIMELINE, log_series, log_tree, ope
 from bench.record.summary import decision_markdown, true_arrival
 from bench.record.vehicle import FLIP_Y, log_arrival, log_candidates
 from calib.conventions import AXES
-from calib.region import Ellipse
-from calib.turning_trajectory import TurningTrajectory, dead_reckoning_path, heading_error
+from calib.vehicle.region import Ellipse
+from calib.vehicle.turning_trajectory import TurningTrajectory, dead_reckoning_path, heading_error
 
 if TYPE_CHECKING:
-    from calib.fusion import FusionResult
-    from calib.innovation_check import Consistency
-    from calib.region import ArrivalRegion
-    from calib.trajectory import Trajectory
-    from calib.turning_trajectory import TurningRegion
+    from calib.fusion.innovation_check import Consistency
+    from calib.fusion.linear import FusionResult
+    from calib.vehicle.region import ArrivalRegion
+    from calib.vehicle.trajectory import Trajectory
+    from calib.vehicle.turning_trajectory import TurningRegion
 
 FUSED_COLOR = (160, 90, 230)
 FIX_COLOR = (210, 210, 210, 200)
@@ -70,7 +70,7 @@ def fusion_report(res: FusionResult, decision: Mapping, dead_reckoning_std,
     """The small tree logged under ``fusion_report/``: final fused position and covariance
     (m, m²), the dead-reckoning std (m; None if not given), the decision, mean
     NIS, P0/Q/R (SI); with a ``consistency``, ``consistent`` and ``consistency`` (its
-    :meth:`~calib.innovation_check.Consistency.to_dict`, the ``fuse --json`` object's)."""
+    :meth:`~calib.fusion.innovation_check.Consistency.to_dict`, the ``fuse --json`` object's)."""
     cov = np.asarray(res.final_position_cov, float).reshape(2, 2)
     nis = res.nis()
     doubt = ({} if consistency is None else
@@ -103,8 +103,8 @@ def record_fusion(path: str | os.PathLike, traj: Trajectory | TurningTrajectory,
     Parameters
     ----------
     traj, region : dead reckoning and its arrival region (same level); a turning run: a
-        :class:`~calib.turning_trajectory.TurningTrajectory` and its
-        :class:`~calib.turning_trajectory.TurningRegion`.
+        :class:`~calib.vehicle.turning_trajectory.TurningTrajectory` and its
+        :class:`~calib.vehicle.turning_trajectory.TurningRegion`.
     res : the Kalman result (one run, nodes ``res.times``).  fixes : (M, 2) fixes used, m.
     decision : the fused decision (``fuse --json``'s ``decision``).  level : region level.
     truth : ``truth.json`` object, if known.  true_path : (n, 2) true positions, m, if known.
@@ -221,7 +221,7 @@ def _log_nis(rec, nis: np.ndarray, used: np.ndarray, tg: Mapping, gate_alpha: fl
         log_series(rec, "fusion/nis/rejected", nis[~used], {TIME_TIMELINE: t[~used]},
                    "points", REJECTED_COLOR, "NIS, fix rejected", 5.0)
     if gate_alpha > 0 and t.size:
-        from calib.kalman import gate_threshold
+        from calib.fusion.kalman import gate_threshold
 
         c = float(gate_threshold(gate_alpha, d))
         log_series(rec, "fusion/nis/gate", np.array([c, c]), {TIME_TIMELINE: t[[0, -1]]},

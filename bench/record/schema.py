@@ -260,7 +260,7 @@ def update_docs(doc: str | os.PathLike) -> bool:
     i, j = text.index(start) + len(start), text.index(end)
     new = text[:i] + "\n" + entity_table_markdown() + "\n" + text[j:]
     if new != text:
-        from calib.atomic import write_text
+        from calib.files.atomic import write_text
 
         write_text(doc, new, force=True)  # atomic and locked, as every output
     return new != text

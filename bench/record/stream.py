@@ -2,7 +2,7 @@
 
 Every recording is written with its own :class:`rerun.RecordingStream` (never the global one),
 so one process can write several; the recording is kept in memory and written by
-:func:`calib.atomic.write_bytes` when complete (temporary name beside the target, fsync,
+:func:`calib.files.atomic.write_bytes` when complete (temporary name beside the target, fsync,
 rename; an existing file is replaced only with ``force``). Large arrays go
 through ``rerun.send_columns`` (one call per entity, not one per sample).
 """
@@ -19,8 +19,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from calib.atomic import write_bytes
-from calib.io import to_jsonable
+from calib.files.atomic import write_bytes
+from calib.files.course import to_jsonable
 
 if TYPE_CHECKING:
     import rerun as rr
@@ -56,7 +56,7 @@ def open_recording(path: str | os.PathLike, force: bool = False, blueprint: Any 
     """A recording-scoped stream written atomically to ``path``.
 
     Yields a :class:`rerun.RecordingStream` whose sink is memory; on normal exit its bytes
-    are written by :func:`calib.atomic.write_bytes` (temporary file beside ``path``, fsync,
+    are written by :func:`calib.files.atomic.write_bytes` (temporary file beside ``path``, fsync,
     rename). No rerun writer thread touches the disk, so a full disk is an ``OSError``
     naming ``path`` at once (rerun's file sink could hang or fail in its flush), and an
     error leaves no file behind. Refuses to replace an existing file unless ``force``
@@ -90,7 +90,7 @@ def open_recording(path: str | os.PathLike, force: bool = False, blueprint: Any 
 
 
 def json_normal(obj: Any) -> Any:
-    """The object exactly as ``json.loads(calib.io.dumps(obj))`` gives it back."""
+    """The object exactly as ``json.loads(calib.files.course.dumps(obj))`` gives it back."""
     return json.loads(json.dumps(to_jsonable(obj)))
 
 

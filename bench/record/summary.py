@@ -11,10 +11,10 @@ from typing import TYPE_CHECKING, Any
 
 from bench.record.stream import json_normal
 from calib.conventions import AXES
-from calib.region import box_k_for_level
+from calib.vehicle.region import box_k_for_level
 
 if TYPE_CHECKING:
-    from calib.region import ArrivalRegion
+    from calib.vehicle.region import ArrivalRegion
 
 
 def parameters_markdown(estimates: Mapping | None, truth: Mapping | None,
@@ -22,7 +22,7 @@ def parameters_markdown(estimates: Mapping | None, truth: Mapping | None,
     """Markdown table: estimate, std, interval at ``level``, true value, z per parameter.
 
     Intervals are ``estimate ± q·std`` with ``q = Φ⁻¹((1 + L)/2)``
-    (:func:`calib.region.box_k_for_level`); ``z = (estimate − true)/std``.
+    (:func:`calib.vehicle.region.box_k_for_level`); ``z = (estimate − true)/std``.
     """
     from bench.validate import true_sensor_params
 

@@ -25,8 +25,8 @@ from bench.record.summary import (
     truth_manifest,
 )
 from calib.conventions import AXES
-from calib.propagation import position_cov_along
-from calib.trajectory_report import trajectory_tree
+from calib.vehicle.propagation import position_cov_along
+from calib.vehicle.report import trajectory_tree
 
 if TYPE_CHECKING:
     import rerun as rr
@@ -34,10 +34,10 @@ if TYPE_CHECKING:
     from bench.course import CourseSet
     from bench.tilt import CalibrationRun
     from bench.vehicle import VehicleRun
-    from calib.calibration import Calibration
-    from calib.io import Ensayo
-    from calib.region import ArrivalRegion
-    from calib.trajectory import Trajectory
+    from calib.calibration.tilt_plane import Calibration
+    from calib.files.course import Ensayo
+    from calib.vehicle.region import ArrivalRegion
+    from calib.vehicle.trajectory import Trajectory
 
 FLIP_Y = (1.0, -1.0, 1.0)
 """Scale of the ``vehicle/plane`` frame: +y up."""
@@ -50,7 +50,7 @@ def _snapshot_dt(traj: Trajectory) -> float:
 
 
 def _ellipse_points(center, cov, level: float, n: int = 96) -> np.ndarray:
-    from calib.region import Ellipse
+    from calib.vehicle.region import Ellipse
 
     if not np.any(cov):
         return np.repeat(np.asarray(center, float)[None, :], 2, axis=0)
@@ -185,7 +185,7 @@ def record_vehicle_truth(run: VehicleRun, path: str | os.PathLike, force: bool =
     """
     import rerun as rr
 
-    from calib.trajectory import integrate_twice
+    from calib.vehicle.trajectory import integrate_twice
 
     manifest = truth_manifest(truth if truth is not None else run.truth_dict(), run.seed)
     raw, _ = integrate_twice(run.t, run.aerr, run.config.p0, run.config.v0)
@@ -229,8 +229,8 @@ def record_trajectory(traj: Trajectory, region: ArrivalRegion, cal: Calibration,
 
     Parameters
     ----------
-    traj : raw and corrected trajectory (:func:`calib.trajectory.compute_trajectory`).
-    region : arrival region and decision (:func:`calib.region.arrival_region`).
+    traj : raw and corrected trajectory (:func:`calib.vehicle.trajectory.compute_trajectory`).
+    region : arrival region and decision (:func:`calib.vehicle.region.arrival_region`).
     cal : the calibration used (its covariance drives the ellipses along time).
     path : output ``.rrd``.  force : replace an existing file.
     truth : ``truth.json`` object, if known (logged under ``truth/``).

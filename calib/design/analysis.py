@@ -7,6 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from calib.calibration.ls import fit_axis
 from calib.conventions import AXES, G, reference_accel
 from calib.design import grid as mcgrid
 from calib.design.experiments import Experiment
@@ -23,9 +24,8 @@ from calib.design.signals import LINEAR, SIMULATED, coefficients, size_of, size_
 from calib.effects import AxisState, Extensions, ModelState, RunData, effect, stated_variances
 from calib.gap.confusions import AMBIGUITY_LR
 from calib.gap.selection import LATTICE_TESTS, candidate_list, first_step
-from calib.ls import fit_axis
-from calib.proportion import clopper_pearson
-from calib.runs import Mapper
+from calib.stats.proportion import clopper_pearson
+from calib.stats.runs import Mapper
 
 DEFAULT_SIZES: dict[str, float] = {
     "misalignment": 0.005, "tilt_offset": 0.005, "nonlinearity_k2": 1e-3, "cross_axis": 1e-3,
@@ -176,7 +176,7 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
     noise_var : (2,) stated σ², (m/s²)².  family_alpha : the gap's family α (its per-step α
         is ``family_alpha / m`` for each experiment).  axis : the axis carrying per-axis
         effects.  runs, seed : Monte Carlo runs per cell and seed (0 runs: analytic only).
-    mapper : :class:`calib.runs.Mapper` for the Monte Carlo.  progress : message callback.
+    mapper : :class:`calib.stats.runs.Mapper` for the Monte Carlo.  progress : message callback.
     mc_grid : K ≥ 2: each Monte Carlo cell is also run at K sizes on a geometric grid of the
         effect's strength around the asked size (:mod:`calib.design.grid`; the same noise
         streams at every size), giving its 80 % / 95 % sizes; 0: the asked size only.

@@ -1,7 +1,7 @@
 """Monte Carlo power through the real gap detection (:func:`calib.gap.analyze_gap`).
 
 Run r of a cell (experiment, effect) draws readings from its own stream
-``run_seeds(seed, runs, spawn_key=(cell,))[r]`` (:mod:`calib.runs`), so the numbers do not
+``run_seeds(seed, runs, spawn_key=(cell,))[r]`` (:mod:`calib.stats.runs`), so the numbers do not
 depend on the chunking, the workers or the cluster. Each run is analysed exactly as a
 measured file would be (same ``family_alpha``); the power estimate is the fraction ``p̂`` of
 runs where the effect is named on its axis, with binomial std ``sqrt(p̂(1 - p̂)/R)``: with R
@@ -16,9 +16,9 @@ import numpy as np
 
 from calib.design.experiments import Experiment
 from calib.design.signals import readings
-from calib.io import Ensayo
-from calib.proportion import clopper_pearson
-from calib.runs import Mapper, chunk_ranges, run_seeds, serial_map
+from calib.files.course import Ensayo
+from calib.stats.proportion import clopper_pearson
+from calib.stats.runs import Mapper, chunk_ranges, run_seeds, serial_map
 
 CHUNK = 10
 
@@ -81,7 +81,7 @@ def run_cells(cells: list[Cell], runs: int, seed: int, mapper: Mapper | None = N
 
 def fraction(hits: int, runs: int) -> dict:
     """The power row of a count: p̂ = hits/R, its binomial std ``sqrt(p̂(1 - p̂)/R)``, and
-    the exact 95 % interval (:func:`calib.proportion.clopper_pearson`; what R runs support,
+    the exact 95 % interval (:func:`calib.stats.proportion.clopper_pearson`; what R runs support,
     also at p̂ = 0 or 1 where the std says nothing)."""
     p = hits / runs
     lo, hi = clopper_pearson(hits, runs)

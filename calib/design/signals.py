@@ -30,8 +30,8 @@ import numpy as np
 
 from calib.conventions import AXES, EFFECTS, reference_accel
 from calib.design.experiments import Experiment
-from calib.diagnostics import angular_rates
 from calib.filters import lowpass
+from calib.stats.diagnostics import angular_rates
 
 LINEAR: tuple[str, ...] = ("misalignment", "tilt_offset", "nonlinearity_k2", "cross_axis",
                            "bias_drift", "lever_arm")

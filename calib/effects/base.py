@@ -37,10 +37,10 @@ from typing import ClassVar, Protocol
 import numpy as np
 from scipy import optimize
 
+from calib.calibration.ls import NotIdentifiableError
 from calib.conventions import AXES, EFFECT_NAMES, EFFECTS, EffectInfo
-from calib.diagnostics import Lattice
 from calib.effects.run import RunData
-from calib.ls import NotIdentifiableError
+from calib.stats.diagnostics import Lattice
 
 SIGN_P: tuple[float, float] = (1.0, -1.0)
 """Sign of the other axis' reference in a rotation by +δ: x: A_rx + δA_ry; y: A_ry - δA_rx."""

@@ -59,11 +59,11 @@ from scipy import fft
 from scipy import linalg as sla
 from scipy.linalg import lapack
 
+from calib.calibration.ls import FitResult, NotIdentifiableError, fit_linear
 from calib.effects.base import AxisState, ModelState, Trial, UntestableError, effect
 from calib.effects.catalog import CATALOG, REFINED, SHARED
 from calib.effects.run import RunData
 from calib.filters import lowpass
-from calib.ls import FitResult, NotIdentifiableError, fit_linear
 from calib.numerics import equilibrated_cond as _equilibrated_cond
 from calib.numerics import r_factor as _r_factor
 
@@ -96,7 +96,7 @@ class _Fit:
     nll : ``-2 log L``.  logdet_h : ``log det(H_wᵀH_w)`` of the whitened design (REML term).
     rss : (2,) whitened RSS per axis (of the joint fit with tilt).  names : parameter names.
     On demand (one full solve, :meth:`Extensions.fit` docs): ``fit`` the joint
-    :class:`~calib.ls.FitResult` (σ² = 1 on the whitened rows), ``blocks`` per axis
+    :class:`~calib.calibration.ls.FitResult` (σ² = 1 on the whitened rows), ``blocks`` per axis
     ``(yw, Hw, names)`` of the whitened system ``L⁻¹Δ·``, ``resid`` per axis whitened residuals.
     """
 

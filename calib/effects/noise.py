@@ -17,7 +17,6 @@ import numpy as np
 from scipy import stats
 
 from calib.conventions import AXES
-from calib.diagnostics import chi2_two_sided_logp
 from calib.effects.base import (
     AxisState,
     Effect,
@@ -29,6 +28,7 @@ from calib.effects.base import (
     register,
 )
 from calib.effects.response import BoundaryEffect, ProfiledEffect
+from calib.stats.diagnostics import chi2_two_sided_logp
 
 
 @register

@@ -6,7 +6,7 @@ by :meth:`Extensions.reference`), and are estimated by a 1-D profile likelihood.
 * lowpass_lag (τ ≥ 0, needs sample times): τ on the boundary under "no such effect", so
   ``LR ~ ½χ²₀ + ½χ²₁`` (χ̄²).
 * saturation: L exists only under the alternative: Davies' bound on the sup of the one-sided
-  score process over the grid of limits (:func:`calib.diagnostics.flat_top_score`).
+  score process over the grid of limits (:func:`calib.stats.diagnostics.flat_top_score`).
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ import numpy as np
 from scipy import stats
 
 from calib.conventions import AXES
-from calib.diagnostics import LN2, flat_top_score, hinge_columns, hinge_levels
 from calib.effects.base import (
     AxisState,
     Effect,
@@ -30,6 +29,7 @@ from calib.effects.base import (
     minimise,
     register,
 )
+from calib.stats.diagnostics import LN2, flat_top_score, hinge_columns, hinge_levels
 
 
 class ProfiledEffect(Effect):
@@ -175,7 +175,7 @@ class Saturation(ProfiledEffect):
         return logp
 
     def levels(self, ext: Likelihood, k: int) -> np.ndarray:
-        """The grid of limits of axis k (:func:`calib.diagnostics.hinge_levels`), m/s²."""
+        """The grid of limits of axis k (:func:`calib.stats.diagnostics.hinge_levels`), m/s²."""
         return ext.memo((self.name, "levels", k), lambda: hinge_levels(ext.run.a_ref[:, k]))
 
     def profile(self, ext: Likelihood, state: ModelState, k: int,

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from calib.conventions import reference_accel
-from calib.diagnostics import angular_rates
 from calib.filters import uniform_step
+from calib.stats.diagnostics import angular_rates
 
 
 @dataclass(frozen=True, eq=False)

@@ -5,7 +5,7 @@ Given a measured calibration run (θ, readings, optional times) and the stated n
 effect of ``docs/effects.md`` as an extension of the model (:mod:`calib.effects`), names the
 missing effect(s) with their estimates ± std in the catalog's units, and measures the gap that
 is left. The bench (:mod:`bench.gap`) re-simulates with the named effects and measures its own
-"after" gap with the same yardstick, :func:`calib.diagnostics.gap_measure`.
+"after" gap with the same yardstick, :func:`calib.stats.diagnostics.gap_measure`.
 
 One job per module:
 
@@ -23,7 +23,6 @@ Effects that need timing are skipped without ``t`` or ``rate`` and listed in ``n
 """
 
 from calib.conventions import EFFECT_NAMES
-from calib.diagnostics import GapMeasure, gap_measure
 from calib.filters import lowpass
 from calib.gap.analysis import analyze_gap
 from calib.gap.confusions import AMBIGUITY_LR, REASONS
@@ -32,6 +31,7 @@ from calib.gap.quantization import quantized_moments
 from calib.gap.random_walk import Q_LEVEL, q_curvature_std, q_profile_interval, q_uncertainty
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
 from calib.gap.selection import MAX_STEPS, PER_AXIS_CANDIDATES
+from calib.stats.diagnostics import GapMeasure, gap_measure
 
 __all__ = ["analyze_gap", "gap_measure", "predict", "GapAnalysis", "GapMeasure",
            "EffectEstimate", "ExtendedModel", "PER_AXIS_CANDIDATES", "EFFECT_NAMES",

@@ -43,7 +43,7 @@ check                     statistic and reference distribution under the model
                           (:func:`_rivals`)
 ``cross_correlation``     (axis ``both``) the two axes' white residuals (innovations on a
                           walk axis) correlated: Fisher's z, N(0, 1), two-sided
-``gap_noise``             the gap after (:func:`calib.diagnostics.gap_measure` of the final
+``gap_noise``             the gap after (:func:`calib.stats.diagnostics.gap_measure` of the final
                           residuals) against the **stated** noise: ``Σr²/σ² ~ χ²(dof)``,
                           two-sided (not where a noise level is named: its σ² is the model's)
 ``gap_signatures``        the gap after's largest signature z, Bonferroni over its
@@ -71,7 +71,6 @@ import numpy as np
 from scipy import stats
 
 from calib.conventions import AXES
-from calib.diagnostics import GapMeasure, Lattice, chi2_two_sided_logp, ljung_box_logp
 from calib.effects import Extensions, ModelState, effect
 from calib.gap.selection import walk_cost
 from calib.gap.space import (
@@ -84,6 +83,7 @@ from calib.gap.space import (
     legendre_in_time,
     spectral_peak,
 )
+from calib.stats.diagnostics import GapMeasure, Lattice, chi2_two_sided_logp, ljung_box_logp
 
 ADEQUACY_ALPHA = 0.005
 """Family-wise false-alarm probability of the battery on a run the final model describes."""

@@ -6,11 +6,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from calib.calibration import Calibration, calibrate
+from calib.calibration.tilt_plane import Calibration, calibrate
 from calib.conventions import AXES, G
-from calib.diagnostics import GapMeasure, Lattice, detect_lattice, gap_measure
 from calib.effects import Extensions, ModelState, RunData, effect, stated_variances
 from calib.effects.catalog import REFINED
+from calib.files.course import Ensayo
 from calib.gap.adequacy import ADEQUACY_ALPHA, Battery, run_battery
 from calib.gap.confusions import merge_tilt, not_identifiable, prefer_less_assuming
 from calib.gap.estimates import Reporter
@@ -19,8 +19,8 @@ from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
 from calib.gap.selection import candidate_list, initial_state, select, try_test
 from calib.gap.sponges import review_sponges
 from calib.gap.walk import WALK_CHECKS, WalkReview, review_walk
-from calib.io import Ensayo
-from calib.sensor_profile import SensorProfile
+from calib.noise.sensor_profile import SensorProfile
+from calib.stats.diagnostics import GapMeasure, Lattice, detect_lattice, gap_measure
 
 
 def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = None,
@@ -39,7 +39,7 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         per sample.
     family_alpha : false-alarm probability of the whole selection on a run without any
         effect; the per-step threshold is ``family_alpha / m`` (Bonferroni over the m tests).
-    sensor : a sensor profile (``sensor.json``, :func:`calib.sensor_profile.load_profile`):
+    sensor : a sensor profile (``sensor.json``, :func:`calib.noise.sensor_profile.load_profile`):
         its ``rate_random_walk`` per axis states the bias random walk's q (m/s²/√s, the same
         q): the walk's q is searched only inside the term's interval and it is charged no
         parameter; an axis whose term is null has no walk candidate. Needs sample times.

@@ -12,13 +12,13 @@ from __future__ import annotations
 import numpy as np
 from scipy import linalg as sla
 
+from calib.calibration.ls import fit_linear
 from calib.conventions import AXES
-from calib.diagnostics import Lattice
 from calib.effects import CATALOG, Extensions, ModelState
 from calib.filters import walk_filter
 from calib.gap.quantization import quantized_moments
 from calib.gap.random_walk import q_uncertainty
-from calib.ls import fit_linear
+from calib.stats.diagnostics import Lattice
 
 
 class Reporter:

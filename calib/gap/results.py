@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from calib.calibration import Calibration
+from calib.calibration.tilt_plane import Calibration
 from calib.conventions import AXES, G
 from calib.effects import ModelState
 from calib.units import effect_units, format_estimate, format_p, format_stat, with_units

@@ -6,7 +6,7 @@ Forward stepwise selection by likelihood-ratio tests with a Bonferroni-controlle
 error rate:
 
 1. Step 0 — quantization: the readings of each axis are tested for a lattice
-   (:func:`calib.diagnostics.detect_lattice`); a lattice is named (its lsb adds lsb²/12 to
+   (:func:`calib.stats.diagnostics.detect_lattice`); a lattice is named (its lsb adds lsb²/12 to
    the noise variance of every later test).
 2. Every step — every remaining candidate (per axis: misalignment, nonlinearity_k2,
    cross_axis, bias_drift, bias_random_walk, saturation, noise_level, and with timing
@@ -55,8 +55,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from calib.calibration.ls import NotIdentifiableError
 from calib.conventions import AXES
-from calib.diagnostics import Lattice
 from calib.effects import (
     NEEDS_TIMING,
     AxisState,
@@ -67,7 +67,7 @@ from calib.effects import (
     effect,
 )
 from calib.gap.flexibility import walk_effective_dof
-from calib.ls import NotIdentifiableError
+from calib.stats.diagnostics import Lattice
 
 PER_AXIS_CANDIDATES: tuple[str, ...] = (
     "noise_level", "misalignment", "nonlinearity_k2", "cross_axis", "bias_drift",
@@ -181,7 +181,7 @@ def first_step(ext: Extensions, state: ModelState, candidates: list[tuple[str, s
 
 def _evidence(t: Trial) -> tuple[float, float]:
     """Sort key, strongest first: the log p-value, then the likelihood ratio (very strong
-    effects all reach the floor of log p, :data:`calib.diagnostics.LOGP_FLOOR`)."""
+    effects all reach the floor of log p, :data:`calib.stats.diagnostics.LOGP_FLOOR`)."""
     return (t.logp, -t.lr)
 
 

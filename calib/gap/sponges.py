@@ -29,13 +29,13 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
+from calib.calibration.ls import NotIdentifiableError
 from calib.conventions import AXES
-from calib.diagnostics import Lattice, chi2_two_sided_logp
 from calib.effects import Extensions, ModelState
 from calib.gap.estimates import Reporter
 from calib.gap.quantization import quantized_moments, rails
 from calib.gap.walk import gls_nll, walk_nll
-from calib.ls import NotIdentifiableError
+from calib.stats.diagnostics import Lattice, chi2_two_sided_logp
 
 SPONGES = ("noise_level", "bias_random_walk")
 LN2 = float(np.log(2.0))

@@ -58,7 +58,7 @@ selection named on an axis before it may explain anything (issue 20, item 1):
      for both (the increments' variance ratio between halves, by likelihood):
      ``LR ~ χ²(1)``;
    * ``walk_spectrum`` — the Allan variance of the path (:func:`flicker_test`, the GLS fit of
-     :mod:`calib.allan`): a walk's deviation rises as τ^½ beside the white noise's τ^-½; a
+     :mod:`calib.noise.allan`): a walk's deviation rises as τ^½ beside the white noise's τ^-½; a
      flat flicker (1/f) floor B beside them is tested by its score z (one-sided normal).
 
 A walk that loses to a rival or fails a check is **not named**: the verdict is "unexplained"
@@ -80,7 +80,6 @@ import numpy as np
 from scipy import linalg as sla
 from scipy import optimize, stats
 
-from calib.allan import MAX_FIT_SAMPLES, AxisNoise, fit_axis_noise
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap.flexibility import tridiagonal_inverse_diagonal
@@ -106,6 +105,7 @@ from calib.gap.space import (
     tilt_drift_columns,
 )
 from calib.input_rules import DataError
+from calib.noise.allan import MAX_FIT_SAMPLES, AxisNoise, fit_axis_noise
 
 GRID = 120
 """Places on the grid of the step, two-step and bump rivals."""
@@ -659,7 +659,7 @@ def flicker_test(e: np.ndarray, rate: float = 1.0) -> AxisNoise | None:
     level a white noise plus a random walk, whose Allan variance is
     ``AVAR(τ) = N²/τ + K²τ/3`` (slopes −½ and +½ of the deviation, IEEE Std 952 Annex C). A bias
     that wanders like flicker (1/f) noise adds the flat floor ``(2 ln 2/π)·B²`` (slope 0) that a
-    walk has not. :func:`calib.allan.fit_axis_noise` fits the three terms by GLS on the octave
+    walk has not. :func:`calib.noise.allan.fit_axis_noise` fits the three terms by GLS on the octave
     Allan variances with their full covariance and tests ``B = 0`` by a score test with the
     white and walk terms refitted (z, one-sided p); ``walk_spectrum`` is that test. Its
     false-reject rate on walks (white noise plus a walk, q√N = 1–16 σ, N = 2001 and 4001,
@@ -671,7 +671,7 @@ def flicker_test(e: np.ndarray, rate: float = 1.0) -> AxisNoise | None:
     octaves carry the walk-versus-floor contrast).
 
     ``rate`` : samples per time unit (Hz, or 1 per sample). Runs longer than
-    :data:`calib.allan.MAX_FIT_SAMPLES` are averaged in blocks of 2^k samples first (as
+    :data:`calib.noise.allan.MAX_FIT_SAMPLES` are averaged in blocks of 2^k samples first (as
     ``tiltbench noise`` does). Returns None when the run spans fewer than 5 octaves.
     """
     e = np.asarray(e, dtype=float)

@@ -1,0 +1,135 @@
+"""A read log written back in the course format, with its provenance (``tiltbench import``).
+
+Files written (MATLAB v5, one row per sample, the course names and shapes so that the course
+scripts run unchanged):
+
+==========================  =========================================================
+the log has                 written
+==========================  =========================================================
+θ (a θ column, or pose      ``ensayo.mat``: ``tita`` N×1 rad, ``datos`` N×2 m/s², and
+angles: held samples only)  ``t`` N×1 s and ``pose`` N×1 when the log has them
+θ unknown, ≥ 2 held poses   ``ensayo.mat`` with ``datos``, ``t`` (if any) and ``pose``
+                            (N×1, integer labels, -1 moving) and **no** ``tita``
+no held poses or only one   ``acel.mat``: ``t`` M×1 s (uniform), ``Aerr`` M×2 m/s²,
+                            ``gyro`` M×1 rad/s when the log has a gyro
+==========================  =========================================================
+
+plus ``provenance.json``: the reader's record (source name and sha256, format, column
+mapping, units and conversion, axes, detected segments and thresholds, gaps) with the tool
+version and :data:`calib.logs.reader.LOG_FORMAT_VERSION`. The set is written atomically: all files
+or none.
+
+``acel.mat`` must be uniformly sampled (``calib.files.course.read_acel``); a log whose steps jitter
+(phones, USB loggers) is resampled by linear interpolation onto the grid ``t0 + k·dt``, ``dt``
+the mean step (same sample count), and the provenance says so with the largest deviation of
+the log's times from that grid. A
+``tita``-less ``ensayo.mat`` is read back by :func:`calib.logs.reader.read_log` (pose labels, θ
+unknown); ``calibrate``/``gap`` need θ and say so.
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from calib.files.atomic import atomic_dir
+from calib.input_rules import DataError
+
+MAT_HEADER_LEN = 116
+FILES = ("ensayo.mat", "acel.mat", "provenance.json")
+"""Names ``tiltbench import`` may write (the overwrite check covers all of them)."""
+
+
+def mat_bytes(variables: dict[str, np.ndarray], note: str = "") -> bytes:
+    """MATLAB v5 bytes, 1-D arrays as N×1 columns; ``pose`` stored as int32 labels, the rest
+    float64; a fixed header so that the same data give the same bytes."""
+    import scipy.io
+
+    clean = {}
+    for k, v in variables.items():
+        arr = np.asarray(v, dtype=np.int32 if k == "pose" else float)
+        clean[k] = arr.reshape(-1, 1) if arr.ndim == 1 else arr
+    buf = io.BytesIO()
+    scipy.io.savemat(buf, clean, format="5", oned_as="column")
+    data = bytearray(buf.getvalue())
+    text = f"MATLAB 5.0 MAT-file, written by tiltbench import {note}".strip()
+    data[:MAT_HEADER_LEN] = text.encode("ascii", "replace")[:MAT_HEADER_LEN].ljust(
+        MAT_HEADER_LEN, b" ")
+    return bytes(data)
+
+
+def uniform(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict | None]:
+    """``(t, x)`` on a uniform grid: unchanged when already uniform (the ``read_acel``
+    tolerance), else linearly interpolated onto ``t0 + k·median(dt)``; the record of it."""
+    d = np.diff(t)
+    if np.max(np.abs(d - d.mean())) <= 1e-6 * max(d.mean(), 1e-12) + 1e-9:
+        return t, x, None
+    # the mean step over the log keeps the sample count and lets the grid not drift from the
+    # log's clock (a median step would, by its bias times N)
+    count = int(t.size)
+    step = float((t[-1] - t[0]) / (count - 1))
+    grid = t[0] + step * np.arange(count)
+    cols = np.atleast_2d(x.T).T if x.ndim == 1 else x
+    out = np.column_stack([np.interp(grid, t, cols[:, k]) for k in range(cols.shape[1])])
+    dev = float(np.max(np.abs(t - (t[0] + step * np.round((t - t[0]) / step)))))
+    return grid, out if x.ndim > 1 else out[:, 0], {
+        "method": "linear interpolation onto a uniform grid", "step_s": step,
+        "samples_in": int(t.size), "samples_out": int(count),
+        "max_deviation_from_grid_s": dev}
+
+
+def course_variables(log) -> tuple[str, dict[str, np.ndarray], dict | None]:
+    """The file name, its variables and the resampling record (None) for an
+    :class:`calib.logs.reader.ImuLog` (module docstring)."""
+    poses = 0 if log.pose is None else int(np.max(log.pose)) + 1
+    if log.theta is not None:
+        e = log.to_ensayo()  # the checks every later command makes, before writing
+        out = {"tita": e.tita, "datos": e.datos}
+        if log.t is not None:
+            out["t"] = log.t
+        if log.pose is not None:
+            out["pose"] = log.pose
+        return "ensayo.mat", out, None
+    if poses >= 2:
+        out = {"datos": log.acc}
+        if log.t is not None:
+            out["t"] = log.t
+        out["pose"] = log.pose
+        return "ensayo.mat", out, None
+    if log.t is None:
+        raise DataError(f"{log.source}: no θ, fewer than two held poses and no sample times: "
+                        "neither a calibration run nor a vehicle run; give --poses, a θ "
+                        "column or --columns t=…")
+    cols = log.acc if log.gyro is None else np.column_stack([log.acc, log.gyro])
+    t, x, record = uniform(log.t, cols)
+    out = {"t": t, "Aerr": x[:, :2]}
+    if log.gyro is not None:
+        out["gyro"] = x[:, 2]
+    return "acel.mat", out, record
+
+
+def write_course_set(log, out: str | Path, force: bool = False, tool_version: str = "",
+                     extra: dict | None = None) -> tuple[list[Path], dict]:
+    """Write the course file and ``provenance.json`` into ``out`` as one set (module
+    docstring); return the paths and the provenance written."""
+    from calib.files.course import dumps
+
+    name, variables, record = course_variables(log)
+    prov = dict(log.provenance)
+    prov["tool"] = {"name": "tiltbench import", "version": tool_version}
+    prov["written"] = {name: {k: list(np.shape(v)) if np.ndim(v) > 1 else [len(v), 1]
+                              for k, v in variables.items()}}
+    if record is not None:
+        prov["resampled"] = record
+    if name == "ensayo.mat" and "tita" not in variables:
+        prov["theta"] = "unknown: ensayo.mat holds datos, t and pose labels, no tita"
+    prov.update(extra or {})
+    with atomic_dir(out, force=force, owned=FILES) as tmp:
+        (tmp / name).write_bytes(mat_bytes(variables, prov["source"]["name"]))
+        (tmp / "provenance.json").write_text(dumps(prov), encoding="utf-8")
+    return [Path(out) / name, Path(out) / "provenance.json"], prov
+
+
+__all__ = ["FILES", "course_variables", "mat_bytes", "uniform", "write_course_set"]

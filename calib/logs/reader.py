@@ -1,0 +1,704 @@
+"""Readers for the logs people have: one entry point, :func:`read_log`, for every command that
+reads readings (``calibrate``, ``gap``, ``trajectory``, ``fuse``, ``noise``, ``import``).
+
+A log becomes an :class:`ImuLog`: the two tilt-plane axes in m/s² (after ``--axes`` picked and
+signed them from a 3-axis IMU), optional sample times, optional table angle θ (rad), optional
+held-pose labels, optional gyro rate about the tilt axis and, for a 3-axis log, the third
+axis (``acc_normal``, along the tilt axis), plus a provenance record (source
+name and sha256, format, column mapping, units, detected segments) that ``tiltbench import``
+writes beside the course files.
+
+Formats (``--format``, else recognized from the content; one module each in
+:mod:`calib.logs`): the course MATLAB files (``ensayo.mat`` tita/datos[/t][/pose],
+``acel.mat`` t/Aerr[/gyro], and the θ-unknown ``ensayo.mat`` of ``tiltbench import``: datos,
+t, pose); CSV/TSV with a header, phyphox and Sensor Logger exports
+(:mod:`calib.logs.csvlog`); ROS 1/2 bags of ``sensor_msgs/Imu``
+(:mod:`calib.logs.rosbag`); any ``.mat`` with ``--map`` (:mod:`calib.logs.matlog`).
+
+Conventions
+-----------
+* Units: SI. Acceleration units are stated (``--units``) or recognized from the header or the
+  format's documentation, never guessed: ``m/s2``; ``g`` and ``mg`` converted with the
+  command's g (:data:`calib.conventions.G` = 9.8 m/s² unless ``--g``); ``counts`` as
+  ``a = counts / sensitivity · g`` (``--sensitivity`` counts per g).
+* Axes: ``--axes a,b`` (each ``x``, ``y`` or ``z`` with an optional ``-``) makes the log's
+  signed axis ``a`` the tilt plane's x and ``b`` its y, so that the course signs hold:
+  ``A_rx = -g sin θ``, ``A_ry = -g cos θ``. The gyro rate kept is the one about the tilt axis
+  ``n = â × b̂`` (right-handed: ``--axes x,y`` keeps ``ω_z``, ``--axes -y,z`` keeps
+  ``-ω_x``); with the course signs θ grows by a right-handed turn about ``n``, so at rest
+  between poses the kept rate is ``dθ/dt``.
+* θ: a θ column in rad or deg (``--angle-unit``, or the header's unit); without either the
+  data-based degrees check of :mod:`calib.files.angles` decides (never a range).
+* Poses: a label column, or the detector of :mod:`calib.logs.poses` (thresholds from the log's own
+  quiet level). ``--poses`` gives each detected (or labelled) pose's angle in order; the log
+  then keeps only the held samples — they make the course ensayo — and its provenance says
+  so. Without angles θ stays unknown (``theta`` None) and ``pose`` carries the labels.
+
+Validation (one-line :class:`calib.input_rules.DataError` naming the file, the line, message
+or index, and the fix): missing header, unknown units, non-numeric cells, NaN/Inf, time not
+strictly increasing, gaps in time longer than :data:`GAP_FACTOR` median steps (refused unless
+``--allow-gaps``: a gap breaks the Allan deviation and integration, while held poses on both
+sides stay valid — with the option the gaps are listed in the provenance), saturated
+stretches (:data:`SATURATION_RUN` or more equal samples at a column's extreme value, that
+value at least g/2 in size; refused unless ``--allow-saturation``, for a sensor so coarse
+that a held pose reads one constant value).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from calib.input_rules import MAX_ABS_TIME, DataError
+from calib.logs.table import ACCEL_UNITS, GYRO_UNITS, RawLog
+
+LOG_FORMAT_VERSION = 1
+"""Version of the provenance record (``provenance.json``)."""
+GAP_FACTOR = 5.0
+"""A step longer than this many median steps is a gap."""
+SATURATION_RUN = 10
+"""This many equal consecutive samples at a column's extreme value are a saturated stretch."""
+MOVING_LABELS = ("", "-1", "moving", "nan", "none")
+"""Label cells that mean "moving" (compared in lower case)."""
+FORMATS = ("auto", "course", "csv", "phyphox", "sensorlogger", "rosbag", "mat")
+"""``--format`` values."""
+_TEXT_SUFFIXES = (".csv", ".tsv", ".csv.gz", ".tsv.gz", ".txt.gz")
+
+
+@dataclass(frozen=True)
+class LogOptions:
+    """How to read a log (the command line's ``--format --columns --axes --units
+    --sensitivity --angle-unit --map --poses``). Every field may be left at its default: the
+    reader then recognizes the format and columns from the content, or refuses with a message
+    that names the option to give.
+
+    Attributes
+    ----------
+    fmt : "auto" | "course" | "csv" | "phyphox" | "sensorlogger" | "rosbag" | "mat".
+    columns : role → column name, roles ``t``, ``x``, ``y``, ``z``, ``theta``, ``label``,
+        ``gyro`` (``--columns t=time,x=ax,y=ay``); ``topic`` for a bag.
+    axes : the log's axis (``x``, ``y`` or ``z``, each with an optional leading ``-``) that
+        becomes the tilt plane's x and y (``--axes x,y``; ``--axes -y,z``).
+    units : acceleration unit: None (recognized from the header, else refused), ``m/s2``,
+        ``g``, ``mg`` or ``counts`` (needs ``sensitivity``).
+    sensitivity : counts per g, for raw counts.
+    angle_unit : None (the data-based degrees check decides, :mod:`calib.files.angles`), ``rad``
+        or ``deg``.
+    mapping : ``.mat`` variable mapping, course name → file name (``--map tita=angle``).
+    poses : angle of each held pose in the order they occur, in ``angle_unit`` (rad if
+        None), or None: poses found in the log stay with unknown θ.
+    label_angles : label value → angle (``angle_unit``), for a label column.
+    g : m/s², converts ``g``/``mg``/``counts``; None: :data:`calib.conventions.G`.
+    gyro_unit : ``rad/s`` or ``deg/s`` of the gyro columns; None: stated by the header or
+        the format.
+    allow_gaps, allow_saturation : accept (and record) gaps in time / saturated stretches.
+    window, min_hold : pose detector's window and minimum hold, s (samples without times);
+        None: :mod:`calib.logs.poses` defaults.
+    detect : look for held poses when θ is unknown (False for a vehicle run).
+    theta_source : where θ comes from when the poses' angles are given: ``poses`` (the held
+        samples only, each at its pose's angle) or ``gyro`` (every sample, θ(t) integrated
+        from the gyro about the tilt axis and anchored to the poses' angles:
+        :func:`calib.logs.gyro_angle.theta_from_gyro`).
+    """
+
+    fmt: str = "auto"
+    columns: dict[str, str] = field(default_factory=dict)
+    axes: tuple[str, str] = ("x", "y")
+    units: str | None = None
+    sensitivity: float | None = None
+    angle_unit: str | None = None
+    mapping: dict[str, str] = field(default_factory=dict)
+    poses: tuple[float, ...] | None = None
+    label_angles: dict[str, float] | None = None
+    g: float | None = None
+    gyro_unit: str | None = None
+    allow_gaps: bool = False
+    allow_saturation: bool = False
+    window: float | None = None
+    min_hold: float | None = None
+    detect: bool = True
+    theta_source: str = "poses"
+
+
+@dataclass(frozen=True)
+class ImuLog:
+    """Readings of one log, in the tilt plane.
+
+    Attributes
+    ----------
+    acc : (N, 2) float, m/s² — ``[A_mx, A_my]`` (course signs after ``--axes``).
+    t : (N,) float, s, strictly increasing, or None.
+    theta : (N,) float, rad, table angle per sample, or None when unknown.
+    pose : (N,) int, held-pose label per sample (0, 1, …; -1 while moving), or None when no
+        poses were given or detected.
+    gyro : (N,) float, rad/s, rate about the tilt axis, or None.
+    acc_normal : (N,) float, m/s², the log's third acceleration axis — the one not in
+        ``--axes``, signed as the tilt axis ``n = â × b̂`` so that (x, y, normal) is
+        right-handed (``--axes x,y`` keeps ``+z``; ``--axes -y,z`` keeps ``-x``) — or None when
+        the log has only the two axes (course files). The 3-axis multi-position calibration
+        (:func:`calib.calibration.multiposition.fit_multiposition3d`) uses it; the provenance's
+        ``normal_axis`` names the column.
+    source : str — the file name, for messages.
+    provenance : dict — source name and sha256, format, mapping, units, segments (JSON-able).
+    """
+
+    acc: np.ndarray
+    t: np.ndarray | None = None
+    theta: np.ndarray | None = None
+    pose: np.ndarray | None = None
+    gyro: np.ndarray | None = None
+    acc_normal: np.ndarray | None = None
+    source: str = "<memory>"
+    provenance: dict[str, Any] = field(default_factory=dict)
+    course: Any = field(default=None, repr=False, compare=False)
+    """The :class:`calib.files.course.Ensayo` / :class:`calib.files.course.Acel` when the log was a
+    course file read by the course reader: :meth:`to_ensayo` / :meth:`to_acel` return it
+    unchanged."""
+
+    def __post_init__(self) -> None:
+        for name in ("acc", "t", "theta", "gyro", "acc_normal"):
+            value = getattr(self, name)
+            if value is not None:
+                arr = np.array(value, dtype=float)
+                arr.setflags(write=False)
+                object.__setattr__(self, name, arr)
+        if self.pose is not None:
+            arr = np.array(self.pose, dtype=int)
+            arr.setflags(write=False)
+            object.__setattr__(self, "pose", arr)
+
+    @property
+    def n(self) -> int:
+        return int(self.acc.shape[0])
+
+    def to_ensayo(self):
+        """The course :class:`calib.files.course.Ensayo` (θ known); DataError when θ is unknown."""
+        from calib.files.course import Ensayo, validate_ensayo
+
+        if isinstance(self.course, Ensayo):
+            return self.course
+        if self.theta is None:
+            raise DataError(f"{self.source}: the table angle is unknown; give the poses' "
+                            "angles (--poses …) or a θ column (--columns theta=…)")
+        return validate_ensayo(self.theta, self.acc, self.t, self.source)
+
+    def to_acel(self):
+        """The course :class:`calib.files.course.Acel` (a vehicle run: uniform ``t`` needed)."""
+        from calib.files.course import Acel
+
+        if isinstance(self.course, Acel):
+            return self.course
+        if self.t is None:
+            raise DataError(f"{self.source}: no sample times; a vehicle run needs them "
+                            "(--columns t=…)")
+        d = np.diff(self.t)
+        if d.size and np.max(np.abs(d - d.mean())) > 1e-6 * max(d.mean(), 1e-12) + 1e-9:
+            raise DataError(f"{self.source}: 't' is not uniformly sampled; a vehicle run is "
+                            "integrated on a uniform grid: import it with tiltbench import "
+                            "(resamples, recorded in provenance.json)")
+        return Acel(t=self.t, aerr=self.acc, source=self.source, gyro=self.gyro)
+
+
+def file_sha256(path: str | os.PathLike) -> str:
+    """sha256 of a file's bytes (hex), for provenance records; of a ROS 2 bag directory, of
+    its files' names and bytes in sorted order."""
+    h = hashlib.sha256()
+    path = Path(path)
+    files = sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
+    for p in files:
+        if path.is_dir():
+            h.update(str(p.relative_to(path)).encode() + b"\0")
+        with open(p, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                h.update(block)
+    return h.hexdigest()
+
+
+def _is_mat(path: Path) -> bool:
+    if path.suffix.lower() == ".mat":
+        return True
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(6) == b"MATLAB"
+    except OSError:
+        return False
+
+
+def _mat_names(path: Path) -> list[str]:
+    import scipy.io
+
+    try:
+        return [name for name, _, _ in scipy.io.whosmat(str(path))]
+    except Exception:  # a damaged file: the course reader names the problem
+        return []
+
+
+def detect_format(path: Path, options: LogOptions) -> str:
+    """The reader for ``path``: ``options.fmt`` unless ``auto``; else ``course`` (a .mat
+    with the course names and no ``--map``), ``mat``, ``rosbag``, ``csv`` (a ``.csv``/``.tsv``
+    name, gzipped or not, or a text file that reads as a table with a header), or ``unknown``.
+    """
+    from calib.logs.csvlog import looks_like_table
+    from calib.logs.rosbag import is_bag
+
+    if options.fmt in ("phyphox", "sensorlogger"):
+        return "csv"
+    if options.fmt != "auto":
+        return options.fmt
+    if not path.exists():
+        return "unknown"
+    if is_bag(path):
+        return "rosbag"
+    if path.is_dir():
+        return "unknown"
+    if _is_mat(path):
+        return "mat" if options.mapping else "course"
+    name = path.name.lower()
+    if name.endswith(_TEXT_SUFFIXES) or looks_like_table(path):
+        return "csv"
+    return "unknown"
+
+
+def read_log(path: str | os.PathLike, options: LogOptions | None = None,
+             expect: str | None = None) -> ImuLog:
+    """Read a measured log into an :class:`ImuLog` (module docstring).
+
+    Parameters
+    ----------
+    path : the log (a file, or a ROS 2 bag directory).
+    options : how to read it; None: everything recognized from the content.
+    expect : ``"ensayo"`` or ``"acel"`` when the caller reads a course input: a course
+        ``.mat`` file — and any file not recognized as a log — then goes through
+        :func:`calib.files.course.read_ensayo` / :func:`calib.files.course.read_acel` unchanged
+        (same checks, same messages as before logs were read).
+
+    Raises
+    ------
+    DataError : a format not recognized, a missing column, units neither stated nor
+        recognized, non-monotone time, NaN/Inf; the message names the file, the line or
+        column and what to do.
+    """
+    from calib.files.course import read_acel, read_ensayo
+
+    options = options or LogOptions()
+    path = Path(path)
+    fmt = detect_format(path, options)
+    if expect is not None and fmt in ("course", "unknown"):
+        names = _mat_names(path) if fmt == "course" else []
+        if not (expect == "ensayo" and "pose" in names and "tita" not in names):
+            prov = {"source": {"name": path.name}, "format": "course"}
+            return _course_log(path, expect, names, prov, read_ensayo, read_acel)
+    if expect == "acel":  # a vehicle run: poses and their angles do not apply
+        options = replace(options, poses=None, label_angles=None, detect=False)
+    if not path.exists():
+        raise DataError(f"{path}: file not found")
+    if fmt == "unknown":
+        raise DataError(f"{path}: not a log format read here (CSV/TSV with a header, phyphox "
+                        "or Sensor Logger export, ROS bag, .mat); give --format")
+    if fmt == "course":
+        return _read_course(path, options, read_ensayo, read_acel)
+    raw = _read_raw(path, fmt, options)
+    return assemble(raw, options, path)
+
+
+def _course_pose(path: Path, n: int) -> np.ndarray:
+    """The ``pose`` labels (N×1 integers, -1 while moving) that ``tiltbench import`` writes
+    beside ``tita``/``datos``; DataError naming the file when they do not fit."""
+    import scipy.io
+
+    pose = np.asarray(scipy.io.loadmat(path, variable_names=["pose"])["pose"], dtype=float)
+    pose = pose.reshape(-1)
+    if pose.size != n or not np.all(np.isfinite(pose)) or np.any(pose != np.round(pose)):
+        raise DataError(f"{path}: 'pose' must hold one integer label per sample ({n}), "
+                        f"got {pose.size} values; remove it or re-run `tiltbench import`")
+    return pose.astype(int)
+
+
+def _read_course(path: Path, options: LogOptions, read_ensayo, read_acel) -> ImuLog:
+    """A course ``.mat``: ensayo (tita, datos), acel (t, Aerr) or the θ-unknown ensayo of
+    ``tiltbench import`` (datos, t, pose)."""
+    names = _mat_names(path)
+    if "pose" in names or ("tita" not in names and "Aerr" not in names
+                           and "datos" in names):
+        return assemble(_read_raw(path, "mat", options), options, path)
+    prov = {"source": {"name": path.name, "sha256": file_sha256(path)}, "format": "course"}
+    kind = "acel" if "Aerr" in names and "tita" not in names else "ensayo"
+    return _course_log(path, kind, names, prov, read_ensayo, read_acel)
+
+
+def _course_log(path: Path, kind: str, names: list[str], prov: dict, read_ensayo,
+                read_acel) -> ImuLog:
+    """A course file read by its course reader (``kind`` "ensayo" or "acel"); an imported
+    ensayo keeps its ``pose`` labels (lack of fit, pure-error σ²)."""
+    if kind == "acel":
+        a = read_acel(path)
+        return ImuLog(acc=a.aerr, t=a.t, gyro=a.gyro, source=str(path), provenance=prov,
+                      course=a)
+    e = read_ensayo(path)
+    pose = _course_pose(path, e.n) if "pose" in names else None
+    return ImuLog(acc=e.datos, t=e.t, theta=e.tita, pose=pose, source=str(path),
+                  provenance=prov, course=e)
+
+
+def _read_raw(path: Path, fmt: str, options: LogOptions) -> RawLog:
+    if fmt == "csv":
+        from calib.logs.csvlog import read_csv
+
+        if path.is_dir():
+            raise DataError(f"{path}: is a directory; expected a CSV/TSV file")
+        return read_csv(path, options.columns, options.fmt)
+    if fmt == "rosbag":
+        from calib.logs.rosbag import read_bag
+
+        return read_bag(path, options.columns.get("topic"))
+    if fmt in ("mat", "course"):
+        from calib.logs.matlog import read_mat
+
+        return read_mat(path, options.mapping)
+    raise DataError(f"{path}: --format {fmt}: not a format read here ({', '.join(FORMATS)})")
+
+
+# --- assembling an ImuLog from a RawLog -----------------------------------------------------
+
+def _axis_vector(spec: str) -> np.ndarray:
+    sign = -1.0 if spec.startswith("-") else 1.0
+    v = np.zeros(3)
+    v["xyz".index(spec.lstrip("+-"))] = sign
+    return v
+
+
+def tilt_axis(axes: tuple[str, str]) -> str:
+    """The signed log axis about which the tilt turns: ``â × b̂`` (``x,y`` → ``z``;
+    ``-y,z`` → ``-x``)."""
+    n = np.cross(_axis_vector(axes[0]), _axis_vector(axes[1]))
+    k = int(np.argmax(np.abs(n)))
+    return ("-" if n[k] < 0 else "") + "xyz"[k]
+
+
+def accel_factor(unit: str, g: float, sensitivity: float | None, where: str) -> float:
+    """m/s² per unit of the log: 1, g, g/1000 or g/sensitivity."""
+    if unit == "m/s2":
+        return 1.0
+    if unit == "g":
+        return float(g)
+    if unit == "mg":
+        return float(g) / 1000.0
+    if unit == "counts":
+        if sensitivity is None:
+            raise DataError(f"{where}: raw counts need --sensitivity (counts per g)")
+        return float(g) / float(sensitivity)
+    raise DataError(f"{where}: unit {unit!r} not read here ({', '.join(ACCEL_UNITS)})")
+
+
+def _check_finite(raw: RawLog, arr: np.ndarray, what: str, path: Path) -> None:
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise DataError(f"{path}: {what}: {int(bad.sum())} NaN/Inf value(s), first at "
+                        f"{raw.where(i)}; remove or repair those samples")
+
+
+def _check_time(raw: RawLog, t: np.ndarray, path: Path, allow_gaps: bool) -> list[dict]:
+    """Strictly increasing, no gaps (unless allowed: then they are returned)."""
+    col = raw.mapping.get("t", "t")
+    big = float(np.max(np.abs(t))) if t.size else 0.0
+    if big > MAX_ABS_TIME:
+        raise DataError(f"{path}: time column '{col}' reaches {big:.3g} s; state its unit in "
+                        "the header (e.g. 'time (ns)' or time_ns)")
+    d = np.diff(t)
+    if np.any(d <= 0):
+        i = int(np.argmax(d <= 0)) + 1
+        raise DataError(f"{path}: time column '{col}' does not increase at {raw.where(i)} "
+                        f"(t = {t[i]:.9g} s after {t[i - 1]:.9g} s); samples must be in "
+                        "time order, without repeats")
+    gaps = []
+    if d.size:
+        step = float(np.median(d))
+        for i in np.flatnonzero(d > GAP_FACTOR * step):
+            gaps.append({"after": raw.where(int(i)), "t": float(t[i]),
+                         "length_s": float(d[i]), "median_step_s": step})
+        if gaps and not allow_gaps:
+            g0 = gaps[0]
+            raise DataError(f"{path}: {len(gaps)} gap(s) in time, the first {g0['length_s']:.4g}"
+                            f" s long (median step {step:.4g} s) after {g0['after']} (t = "
+                            f"{g0['t']:.6g} s); pass --allow-gaps to read it anyway (held "
+                            "poses stay valid; noise and integration need an unbroken log)")
+    return gaps
+
+
+def _check_saturation(raw: RawLog, arr: np.ndarray, what: str, path: Path, factor: float,
+                      g: float) -> None:
+    """Refuse runs of ≥ :data:`SATURATION_RUN` equal samples at the column's extreme when
+    that extreme is at least g/2 in size (a reading near zero that does not move is an axis
+    across the tilt plane, not a clipped one)."""
+    for extreme in (float(np.max(arr)), float(np.min(arr))):
+        if abs(extreme * factor) < 0.5 * g:
+            continue
+        at = arr == extreme
+        m = np.concatenate(([False], at, [False]))
+        edges = np.flatnonzero(m[1:] != m[:-1])
+        for a, b in zip(edges[0::2], edges[1::2], strict=True):
+            if b - a >= SATURATION_RUN:
+                raise DataError(f"{path}: {what} sits at its extreme value {extreme:g} for "
+                                f"{b - a} samples ({raw.where(int(a))} to "
+                                f"{raw.where(int(b) - 1)}): saturated? Record with a range "
+                                "beyond ±1 g, drop those samples, or pass --allow-saturation "
+                                "if the sensor is so coarse that a held pose reads one value")
+
+
+def _angles(values, unit: str | None) -> np.ndarray:
+    arr = np.asarray(values, dtype=float)
+    return np.deg2rad(arr) if unit == "deg" else arr
+
+
+def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
+    """Axes, units, checks, θ and poses: a :class:`RawLog` as an :class:`ImuLog` (module
+    docstring)."""
+    from calib.conventions import G
+
+    g = G if options.g is None else float(options.g)
+    where = str(path)
+    # the two tilt-plane axes, signed
+    acc_cols = []
+    for spec in options.axes:
+        axis = spec.lstrip("+-")
+        if axis not in raw.acc:
+            have = ", ".join(sorted(raw.acc)) or "none"
+            raise DataError(f"{path}: --axes {','.join(options.axes)}: the log has no {axis} "
+                            f"acceleration (axes read: {have}); choose two of them")
+        acc_cols.append((spec, axis))
+    stated = raw.acc_unit
+    if options.units is not None and stated is not None and options.units != stated:
+        raise DataError(f"{path}: the header states the acceleration in {stated} but --units "
+                        f"{options.units}; drop --units or fix the header")
+    unit = options.units or stated or raw.notes.get("default_unit")
+    if unit is None:
+        cols = ", ".join(repr(raw.mapping.get(a, a)) for _, a in acc_cols)
+        raise DataError(f"{path}: the unit of column(s) {cols} is neither stated in the header "
+                        "nor known for this format; give --units m/s2|g|mg|counts")
+    factor = accel_factor(unit, g, options.sensitivity, where)
+    for _, axis in acc_cols:
+        what = f"column '{raw.mapping.get(axis, axis)}'"
+        _check_finite(raw, raw.acc[axis], what, path)
+        if not options.allow_saturation:
+            _check_saturation(raw, raw.acc[axis], what, path, factor, g)
+    acc = np.column_stack([(-1.0 if spec.startswith("-") else 1.0) * raw.acc[a] * factor
+                           for spec, a in acc_cols])
+    # the third axis, signed as the tilt axis â × b̂: (x, y, normal) right-handed
+    normal_spec = tilt_axis(tuple(options.axes))
+    normal_axis = normal_spec.lstrip("-")
+    acc_normal, normal_from = None, None
+    if normal_axis in raw.acc:
+        what = f"column '{raw.mapping.get(normal_axis, normal_axis)}'"
+        # finite values only; not the saturation check: the commands that read the tilt
+        # plane alone must not start refusing a log for an axis they ignore (a flat board's
+        # z sits still at +g); the 3-axis fit's lack-of-fit test shows a clipped pose
+        _check_finite(raw, raw.acc[normal_axis], what, path)
+        sign = -1.0 if normal_spec.startswith("-") else 1.0
+        acc_normal = sign * raw.acc[normal_axis] * factor
+        normal_from = f"{'-' if sign < 0 else ''}{raw.mapping.get(normal_axis, normal_axis)}"
+    n = acc.shape[0]
+    if n < 3:
+        raise DataError(f"{path}: only {n} samples; at least 3 are needed")
+    # time
+    t, gaps = raw.t, []
+    if t is not None:
+        _check_finite(raw, t, f"time column '{raw.mapping.get('t', 't')}'", path)
+        gaps = _check_time(raw, t, path, options.allow_gaps)
+    # gyro about the tilt axis
+    gyro, gyro_from = None, None
+    g_unit = options.gyro_unit or raw.gyro_unit
+    gyro_note = None
+    if raw.gyro and g_unit not in GYRO_UNITS:
+        if "tilt" in raw.gyro:  # named on purpose with --columns gyro=…: say what is missing
+            raise DataError(f"{path}: the unit of gyro column '{raw.mapping.get('gyro')}' is "
+                            "not stated; give --gyro-unit rad/s|deg/s")
+        gyro_note = "gyro columns ignored: their unit is not stated (give --gyro-unit)"
+    elif raw.gyro:
+        gfac = np.pi / 180.0 if g_unit == "deg/s" else 1.0
+        if "tilt" in raw.gyro:
+            gyro, gyro_from = raw.gyro["tilt"] * gfac, raw.mapping.get("gyro", "gyro")
+        else:
+            n_axis = tilt_axis(tuple(options.axes))
+            k = n_axis.lstrip("-")
+            if k in raw.gyro:
+                sign = -1.0 if n_axis.startswith("-") else 1.0
+                gyro = sign * raw.gyro[k] * gfac
+                gyro_from = f"{'-' if sign < 0 else ''}{raw.mapping.get('gyro_' + k, k)}"
+        if gyro is not None:
+            _check_finite(raw, gyro, f"gyro '{gyro_from}'", path)
+    # θ
+    theta = None
+    theta_unit = None
+    if raw.theta is not None:
+        if options.angle_unit and raw.theta_unit and options.angle_unit != raw.theta_unit:
+            raise DataError(f"{path}: the header states θ in {raw.theta_unit} but --angle-unit "
+                            f"{options.angle_unit}; drop one")
+        theta_unit = options.angle_unit or raw.theta_unit
+        _check_finite(raw, raw.theta, f"θ column '{raw.mapping.get('theta', 'theta')}'", path)
+        theta = _angles(raw.theta, theta_unit)
+    prov: dict[str, Any] = {
+        "format_version": LOG_FORMAT_VERSION,
+        "source": {"name": path.name, "sha256": file_sha256(path)},
+        "format": raw.fmt,
+        "mapping": dict(raw.mapping),
+        "axes": list(options.axes),
+        "tilt_axis": tilt_axis(tuple(options.axes)),
+        "normal_axis": normal_from,
+        "units": {"acc": unit, "acc_to_m_s2": factor, "g": g,
+                  "sensitivity_counts_per_g": options.sensitivity,
+                  "gyro": g_unit if gyro is not None else None, "gyro_from": gyro_from,
+                  "gyro_note": gyro_note,
+                  "theta": None if theta is None else (theta_unit or "rad (degrees check)"),
+                  "t": "s"},
+        "reader": dict(raw.notes),
+        "samples": {"read": n},
+        "gaps": gaps,
+    }
+    if raw.fmt == "mat" and options.units is None:
+        prov["units"]["acc_note"] = "the course variable's unit (m/s²)"
+    log = ImuLog(acc=acc, t=t, theta=theta, gyro=gyro, acc_normal=acc_normal, source=where,
+                 provenance=prov)
+    return _poses(log, raw, options, path)
+
+
+def _sub(log: ImuLog, keep: np.ndarray, theta: np.ndarray, pose: np.ndarray,
+         prov: dict) -> ImuLog:
+    return ImuLog(acc=log.acc[keep], t=None if log.t is None else log.t[keep], theta=theta,
+                  pose=pose, gyro=None if log.gyro is None else log.gyro[keep],
+                  acc_normal=None if log.acc_normal is None else log.acc_normal[keep],
+                  source=log.source, provenance=prov)
+
+
+def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
+    """Pose labels (label column or detector) and θ from ``--poses`` / label angles."""
+    from calib.logs.poses import detect_poses
+
+    prov = dict(log.provenance)
+    if log.theta is not None:
+        if options.poses is not None or options.label_angles:
+            raise DataError(f"{path}: the log has a θ column; --poses / label angles would "
+                            "give θ twice: drop one")
+        if options.angle_unit is None and raw.theta_unit is None:
+            _degrees_check(log.theta, log.acc, path,
+                           f"θ column '{raw.mapping.get('theta', 'theta')}'")
+        pose = None
+        if raw.label is not None:
+            pose, _ = _labels(raw.label)
+        return ImuLog(acc=log.acc, t=log.t, theta=log.theta, pose=pose, gyro=log.gyro,
+                      acc_normal=log.acc_normal, source=log.source, provenance=prov)
+    if raw.label is not None:
+        pose, values = _labels(raw.label)
+        prov["poses"] = {"source": f"label column '{raw.mapping.get('label', 'label')}'",
+                         "labels": values}
+    elif not options.detect:
+        pose, values = None, None
+    else:
+        det = detect_poses(log.acc, log.t, log.gyro, window=options.window,
+                           min_hold=options.min_hold)
+        pose, values = det.labels, None
+        prov["poses"] = {"source": "detected", "detection": det.to_dict(),
+                         "thresholds": det.thresholds_line()}
+        if det.count == 0:
+            pose = None
+    angles = None
+    count = 0 if pose is None else int(pose.max()) + 1
+    if options.label_angles:
+        if raw.label is None:
+            raise DataError(f"{path}: label angles given but the log has no label column "
+                            "(--columns label=…)")
+        missing = [v for v in values if v not in options.label_angles]
+        if missing:
+            raise DataError(f"{path}: label(s) {', '.join(missing)} have no angle; give one "
+                            "for each label")
+        angles = [options.label_angles[v] for v in values]
+    elif options.poses is not None:
+        if len(options.poses) != count:
+            found = ("detected" if raw.label is None else "labelled")
+            raise DataError(f"{path}: --poses gives {len(options.poses)} angle(s) but "
+                            f"{count} held pose(s) were {found}; give one angle per pose "
+                            "in order (the poses found are in the provenance / tiltbench "
+                            "import output)")
+        angles = list(options.poses)
+    if angles is None:
+        if options.theta_source == "gyro":
+            raise DataError(f"{path}: --theta-source gyro anchors the integrated gyro to the "
+                            "held poses' angles: give them (--poses … or --label-angles …)")
+        return ImuLog(acc=log.acc, t=log.t, pose=pose, gyro=log.gyro,
+                      acc_normal=log.acc_normal, source=log.source, provenance=prov)
+    rad = _angles(angles, options.angle_unit)
+    if options.theta_source == "gyro":
+        return _theta_from_gyro(log, pose, rad, prov, options, path)
+    keep = pose >= 0
+    theta = rad[pose[keep]]
+    prov["samples"] = dict(prov["samples"], kept=int(keep.sum()))
+    prov["held_samples_only"] = ("θ comes from the poses' angles: only the held samples "
+                                 f"({int(keep.sum())} of {log.n}) are kept")
+    prov["units"]["theta"] = options.angle_unit or "rad"
+    prov["pose_angles_rad"] = rad.tolist()
+    out = _sub(log, keep, theta, pose[keep], prov)
+    if options.angle_unit is None:
+        _degrees_check(out.theta, out.acc, path, "the pose angles")
+    return out
+
+
+def _theta_from_gyro(log: ImuLog, pose: np.ndarray | None, rad: np.ndarray, prov: dict,
+                     options: LogOptions, path: Path) -> ImuLog:
+    """Every sample kept, θ(t) integrated from the gyro and anchored to the poses' angles
+    (:mod:`calib.logs.gyro_angle`); the provenance says how, with the closure errors."""
+    from calib.logs.gyro_angle import theta_from_gyro
+
+    if log.gyro is None:
+        note = prov["units"].get("gyro_note")
+        raise DataError(f"{path}: --theta-source gyro needs a gyro about the tilt axis "
+                        f"{prov['tilt_axis']} (from --axes); "
+                        + (note if note else "the log has none (--columns gyro=…)"))
+    g = prov["units"]["g"]
+    res = theta_from_gyro(log.t, log.gyro, pose, rad, acc=log.acc, g=g, where=str(path),
+                          gyro_from=prov["units"].get("gyro_from") or "gyro")
+    prov["theta"] = res.summary()
+    prov["theta_from_gyro"] = res.to_dict(with_theta=False)
+    prov["units"]["theta"] = "rad (integrated gyro)"
+    prov["pose_angles_rad"] = rad.tolist()
+    prov["samples"] = dict(prov["samples"], kept=log.n)
+    return ImuLog(acc=log.acc, t=log.t, theta=res.theta, pose=pose, gyro=log.gyro,
+                  acc_normal=log.acc_normal, source=log.source, provenance=prov)
+
+
+def _degrees_check(theta: np.ndarray, acc: np.ndarray, path: Path, what: str) -> None:
+    """θ of unstated unit: refuse when the readings say degrees (:mod:`calib.files.angles`)."""
+    from calib.files.angles import compare_angle_units
+
+    units = compare_angle_units(theta, acc)
+    if units.looks_like_degrees:
+        raise DataError(f"{path}: {what} look like degrees, not radians: the nominal model "
+                        f"fits θ·π/180 far better than θ ({units.summary()}); give "
+                        "--angle-unit deg")
+
+
+def _labels(label: np.ndarray) -> tuple[np.ndarray, list[str]]:
+    """Pose indices in order of first appearance; moving cells (:data:`MOVING_LABELS`) -1."""
+    codes: dict[str, int] = {}
+    out = np.empty(label.size, dtype=int)
+    for i, v in enumerate(label.tolist()):
+        key = str(v).strip()
+        if key.lower() in MOVING_LABELS or key.startswith("-"):
+            out[i] = -1
+            continue
+        try:  # "1" and "1.0" are one label
+            f = float(key)
+            key = str(int(f)) if f == int(f) else key
+        except ValueError:
+            pass
+        out[i] = codes.setdefault(key, len(codes))
+    return out, list(codes)
+
+
+__all__ = ["FORMATS", "GAP_FACTOR", "LOG_FORMAT_VERSION", "SATURATION_RUN", "ImuLog",
+           "LogOptions", "accel_factor", "assemble", "detect_format", "file_sha256",
+           "read_log", "tilt_axis"]
