@@ -10,6 +10,62 @@ import numpy as np
 G: float = 9.8
 """Magnitude of gravity in m/s² used by the course (the user may give another)."""
 
+STANDARD_GRAVITY: float = 9.80665
+"""The unit g, m/s² (CGPM 1901): a log in g is converted with this value, whatever the local
+gravity the sensor feels (:data:`G`, ``--g`` or :func:`normal_gravity`)."""
+
+# WGS84 defining and derived constants (NIMA TR8350.2, 3rd ed., tables 3.1 and 3.3).
+WGS84_A: float = 6378137.0  # semi-major axis, m
+WGS84_F: float = 1.0 / 298.257223563  # flattening
+WGS84_GM: float = 3.986004418e14  # m³/s²
+WGS84_OMEGA: float = 7.292115e-5  # rad/s
+WGS84_GAMMA_E: float = 9.7803253359  # normal gravity at the equator, m/s²
+WGS84_GAMMA_P: float = 9.8321849378  # normal gravity at the poles, m/s²
+WGS84_E2: float = 0.00669437999013  # first eccentricity squared
+
+
+def normal_gravity(latitude_deg: float, height_m: float = 0.0) -> float:
+    """WGS84 normal gravity γ(φ, h) in m/s²: the local g a still sensor feels, to ~1e-4 m/s²
+    (anomalies of the real field are not modelled).
+
+    Parameters
+    ----------
+    latitude_deg : geodetic latitude φ in **degrees** (−90 … 90; north positive) — the unit
+        people read off a map, as ``--latitude`` takes it.
+    height_m : height h above the ellipsoid in m (−1e4 … 1e5); 0 by default.
+
+    Notes
+    -----
+    Somigliana's closed formula on the ellipsoid and the second-order height expression of
+    NIMA TR8350.2 (eq. 4-1 and 4-3)::
+
+        γ(φ)    = γe (1 + k sin²φ) / √(1 − e² sin²φ),     k = (b γp)/(a γe) − 1
+        γ(φ, h) = γ(φ) [1 − (2/a)(1 + f + m − 2 f sin²φ) h + (3/a²) h²],   m = ω² a² b / GM
+
+    with b = a (1 − f). Check values: γ(0°) = γe, γ(90°) = γp; MATLAB's
+    ``gravitywgs84(5000, 55, 'TaylorSeries')`` prints 9.7997.
+
+    >>> round(normal_gravity(0.0), 10), round(normal_gravity(90.0), 10)
+    (9.7803253359, 9.8321849378)
+    >>> round(normal_gravity(55.0, 5000.0), 4)
+    9.7997
+    """
+    lat = float(latitude_deg)
+    h = float(height_m)
+    if not np.isfinite(lat) or abs(lat) > 90.0:
+        raise ValueError(f"latitude {latitude_deg!r}: expected degrees in [-90, 90]")
+    if not np.isfinite(h) or not -1e4 <= h <= 1e5:
+        raise ValueError(f"height {height_m!r}: expected metres in [-10000, 100000] above the "
+                         "WGS84 ellipsoid")
+    a, f = WGS84_A, WGS84_F
+    b = a * (1.0 - f)
+    k = (b * WGS84_GAMMA_P) / (a * WGS84_GAMMA_E) - 1.0
+    m = WGS84_OMEGA**2 * a**2 * b / WGS84_GM
+    s2 = np.sin(np.radians(lat)) ** 2
+    gamma0 = WGS84_GAMMA_E * (1.0 + k * s2) / np.sqrt(1.0 - WGS84_E2 * s2)
+    return float(gamma0 * (1.0 - 2.0 / a * (1.0 + f + m - 2.0 * f * s2) * h
+                           + 3.0 / a**2 * h**2))
+
 AXES: tuple[str, str] = ("x", "y")
 """Column order of every (N, 2) array: x first, then y."""
 
