@@ -1,0 +1,408 @@
+"""The six-face test of a 3-axis accelerometer: bias, scale and misalignment of all three axes
+from holds on the faces of its case, with hold-to-hold repeatability in every interval.
+
+Model (IEEE Std 1293 accelerometer model, its linear terms; MATLAB ``accelcal``'s
+``C = U·A + b``). Hold h rests on a face of the case, so that the specific force of gravity
+points along a case axis ``u_h = ±e_k`` (face ``+z``: the z axis points up and reads about
++1 g). Each axis a reads the hold's mean::
+
+    m̄_h,a = b_a + g · (K_a · u_h) + ε_h,a,      ε_h,a ~ N(0, σ_B,a² + σ_W,a² / n_h)
+
+    K = (I + S)(I + M):  K_aa = 1 + s_a,   K_ab = (1 + s_a) · m_ab    (a ≠ b)
+
+``b`` bias (m/s², K0), ``s`` scale (dimensionless, K1 − 1; positive: the axis reads too much),
+``m_ab`` misalignment (rad, small angle: the sensitive axis a leans toward case axis b; positive
+when a reads +m_ab·g with case axis b up). Each row ``[b_a, K_ax, K_ay, K_az]`` enters linearly
+(design rows ``[1, g·u_h]``) and is fitted by weighted least squares with a QR factor; the
+misalignments ``m_ab = K_ab / K_aa`` get their covariance by the delta method. The axes are
+fitted separately: their noises are taken as independent.
+
+The noise of a hold mean has two parts (one-way random effects, Searle, Casella & McCulloch,
+*Variance Components*, 1992, ch. 3):
+
+* within the hold, ``σ_W,a²`` — the pooled scatter of the samples about their hold's mean,
+  ``MS_W = SS_W / (N − H)``;
+* between holds, ``σ_B,a²`` — re-holding the same face reads differently (the case sits
+  differently, the bias wanders). Measured only when a face is held more than once: the hold
+  means of one face scatter about that face's mean by ``SS_PE`` with ``H − F`` dof and
+  ``E[SS_PE] = (H − F)·σ_B² + σ_W²·c``, ``c = Σ_f (1 − 1/H_f) Σ_{h∈f} 1/n_h`` (ANOVA
+  estimator, truncated at 0).
+
+Every interval uses ``v_h = σ̂_B² + σ̂_W²/n_h`` and a Student t quantile with Satterthwaite's
+dof for ``v̄ = MS_PE·1 + MS_W·(1/n̄ − c/(H − F))``. With ``σ_B`` truly zero the estimate is
+zero about half the time and otherwise small, so the intervals do not widen beyond chance;
+with no face held twice the repeatability is not measured and the result says so.
+
+Lack of fit (per axis): the hold means that the linear model misses beyond the pure error —
+``F = (SS_LOF/(F − 4)) / (SS_PE/(H − F))`` from the unweighted fit — or, without re-holds,
+the weighted residuals against the within-hold scatter, ``(RSS_W/(H − 4))`` on
+``F(H − 4, N − H)``. A missing term (a second-order K2, a face that is not flat) shows here,
+not in σ_B.
+
+What the faces identify: per axis the four columns ``1, u_x, u_y, u_z`` need faces along every
+case axis and at least four faces in all; a design that misses one is refused with the names
+of the parameters it cannot identify and the faces that would. The case's own placement on the
+table cannot be told apart from the sensor's misalignment relative to the case: ``m_ab`` is the
+misalignment relative to the faces used.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import linalg, stats
+
+from calib.calibration.ls import NotIdentifiableError
+from calib.calibration.multiposition.shared import Poses
+from calib.conventions import G
+from calib.input_rules import DataError
+from calib.results import ResultMixin, readonly
+
+AXES_3: tuple[str, str, str] = ("x", "y", "z")
+FACE_COS: float = float(np.cos(np.radians(20.0)))
+"""A hold is on a face when its mean reading lies within 20° of one case axis."""
+LOF_ALPHA: float = 0.05
+
+
+def face_name(u: np.ndarray) -> str:
+    """``"+z"`` for ``u = (0, 0, 1)``: the case axis that points up, with its sign."""
+    k = int(np.argmax(np.abs(u)))
+    return ("+" if u[k] > 0 else "-") + AXES_3[k]
+
+
+def faces_of(means: np.ndarray, source: str = "<memory>") -> np.ndarray:
+    """The face ``u_h = ±e_k`` (H, 3) of each hold from its mean reading ``means`` (H, 3) m/s²:
+    the axis with the largest |mean| and its sign; DataError for a hold more than 20° from
+    every face (a tilted hold belongs to the multi-position fit, not the six-face test)."""
+    means = np.asarray(means, dtype=float)
+    norm = np.linalg.norm(means, axis=1)
+    k = np.argmax(np.abs(means), axis=1)
+    lead = np.abs(means[np.arange(len(means)), k])
+    off = np.flatnonzero(lead < FACE_COS * norm)
+    if off.size:
+        i = int(off[0])
+        angle = np.degrees(np.arccos(np.clip(lead[i] / norm[i], -1, 1)))
+        raise DataError(f"{source}: hold {i} is not on a face of the case: its reading is "
+                        f"{angle:.0f}° from the nearest axis (a face is within 20°); use the "
+                        "multi-position fit for tilted holds")
+    u = np.zeros_like(means)
+    u[np.arange(len(means)), k] = np.sign(means[np.arange(len(means)), k])
+    return u
+
+
+def _unidentified(x: np.ndarray, axis: str) -> list[str]:
+    """Names of the row parameters of ``axis`` in the null space of the design ``x``."""
+    _, s, vt = np.linalg.svd(x / np.linalg.norm(x, axis=0).clip(min=1e-300),
+                             full_matrices=True)
+    rank = int(np.sum(s > s[0] * 1e-10)) if s.size else 0
+    null = vt[rank:]
+    involved = np.flatnonzero(np.any(np.abs(null) > 1e-8, axis=0))
+    out = []
+    for j in involved:
+        if j == 0:
+            out.append(f"bias_{axis}")
+        elif AXES_3[j - 1] == axis:
+            out.append(f"scale_{axis}")
+        else:
+            out.append(f"misalignment_{axis}{AXES_3[j - 1]}")
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class SixFaceFit(ResultMixin):
+    """Bias, scale and misalignment of three axes from a six-face test (module docstring).
+
+    Attributes
+    ----------
+    param_names : the 12 names, per axis a: ``bias_a`` (m/s²), ``scale_a`` (dimensionless),
+        then its two misalignments ``misalignment_ab`` (rad).
+    params : (12,) estimates in that order.
+    cov : (12, 12) covariance (block diagonal by axis), hold-to-hold repeatability included.
+    dof : (3,) Satterthwaite dof of each axis' variance (Student t quantiles).
+    k_matrix : (3, 3) K = (I + S)(I + M), dimensionless (rows: sensor axes; columns: case
+        axes).
+    residuals : (H, 3) m/s², hold means minus the model.
+    faces : tuple of H face names (``"+x"`` …), one per hold.
+    n : (H,) samples per hold.
+    sigma_within : (3,) σ_W per axis, m/s²; ``sigma_between``: (3,) σ_B, m/s², NaN when no face
+        is held twice (not measured).
+    widening : (3,) how much hold-to-hold repeatability widened each axis' intervals (ratio
+        of the bias half-width to the within-hold-only one; 1 when σ_B = 0, NaN if not
+        measured).
+    lack_of_fit_p : (3,) p-value of each axis' lack-of-fit test (NaN with no dof left).
+    g : gravity used, m/s²; ``g_source``: where it came from.
+    level : the level of the intervals :meth:`summary` prints.
+    """
+
+    param_names: tuple[str, ...]
+    params: np.ndarray
+    cov: np.ndarray
+    dof: np.ndarray
+    k_matrix: np.ndarray
+    residuals: np.ndarray
+    faces: tuple[str, ...]
+    n: np.ndarray
+    sigma_within: np.ndarray
+    sigma_between: np.ndarray
+    widening: np.ndarray
+    lack_of_fit_p: np.ndarray
+    g: float
+    g_source: str = "given"
+    level: float = 0.95
+    source: str = field(default="<memory>", compare=False)
+
+    _TITLE = "Six-face calibration (3 axes)"
+    _UNITS = "bias m/s²; scale dimensionless; misalignment rad; σ m/s²; g m/s²"
+
+    def __post_init__(self) -> None:
+        for name in ("params", "cov", "dof", "k_matrix", "residuals", "sigma_within",
+                     "sigma_between", "widening", "lack_of_fit_p"):
+            object.__setattr__(self, name, readonly(getattr(self, name)))
+        object.__setattr__(self, "n", readonly(self.n, int))
+        object.__setattr__(self, "param_names", tuple(self.param_names))
+        object.__setattr__(self, "faces", tuple(self.faces))
+
+    @property
+    def std(self) -> np.ndarray:
+        return np.sqrt(np.diag(self.cov))
+
+    @property
+    def bias(self) -> np.ndarray:
+        """(3,) m/s²."""
+        return self.params[0::4]
+
+    @property
+    def scale(self) -> np.ndarray:
+        """(3,) dimensionless."""
+        return self.params[1::4]
+
+    @property
+    def misalignment(self) -> np.ndarray:
+        """(3, 3) rad, ``m_ab`` off the diagonal, 0 on it."""
+        return self.k_matrix / np.diag(self.k_matrix)[:, None] - np.eye(3)
+
+    @property
+    def repeatability_measured(self) -> bool:
+        return bool(np.all(np.isfinite(self.sigma_between)))
+
+    def quantiles(self, level: float | None = None) -> np.ndarray:
+        """(12,) two-sided Student t quantile of each parameter (its axis' dof)."""
+        lv = self.level if level is None else level
+        if not 0 < lv < 1:
+            raise ValueError(f"level must be in (0, 1), got {lv}")
+        return np.repeat(stats.t.ppf(0.5 + lv / 2, self.dof), 4)
+
+    def conf_int(self, level: float | None = None) -> np.ndarray:
+        """(12, 2) intervals at ``level`` (default: :attr:`level`)."""
+        half = self.quantiles(level) * self.std
+        return np.column_stack([self.params - half, self.params + half])
+
+    def repeatability_line(self) -> str:
+        """What hold-to-hold repeatability did to the intervals (one or two lines)."""
+        if not self.repeatability_measured:
+            return ("hold-to-hold repeatability: not measured (no face held twice); the "
+                    "intervals count the scatter within holds only")
+        sb = ", ".join(f"{a} {v:.3g}" for a, v in zip(AXES_3, self.sigma_between, strict=True))
+        wd = ", ".join(f"{a} ×{v:.2f}" for a, v in zip(AXES_3, self.widening, strict=True))
+        return f"hold-to-hold repeatability σ_B (m/s²): {sb}\n  intervals widened by it: {wd}"
+
+    def summary(self) -> str:
+        ci = self.conf_int()
+        pct = f"{100 * self.level:g} %"
+        lines = [f"six-face calibration of {self.source}: {len(self.faces)} holds on "
+                 f"{len(set(self.faces))} faces ({', '.join(sorted(set(self.faces)))}), "
+                 f"g = {self.g:.6g} m/s² ({self.g_source})",
+                 f"{'parameter':<18} {'estimate':>12} {'std':>10}   {pct} interval"]
+        for name, v, s, (lo, hi) in zip(self.param_names, self.params, self.std, ci,
+                                        strict=True):
+            unit = "m/s²" if name.startswith("bias") else (
+                "rad" if name.startswith("misalignment") else "")
+            lines.append(f"{name:<18} {v:>12.6g} {s:>10.3g}   [{lo:.6g}, {hi:.6g}] {unit}")
+        lines.append(self.repeatability_line())
+        lof = ", ".join("n/a" if not np.isfinite(p) else f"{a} p = {p:.2g}"
+                        for a, p in zip(AXES_3, self.lack_of_fit_p, strict=True))
+        lines.append(f"lack of fit (α = {LOF_ALPHA}): {lof}")
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"method": "six-face", "source": self.source,
+                "param_names": list(self.param_names), "params": self.params.tolist(),
+                "cov": self.cov.tolist(), "dof": self.dof.tolist(),
+                "k_matrix": self.k_matrix.tolist(), "residuals": self.residuals.tolist(),
+                "faces": list(self.faces), "n": self.n.tolist(),
+                "sigma_within": self.sigma_within.tolist(),
+                "sigma_between": [None if not np.isfinite(v) else v
+                                  for v in self.sigma_between.tolist()],
+                "widening": [None if not np.isfinite(v) else v
+                             for v in self.widening.tolist()],
+                "lack_of_fit_p": [None if not np.isfinite(v) else v
+                                  for v in self.lack_of_fit_p.tolist()],
+                "g": self.g, "g_source": self.g_source, "level": self.level}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> SixFaceFit:
+        def arr(key: str) -> np.ndarray:
+            return np.array([np.nan if v is None else v for v in d[key]], dtype=float)
+
+        return cls(param_names=tuple(d["param_names"]), params=np.array(d["params"]),
+                   cov=np.array(d["cov"]), dof=np.array(d["dof"]),
+                   k_matrix=np.array(d["k_matrix"]), residuals=np.array(d["residuals"]),
+                   faces=tuple(d["faces"]), n=np.array(d["n"]),
+                   sigma_within=np.array(d["sigma_within"]), sigma_between=arr("sigma_between"),
+                   widening=arr("widening"), lack_of_fit_p=arr("lack_of_fit_p"),
+                   g=float(d["g"]), g_source=d["g_source"], level=float(d["level"]),
+                   source=d.get("source", "<memory>"))
+
+
+@dataclass(frozen=True)
+class _AxisFit:
+    row: np.ndarray  # (4,) [b, K_x, K_y, K_z]
+    cov: np.ndarray  # (4, 4)
+    dof: float
+    resid: np.ndarray  # (H,)
+    sigma_w: float
+    sigma_b: float  # NaN: not measured
+    widening: float
+    lof_p: float
+
+
+def _wls(x: np.ndarray, y: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row estimate and covariance of ``y = x p + ε``, ``Var ε = diag(v)``: QR of the
+    whitened design, ``cov = R⁻¹R⁻ᵀ`` (no normal matrix)."""
+    w = 1.0 / np.sqrt(v)
+    p, *_ = np.linalg.lstsq(x * w[:, None], y * w, rcond=None)
+    r = np.linalg.qr(x * w[:, None], mode="r")
+    ri = linalg.solve_triangular(r, np.eye(r.shape[0]))
+    return p, ri @ ri.T
+
+
+def _fit_axis(x: np.ndarray, y: np.ndarray, n: np.ndarray, ss_w: float,
+              face: np.ndarray) -> _AxisFit:
+    h, p = x.shape
+    dof_w = int(n.sum()) - h
+    ms_w = ss_w / dof_w
+    groups = [np.flatnonzero(face == f) for f in np.unique(face)]
+    n_faces = len(groups)
+    dof_pe = h - n_faces
+    nbar = h / float(np.sum(1.0 / n))  # harmonic mean: v̄ = σ_B² + σ_W²/n̄
+    if dof_pe > 0:
+        ss_pe = float(sum(np.sum((y[g] - y[g].mean()) ** 2) for g in groups))
+        c = float(sum((1 - 1 / len(g)) * np.sum(1.0 / n[g]) for g in groups))
+        sigma_b2 = max(0.0, (ss_pe - ms_w * c) / dof_pe)
+        if sigma_b2 > 0:  # Satterthwaite: v̄ = 1·MS_PE + (1/n̄ − c/dof_pe)·MS_W
+            ms_pe = ss_pe / dof_pe
+            a2 = 1 / nbar - c / dof_pe
+            vbar = ms_pe + a2 * ms_w
+            dof = vbar**2 / (ms_pe**2 / dof_pe + (a2 * ms_w) ** 2 / dof_w)
+        else:
+            dof = float(dof_w)
+    else:
+        ss_pe, sigma_b2, dof = np.nan, np.nan, float(dof_w)
+    v = (0.0 if np.isnan(sigma_b2) else sigma_b2) + ms_w / n
+    row, cov = _wls(x, y, v)
+    resid = y - x @ row
+    if np.isnan(sigma_b2):
+        widening = np.nan
+    else:
+        _, cov_w = _wls(x, y, ms_w / n)
+        q = stats.t.ppf(0.975, dof) / stats.t.ppf(0.975, dof_w)
+        widening = float(q * np.sqrt(cov[0, 0] / cov_w[0, 0]))
+    dof_lof = n_faces - p
+    if dof_pe > 0 and dof_lof > 0:  # unweighted fit: RSS = SS_PE + SS_LOF
+        p_u, *_ = np.linalg.lstsq(x, y, rcond=None)
+        ss_lof = max(0.0, float(np.sum((y - x @ p_u) ** 2)) - ss_pe)
+        f = (ss_lof / dof_lof) / (ss_pe / dof_pe) if ss_pe > 0 else np.inf
+        lof_p = float(stats.f.sf(f, dof_lof, dof_pe))
+    elif dof_pe <= 0 and h > p:
+        f = float(np.sum(resid**2 / v)) / (h - p)
+        lof_p = float(stats.f.sf(f, h - p, dof_w))
+    else:
+        lof_p = np.nan
+    return _AxisFit(row, cov, float(dof), resid, float(np.sqrt(ms_w)),
+                    float(np.sqrt(sigma_b2)) if np.isfinite(sigma_b2) else np.nan, widening,
+                    lof_p)
+
+
+def fit_six_face(poses: Poses, g: float = G, g_source: str = "given", level: float = 0.95,
+                 source: str = "<memory>") -> SixFaceFit:
+    """Bias, scale and misalignment of three axes from holds on the faces of the case.
+
+    Parameters
+    ----------
+    poses : the holds (:func:`calib.calibration.multiposition.pose_statistics` of an (N, 3)
+        log in m/s² with hold labels): means (H, 3), counts, within-hold sums of squares.
+        Re-holds of one face are separate holds (that is how repeatability is measured).
+    g : the local gravity the sensor feels, m/s² (``--g``, or
+        :func:`calib.conventions.normal_gravity` of the latitude and height).
+    g_source : where ``g`` came from, for the record (e.g. ``"--latitude 55 --height 5000"``).
+    level : the level of the printed intervals.
+    source : the log's name, for messages.
+
+    Returns
+    -------
+    SixFaceFit
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from calib.calibration.multiposition import Poses
+    >>> u = np.repeat(np.vstack([np.eye(3), -np.eye(3)]), 2, axis=0)  # six faces, twice
+    >>> k = np.array([[1.01, 0.002, 0.0], [0.0, 0.99, -0.001], [0.003, 0.0, 1.02]])
+    >>> means = 0.05 + 9.8 * u @ k.T
+    >>> fit = fit_six_face(Poses(np.arange(12), np.full(12, 100), means, np.ones((12, 3))))
+    >>> np.round(fit.scale, 9).tolist(), round(float(fit.misalignment[0, 1]), 9)
+    ([0.01, -0.01, 0.02], 0.001980198)
+    """
+    means = np.asarray(poses.means, dtype=float)
+    if means.ndim != 2 or means.shape[1] != 3:
+        raise DataError(f"{source}: the six-face test needs three axes; the holds have "
+                        f"{means.shape[-1]} (give the log's third axis)")
+    if not (np.isfinite(g) and g > 0):
+        raise ValueError(f"g must be a positive number of m/s², got {g}")
+    u = faces_of(means, source)
+    names_h = tuple(face_name(r) for r in u)
+    face = np.array([AXES_3.index(f[1]) * 2 + (f[0] == "-") for f in names_h])
+    x = np.column_stack([np.ones(len(u)), g * u])
+    missing = [f"{s}{a}" for a in AXES_3 for s in "+-" if f"{s}{a}" not in names_h]
+    bad = [name for a in AXES_3 for name in _unidentified(x, a)]
+    if bad or len(np.unique(face)) < 4:
+        raise NotIdentifiableError(
+            f"{source}: the faces held ({', '.join(sorted(set(names_h)))}) cannot identify "
+            f"{', '.join(bad) or 'the 4 parameters of each axis (fewer than 4 faces)'}; "
+            f"hold the case also on {', '.join(missing) or 'more faces'}")
+    n = np.asarray(poses.n, dtype=int)
+    if np.any(n < 2):
+        raise DataError(f"{source}: every hold needs at least 2 samples (the scatter within "
+                        "it); got a hold of 1")
+    fits = [_fit_axis(x, means[:, k], n, float(np.sum(poses.ss[:, k])), face)
+            for k in range(3)]
+    k_matrix = np.array([f.row[1:] for f in fits])
+    params, blocks, names = [], [], []
+    for k, (a, f) in enumerate(zip(AXES_3, fits, strict=True)):
+        kaa = f.row[1 + k]
+        others = [j for j in range(3) if j != k]
+        # derived d = [b, K_aa − 1, K_ab/K_aa, K_ac/K_aa]; J = ∂d/∂[b, K_ax, K_ay, K_az]
+        jac = np.zeros((4, 4))
+        jac[0, 0] = 1.0
+        jac[1, 1 + k] = 1.0
+        for i, j in enumerate(others):
+            jac[2 + i, 1 + j] = 1.0 / kaa
+            jac[2 + i, 1 + k] = -f.row[1 + j] / kaa**2
+        params += [f.row[0], kaa - 1.0, *(f.row[1 + j] / kaa for j in others)]
+        blocks.append(jac @ f.cov @ jac.T)
+        names += [f"bias_{a}", f"scale_{a}", *(f"misalignment_{a}{AXES_3[j]}" for j in others)]
+    return SixFaceFit(
+        param_names=tuple(names), params=np.array(params), cov=linalg.block_diag(*blocks),
+        dof=np.array([f.dof for f in fits]), k_matrix=k_matrix,
+        residuals=np.column_stack([f.resid for f in fits]), faces=names_h, n=n,
+        sigma_within=np.array([f.sigma_w for f in fits]),
+        sigma_between=np.array([f.sigma_b for f in fits]),
+        widening=np.array([f.widening for f in fits]),
+        lack_of_fit_p=np.array([f.lof_p for f in fits]), g=float(g), g_source=g_source,
+        level=level, source=source)
+
+
+__all__ = ["AXES_3", "FACE_COS", "LOF_ALPHA", "SixFaceFit", "face_name", "faces_of",
+           "fit_six_face"]
