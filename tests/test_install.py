@@ -1,8 +1,9 @@
 """An installed tiltbench works like the README: the wheel carries every package (found by
-discovery: ``bench*``, ``calib*``), the datasets and docs pages, and nothing else (no
-``validation``); ``tiltbench examples DIR`` writes the shipped files, and the README's shell
-examples name only files that exist after it (never the checkout's ``data/``, which a ``pip
-install`` does not have).
+discovery: ``bench*``, ``calib*``), the datasets and docs pages (and their pictures), and
+nothing else (no ``validation``); ``tiltbench examples DIR`` writes the shipped files, and the
+shell examples of the README and of every docs page name only files that exist after it (never
+the checkout's ``data/``, which a ``pip install`` does not have). The README's tour runs, line
+by line, from an empty folder.
 
 The wheel is built once per module (``pip wheel --no-deps --no-build-isolation`` of a copy of
 the sources with the test environment's setuptools, ≈ 5 s: no download). The slow test
@@ -59,10 +60,15 @@ def wheel(built) -> zipfile.ZipFile:
     return zipfile.ZipFile(built[0])
 
 
-def _sh_lines() -> list[str]:
-    """Command lines of the README's ```sh blocks (comments stripped)."""
-    blocks = re.findall(r"^```sh\n(.*?)^```", README.read_text(encoding="utf-8"), re.S | re.M)
-    return [ln.split("  #")[0].strip() for b in blocks for ln in b.splitlines() if ln.strip()]
+def _sh_lines(page: Path = README) -> list[str]:
+    """Command lines of a page's ```sh blocks (comments stripped)."""
+    blocks = re.findall(r"^```sh\n(.*?)^```", page.read_text(encoding="utf-8"), re.S | re.M)
+    return [ln.split("  #")[0].strip() for b in blocks for ln in b.splitlines()
+            if ln.strip() and not ln.lstrip().startswith("#")]
+
+
+SH_PAGES = [README] + [p for p in sorted((ROOT / "docs").glob("*.md")) if _sh_lines(p)]
+"""The README and every docs page with shell examples (the README's details moved there)."""
 
 
 def _help_texts(parser) -> list[str]:
@@ -141,32 +147,75 @@ def test_examples_without_dir_names_where_they_are(capsys):
     assert all(f"{folder}/: " in printed for folder in FOLDERS)
 
 
-def test_readme_examples_name_files_the_examples_command_writes(tmp_path, monkeypatch, capsys):
-    """Every README shell line that reads a shipped file reads it from the folder that
-    ``tiltbench examples DIR`` (a line of the same README) wrote, so it runs from any
-    directory; no line reads the checkout's ``data/``."""
-    lines = [shlex.split(ln) for ln in _sh_lines() if ln.startswith("tiltbench ")]
-    dirs = [argv[2] for argv in lines if argv[1] == "examples"]
-    assert dirs, "the README never runs `tiltbench examples DIR`"
+def test_moved_shell_examples_are_still_checked():
+    """The README kept a few real lines; the pages its details moved to are checked too."""
+    names = {p.name for p in SH_PAGES}
+    assert {"README.md", "install.md", "demo.md", "gap.md", "real-data.md"} <= names, names
+
+
+@pytest.mark.parametrize("page", SH_PAGES, ids=lambda p: p.name)
+def test_shell_examples_name_files_the_examples_command_writes(page, tmp_path, monkeypatch,
+                                                               capsys):
+    """Every shell line of the page that reads a shipped file reads it from the folder that
+    ``tiltbench examples DIR`` (a line of the same page) wrote, so it runs from any directory;
+    no line reads the checkout's ``data/`` or ``docs/``."""
+    lines = [shlex.split(ln) for ln in _sh_lines(page) if ln.startswith("tiltbench ")]
+    dirs = [argv[2] for argv in lines if argv[1] == "examples" and len(argv) > 2]
+    if page == README:
+        assert dirs, "the README never runs `tiltbench examples DIR`"
     monkeypatch.chdir(tmp_path)
     for d in dirs:
         assert main(["examples", d, "--force"]) == 0
     capsys.readouterr()
     shipped = tuple(f"{d}/{folder}/" for d in dirs for folder in FOLDERS)
     used = [tok for argv in lines for tok in argv if tok.startswith(shipped)]
-    assert any(tok.endswith("ensayo.mat") for tok in used)
+    if page == README:
+        assert any(tok.endswith("ensayo.mat") for tok in used)
     missing = [tok for tok in used if not Path(tok).is_file()]
     assert not missing, missing
+    # a shipped-looking path (X/data/…, X/docs/…) whose X no `examples` line of the page wrote
+    orphans = [tok for argv in lines for tok in argv
+               if re.match(r"^[\w.-]+/(data|docs)/", tok) and not tok.startswith(shipped)]
+    assert not orphans, f"{page.name}: run `tiltbench examples DIR` first: {orphans}"
     bare = [" ".join(argv) for argv in lines
             if any(tok.startswith(("data/", "docs/")) for tok in argv)]
-    assert not bare, f"README lines that read the checkout's data/ or docs/: {bare}"
+    assert not bare, f"{page.name} lines that read the checkout's data/ or docs/: {bare}"
+
+
+@pytest.mark.slow
+def test_the_readme_tour_runs(tmp_path, monkeypatch, capsys):
+    """Every ``tiltbench`` line of the README, in order, from an empty folder: exit 0, and the
+    numbers the README quotes beside them are what the commands print."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    lines = [ln for ln in _sh_lines() if ln.startswith("tiltbench ")]
+    assert len(lines) >= 6
+    printed = {}
+    for ln in lines:
+        argv = shlex.split(ln)[1:]
+        rc = main(argv)
+        out, err = capsys.readouterr()
+        assert rc == 0, f"{ln}: exit {rc}\n{err[-2000:]}"
+        printed[argv[0]] = printed.get(argv[0], "") + out
+    text = {cmd: " ".join(out.split()) for cmd, out in printed.items()}  # wrapped lines joined
+    readme = " ".join(README.read_text(encoding="utf-8").split())
+    assert "std 14.5 m × 24.7 m" in readme and "from (14.5, 24.7) m to (1.35, 1.56) m" in readme
+    assert "std = (14.52, 24.66) m" in text["trajectory"] and "decision: C" in text["trajectory"]
+    fused = re.search(r"final position \(.*?\) m, std \(([\d.]+), ([\d.]+)\) m", text["fuse"])
+    assert [round(float(v), 2) for v in fused.groups()] == [1.35, 1.56]
+    assert "0.0195 ± 0.0012 rad, hidden as 0.02 rad" in readme
+    assert "misalignment (x): delta = 0.01952 ± 0.0012 rad" in text["gap"]
+    assert "21 holds, 3 axes" in readme and "multi-position, 3 axes" in text["calibrate"]
+    assert "21 poses" in text["calibrate"]
 
 
 def test_docs_pages_named_by_help_and_readme_are_shipped():
-    """``docs/X.md`` named by any --help text or the README is a page ``tiltbench examples``
-    writes (and the wheel carries)."""
+    """``docs/X.md`` (or a picture, ``docs/images/X.png``) named by any --help text or the
+    README is a file ``tiltbench examples`` writes (and the wheel carries)."""
     texts = _help_texts(build_parser()) + [README.read_text(encoding="utf-8")]
-    named = {m for t in texts for m in re.findall(r"docs/[\w.-]+\.md", " ".join(t.split()))}
+    named = {m for t in texts
+             for m in re.findall(r"docs/[\w./-]+\.(?:md|png)", " ".join(t.split()))}
+    assert "docs/images/demo-trajectory.png" in named
     assert named
     assert named <= set(shipped_files()), sorted(named - set(shipped_files()))
 
@@ -215,7 +264,7 @@ RUNS = [  # one real run per command (small sizes), in order: later runs read ea
      "--out", "imp", "--json"],
     ["trajectory", *COURSE, "--json"],
     ["nmin", *COURSE, "--runs", "0", "--draws", "0", "--json"],
-    ["design", "--designs", "uniform", "--n", "201", "--runs", "0", "--json"],
+    ["design", "--designs", "uniform", "--count", "201", "--runs", "0", "--json"],
     ["fuse", *COURSE, "--gps", "course/gps.mat", "--json"],
     ["fusion-study", "--runs", "2", "--workers", "1", "--out", "fs", "--quiet", "--json"],
     ["record", "read", "cal.rrd", "--json"],
