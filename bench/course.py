@@ -160,6 +160,7 @@ def place_candidates(truth, raw_end, rng: np.random.Generator, letters=LETTERS,
 class CourseSet:
     """A generated course set with its truth."""
 
+    # fields alike sensor_twin.StaticRun's in shape only: a different run, nothing to share
     calibration: CalibrationRun
     vehicle: VehicleRun
     candidates: dict
@@ -261,6 +262,7 @@ def write_course(course: CourseSet, out: str | Path, force: bool = False) -> dic
 def generate_course(out: str | Path, seed: int = 0, force: bool = False,
                     config: CourseConfig | None = None) -> CourseSet:
     """Generate a course set and write it (``tiltbench generate course``)."""
+    # shaped as vehicle.generate_vehicle: each kind's own make and write, too thin to share
     course = make_course_set(config, seed)
     write_course(course, out, force)
     return course

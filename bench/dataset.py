@@ -45,6 +45,16 @@ def versions() -> dict[str, str]:
     return out
 
 
+def without_versions(tree):
+    """A JSON tree with every ``versions`` block (:func:`versions`, at any depth) left out:
+    what must stay the same when another patch release of a package is installed."""
+    if isinstance(tree, dict):
+        return {k: without_versions(v) for k, v in tree.items() if k != "versions"}
+    if isinstance(tree, list):
+        return [without_versions(v) for v in tree]
+    return tree
+
+
 def mat_bytes(variables: dict[str, np.ndarray], note: str = "") -> bytes:
     """MATLAB v5 bytes of ``variables`` with a fixed, reproducible header.
 

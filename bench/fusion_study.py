@@ -147,6 +147,7 @@ class StudyConfig:
     ≈ 200 MB of covariances), region level L, the true initial-state σ (m, m/s) and fix σ (m).
     """
 
+    # fields alike Scenario's in shape only: the study's size and truth, not a filter's settings
     runs: int = 200
     seed: int = 0
     chunk: int = 25

@@ -28,7 +28,7 @@ Canonical term order inside a stage: :data:`TERM_ORDER`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import ClassVar, Literal, Protocol
 
 import numpy as np
@@ -38,6 +38,8 @@ from calib.filters import lowpass, uniform_step
 from calib.noise.allan_model import flicker_coefficients
 
 Stage = Literal["response", "output"]
+Bound = Literal["finite", "nonnegative", "positive"]
+"""What a term's coefficient must be (besides finite: >= 0, > 0)."""
 
 
 @dataclass(frozen=True)
@@ -71,9 +73,17 @@ TERM_REGISTRY: dict[str, type] = {}
 """Effect name → term class; filled by :func:`register_term`, used to rebuild from JSON."""
 
 
-def register_term(cls: type) -> type:
-    TERM_REGISTRY[cls.name] = cls
-    return cls
+def register_term(name: str, stage: Stage, bound: Bound = "finite"):
+    """Class decorator: give a term class its vocabulary ``name``, its ``stage`` and the
+    ``bound`` its coefficient keeps, and register it under ``name`` (dm_control registers a
+    task the same way)."""
+
+    def register(cls: type) -> type:
+        cls.name, cls.stage, cls.bound = name, stage, bound
+        TERM_REGISTRY[name] = cls
+        return cls
+
+    return register
 
 
 TERM_ORDER: tuple[str, ...] = ("lowpass_lag", "nonlinearity_k2", "cross_axis", "bias_drift",
@@ -88,19 +98,6 @@ def require_finite(value: float, what: str) -> float:
     return value
 
 
-def _positive(value: float, what: str) -> float:
-    value = require_finite(value, what)
-    if value <= 0:
-        raise ValueError(f"{what} must be positive, got {value}")
-    return value
-
-
-def _one_of(a: float | None, b: float | None, names: tuple[str, str], effect: str) -> None:
-    if (a is None) == (b is None):
-        raise ValueError(f"{effect}: give exactly one of {names[0]} (with timing) or "
-                         f"{names[1]} (samples in time order)")
-
-
 def _per_sample_or_time(ctx: SensorContext, n: int, per_second: bool, effect: str,
                         key: str) -> np.ndarray:
     """Elapsed time t - t0 (s) or the sample index k (samples) for a drift-type term."""
@@ -113,12 +110,47 @@ def _per_sample_or_time(ctx: SensorContext, n: int, per_second: bool, effect: st
     return np.arange(n, dtype=float)
 
 
+class CoefficientTerm:
+    """What every term of the catalog shares: its coefficient is checked when it is made and
+    written to ``truth.json`` as a float.
+
+    A term has one coefficient, or two alternatives of which exactly one is given (per second,
+    with sample times, or per sample: ``rate`` / ``rate_per_sample``); the first field names
+    the coefficient in messages. The coefficient is finite and keeps the term's ``bound``
+    (:func:`register_term`).
+    """
+
+    name: ClassVar[str]
+    stage: ClassVar[Stage]
+    bound: ClassVar[Bound]
+
+    def __post_init__(self) -> None:
+        names = tuple(f.name for f in fields(self))
+        values = [getattr(self, n) for n in names]
+        if len(names) == 2:
+            a, b = values
+            if (a is None) == (b is None):
+                raise ValueError(f"{self.name}: give exactly one of {names[0]} (with timing) "
+                                 f"or {names[1]} (samples in time order)")
+        value = values[0] if values[0] is not None else values[-1]
+        what = f"{self.name} {names[0]}"
+        checked = require_finite(value, what)
+        if self.bound == "nonnegative" and checked < 0:
+            raise ValueError(f"{what} must be >= 0, got {value}")
+        if self.bound == "positive" and checked <= 0:
+            raise ValueError(f"{what} must be positive, got {checked}")
+
+    def to_dict(self) -> dict:
+        """The given coefficient(s) as floats (an alternative left unset is left out)."""
+        return {f.name: float(v) for f in fields(self) if (v := getattr(self, f.name)) is not None}
+
+
 # --- the catalog's sensor error terms -----------------------------------------------------
 
 
-@register_term
+@register_term("nonlinearity_k2", "response")
 @dataclass(frozen=True)
-class NonlinearityK2:
+class NonlinearityK2(CoefficientTerm):
     """Second-order response (IEEE Std 1293 K2/K1): ``a ↦ a + k2·a²``.
 
     Parameters
@@ -128,23 +160,15 @@ class NonlinearityK2:
     """
 
     k2: float
-    name: ClassVar[str] = "nonlinearity_k2"
-    stage: ClassVar[Stage] = "response"
-
-    def __post_init__(self) -> None:
-        require_finite(self.k2, "nonlinearity_k2 k2")
 
     def apply(self, a: np.ndarray, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:
         """Return ``a + k2·a²`` (a: (N,) m/s²)."""
         return a + self.k2 * a * a
 
-    def to_dict(self) -> dict:
-        return {"k2": float(self.k2)}
 
-
-@register_term
+@register_term("cross_axis", "response")
 @dataclass(frozen=True)
-class CrossAxis:
+class CrossAxis(CoefficientTerm):
     """Cross-coupling (IEEE Std 1293 K_ip/K1): ``a_i ↦ a_i + k_ip·a_i·a_p``.
 
     Parameters
@@ -154,24 +178,16 @@ class CrossAxis:
     """
 
     k_ip: float
-    name: ClassVar[str] = "cross_axis"
-    stage: ClassVar[Stage] = "response"
-
-    def __post_init__(self) -> None:
-        require_finite(self.k_ip, "cross_axis k_ip")
 
     def apply(self, a: np.ndarray, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:
         """Return ``a + k_ip·a·a_p``; ``a_p = ctx.a_true[:, other axis]``."""
         a_p = np.asarray(ctx.a_true, dtype=float)[:, 1 - ctx.axis]
         return a + self.k_ip * a * a_p
 
-    def to_dict(self) -> dict:
-        return {"k_ip": float(self.k_ip)}
 
-
-@register_term
+@register_term("bias_drift", "output")
 @dataclass(frozen=True)
-class BiasDrift:
+class BiasDrift(CoefficientTerm):
     """Linear bias drift, additive at the bias level: ``A_m ↦ A_m + rate·(t - t0)``.
 
     Exactly one of ``rate`` (m/s² per s, needs sample times) or ``rate_per_sample`` (m/s² per
@@ -181,13 +197,6 @@ class BiasDrift:
 
     rate: float | None = None
     rate_per_sample: float | None = None
-    name: ClassVar[str] = "bias_drift"
-    stage: ClassVar[Stage] = "output"
-
-    def __post_init__(self) -> None:
-        _one_of(self.rate, self.rate_per_sample, ("rate", "rate_per_sample"), self.name)
-        require_finite(self.rate if self.rate is not None else self.rate_per_sample,
-                       "bias_drift rate")
 
     def apply(self, a: np.ndarray, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:
         """Return ``a + rate·(t - t0)`` (or ``a + rate_per_sample·k``)."""
@@ -195,31 +204,18 @@ class BiasDrift:
         x = _per_sample_or_time(ctx, a.shape[0], per_second, self.name, "rate")
         return a + (self.rate if per_second else self.rate_per_sample) * x
 
-    def to_dict(self) -> dict:
-        if self.rate is not None:
-            return {"rate": float(self.rate)}
-        return {"rate_per_sample": float(self.rate_per_sample)}
 
-
-@register_term
+@register_term("bias_random_walk", "output", bound="nonnegative")
 @dataclass(frozen=True)
-class BiasRandomWalk:
+class BiasRandomWalk(CoefficientTerm):
     """Bias random walk, additive at the bias level: ``b_k = b_{k-1} + q·√Δt_k·w_k``, b_0 = 0.
 
     Exactly one of ``q`` (m/s²/√s, Δt from the sample times) or ``q_per_sample`` (m/s² per
-    √sample, Δt = 1) is given. Draws N - 1 standard normals w_k from the run's generator.
+    √sample, Δt = 1) is given, ≥ 0. Draws N - 1 standard normals w_k from the run's generator.
     """
 
     q: float | None = None
     q_per_sample: float | None = None
-    name: ClassVar[str] = "bias_random_walk"
-    stage: ClassVar[Stage] = "output"
-
-    def __post_init__(self) -> None:
-        _one_of(self.q, self.q_per_sample, ("q", "q_per_sample"), self.name)
-        q = self.q if self.q is not None else self.q_per_sample
-        if require_finite(q, "bias_random_walk q") < 0:
-            raise ValueError(f"bias_random_walk q must be >= 0, got {q}")
 
     def walk(self, n: int, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:
         """The (N,) bias path b_k, m/s² (b_0 = 0)."""
@@ -233,15 +229,10 @@ class BiasRandomWalk:
         """Return ``a + b`` with ``b`` a fresh random-walk path (see :meth:`walk`)."""
         return a + self.walk(a.shape[0], ctx, rng)
 
-    def to_dict(self) -> dict:
-        if self.q is not None:
-            return {"q": float(self.q)}
-        return {"q_per_sample": float(self.q_per_sample)}
 
-
-@register_term
+@register_term("bias_instability", "output", bound="nonnegative")
 @dataclass(frozen=True)
-class BiasInstability:
+class BiasInstability(CoefficientTerm):
     """Bias instability (flicker noise of the bias), additive at the bias level:
     ``b_k = B · Σ_{j=0}^{N-1} f_j w_{k-j}``, ``f`` Kasdin's fractional-integration filter for
     α = 1 (:func:`calib.noise.allan_model.flicker_coefficients`), ``w`` standard normal.
@@ -260,12 +251,6 @@ class BiasInstability:
     """
 
     b: float
-    name: ClassVar[str] = "bias_instability"
-    stage: ClassVar[Stage] = "output"
-
-    def __post_init__(self) -> None:
-        if require_finite(self.b, "bias_instability b") < 0:
-            raise ValueError(f"bias_instability b must be >= 0, got {self.b}")
 
     def path(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """The (N,) flicker bias path, m/s² (draws 2N − 1 standard normals)."""
@@ -278,13 +263,10 @@ class BiasInstability:
         """Return ``a + b`` with ``b`` a fresh flicker path (see :meth:`path`)."""
         return a + self.path(a.shape[0], rng)
 
-    def to_dict(self) -> dict:
-        return {"b": float(self.b)}
 
-
-@register_term
+@register_term("quantization", "output", bound="positive")
 @dataclass(frozen=True)
-class Quantization:
+class Quantization(CoefficientTerm):
     """Output quantization: the reading is rounded to the nearest multiple of ``lsb`` (m/s²).
 
     Ties round up (``lsb·floor(a/lsb + 1/2)``), so the result does not depend on numpy's
@@ -292,23 +274,15 @@ class Quantization:
     """
 
     lsb: float
-    name: ClassVar[str] = "quantization"
-    stage: ClassVar[Stage] = "output"
-
-    def __post_init__(self) -> None:
-        _positive(self.lsb, "quantization lsb")
 
     def apply(self, a: np.ndarray, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:
         """Return ``lsb·floor(a/lsb + 1/2)``."""
         return self.lsb * np.floor(a / self.lsb + 0.5)
 
-    def to_dict(self) -> dict:
-        return {"lsb": float(self.lsb)}
 
-
-@register_term
+@register_term("lowpass_lag", "response", bound="positive")
 @dataclass(frozen=True)
-class LowpassLag:
+class LowpassLag(CoefficientTerm):
     """First-order low-pass ``τ·dy/dt + y = u`` with time constant ``tau`` (s).
 
     Needs sample times. Response stage (see the module docstring): the deterministic reading is
@@ -317,20 +291,12 @@ class LowpassLag:
     """
 
     tau: float
-    name: ClassVar[str] = "lowpass_lag"
-    stage: ClassVar[Stage] = "response"
-
-    def __post_init__(self) -> None:
-        _positive(self.tau, "lowpass_lag tau")
 
     def apply(self, a: np.ndarray, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:
         """Return the low-passed signal (:func:`calib.filters.lowpass`)."""
         if ctx.t is None:
             raise ValueError("lowpass_lag needs sample times (a sweep); a static run has none")
         return lowpass(a, ctx.t, self.tau, uniform_step(ctx.t))
-
-    def to_dict(self) -> dict:
-        return {"tau": float(self.tau)}
 
 
 TERM_CLASSES: dict[str, type] = {c.name: c for c in (

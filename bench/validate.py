@@ -264,16 +264,8 @@ class Validation(ResultMixin):
 
         Examples
         --------
-        >>> from bench.validate import Validation, validate
-        >>> truth = {"sensor": {"x": {"bias": 0.1, "scale": 0.0},
-        ...                     "y": {"bias": 0.0, "scale": 0.01}}}
-        >>> est = {"axes": {"x": {"bias": 0.11, "bias_std": 0.01, "scale": 0.0,
-        ...                       "scale_std": 0.001},
-        ...                 "y": {"bias": 0.0, "bias_std": 0.01, "scale": 0.01,
-        ...                       "scale_std": 0.001}}}
-        >>> v = validate(truth, est)
-        >>> Validation.from_dict(v.to_state()) == v
-        True
+        See :func:`validate`: its example ends with the round trip
+        ``Validation.from_dict(v.to_state()) == v``.
         """
         par = d["parameters"]
         if "names" in d:
@@ -360,6 +352,9 @@ def validate(truth: Mapping, estimates: Mapping, level: float = 0.99,
     >>> v = validate(truth, est, level=0.99)
     >>> bool(v.passed), [round(float(z), 3) for z in v.z]
     (True, [1.0, 0.0, 0.0, 0.0])
+    >>> from bench.validate import Validation
+    >>> Validation.from_dict(v.to_state()) == v
+    True
     """
     if not 0.0 < level < 1.0:
         raise DataError(f"--level must be in (0, 1), got {level}")

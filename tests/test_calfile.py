@@ -16,6 +16,7 @@ from calib.calibration.calfile import FILE_UNITS, FORMAT, FORMAT_VERSION, load_c
 from calib.calibration.tilt_plane import calibrate
 from calib.files.course import read_datos, read_ensayo
 from calib.units import missing_units
+from tests.checks import assert_same_tree
 from tests.cli import one_line_error as _error
 from tests.cli import run as _run
 
@@ -73,22 +74,7 @@ def test_trajectory_from_the_file_equals_refitting(saved, course_dir, capsys):
     rc2, fromfile, _ = _run(capsys, "trajectory", "--calibration", saved / "cal.json", *common)
     assert rc1 == rc2 == 0
     a, b = json.loads(refit), json.loads(fromfile)
-
-    def close(x, y, path="") -> None:
-        if isinstance(x, dict):
-            assert x.keys() == y.keys(), path
-            for k in x:
-                close(x[k], y[k], f"{path}.{k}")
-        elif isinstance(x, list):
-            assert len(x) == len(y), path
-            for i, (u, v) in enumerate(zip(x, y, strict=True)):
-                close(u, v, f"{path}[{i}]")
-        elif isinstance(x, float):
-            assert abs(x - y) <= 1e-12 * max(1.0, abs(x)), path
-        else:
-            assert x == y, path
-
-    close(a, b)
+    assert_same_tree(b, a)
     assert a["decision"] == b["decision"]
 
 

@@ -18,6 +18,7 @@ import pytest
 import scipy.io
 
 from bench.cli import main
+from bench.dataset import without_versions
 from bench.gap import run_gap
 from calib.files.course import read_ensayo
 
@@ -31,14 +32,6 @@ def _commands() -> list[list[str]]:
 
 def _out(argv: list[str]) -> str:
     return argv[argv.index("--out") + 1]
-
-
-def _without_versions(tree):
-    if isinstance(tree, dict):
-        return {k: _without_versions(v) for k, v in tree.items() if k != "versions"}
-    if isinstance(tree, list):
-        return [_without_versions(v) for v in tree]
-    return tree
 
 
 COMMANDS = _commands()
@@ -68,7 +61,7 @@ def test_shipped_dataset_is_what_the_command_makes(argv, tmp_path, capsys):
             np.testing.assert_allclose(ours[key], theirs[key], rtol=0, atol=1e-12,
                                        err_msg=f"{mat}: {key}")
     truth = [json.loads((d / "truth.json").read_text()) for d in (made, shipped)]
-    assert _without_versions(truth[0]) == _without_versions(truth[1])
+    assert without_versions(truth[0]) == without_versions(truth[1])
 
 
 @pytest.mark.parametrize("name, expected", [("misalignment", [("misalignment", "x")]),

@@ -9,19 +9,19 @@ quantization in ``benchmarks/gap_uncertainty_mc.py``.
 
 Design
 ------
-Synthetic runs are generated here in plain numpy straight from the equations of
-``docs/effects.md`` (never through ``calib`` or the bench): a static full turn (θ uniform over
-[0, 2π), sorted, no timing: drift per sample), N = 1000, random bias U(-0.3, 0.3) m/s² and
-scale U(-0.03, 0.03) on both axes, white noise of the course (σ² = 0.25, 0.64 (m/s²)², the
-stated values), and ONE effect. Per-axis effects alternate between x (even replicates) and y
-(odd ones). Sizes: ``|estimate - null|/std`` ≈ 10 on each axis (null = 0, or the stated σ²
-for noise_level), far above the selection threshold (per-step α = 0.005/17 ≈ 2.9e-4,
-|z| ≈ 3.6), so the workflow names the effect in essentially every run. The drift is ≈ 20 std:
-a ramp is also fitted by a random walk (the documented drift / walk confusion), and at 10 std
-the walk's p-value beat the drift's in 1-4 % of y runs (log-p margin 3.5 ± 1.5; at 20 std
-6.9 ± 1.6, none of 150 runs below 0.4). The std of a linear coefficient does not depend on the
-size, so the larger size changes nothing in what is checked. The test also asserts this
-premise (median size ≥ 8 on each axis). ``analyze_gap`` runs end to end and
+Synthetic runs come from :func:`tests.gap_synthetic.synth`, plain numpy straight from the
+equations of ``docs/effects.md`` (never through ``calib`` or the bench): a static full turn
+(its "uniform" design: θ uniform over [0, 2π), sorted, no timing: drift per sample), N = 1000,
+random bias U(-0.3, 0.3) m/s² and scale U(-0.03, 0.03) on both axes, white noise of the course
+(σ² = 0.25, 0.64 (m/s²)², the stated values), and ONE effect. Per-axis effects alternate
+between x (even replicates) and y (odd ones). Sizes: ``|estimate - null|/std`` ≈ 10 on each
+axis (null = 0, or the stated σ² for noise_level), far above the selection threshold (per-step
+α = 0.005/17 ≈ 2.9e-4, |z| ≈ 3.6), so the workflow names the effect in essentially every run.
+The drift is ≈ 20 std: a ramp is also fitted by a random walk (the documented drift / walk
+confusion), and at 10 std the walk's p-value beat the drift's in 1-4 % of y runs (log-p margin
+3.5 ± 1.5; at 20 std 6.9 ± 1.6, none of 150 runs below 0.4). The std of a linear coefficient
+does not depend on the size, so the larger size changes nothing in what is checked. The test
+also asserts this premise (median size ≥ 8 on each axis). ``analyze_gap`` runs end to end and
 ``z = (estimate - truth)/std`` is taken from the printed ``params`` / ``std``.
 
 R = 80 replicates per effect (40 per axis), R_tot = 480 in all, on two spawned workers with
@@ -77,18 +77,16 @@ from scipy import stats
 
 from calib.files.course import Ensayo
 from calib.gap import analyze_gap
+from tests.gap_synthetic import STATED, synth
 
-G = 9.8
-TWO_PI = 2.0 * np.pi
-STATED = (0.25, 0.64)
 SEED = 20240617
 N = 1000
 R_PER_EFFECT = 80
 Z95 = float(stats.norm.ppf(0.975))
 FAMILY_ALPHA = 0.005  # analyze_gap's default false-alarm rate per run
 
-# (effect, printed key, {axis: true value}): about 10 printed std on each axis at N = 1000,
-# 20 for the drift (module docstring)
+# (effect, printed key = its parameter, {axis: true value}): about 10 printed std on each
+# axis at N = 1000, 20 for the drift (module docstring)
 # (std: misalignment σ/(g·sqrt(N/2)); tilt 1/sqrt(Σ_a g²N/(2σ_a²)); k2, k_ip ≈ 2σ/(g²·
 # sqrt(N/2)); drift per sample ≈ σ·sqrt(12/N³), ×1.6 on x where the ramp shares its sin θ
 # component with the scale column; noise level σ²·sqrt(2/N)).
@@ -102,44 +100,6 @@ CASES: tuple[tuple[str, str, dict[str, float]], ...] = (
 )
 
 
-# ------------------------------------------------------------------ synthetic runs (numpy)
-
-def synth(name: str, axis: str, value: float, rng: np.random.Generator
-          ) -> tuple[np.ndarray, np.ndarray]:
-    """One run with one effect, from docs/effects.md: (θ (N,) rad, readings (N, 2) m/s²).
-
-    True specific force ``[-g sin(θ + δ_x), -g cos(θ + δ_y)]`` (misalignment: δ on one axis;
-    tilt offset: the same δ on both), response terms ``k2·a_i²`` and ``k_ip·a_i·a_p``, then
-    ``(1 + scale)·(…) + bias + v``, v ~ N(0, σ²) (noise_level: the true σ² instead of the
-    stated one), then the drift ``rate_per_sample·k`` at the bias level (k the sample index).
-    """
-    th = np.sort(rng.uniform(0.0, TWO_PI, N))
-    bias = rng.uniform(-0.3, 0.3, 2)
-    scale = rng.uniform(-0.03, 0.03, 2)
-    s2 = np.array(STATED)
-    delta = np.zeros(2)
-    k = None if axis == "both" else "xy".index(axis)
-    if name == "tilt_offset":
-        delta[:] = value
-    elif name == "misalignment":
-        delta[k] = value
-    elif name == "noise_level":
-        s2[k] = value
-    a = np.column_stack([-G * np.sin(th + delta[0]), -G * np.cos(th + delta[1])])
-    out = np.empty((N, 2))
-    for j in range(2):
-        x = a[:, j].copy()
-        if j == k and name == "nonlinearity_k2":
-            x = x + value * x * x
-        if j == k and name == "cross_axis":
-            x = x + value * x * a[:, 1 - j]
-        x = (1.0 + scale[j]) * x + bias[j] + np.sqrt(s2[j]) * rng.standard_normal(N)
-        if j == k and name == "bias_drift":
-            x = x + value * np.arange(N)
-        out[:, j] = x
-    return th, out
-
-
 def _axis_of(case: int, i: int) -> str:
     axes = list(CASES[case][2])
     return axes[i % len(axes)]
@@ -151,7 +111,7 @@ def _replicate(job: tuple[int, int]) -> tuple[int, int, str, list, float, float]
     name, key, truth = CASES[case]
     axis = _axis_of(case, i)
     rng = np.random.default_rng([SEED, case, i])
-    th, y = synth(name, axis, truth[axis], rng)
+    th, y, _ = synth("uniform", N, rng, [(name, axis, {key: truth[axis]})])
     res = analyze_gap(Ensayo(th, y), STATED)
     try:
         est = res.effect(name, axis)

@@ -19,6 +19,7 @@ import scipy.io
 from calib.files.course import read_acel
 from calib.logs.reader import read_log
 from tests import logfixtures as fx
+from tests.checks import assert_same_tree
 from tests.cli import one_line_error, run
 
 POSES = ["--poses", ",".join(str(a) for a in fx.ANGLES_DEG), "--angle-unit", "deg"]
@@ -203,24 +204,9 @@ def test_course_files_as_csv_logs_give_the_course_trajectory(capsys, tmp_path, c
     rc, got, err = run(capsys, "trajectory", "--ensayo", tmp_path / "e.csv", "--acel",
                        tmp_path / "a.csv", *common)
     assert rc == 0, err
-    _same(json.loads(got), json.loads(want))
-
-
-def _same(a, b, where="") -> None:
-    """Equal trees, floats to 1e-12 relative: the CSV's arrays equal the .mat's by value but
-    not in memory layout, so BLAS may round the last bits differently."""
-    if isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        for k in a:
-            _same(a[k], b[k], f"{where}.{k}")
-    elif isinstance(a, list):
-        assert len(a) == len(b), where
-        for i, (x, y) in enumerate(zip(a, b, strict=True)):
-            _same(x, y, f"{where}[{i}]")
-    elif isinstance(a, float):
-        assert abs(a - b) <= 1e-12 * max(1.0, abs(b)), (where, a, b)
-    else:
-        assert a == b, where
+    # the CSV's arrays equal the .mat's by value but not in memory layout: BLAS may round
+    # the last bits differently
+    assert_same_tree(json.loads(got), json.loads(want))
 
 
 def test_gap_reads_a_log_as_it_reads_its_import(capsys, tmp_path, files):

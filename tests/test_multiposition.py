@@ -25,6 +25,7 @@ from calib.calibration.tilt_plane import calibrate
 from calib.conventions import G
 from calib.files.course import Ensayo, read_ensayo
 from calib.input_rules import DataError
+from tests.checks import assert_honest_intervals
 from tests.reference import course_2009 as ref
 
 TRUTH = np.array([0.08, -0.03, -0.02, 0.01])  # [bias_x, scale_x, bias_y, scale_y]
@@ -60,34 +61,21 @@ def random_set(rng, sigma2=SIGMA2):
 
 @pytest.mark.parametrize("known", [True, False], ids=["sigma2-given", "sigma2-pure-error"])
 def test_interval_coverage_and_nees(known):
-    """R = 600 simulated sets (seed 19), 95 % intervals of each of the 4 parameters.
+    """R = 600 simulated sets (seed 19), 95 % intervals of each of the 4 parameters
+    (:func:`tests.checks.assert_honest_intervals`).
 
-    Each set gives a hit (truth inside) with probability p = 0.95 if the intervals are honest,
-    so hits/R is binomial: sd = sqrt(p(1−p)/R) = 0.0089; the check is |hits/R − p| ≤ 4 sd
-    (±0.036, a false alarm ≈ 6e-5 per parameter). With σ² given, the NEES
-    (p̂ − p)ᵀ cov⁻¹ (p̂ − p) is χ²(4): its mean over R runs has sd sqrt(2·4/R) = 0.115;
-    checked within 4 ± 4 sd. With σ² from the pure error (N − P ≥ 594 dof) the NEES mean is
-    4·(dof/(dof − 2)) ≈ 4.01: the same band holds. The joint lack-of-fit test (χ² or F with
-    P − 4 dof) rejects a right model at α = 0.05 with probability 0.05: its rate is checked
-    within 4·sqrt(0.05·0.95/R) = 0.036.
+    Hits/R has sd sqrt(p(1−p)/R) = 0.0089: |hits/R − p| ≤ 4 sd is ±0.036 (a false alarm
+    ≈ 6e-5 per parameter). With σ² given, the NEES is χ²(4): its mean over R runs has sd
+    sqrt(2·4/R) = 0.115; checked within 4 ± 4 sd. With σ² from the pure error (N − P ≥ 594
+    dof) the NEES mean is 4·(dof/(dof − 2)) ≈ 4.01: the same band holds. The joint lack-of-fit
+    test (χ² or F with P − 4 dof) rejects a right model at α = 0.05 with probability 0.05: its
+    rate is checked within 4·sqrt(0.05·0.95/R) = 0.036.
     """
     rng = np.random.default_rng(19)
-    R, p = 600, 0.95
-    hits = np.zeros(4)
-    nees = np.empty(R)
-    rejected = 0
-    for r in range(R):
-        poses = random_set(rng)
-        fit = fit_multiposition(poses, SIGMA2 if known else None)
-        lo, hi = fit.conf_int(p).T
-        hits += (lo <= TRUTH) & (TRUTH <= hi)
-        d = fit.params - TRUTH
-        nees[r] = d @ np.linalg.solve(fit.cov, d)
-        rejected += fit.lack_of_fit.p_value < 0.05
-    band = 4 * np.sqrt(p * (1 - p) / R)
-    assert np.all(np.abs(hits / R - p) <= band), hits / R
-    assert abs(nees.mean() - 4) <= 4 * np.sqrt(8 / R), nees.mean()
-    assert abs(rejected / R - 0.05) <= 4 * np.sqrt(0.05 * 0.95 / R), rejected / R
+    R = 600
+    assert_honest_intervals(
+        (fit_multiposition(random_set(rng), SIGMA2 if known else None) for _ in range(R)),
+        TRUTH)
 
 
 def test_pose_statistics_matches_samples_and_order_is_irrelevant():

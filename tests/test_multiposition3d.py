@@ -25,6 +25,7 @@ from calib.calibration.multiposition import (
 from calib.conventions import G
 from calib.logs.reader import LogOptions, read_log
 from calib.units import missing_units
+from tests.checks import assert_honest_intervals
 from tests.cli import one_line_error, run
 from tests.reference.real_data import REAL_DIR, SPECS, pose_means
 
@@ -70,32 +71,20 @@ def random_set(rng, sigma2=SIGMA2):
 @pytest.mark.slow
 @pytest.mark.parametrize("known", [True, False], ids=["sigma2-given", "sigma2-pure-error"])
 def test_interval_coverage_and_nees(known):
-    """R = 500 simulated sets (seed 193), 95 % intervals of each of the 6 parameters.
+    """R = 500 simulated sets (seed 193), 95 % intervals of each of the 6 parameters
+    (:func:`tests.checks.assert_honest_intervals`).
 
-    Honest intervals give each set a hit with probability p = 0.95, so hits/R is binomial
-    with sd sqrt(p(1 − p)/R) = 0.0097; checked as |hits/R − p| ≤ 4 sd (±0.039; a false alarm
-    ≈ 6e-5 per parameter). With σ² given the NEES (p̂ − p)ᵀ cov⁻¹ (p̂ − p) is χ²(6): its mean
-    over R runs has sd sqrt(2·6/R) = 0.155, checked within 6 ± 4 sd (with the pure error,
-    ≥ 3·(8·99) dof, its mean is 6·dof/(dof − 2) ≈ 6.01: the same band). The joint lack-of-fit
-    test rejects a right model at α = 0.05 with probability 0.05: rate within
-    4·sqrt(0.05·0.95/R) = 0.039.
+    Hits/R has sd sqrt(p(1 − p)/R) = 0.0097: |hits/R − p| ≤ 4 sd is ±0.039 (a false alarm
+    ≈ 6e-5 per parameter). With σ² given the NEES is χ²(6): its mean over R runs has sd
+    sqrt(2·6/R) = 0.155, checked within 6 ± 4 sd (with the pure error, ≥ 3·(8·99) dof, its
+    mean is 6·dof/(dof − 2) ≈ 6.01: the same band). The joint lack-of-fit test rejects a right
+    model at α = 0.05 with probability 0.05: rate within 4·sqrt(0.05·0.95/R) = 0.039.
     """
     rng = np.random.default_rng(193)
-    R, p = 500, 0.95
-    hits = np.zeros(6)
-    nees = np.empty(R)
-    rejected = 0
-    for r in range(R):
-        fit = fit_multiposition3d(random_set(rng), SIGMA2 if known else None)
-        lo, hi = fit.conf_int(p).T
-        hits += (lo <= TRUTH) & (TRUTH <= hi)
-        d = fit.params - TRUTH
-        nees[r] = d @ np.linalg.solve(fit.cov, d)
-        rejected += fit.lack_of_fit.p_value < 0.05
-    band = 4 * np.sqrt(p * (1 - p) / R)
-    assert np.all(np.abs(hits / R - p) <= band), hits / R
-    assert abs(nees.mean() - 6) <= 4 * np.sqrt(12 / R), nees.mean()
-    assert abs(rejected / R - 0.05) <= 4 * np.sqrt(0.05 * 0.95 / R), rejected / R
+    R = 500
+    assert_honest_intervals(
+        (fit_multiposition3d(random_set(rng), SIGMA2 if known else None) for _ in range(R)),
+        TRUTH)
 
 
 @pytest.mark.parametrize("seed", range(4))

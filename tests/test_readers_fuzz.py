@@ -56,6 +56,18 @@ def _save(path, **variables):
     return path
 
 
+def _read_fuzzed(read, path):
+    """``read(path)`` with every warning recorded (none shown): ``(result, warnings)``, or
+    ``(the ValueError, warnings)`` when the file is refused — a refusal names the file."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            return read(path), caught
+        except ValueError as exc:
+            assert str(path) in str(exc), str(exc)
+            return exc, caught
+
+
 def _error(capsys, *argv) -> str:
     """A command that must fail cleanly (warnings aside): :func:`tests.cli.one_line_error`."""
     return one_line_error(capsys, *argv, ignore=("warning:",))
@@ -516,12 +528,10 @@ def test_property_datos_txt(case, tmp_path_factory):
     data, expected = case
     path = tmp_path_factory.mktemp("datos") / "datos.txt"
     path.write_bytes(data)
-    try:
-        d = read_datos(path)
-    except ValueError as exc:  # a clean error naming the file
+    d, _ = _read_fuzzed(read_datos, path)
+    if isinstance(d, ValueError):  # a clean error naming the file
         event("datos.txt refused")
-        assert str(path) in str(exc)
-        assert expected is None or not all(v > 0 for v in expected["noise_var"]), str(exc)
+        assert expected is None or not all(v > 0 for v in expected["noise_var"]), str(d)
         return
     event("datos.txt read")
     assert expected is not None, data
@@ -589,18 +599,17 @@ def _mat_ensayo(draw):
 @FUZZ
 @given(variables=_mat_ensayo())
 def test_property_ensayo_library(variables, tmp_path_factory):
-    path = tmp_path_factory.mktemp("mat") / "ensayo.mat"
-    scipy.io.savemat(path, variables)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            e = read_ensayo(path)
-            cal = calibrate(e, [0.25, 0.64])
-    except ValueError as exc:
-        event(f"refused: {type(exc).__name__}")
-        assert str(path) in str(exc), str(exc)
-        assert "\n" not in str(exc)
+    def read_and_calibrate(path):
+        e = read_ensayo(path)
+        return e, calibrate(e, [0.25, 0.64])
+
+    path = _save(tmp_path_factory.mktemp("mat") / "ensayo.mat", **variables)
+    got, _ = _read_fuzzed(read_and_calibrate, path)
+    if isinstance(got, ValueError):
+        event(f"refused: {type(got).__name__}")
+        assert "\n" not in str(got)
         return
+    e, cal = got
     event("calibrated")
     assert e.n >= 3 and np.isfinite(e.tita).all() and np.isfinite(e.datos).all()
     assert np.isfinite(cal.params).all() and np.isfinite(cal.cov).all()
@@ -610,8 +619,7 @@ def test_property_ensayo_library(variables, tmp_path_factory):
 @given(variables=_mat_ensayo(), command=st.sampled_from(["calibrate", "calibrate-estimated",
                                                          "calibrate-wls"]))
 def test_property_ensayo_cli(variables, command, tmp_path_factory, capsys):
-    path = tmp_path_factory.mktemp("cli") / "ensayo.mat"
-    scipy.io.savemat(path, variables)
+    path = _save(tmp_path_factory.mktemp("cli") / "ensayo.mat", **variables)
     argv = ["calibrate", path, "--json"]
     if command != "calibrate-estimated":
         argv += ["--noise-var", NV]
@@ -649,18 +657,13 @@ def _mat_puntos(draw):
 @FUZZ
 @given(variables=_mat_puntos())
 def test_property_puntos(variables, tmp_path_factory):
-    path = tmp_path_factory.mktemp("puntos") / "puntos.mat"
-    scipy.io.savemat(path, variables)
-    try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            got = read_puntos(path)
-    except ValueError as exc:
+    path = _save(tmp_path_factory.mktemp("puntos") / "puntos.mat", **variables)
+    got, caught = _read_fuzzed(read_puntos, path)
+    if isinstance(got, ValueError):
         event("puntos.mat refused")
-        assert str(path) in str(exc)
         missing = [k for k in "ABCD" if k not in variables]
         if missing:
-            assert ", ".join(missing) in str(exc)
+            assert ", ".join(missing) in str(got)
         return
     event("puntos.mat read")
     assert list(got) == ["A", "B", "C", "D"]  # never a fifth candidate

@@ -20,6 +20,7 @@ from calib.vehicle.trajectory import (
     trapezoid_sum_w2_uniform,
     trapezoid_weights_uniform,
 )
+from tests.checks import assert_frozen_and_serialisable
 from tests.reference import course_2009 as ref
 
 EPS = np.finfo(float).eps
@@ -144,11 +145,7 @@ def test_result_is_frozen_and_serialisable(course):
     _, acel, _, cal, _ = course
     traj = compute_trajectory(acel, cal)
     assert isinstance(traj, Trajectory)
-    with pytest.raises(AttributeError):
-        traj.integrator = "simpson"  # type: ignore[misc]
-    with pytest.raises(ValueError):
-        traj.pos_corrected[0, 0] = 1.0
-    d = json.loads(json.dumps(traj.to_dict()))
+    d = assert_frozen_and_serialisable(traj, "integrator", traj.pos_corrected)
     assert set(d) >= {"final_raw", "final_corrected", "final_velocity_corrected"}
     assert "final position, corrected" in traj.summary()
 

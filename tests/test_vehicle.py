@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import scipy.io
 
+import bench.model as elements
 from bench.cli import main
 from bench.course import (
     COURSE_FILES,
@@ -16,14 +17,6 @@ from bench.course import (
     generate_course,
     make_course_set,
     place_candidates,
-)
-from bench.model import (
-    VEHICLE_ACC_SENSORS,
-    VEHICLE_ACC_SITES,
-    VEHICLE_BODY,
-    VEHICLE_DRIVES,
-    VEHICLE_SLIDE_JOINTS,
-    VEHICLE_XML,
 )
 from bench.sensors import SensorErrorModel
 from bench.tilt import ThetaDesign
@@ -74,27 +67,28 @@ def test_model_compiles_all_elements_named_and_no_mjcf_noise():
                     ("site", model.nsite), ("actuator", model.nu), ("sensor", model.nsensor)):
         for i in range(1 if kind == "body" else 0, n):  # body 0 is the world
             assert getattr(model, kind)(i).name, f"unnamed {kind} {i}"
-    for name in (*VEHICLE_SLIDE_JOINTS.values(),):
+    for name in (*elements.VEHICLE_SLIDE_JOINTS.values(),):
         assert model.joint(name).id >= 0
-    for names, getter in ((VEHICLE_DRIVES, model.actuator), (VEHICLE_ACC_SITES, model.site),
-                          (VEHICLE_ACC_SENSORS, model.sensor)):
+    for names, getter in ((elements.VEHICLE_DRIVES, model.actuator),
+                          (elements.VEHICLE_ACC_SITES, model.site),
+                          (elements.VEHICLE_ACC_SENSORS, model.sensor)):
         for name in names.values():
             assert getter(name).id >= 0
-    assert model.body(VEHICLE_BODY).id >= 0
+    assert model.body(elements.VEHICLE_BODY).id >= 0
     assert np.all(model.sensor_noise == 0)
-    assert "noise=" not in VEHICLE_XML.read_text()
+    assert "noise=" not in elements.VEHICLE_XML.read_text()
 
 
 def test_sites_read_world_x_and_y_as_their_local_x():
     """A static push along +x shows on the x sensor's local x only; +y on the y sensor's."""
     model, _ = vehicle_model()
     data = mujoco.MjData(model)
-    m = float(model.body_subtreemass[model.body(VEHICLE_BODY).id])
-    data.ctrl[model.actuator(VEHICLE_DRIVES["x"]).id] = 2.0 * m
-    data.ctrl[model.actuator(VEHICLE_DRIVES["y"]).id] = -3.0 * m
+    m = float(model.body_subtreemass[model.body(elements.VEHICLE_BODY).id])
+    data.ctrl[model.actuator(elements.VEHICLE_DRIVES["x"]).id] = 2.0 * m
+    data.ctrl[model.actuator(elements.VEHICLE_DRIVES["y"]).id] = -3.0 * m
     mujoco.mj_forward(model, data)
-    ax = data.sensor(VEHICLE_ACC_SENSORS["x"]).data
-    ay = data.sensor(VEHICLE_ACC_SENSORS["y"]).data
+    ax = data.sensor(elements.VEHICLE_ACC_SENSORS["x"]).data
+    ay = data.sensor(elements.VEHICLE_ACC_SENSORS["y"]).data
     assert ax[0] == pytest.approx(2.0, abs=1e-12) and ay[0] == pytest.approx(-3.0, abs=1e-12)
     assert ax[2] == pytest.approx(9.8, abs=1e-12)  # gravity only on the vertical axis
 

@@ -75,14 +75,6 @@ NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
 
 # ---- collecting -------------------------------------------------------------------------------
 
-def _strip_versions(obj):
-    if isinstance(obj, dict):
-        return {k: _strip_versions(v) for k, v in obj.items() if k != "versions"}
-    if isinstance(obj, list):
-        return [_strip_versions(v) for v in obj]
-    return obj
-
-
 def rrd_content(path: Path) -> dict:
     """A recording's content as a tree: entity ``/a/b/c`` column ``C`` is ``tree[a][b]["c|C"]``
     (so a value logged from a JSON report sits where it sits in the JSON). Each column is the
@@ -146,7 +138,7 @@ def file_content(path: Path):
     if path.suffix == ".mat":
         return mat_content(path)
     if path.suffix == ".json":
-        return _strip_versions(json.loads(path.read_text(encoding="utf-8")))
+        return _json(path.read_text(encoding="utf-8"))
     return text_content(path)
 
 
@@ -164,7 +156,9 @@ def _run(argv: list[str]) -> str:
 
 
 def _json(text: str):
-    return _strip_versions(json.loads(text))
+    from bench.dataset import without_versions
+
+    return without_versions(json.loads(text))
 
 
 def collect(work: Path, course: Path = COURSE_DATA) -> dict:
@@ -189,8 +183,8 @@ def _collect(course: Path) -> dict:
                             f"static-{s}.rrd"],
             f"positions-{s}": ["generate", "calibration", "--positions", "12",
                                "--per-position", "20", "--effect", "misalignment:x:delta=0.02"],
-            f"sweep-{s}": ["generate", "calibration", "--mode", "sweep", "--profile", "updown",
-                           "--duration", "8", "--effect", "lever_arm:x:pos_x=0.2"],
+            f"sweep-{s}": ["generate", "calibration", "--mode", "sweep", "--sweep-profile",
+                           "updown", "--duration", "8", "--effect", "lever_arm:x:pos_x=0.2"],
             f"vehicle-{s}": ["generate", "vehicle", "--rrd", f"vehicle-{s}.rrd"],
             f"course-{s}": ["generate", "course", "--rrd", f"course-{s}.rrd"],
             f"class-{s}": ["generate", "class", "--students", "2"],

@@ -43,6 +43,7 @@ class EntityDoc:
         return re.compile("^" + out + "$")
 
 
+# A table, one row per entity: its rows are alike in shape, not in logic (nothing to share).
 _CAL = ("calibration", "truth-run")
 _VEH = ("vehicle", "truth-run")
 ENTITY_DOCS: tuple[EntityDoc, ...] = (

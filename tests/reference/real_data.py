@@ -89,6 +89,7 @@ class LogSpec:
     norm_tolerance: float = 0.05  # |norm/g − 1| a held pose's mean stays within (see the log)
 
 
+# Every log's layout stated in full (no defaults hide a file's facts): alike in shape only.
 SPECS: dict[str, LogSpec] = {
     # YEI 3-Space sensor, uncalibrated ("Raw") channels: gyro rad/s, compass gauss, accel g;
     # ~110 Hz (ChipTimeUS in µs). Poses read by eye from a plot of the three acceleration

@@ -92,6 +92,7 @@ others (extra noise, spikes, rails, a stuck stretch) are sized in their own term
 
 C, CL, A, OOC = "catalog", "clean", "absorbed", "out_of_catalog"
 
+# A table, one case per row: its rows are alike in shape, not in logic (nothing to share).
 CASES: tuple[CaseDef, ...] = (
     # --- catalog effects, three each, on designs validation/ does not use
     CaseDef(C, "noise_level", "x", "random_poses", noise=0, z=8),
