@@ -67,7 +67,7 @@ from calib.calibration.ls import FitResult
 from calib.calibration.tilt_plane import METHODS, Calibration
 from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES
 from calib.files.atomic import write_bytes, write_text
-from calib.input_rules import MAX_ABS_ACCEL, DataError
+from calib.input_rules import MAX_ABS_ACCEL, DataError, check_file
 from calib.units import nest
 
 FORMAT = "tiltbench-calibration"
@@ -238,15 +238,7 @@ def save_calibration(path: str | os.PathLike, cal: Calibration,
 
     Examples
     --------
-    >>> import numpy as np, tempfile, pathlib
-    >>> from calib import Ensayo, calibrate
-    >>> th = np.linspace(0, 2 * np.pi, 100)
-    >>> cal = calibrate(Ensayo(th, np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)])
-    ...                        + 0.05), noise_var=[0.25, 0.64])
-    >>> p = pathlib.Path(tempfile.mkdtemp()) / "cal.json"
-    >>> _ = save_calibration(p, cal, sigma2_source="given")
-    >>> load_calibration(p) == cal
-    True
+    Saved and read back, as JSON and as ``.mat``: :func:`load_calibration`.
     """
     doc = calibration_document(cal, source, sigma2_source, noise_file, tool_version)
     # the document goes through JSON before the check, as the reader will see it
@@ -721,10 +713,7 @@ def read_calibration_document(path: str | os.PathLike) -> dict:
 
 
 def _read(path: Path) -> tuple[CalibrationFile, dict]:
-    if not path.exists():
-        raise DataError(f"{path}: calibration file not found")
-    if path.is_dir():
-        raise DataError(f"{path}: is a directory; expected a calibration file (cal.json)")
+    check_file(path, "a calibration file (cal.json)", "calibration file")
     if path.suffix.lower() == ".mat":
         return _read_mat_document(path)
     doc = _read_json_document(path)
@@ -830,31 +819,26 @@ def load_calibration_file(path: str | os.PathLike) -> CalibrationFile:
 
 
 def load_calibration(path: str | os.PathLike) -> Calibration:
-    """The :class:`Calibration` of a calibration file (:func:`load_calibration_file`).
+    """The :class:`Calibration` of a calibration file, equal (``==``) to the one saved:
+    ``load_calibration_file(path).calibration``.
 
     Parameters
     ----------
-    path : a ``.json`` calibration file or its ``.mat`` export.
-
-    Returns
-    -------
-    Calibration : equal (``==``) to the one saved.
-
-    Raises
-    ------
-    DataError : as :func:`load_calibration_file` (one line: the file and the field).
+    path : as :func:`load_calibration_file`, which says what raises :class:`DataError`.
 
     Examples
     --------
+    A calibration saved (:func:`save_calibration`) as JSON and as ``.mat``, and read back:
+
     >>> import numpy as np, tempfile, pathlib
     >>> from calib import Ensayo, calibrate
     >>> th = np.linspace(0, 2 * np.pi, 100)
     >>> cal = calibrate(Ensayo(th, np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)])
     ...                        + 0.05), noise_var=[0.25, 0.64])
     >>> d = pathlib.Path(tempfile.mkdtemp())
-    >>> _ = save_calibration(d / "cal.mat", cal, sigma2_source="given")
-    >>> load_calibration(d / "cal.mat") == cal
-    True
+    >>> [load_calibration(save_calibration(d / name, cal, sigma2_source="given")) == cal
+    ...  for name in ("cal.json", "cal.mat")]
+    [True, True]
     """
     return load_calibration_file(path).calibration
 

@@ -124,6 +124,7 @@ class SixFaceFit(ResultMixin):
     k_matrix : (3, 3) K = (I + S)(I + M), dimensionless (rows: sensor axes; columns: case
         axes).
     residuals : (H, 3) m/s², hold means minus the model.
+    hold_std : (H, 3) m/s², the std of each hold mean the fit used, ``√(σ̂_B² + σ̂_W²/n_h)``.
     faces : tuple of H face names (``"+x"`` …), one per hold.
     n : (H,) samples per hold.
     sigma_within : (3,) σ_W per axis, m/s²; ``sigma_between``: (3,) σ_B, m/s², NaN when no face
@@ -142,6 +143,7 @@ class SixFaceFit(ResultMixin):
     dof: np.ndarray
     k_matrix: np.ndarray
     residuals: np.ndarray
+    hold_std: np.ndarray
     faces: tuple[str, ...]
     n: np.ndarray
     sigma_within: np.ndarray
@@ -157,7 +159,7 @@ class SixFaceFit(ResultMixin):
     _UNITS = "bias m/s²; scale dimensionless; misalignment rad; σ m/s²; g m/s²"
 
     def __post_init__(self) -> None:
-        for name in ("params", "cov", "dof", "k_matrix", "residuals", "sigma_within",
+        for name in ("params", "cov", "dof", "k_matrix", "residuals", "hold_std", "sigma_within",
                      "sigma_between", "widening", "lack_of_fit_p"):
             object.__setattr__(self, name, readonly(getattr(self, name)))
         object.__setattr__(self, "n", readonly(self.n, int))
@@ -231,6 +233,7 @@ class SixFaceFit(ResultMixin):
                 "param_names": list(self.param_names), "params": self.params.tolist(),
                 "cov": self.cov.tolist(), "dof": self.dof.tolist(),
                 "k_matrix": self.k_matrix.tolist(), "residuals": self.residuals.tolist(),
+                "hold_std": self.hold_std.tolist(),
                 "faces": list(self.faces), "n": self.n.tolist(),
                 "sigma_within": self.sigma_within.tolist(),
                 "sigma_between": [None if not np.isfinite(v) else v
@@ -249,6 +252,7 @@ class SixFaceFit(ResultMixin):
         return cls(param_names=tuple(d["param_names"]), params=np.array(d["params"]),
                    cov=np.array(d["cov"]), dof=np.array(d["dof"]),
                    k_matrix=np.array(d["k_matrix"]), residuals=np.array(d["residuals"]),
+                   hold_std=np.array(d["hold_std"]),
                    faces=tuple(d["faces"]), n=np.array(d["n"]),
                    sigma_within=np.array(d["sigma_within"]), sigma_between=arr("sigma_between"),
                    widening=arr("widening"), lack_of_fit_p=arr("lack_of_fit_p"),
@@ -262,6 +266,7 @@ class _AxisFit:
     cov: np.ndarray  # (4, 4)
     dof: float
     resid: np.ndarray  # (H,)
+    hold_std: np.ndarray  # (H,) √v_h
     sigma_w: float
     sigma_b: float  # NaN: not measured
     widening: float
@@ -320,7 +325,7 @@ def _fit_axis(x: np.ndarray, y: np.ndarray, n: np.ndarray, ss_w: float,
         lof_p = float(stats.f.sf(f, h - p, dof_w))
     else:
         lof_p = np.nan
-    return _AxisFit(row, cov, float(dof), resid, float(np.sqrt(ms_w)),
+    return _AxisFit(row, cov, float(dof), resid, np.sqrt(v), float(np.sqrt(ms_w)),
                     float(np.sqrt(sigma_b2)) if np.isfinite(sigma_b2) else np.nan, widening,
                     lof_p)
 
@@ -396,7 +401,8 @@ def fit_six_face(poses: Poses, g: float = G, g_source: str = "given", level: flo
     return SixFaceFit(
         param_names=tuple(names), params=np.array(params), cov=linalg.block_diag(*blocks),
         dof=np.array([f.dof for f in fits]), k_matrix=k_matrix,
-        residuals=np.column_stack([f.resid for f in fits]), faces=names_h, n=n,
+        residuals=np.column_stack([f.resid for f in fits]),
+        hold_std=np.column_stack([f.hold_std for f in fits]), faces=names_h, n=n,
         sigma_within=np.array([f.sigma_w for f in fits]),
         sigma_between=np.array([f.sigma_b for f in fits]),
         widening=np.array([f.widening for f in fits]),

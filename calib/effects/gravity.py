@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from calib.effects.base import Effect, ModelState, register
+from calib.effects import base
 
 
-@register
-class GravityMismatch(Effect):
+@base.register
+class GravityMismatch(base.Effect):
     """A different local g is a common scale change of both axes: no extension of its own."""
 
     name = "gravity_mismatch"
@@ -14,5 +14,5 @@ class GravityMismatch(Effect):
         "absorbed by the scale factors: a different local g is a common scale change of both "
         "axes; only an independent gravity reference (or a known scale) separates them")
 
-    def in_model(self, state: ModelState, axis: str) -> bool:
+    def in_model(self, state: base.ModelState, axis: str) -> bool:
         return False

@@ -21,17 +21,7 @@ import numpy as np
 from scipy import stats
 
 from calib.conventions import AXES, EFFECT_NAMES
-from calib.effects.base import (
-    SIGN_P,
-    AxisState,
-    Effect,
-    FinalFit,
-    Likelihood,
-    ModelState,
-    Trial,
-    UntestableError,
-    register,
-)
+from calib.effects import base
 
 
 def ratio(c: float, s: float, cov2: np.ndarray) -> tuple[float, float]:
@@ -41,41 +31,35 @@ def ratio(c: float, s: float, cov2: np.ndarray) -> tuple[float, float]:
     return v, float(np.sqrt(max(grad @ cov2 @ grad, 0.0)))
 
 
-class LinearEffect(Effect):
+class LinearEffect(base.Effect):
     """An effect that is design columns of one axis (one coefficient per column)."""
 
     @property
     def n_free(self) -> int:  # type: ignore[override]
         return len(self.coefficients)
 
-    def present(self, st: AxisState) -> bool:
+    def present(self, st: base.AxisState) -> bool:
         return self.name in st.linear
 
-    def add(self, st: AxisState, value: float | None = None) -> AxisState:
+    def add(self, st: base.AxisState, value: float | None = None) -> base.AxisState:
         order = [n for n in EFFECT_NAMES if n in set(st.linear) | {self.name}]
         return replace(st, linear=tuple(order))
 
-    def remove(self, st: AxisState) -> AxisState:
+    def remove(self, st: base.AxisState) -> base.AxisState:
         return replace(st, linear=tuple(n for n in st.linear if n != self.name))
 
-    def test(self, ext: Likelihood, state: ModelState, axis: str) -> Trial:
+    def test(self, ext: base.Likelihood, state: base.ModelState, axis: str) -> base.Trial:
         k = AXES.index(axis)
         nll0 = ext.nll(state)
         new = state.with_axis(k, self.add(state.axes[k]))
         nll1 = ext.nll(new)
         lr = max(nll0 - nll1, 0.0)
         df = len(self.coefficients)
-        return Trial(self.name, axis, new, lr, float(stats.chi2.logsf(lr, df)), nll1,
-                     f"chi2({df})")
-
-    def _scaled(self, fit: FinalFit, axis: str, key: str) -> tuple[dict, dict]:
-        """The catalog parameter ``key = c/(1 + s)`` of a one-column effect."""
-        sc, cn = f"{axis}.scale", f"{axis}.{self.coefficients[0]}"
-        v, sd = ratio(fit.value(cn), fit.value(sc), fit.cov_of(sc, cn))
-        return {key: v}, {key: sd}
+        return base.Trial(self.name, axis, new, lr, float(stats.chi2.logsf(lr, df)), nll1,
+                          f"chi2({df})")
 
 
-@register
+@base.register
 class Misalignment(LinearEffect):
     """Sensitive axis rotated by +δ: column ``sgn·A_p`` through the low-pass (physical)."""
 
@@ -83,12 +67,12 @@ class Misalignment(LinearEffect):
     coefficients = ("c_mis",)
 
     def raw_physical(self, run, k: int) -> dict[str, np.ndarray]:
-        return {"mis": SIGN_P[k] * run.a_ref[:, 1 - k]}
+        return {"mis": base.SIGN_P[k] * run.a_ref[:, 1 - k]}
 
-    def columns(self, ext: Likelihood, k: int, st: AxisState) -> list[np.ndarray]:
+    def columns(self, ext: base.Likelihood, k: int, st: base.AxisState) -> list[np.ndarray]:
         return [ext.physical_column(k, st.tau, "mis")]
 
-    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: base.FinalFit, axis: str) -> tuple[dict, dict]:
         sc, cn = f"{axis}.scale", f"{axis}.c_mis"
         s, c = fit.value(sc), fit.value(cn)
         den = (1 + s) ** 2 + c * c
@@ -97,37 +81,49 @@ class Misalignment(LinearEffect):
         return {"delta": float(np.arctan2(c, 1 + s))}, {"delta": sd}
 
 
-@register
-class NonlinearityK2(LinearEffect):
+class ReferenceProduct(LinearEffect):
+    """A one-column effect on the reference before the gain: column ``r·f`` (``r`` the axis'
+    reference, ``f`` :meth:`factor`), catalog parameter ``c / (1 + s)`` (module docstring)
+    with its delta-method std (:func:`ratio`)."""
+
+    def factor(self, ext: base.Likelihood, k: int, r: np.ndarray) -> np.ndarray:
+        """(N,) what multiplies the reference ``r`` of axis k."""
+        raise NotImplementedError
+
+    def columns(self, ext: base.Likelihood, k: int, st: base.AxisState) -> list[np.ndarray]:
+        r = ext.reference(k, st.tau, st.limit)
+        return [r * self.factor(ext, k, r)]
+
+    def estimate(self, fit: base.FinalFit, axis: str) -> tuple[dict, dict]:
+        key = self.info.keys[0]
+        sc, cn = f"{axis}.scale", f"{axis}.{self.coefficients[0]}"
+        v, sd = ratio(fit.value(cn), fit.value(sc), fit.cov_of(sc, cn))
+        return {key: v}, {key: sd}
+
+
+@base.register
+class NonlinearityK2(ReferenceProduct):
     """Second-order response k2·r² (IEEE K2/K1)."""
 
     name = "nonlinearity_k2"
     coefficients = ("c_k2",)
 
-    def columns(self, ext: Likelihood, k: int, st: AxisState) -> list[np.ndarray]:
-        r = ext.reference(k, st.tau, st.limit)
-        return [r * r]
-
-    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
-        return self._scaled(fit, axis, "k2")
+    def factor(self, ext: base.Likelihood, k: int, r: np.ndarray) -> np.ndarray:
+        return r
 
 
-@register
-class CrossAxis(LinearEffect):
+@base.register
+class CrossAxis(ReferenceProduct):
     """Cross-coupling k_ip·r·A_p (IEEE K_ip/K1)."""
 
     name = "cross_axis"
     coefficients = ("c_cross",)
 
-    def columns(self, ext: Likelihood, k: int, st: AxisState) -> list[np.ndarray]:
-        r = ext.reference(k, st.tau, st.limit)
-        return [r * ext.run.a_ref[:, 1 - k]]
-
-    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
-        return self._scaled(fit, axis, "k_ip")
+    def factor(self, ext: base.Likelihood, k: int, r: np.ndarray) -> np.ndarray:
+        return ext.run.a_ref[:, 1 - k]
 
 
-@register
+@base.register
 class BiasDrift(LinearEffect):
     """Linear bias drift rate·(t - t0), per second with timing, else per sample."""
 
@@ -137,10 +133,10 @@ class BiasDrift(LinearEffect):
         "a linear trend is one realisation of a random walk; a longer run, or repeated runs, "
         "separate them")
 
-    def columns(self, ext: Likelihood, k: int, st: AxisState) -> list[np.ndarray]:
+    def columns(self, ext: base.Likelihood, k: int, st: base.AxisState) -> list[np.ndarray]:
         return [ext.run.tcol]
 
-    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: base.FinalFit, axis: str) -> tuple[dict, dict]:
         cn = f"{axis}.c_drift"
         key = self.info.keys[0] if fit.run.time_unit == "s" else self.info.keys[1]
         return {key: fit.value(cn)}, {key: float(np.sqrt(fit.cov_of(cn)[0, 0]))}
@@ -149,7 +145,7 @@ class BiasDrift(LinearEffect):
         return time_unit == "s"
 
 
-@register
+@base.register
 class LeverArm(LinearEffect):
     """Site off the hinge axis: columns ω² and α through the low-pass (physical, timed)."""
 
@@ -161,12 +157,12 @@ class LeverArm(LinearEffect):
             return {}
         return {"w2": run.omega**2, "alpha": run.alpha}
 
-    def columns(self, ext: Likelihood, k: int, st: AxisState) -> list[np.ndarray]:
+    def columns(self, ext: base.Likelihood, k: int, st: base.AxisState) -> list[np.ndarray]:
         if ext.run.omega is None:
-            raise UntestableError("lever_arm needs sample times")
+            raise base.UntestableError("lever_arm needs sample times")
         return [ext.physical_column(k, st.tau, "w2"), ext.physical_column(k, st.tau, "alpha")]
 
-    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: base.FinalFit, axis: str) -> tuple[dict, dict]:
         sc, w2, al = f"{axis}.scale", f"{axis}.c_w2", f"{axis}.c_alpha"
         s = fit.value(sc)
         c = fit.cov_of(sc, w2, al)

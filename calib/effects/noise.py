@@ -17,21 +17,12 @@ import numpy as np
 from scipy import stats
 
 from calib.conventions import AXES
-from calib.effects.base import (
-    AxisState,
-    Effect,
-    FinalFit,
-    Likelihood,
-    ModelState,
-    Trial,
-    minimise,
-    register,
-)
+from calib.effects import base
 from calib.effects.response import BoundaryEffect, ProfiledEffect
 from calib.stats.diagnostics import chi2_two_sided_logp
 
 
-@register
+@base.register
 class BiasRandomWalk(BoundaryEffect):
     """Bias random walk ``b_k = b_{k-1} + q·√Δt·w_k`` (per √s with timing, else per √sample)."""
 
@@ -42,7 +33,7 @@ class BiasRandomWalk(BoundaryEffect):
     refine_rank = 2
     refine_window = 1.0
 
-    def profile(self, ext: Likelihood, state: ModelState, k: int,
+    def profile(self, ext: base.Likelihood, state: base.ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:
         """REML of the random-walk intensity q of axis k (others fixed): (q, REML -2 log L).
 
@@ -63,34 +54,34 @@ class BiasRandomWalk(BoundaryEffect):
             lo, hi = (np.log(b * b * dtm / s2) for b in bounds)
             if hi - lo < 1e-9:
                 return float(bounds[0]), f(lo)
-            lk, val = minimise(f, np.linspace(lo, hi, 7))
+            lk, val = base.minimise(f, np.linspace(lo, hi, 7))
             return float(np.sqrt(np.exp(lk) * s2 / dtm)), val
         if window is None:
             grid = np.linspace(np.log(0.01 / n**2), 0.0, 18)
         else:
             c = np.log(st.q**2 * dtm / s2)
             grid = np.linspace(c - window, c + window, 7)
-        lk, val = minimise(f, grid)
+        lk, val = base.minimise(f, grid)
         return float(np.sqrt(np.exp(lk) * s2 / dtm)), val
 
-    def std(self, fit: FinalFit, k: int) -> float:
+    def std(self, fit: base.FinalFit, k: int) -> float:
         """From the REML profile interval (:func:`calib.gap.random_walk.q_uncertainty`)."""
         return fit.q_uncertainty(k)[0]
 
     def _key(self, fit) -> str:
         return self.info.keys[0] if fit.run.time_unit == "s" else self.info.keys[1]
 
-    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: base.FinalFit, axis: str) -> tuple[dict, dict]:
         k = AXES.index(axis)
         key = self._key(fit)
         return {key: fit.state.axes[k].q}, {key: self.std(fit, k)}
 
-    def interval(self, fit: FinalFit, axis: str, params: dict) -> dict:
+    def interval(self, fit: base.FinalFit, axis: str, params: dict) -> dict:
         """The REML profile-likelihood interval of q (asymmetric)."""
         return {self._key(fit): fit.q_uncertainty(AXES.index(axis))[1]}
 
 
-@register
+@base.register
 class NoiseLevel(ProfiledEffect):
     """True white-noise variance σ² differs from the stated one: σ² estimated."""
 
@@ -98,28 +89,28 @@ class NoiseLevel(ProfiledEffect):
     field = "sigma2"
     refine_rank = 3
 
-    def present(self, st: AxisState) -> bool:
+    def present(self, st: base.AxisState) -> bool:
         return st.noise_free
 
-    def add(self, st: AxisState, value: float | None = None) -> AxisState:
+    def add(self, st: base.AxisState, value: float | None = None) -> base.AxisState:
         return replace(st, sigma2_fitted=float(value))
 
-    def remove(self, st: AxisState) -> AxisState:
+    def remove(self, st: base.AxisState) -> base.AxisState:
         return replace(st, sigma2_fitted=None)  # the stated σ² is in use again
 
-    def test(self, ext: Likelihood, state: ModelState, axis: str) -> Trial:
+    def test(self, ext: base.Likelihood, state: base.ModelState, axis: str) -> base.Trial:
         k = AXES.index(axis)
         nll0 = ext.nll(state)
         fit = ext.fit(state)
         dof = ext.run.n - 1 - (ext.n_params(state, k) - 1)
         if dof < 2:  # σ² fitted would leave no degree of freedom (N = 3): not testable
-            return Trial(self.name, axis, state, 0.0, 0.0, nll0, f"chi2({dof})")
+            return base.Trial(self.name, axis, state, 0.0, 0.0, nll0, f"chi2({dof})")
         logp = chi2_two_sided_logp(fit.rss[k], dof)
         s2, nll1 = self.profile(ext, state, k)
         new = state.with_axis(k, self.add(state.axes[k], s2))
-        return Trial(self.name, axis, new, max(nll0 - nll1, 0.0), logp, nll1, f"chi2({dof})")
+        return base.Trial(self.name, axis, new, max(nll0 - nll1, 0.0), logp, nll1, f"chi2({dof})")
 
-    def profile(self, ext: Likelihood, state: ModelState, k: int,
+    def profile(self, ext: base.Likelihood, state: base.ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:
         """ML of the white-noise variance σ² of axis k (others fixed): (σ², nll)."""
         st = state.axes[k]
@@ -132,38 +123,38 @@ class NoiseLevel(ProfiledEffect):
         def f(ls: float) -> float:
             return ext.safe_nll(state.with_axis(k, self.add(st, float(np.exp(ls)))))
 
-        ls, val = minimise(f, np.log(guess) + np.linspace(-0.7, 0.7, 7))
+        ls, val = base.minimise(f, np.log(guess) + np.linspace(-0.7, 0.7, 7))
         return float(np.exp(ls)), val
 
     @staticmethod
-    def _dof(fit: FinalFit, k: int) -> int:
+    def _dof(fit: base.FinalFit, k: int) -> int:
         return fit.run.n - fit.ext.n_params(fit.state, k)
 
-    def std(self, fit: FinalFit, k: int) -> float:
+    def std(self, fit: base.FinalFit, k: int) -> float:
         """``σ̂²·sqrt(2/dof)`` (χ²(dof) variance)."""
         return fit.state.axes[k].sigma2 * float(np.sqrt(2.0 / self._dof(fit, k)))
 
-    def interval(self, fit: FinalFit, axis: str, params: dict) -> dict:
+    def interval(self, fit: base.FinalFit, axis: str, params: dict) -> dict:
         """``(dof·σ̂²/χ²_{0.975}, dof·σ̂²/χ²_{0.025})``."""
         dof = self._dof(fit, AXES.index(axis))
         lo, hi = dof * params["sigma2"] / stats.chi2.ppf([0.975, 0.025], dof)
         return {"sigma2": (float(lo), float(hi))}
 
 
-@register
-class Quantization(Effect):
+@base.register
+class Quantization(base.Effect):
     """Output rounded to multiples of lsb: adds lsb²/12 to the noise variance."""
 
     name = "quantization"
     n_free = 0
     lr_tested = False
 
-    def present(self, st: AxisState) -> bool:
+    def present(self, st: base.AxisState) -> bool:
         return st.lsb > 0
 
-    def remove(self, st: AxisState) -> AxisState:
+    def remove(self, st: base.AxisState) -> base.AxisState:
         return replace(st, lsb=0.0)
 
-    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: base.FinalFit, axis: str) -> tuple[dict, dict]:
         lat = fit.lattice[AXES.index(axis)]
         return {"lsb": lat.lsb}, {"lsb": lat.lsb_std}

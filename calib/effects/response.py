@@ -18,21 +18,11 @@ import numpy as np
 from scipy import stats
 
 from calib.conventions import AXES
-from calib.effects.base import (
-    AxisState,
-    Effect,
-    FinalFit,
-    Likelihood,
-    ModelState,
-    Trial,
-    UntestableError,
-    minimise,
-    register,
-)
+from calib.effects import base
 from calib.stats.diagnostics import LN2, flat_top_score, hinge_columns, hinge_levels
 
 
-class ProfiledEffect(Effect):
+class ProfiledEffect(base.Effect):
     """A per-axis effect with one nonlinear parameter, the axis-state field ``field``,
     estimated by :meth:`profile` and refined in a local window ``refine_window``."""
 
@@ -41,32 +31,32 @@ class ProfiledEffect(Effect):
     """The field's value when the effect is absent."""
     refine_window: ClassVar[float | None] = None
 
-    def present(self, st: AxisState) -> bool:
+    def present(self, st: base.AxisState) -> bool:
         return getattr(st, self.field) != self.off
 
-    def add(self, st: AxisState, value: float | None = None) -> AxisState:
+    def add(self, st: base.AxisState, value: float | None = None) -> base.AxisState:
         return replace(st, **{self.field: float(value)})
 
-    def remove(self, st: AxisState) -> AxisState:
+    def remove(self, st: base.AxisState) -> base.AxisState:
         return replace(st, **{self.field: self.off})
 
-    def profile(self, ext: Likelihood, state: ModelState, k: int,
+    def profile(self, ext: base.Likelihood, state: base.ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:
         """ML (or REML) of the parameter of axis k, others fixed: (value, -2 log L)."""
         raise NotImplementedError
 
-    def refine(self, ext: Likelihood, state: ModelState, k: int) -> ModelState:
+    def refine(self, ext: base.Likelihood, state: base.ModelState, k: int) -> base.ModelState:
         val, _ = self.profile(ext, state, k, window=self.refine_window)
         return state.with_axis(k, self.add(state.axes[k], val))
 
-    def nonlinear(self, fit: FinalFit, k: int) -> tuple[float, float]:
+    def nonlinear(self, fit: base.FinalFit, k: int) -> tuple[float, float]:
         return getattr(fit.state.axes[k], self.field), self.std(fit, k)
 
-    def std(self, fit: FinalFit, k: int) -> float:
+    def std(self, fit: base.FinalFit, k: int) -> float:
         """Gauss-Newton std from the final fit's column ``d_<field>`` (:meth:`gn_column`)."""
         return fit.gn_std[f"{AXES[k]}.d_{self.field}"]
 
-    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: base.FinalFit, axis: str) -> tuple[dict, dict]:
         k = AXES.index(axis)
         key = self.info.keys[0]
         return {key: getattr(fit.state.axes[k], self.field)}, {key: self.std(fit, k)}
@@ -77,23 +67,23 @@ class BoundaryEffect(ProfiledEffect):
 
     reml: ClassVar[bool] = False
 
-    def test(self, ext: Likelihood, state: ModelState, axis: str) -> Trial:
+    def test(self, ext: base.Likelihood, state: base.ModelState, axis: str) -> base.Trial:
         k = AXES.index(axis)
         nll0 = ext.nll(state)
         self.check_testable(ext)
         val, nll1 = self.profile(ext, state, k)
         lr = (ext.nll(state, reml=True) if self.reml else nll0) - nll1
         if not np.isfinite(nll1) or lr <= 0:
-            return Trial(self.name, axis, state, 0.0, 0.0, nll0, "chibar2(0:1)")
+            return base.Trial(self.name, axis, state, 0.0, 0.0, nll0, "chibar2(0:1)")
         new = state.with_axis(k, self.add(state.axes[k], val))
-        return Trial(self.name, axis, new, lr, float(-LN2 + stats.chi2.logsf(lr, 1)),
-                     ext.nll(new), "chibar2(0:1)")
+        return base.Trial(self.name, axis, new, lr, float(-LN2 + stats.chi2.logsf(lr, 1)),
+                          ext.nll(new), "chibar2(0:1)")
 
-    def check_testable(self, ext: Likelihood) -> None:
+    def check_testable(self, ext: base.Likelihood) -> None:
         return None
 
 
-@register
+@base.register
 class LowpassLag(BoundaryEffect):
     """First-order low-pass τ·dy/dt + y = u on the signal (the white noise stays white)."""
 
@@ -106,11 +96,11 @@ class LowpassLag(BoundaryEffect):
         "at a constant sweep rate a lag τ looks like an angle offset -τ·ω; a sweep with a "
         "varying rate or a reversal (up-then-down) separates them")
 
-    def check_testable(self, ext: Likelihood) -> None:
+    def check_testable(self, ext: base.Likelihood) -> None:
         if not ext.run.timed:
-            raise UntestableError("lowpass_lag needs sample times")
+            raise base.UntestableError("lowpass_lag needs sample times")
 
-    def profile(self, ext: Likelihood, state: ModelState, k: int,
+    def profile(self, ext: base.Likelihood, state: base.ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:
         """ML of the low-pass time constant τ (s) of axis k (others fixed): (τ, nll)."""
         st = state.axes[k]
@@ -125,10 +115,10 @@ class LowpassLag(BoundaryEffect):
         else:
             c = np.log(st.tau)
             grid = np.linspace(c - window, c + window, 7)
-        lt, val = minimise(f, grid)
+        lt, val = base.minimise(f, grid)
         return float(np.exp(lt)), val
 
-    def gn_column(self, ext: Likelihood, k: int, st: AxisState, gain: float
+    def gn_column(self, ext: base.Likelihood, k: int, st: base.AxisState, gain: float
                   ) -> tuple[str, np.ndarray] | None:
         """``d r / d τ`` by a central difference (relative step 1e-3), times the gain."""
         eps = 1e-3
@@ -140,7 +130,7 @@ class LowpassLag(BoundaryEffect):
         return True
 
 
-@register
+@base.register
 class Saturation(ProfiledEffect):
     """True specific force clipped to ±L."""
 
@@ -150,21 +140,21 @@ class Saturation(ProfiledEffect):
     refine_rank = 1
     refine_window = 0.05
 
-    def test(self, ext: Likelihood, state: ModelState, axis: str) -> Trial:
+    def test(self, ext: base.Likelihood, state: base.ModelState, axis: str) -> base.Trial:
         k = AXES.index(axis)
         nll0 = ext.nll(state)
         logp = self.score(ext, state, k)
         lim, nll1 = self.profile(ext, state, k)
         lr = max(nll0 - nll1, 0.0)
         new = state.with_axis(k, self.add(state.axes[k], lim)) if np.isfinite(lim) else state
-        return Trial(self.name, axis, new, lr, logp, min(nll1, nll0), "davies")
+        return base.Trial(self.name, axis, new, lr, logp, min(nll1, nll0), "davies")
 
-    def score(self, ext: Likelihood, state: ModelState, k: int) -> float:
+    def score(self, ext: base.Likelihood, state: base.ModelState, k: int) -> float:
         """log p of the flat-top score test (clip at ±L, L unknown) on axis k."""
         st = state.axes[k]
         levels = self.levels(ext, k)
         if levels.size == 0:
-            raise UntestableError("no range of |A_r| to clip")
+            raise base.UntestableError("no range of |A_r| to clip")
         ext.fit(state)  # raises when the model is not identifiable
         resid, design = ext.whitened_residual(k, state)
         hinges = ext.memo((self.name, "hinges", k, st.tau), lambda: ext.filter(
@@ -174,11 +164,11 @@ class Saturation(ProfiledEffect):
         _, logp = flat_top_score(resid, design, hinges_w)
         return logp
 
-    def levels(self, ext: Likelihood, k: int) -> np.ndarray:
+    def levels(self, ext: base.Likelihood, k: int) -> np.ndarray:
         """The grid of limits of axis k (:func:`calib.stats.diagnostics.hinge_levels`), m/s²."""
         return ext.memo((self.name, "levels", k), lambda: hinge_levels(ext.run.a_ref[:, k]))
 
-    def profile(self, ext: Likelihood, state: ModelState, k: int,
+    def profile(self, ext: base.Likelihood, state: base.ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:
         """ML of the saturation limit L (m/s²) of axis k (others fixed): (L, nll)."""
         st = state.axes[k]
@@ -195,10 +185,10 @@ class Saturation(ProfiledEffect):
                 grid = np.unique(np.minimum(grid, float(np.max(levels))))  # and its column be 0
         if grid.size == 0:
             return float("inf"), ext.nll(state)
-        lim, val = minimise(f, grid)
+        lim, val = base.minimise(f, grid)
         return lim, val
 
-    def gn_column(self, ext: Likelihood, k: int, st: AxisState, gain: float
+    def gn_column(self, ext: base.Likelihood, k: int, st: base.AxisState, gain: float
                   ) -> tuple[str, np.ndarray] | None:
         """``d r / d L = LPF_τ(sgn(A_r)·[|A_r| > L])``, times the gain."""
         a = ext.run.a_ref[:, k]

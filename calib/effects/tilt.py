@@ -12,11 +12,11 @@ from dataclasses import replace
 import numpy as np
 from scipy import stats
 
-from calib.effects.base import AxisState, Effect, FinalFit, Likelihood, ModelState, Trial, register
+from calib.effects import base
 
 
-@register
-class TiltOffset(Effect):
+@base.register
+class TiltOffset(base.Effect):
     name = "tilt_offset"
     shared = True
     confusion = (
@@ -24,25 +24,25 @@ class TiltOffset(Effect):
         "sensors; mounting the sensor block rotated by 90° (or an independent inclinometer) "
         "separates them")
 
-    def shared_column(self, ext: Likelihood, k: int, st: AxisState) -> np.ndarray:
+    def shared_column(self, ext: base.Likelihood, k: int, st: base.AxisState) -> np.ndarray:
         """``sgn·(1 + ŝ_k)·LPF_τ(A_p)``: the reading change per unit sin δ of a tilt offset
         (the misalignment's physical column times the nominal gain)."""
         return ext.gains[k] * ext.physical_column(k, st.tau, "mis")
 
-    def in_model(self, state: ModelState, axis: str) -> bool:
+    def in_model(self, state: base.ModelState, axis: str) -> bool:
         return state.tilt
 
-    def drop(self, state: ModelState, axis: str) -> ModelState:
+    def drop(self, state: base.ModelState, axis: str) -> base.ModelState:
         return replace(state, tilt=False)
 
-    def test(self, ext: Likelihood, state: ModelState, axis: str) -> Trial:
+    def test(self, ext: base.Likelihood, state: base.ModelState, axis: str) -> base.Trial:
         new = replace(state, tilt=True)
         nll1 = ext.nll(new)
         lr = max(ext.nll(state) - nll1, 0.0)
-        return Trial(self.name, "both", new, lr, float(stats.chi2.logsf(lr, 1)), nll1,
-                     "chi2(1)")
+        return base.Trial(self.name, "both", new, lr, float(stats.chi2.logsf(lr, 1)), nll1,
+                          "chi2(1)")
 
-    def estimate(self, fit: FinalFit, axis: str) -> tuple[dict, dict]:
+    def estimate(self, fit: base.FinalFit, axis: str) -> tuple[dict, dict]:
         s = fit.value("sin_tilt")
         sd = float(np.sqrt(fit.cov_of("sin_tilt")[0, 0]))
         d = float(np.arcsin(np.clip(s, -1, 1)))

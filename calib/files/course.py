@@ -24,7 +24,7 @@ from calib.files.angles import compare_angle_units
 from calib.files.atomic import write_bytes as atomic_write_bytes  # noqa: F401  (one home)
 from calib.files.atomic import write_text as atomic_write_text  # noqa: F401
 from calib.files.datos_txt import parse_datos
-from calib.files.degeneracy import check_magnitudes, check_signal
+from calib.files.degeneracy import check_magnitudes, check_signal, refuse_beyond
 from calib.input_rules import (  # noqa: F401  (re-exported: calib.files.course is where users look)
     MAX_ABS_ACCEL,
     MAX_ABS_POSITION,
@@ -32,7 +32,10 @@ from calib.input_rules import (  # noqa: F401  (re-exported: calib.files.course 
     MAX_ABS_VELOCITY,
     DataError,
     DataNote,
+    check_file,
+    file_head,
 )
+from calib.results import readonly
 
 
 @dataclass(frozen=True)
@@ -54,11 +57,8 @@ class Ensayo:
 
     def __post_init__(self) -> None:
         for name in ("tita", "datos", "t"):
-            value = getattr(self, name)
-            if value is not None:
-                arr = np.array(value, dtype=float)
-                arr.setflags(write=False)
-                object.__setattr__(self, name, arr)
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, readonly(getattr(self, name)))
 
     @property
     def n(self) -> int:
@@ -78,11 +78,8 @@ class Acel:
 
     def __post_init__(self) -> None:
         for name in ("t", "aerr", "gyro"):
-            if getattr(self, name) is None:
-                continue
-            arr = np.array(getattr(self, name), dtype=float)
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, readonly(getattr(self, name)))
 
 
 @dataclass(frozen=True)
@@ -126,10 +123,8 @@ class _Mat:
 def _file_kind(path: Path) -> str | None:
     """What a file that scipy cannot read as .mat is, in words (None: nothing recognisable):
     an empty file, a text file (the course ``datos.txt``, a JSON file) or another format."""
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(4096)
-    except OSError:
+    head = file_head(path, 4096)
+    if head is None:
         return None
     if not head:
         return "is an empty file"
@@ -163,10 +158,7 @@ def _loadmat(path: Path, expected: str = "a MATLAB .mat file") -> _Mat:
     import scipy.io
 
     path = Path(path)
-    if not path.exists():
-        raise DataError(f"{path}: file not found")
-    if path.is_dir():
-        raise DataError(f"{path}: is a directory; expected a MATLAB .mat file")
+    check_file(path, "a MATLAB .mat file")
     try:
         variables = scipy.io.loadmat(str(path))
         # loadmat returns MATLAB logicals as uint8; the class in the header tells them apart
@@ -233,10 +225,8 @@ def _numeric(value, where, name: str, mclass: str | None = None) -> np.ndarray:
 
 
 def _check_magnitude(arr: np.ndarray, limit: float, where: str, name: str, unit: str) -> None:
-    big = float(np.max(np.abs(arr))) if arr.size else 0.0
-    if big > limit:
-        raise DataError(f"{where}: variable '{name}' reaches {big:.3g} {unit}, beyond "
-                        f"{limit:.3g} {unit}; check the units or the file")
+    refuse_beyond(arr, limit, lambda big: f"{where}: variable '{name}' reaches {big:.3g} "
+                  f"{unit}, beyond {limit:.3g} {unit}; check the units or the file", DataError)
 
 
 def check_finite(arr: np.ndarray, where: str, name: str) -> None:
@@ -379,16 +369,35 @@ class Fixes:
     source: str = "<memory>"
 
 
+def uniformly_sampled(t: np.ndarray) -> bool:
+    """Whether the times ``t`` (M,) s are evenly spaced, as a vehicle run's must be to be
+    integrated: every step within ``1e-6·h̄ + 1e-9`` s of the mean step ``h̄``."""
+    d = np.diff(t)
+    if d.size == 0:
+        return True
+    return not bool(np.max(np.abs(d - d.mean())) > 1e-6 * max(d.mean(), 1e-12) + 1e-9)
+
+
+def _time_and_pair(path: str | os.PathLike, expected: str, time: str, pair: str
+                   ) -> tuple[_Mat, np.ndarray, np.ndarray]:
+    """The .mat file of a run (``expected``: what it should hold, for the message when it is
+    not one), its time variable ``time`` as (M,) s and its variable ``pair`` as (M', 2):
+    both present and shaped (:func:`_column`, :func:`_two_columns`), nothing else checked."""
+    path = Path(path)
+    mat = _loadmat(path, expected)
+    _require(mat, (time, pair))
+    where = str(path)
+    return (mat, _column(_get(mat, path, time), where, time),
+            _two_columns(_get(mat, path, pair), where, pair))
+
+
 def read_gps(path: str | os.PathLike) -> Fixes:
     """Read ``gps.mat``: ``t_gps`` (M×1, s, increasing), ``pos`` (M×2, m) and optionally
     ``vel`` (M×2, m/s) (``tiltbench generate vehicle|course --gps``, docs/gnss.md)."""
-    path = Path(path)
-    mat = _loadmat(path, "the gps .mat file (t_gps M×1 s, pos M×2 m, optional vel M×2 m/s)")
-    where = str(path)
-    _require(mat, ("t_gps", "pos"))
-    t = _column(_get(mat, path, "t_gps"), where, "t_gps")
-    pos = _two_columns(_get(mat, path, "pos"), where, "pos")
-    vel = _two_columns(_get(mat, path, "vel"), where, "vel") if "vel" in mat else None
+    mat, t, pos = _time_and_pair(
+        path, "the gps .mat file (t_gps M×1 s, pos M×2 m, optional vel M×2 m/s)", "t_gps", "pos")
+    where = str(mat.path)
+    vel = _two_columns(_get(mat, mat.path, "vel"), where, "vel") if "vel" in mat else None
     for name, arr in (("pos", pos), ("vel", vel)):
         if arr is not None and arr.shape[0] != t.shape[0]:
             raise DataError(f"{where}: 't_gps' has {t.shape[0]} fixes but '{name}' has "
@@ -426,12 +435,9 @@ def read_acel(path: str | os.PathLike) -> Acel:
     >>> a.t.shape, a.aerr.shape  # doctest: +SKIP
     ((6000,), (6000, 2))
     """
-    path = Path(path)
-    mat = _loadmat(path, "the acel .mat file (t M×1 s, Aerr M×2 m/s²)")
-    where = str(path)
-    _require(mat, ("t", "Aerr"))
-    t = _column(_get(mat, path, "t"), where, "t")
-    aerr = _two_columns(_get(mat, path, "Aerr"), where, "Aerr")
+    mat, t, aerr = _time_and_pair(path, "the acel .mat file (t M×1 s, Aerr M×2 m/s²)", "t",
+                                  "Aerr")
+    where = str(mat.path)
     if aerr.shape[0] != t.shape[0]:
         raise DataError(f"{where}: 't' has {t.shape[0]} samples but 'Aerr' has {aerr.shape[0]}")
     check_finite(t, where, "t")
@@ -442,12 +448,11 @@ def read_acel(path: str | os.PathLike) -> Acel:
         raise DataError(f"{where}: only {t.shape[0]} samples in 't'; at least 3 are needed "
                         "to integrate")
     check_time(t, where)
-    d = np.diff(t)
-    if d.size and np.max(np.abs(d - d.mean())) > 1e-6 * max(d.mean(), 1e-12) + 1e-9:
+    if not uniformly_sampled(t):
         raise DataError(f"{where}: 't' is not uniformly sampled; resample before integrating")
     gyro = None
     if "gyro" in mat:  # turning vehicle: yaw rate M×1, rad/s (docs/fusion.md)
-        gyro = _column(_get(mat, path, "gyro"), where, "gyro")
+        gyro = _column(_get(mat, mat.path, "gyro"), where, "gyro")
         if gyro.shape[0] != t.shape[0]:
             raise DataError(f"{where}: 't' has {t.shape[0]} samples but 'gyro' has "
                             f"{gyro.shape[0]}")
@@ -538,10 +543,7 @@ def read_datos(path: str | os.PathLike) -> Datos:
     ([1.0, 3.0], [0.25, 0.64])
     """
     path = Path(path)
-    if not path.exists():
-        raise DataError(f"{path}: file not found")
-    if path.is_dir():
-        raise DataError(f"{path}: is a directory; expected the course datos.txt")
+    check_file(path, "the course datos.txt")
     found = parse_datos(path.read_bytes(), str(path))
     return Datos(**{k: np.array(v, dtype=float) for k, v in found.items()})
 

@@ -36,6 +36,7 @@ fits below cannot overflow.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -68,23 +69,26 @@ class DegenerateDataError(DataError):
 _REF_NAME = {"x": "−g sin θ", "y": "−g cos θ"}
 
 
+def refuse_beyond(values: np.ndarray, limit: float, message: Callable[[float], str],
+                  error: type[DataError] = DegenerateDataError) -> None:
+    """Raise ``error(message(big))`` when the largest magnitude ``big = max |values|`` (0 for
+    no values; the values' unit) exceeds ``limit``: the one test of a plausible size."""
+    big = float(np.max(np.abs(values))) if values.size else 0.0
+    if big > limit:
+        raise error(message(big))
+
+
 def check_magnitudes(tita: np.ndarray, datos: np.ndarray, where: str) -> None:
     """Refuse finite values too large to be angles in rad or accelerations in m/s²."""
-    big = float(np.max(np.abs(tita))) if tita.size else 0.0
-    if big > MAX_ABS_THETA:
-        raise DegenerateDataError(
-            f"{where}: variable 'tita' reaches |θ| = {big:.3g} rad; at that size a float "
-            f"cannot resolve 1 µrad (spacing {np.spacing(big):.3g} rad): subtract whole "
-            f"turns (2π) or check the units (limit {MAX_ABS_THETA:.3g} rad)")
+    refuse_beyond(tita, MAX_ABS_THETA, lambda big: (
+        f"{where}: variable 'tita' reaches |θ| = {big:.3g} rad; at that size a float "
+        f"cannot resolve 1 µrad (spacing {np.spacing(big):.3g} rad): subtract whole "
+        f"turns (2π) or check the units (limit {MAX_ABS_THETA:.3g} rad)"))
     for k, axis in enumerate(AXES):
-        col = datos[:, k]
-        big = float(np.max(np.abs(col))) if col.size else 0.0
-        if big > MAX_ABS_READING:
-            raise DegenerateDataError(
-                f"{where}: variable 'datos' column {k + 1} ({axis}) reaches |A| = {big:.3g} "
-                f"m/s² ({big / G:.3g} g): not accelerations in m/s² (limit "
-                f"{MAX_ABS_READING:.3g} m/s²); check the units or the file")
-
+        refuse_beyond(datos[:, k], MAX_ABS_READING, lambda big, k=k, axis=axis: (
+            f"{where}: variable 'datos' column {k + 1} ({axis}) reaches |A| = {big:.3g} "
+            f"m/s² ({big / G:.3g} g): not accelerations in m/s² (limit "
+            f"{MAX_ABS_READING:.3g} m/s²); check the units or the file"))
 
 
 def _noise_sd(tita: np.ndarray, y: np.ndarray, g: float) -> float:

@@ -139,6 +139,75 @@ def fix_measurements(pos_gps, m: int, runs: int, sigma_pos: float, vel_gps=None,
     return np.concatenate(zs, axis=-1), np.diag(r_diag)
 
 
+@dataclass(frozen=True, eq=False)
+class FilterInputs:
+    """The checked inputs of a fusion filter (:func:`filter_inputs`), and the run of the
+    shared loop on them (:meth:`run`).
+
+    Attributes
+    ----------
+    t : (N,) IMU times, s.  acc : (R, N, 2) readings, m/s²; ``batched``: the caller gave the
+        run axis R (else R = 1, dropped again from the result).
+    t_gps : (M,) fix times, s.  Z : (R, M, d) the fixes (positions m, then velocities m/s)
+        and Rm : (d, d) their noise (:func:`fix_measurements`).
+    cal : the calibration (:class:`CalibrationPrior`).  noise_var : (2,) σ_a², (m/s²)².
+    """
+
+    t: np.ndarray
+    acc: np.ndarray
+    batched: bool
+    t_gps: np.ndarray
+    Z: np.ndarray
+    Rm: np.ndarray
+    cal: CalibrationPrior
+    noise_var: np.ndarray
+
+    @property
+    def runs(self) -> int:
+        """R, the runs stepped at once."""
+        return int(self.acc.shape[0])
+
+    @property
+    def dt(self) -> float:
+        """The nominal IMU step, the median step of ``t``, s (the printed Q's)."""
+        return float(np.median(np.diff(self.t)))
+
+    def run(self, step, x0: np.ndarray, P0: np.ndarray, fixi: np.ndarray, *,
+            nodes: np.ndarray, keep: str, smoother: bool, gate_alpha: float) -> dict:
+        """:func:`run_filter` of the model's ``step`` from ``x0``, ``P0`` over the nodes
+        ``nodes`` (K,) s with the fix index ``fixi`` (K,) (−1: none), gated at
+        :func:`gate_threshold` of ``gate_alpha``; returns the fields of a
+        :class:`calib.fusion.linear.FusionResult` this run fills: the stored ``times``,
+        ``t_gps``, :func:`filter_outputs`, ``P0``, ``R``, ``noise_var``, ``dt`` and
+        ``gate_alpha`` (the model adds ``state_names``, ``Q`` and ``estimate_scale``)."""
+        kept, nu, S_all, used = run_filter(step, x0, P0, fixi, self.Z, self.Rm, keep, smoother,
+                                           gate=gate_threshold(gate_alpha, self.Z.shape[-1]))
+        return {"times": nodes[kept.store], "t_gps": self.t_gps,
+                **filter_outputs(kept, nu, S_all, used, self.batched), "P0": P0, "R": self.Rm,
+                "noise_var": self.noise_var, "dt": self.dt, "gate_alpha": gate_alpha}
+
+
+def filter_inputs(t, acc_m, t_gps, pos_gps, *, noise_var, sigma_pos: float,
+                  calibration: CalibrationLike | None = None, bias=None, scale=None,
+                  cal_cov=None, vel_gps=None, sigma_vel: float | None = None) -> FilterInputs:
+    """The checks both filters make on their inputs, in this order: the IMU times
+    (:func:`check_times`, at least 2), the readings ``acc_m`` (N, 2) or (R, N, 2) m/s²
+    (:func:`as_runs`, one per time), the fixes (:func:`fix_measurements`: ``pos_gps`` m, one
+    per fix time ``t_gps`` s, optional ``vel_gps`` m/s), the calibration
+    (:meth:`CalibrationPrior.of`) and σ_a² ``noise_var`` (scalar or (2,), (m/s²)²). Each
+    filter checks the fix times against its own model afterwards."""
+    t = check_times(t, 2)
+    acc, batched = as_runs(acc_m, 2, "acc_m")
+    if acc.shape[1] != t.shape[0]:
+        raise ValueError(f"acc_m has {acc.shape[1]} samples for {t.shape[0]} times")
+    t_gps = np.asarray(t_gps, dtype=float).reshape(-1)
+    Z, Rm = fix_measurements(pos_gps, t_gps.shape[0], acc.shape[0], sigma_pos, vel_gps,
+                             sigma_vel)
+    cal = CalibrationPrior.of(calibration, bias=bias, scale=scale, cal_cov=cal_cov)
+    sa2 = np.broadcast_to(np.asarray(noise_var, dtype=float), (2,)).copy()
+    return FilterInputs(t, acc, batched, t_gps, Z, Rm, cal, sa2)
+
+
 def initial_cov(n: int, p0_cov, v0_cov, blocks: dict[int, np.ndarray]) -> np.ndarray:
     """P0 (n, n): position (m²) and velocity ((m/s)²) blocks first, then each square block
     of ``blocks`` at its start index (the calibration's, a heading variance, …)."""

@@ -64,16 +64,12 @@ from calib.fusion.kalman import (
     CAL_ORDER,
     CalibrationLike,
     CalibrationPrior,
-    as_runs,
-    check_times,
-    filter_outputs,
-    fix_measurements,
-    gate_threshold,
+    FilterInputs,
+    filter_inputs,
     initial_cov,
     kalman_update,
     nominal_q,
     rts,
-    run_filter,
 )
 from calib.results import ResultMixin, readonly
 
@@ -104,6 +100,7 @@ class FusionResult(ResultMixin):
     gate_alpha : the gate's α (0: no gate): a right fix is rejected with probability α.
     """
 
+    # only alike (bench.validate.Validation): a result's title, units and fields, not logic
     _TITLE = "Kalman fusion"
     _UNITS = ("t s; px, py m; vx, vy m/s; bx, by m/s²; sx, sy 1; covariances in the products "
               "of those units; innovations m (position) and m/s (velocity)")
@@ -313,17 +310,12 @@ def fuse(t, acc_m, t_gps, pos_gps, *, noise_var, sigma_pos, p0, v0, p0_cov, v0_c
     >>> bool(np.all(np.sqrt(np.diag(res.final_position_cov)) < 3.0))  # below one fix's σ
     True
     """
-    t = check_times(t, 2)
-    acc, batched = as_runs(acc_m, 2, "acc_m")
-    if acc.shape[1] != t.shape[0]:
-        raise ValueError(f"acc_m has {acc.shape[1]} samples for {t.shape[0]} times")
-    t_gps = np.asarray(t_gps, dtype=float).reshape(-1)
+    inp = filter_inputs(t, acc_m, t_gps, pos_gps, noise_var=noise_var, sigma_pos=sigma_pos,
+                        calibration=calibration, bias=bias, scale=scale, cal_cov=cal_cov,
+                        vel_gps=vel_gps, sigma_vel=sigma_vel)
+    t, t_gps, cal = inp.t, inp.t_gps, inp.cal
     if np.any(np.diff(t_gps) <= 0) or (t_gps.size and (t_gps[0] < t[0] or t_gps[-1] > t[-1])):
         raise ValueError("t_gps must be strictly increasing and inside [t[0], t[-1]]")
-    Rn = acc.shape[0]
-    Z, Rm = fix_measurements(pos_gps, t_gps.shape[0], Rn, sigma_pos, vel_gps, sigma_vel)
-    cal = CalibrationPrior.of(calibration, bias=bias, scale=scale, cal_cov=cal_cov)
-    sa2 = np.broadcast_to(np.asarray(noise_var, dtype=float), (2,)).copy()
 
     n = 8 if estimate_scale else 6
     # P0: position, velocity, then the calibration blocks (bias [0, 2], scale [1, 3]).
@@ -331,17 +323,14 @@ def fuse(t, acc_m, t_gps, pos_gps, *, noise_var, sigma_pos, p0, v0, p0_cov, v0_c
     P0 = initial_cov(n, p0_cov, v0_cov, {4: cal.cov[np.ix_(cal_idx, cal_idx)]})
     x0 = np.concatenate([p0, v0, cal.bias] + ([cal.scale] if estimate_scale else []))
 
-    gate = gate_threshold(gate_alpha, Z.shape[-1])
     nodes, hold, fixi = _timeline(t, t_gps)
-    step = LinearStep(nodes, hold, acc, cal, sa2, estimate_scale)
-    kept, nu, S_all, used = run_filter(step, x0, P0, fixi, Z, Rm, keep, smoother,
-                                       gate=gate)
-    dt = float(np.median(np.diff(t)))
+    step = LinearStep(nodes, hold, inp, estimate_scale)
     names = STATE_NAMES + (SCALE_NAMES if estimate_scale else ())
-    return FusionResult(state_names=names, times=nodes[kept.store], t_gps=t_gps,
-                        **filter_outputs(kept, nu, S_all, used, batched), P0=P0,
-                        Q=nominal_q(n, sa2, 1.0 / (1.0 + cal.scale), dt), R=Rm, noise_var=sa2,
-                        estimate_scale=estimate_scale, dt=dt, gate_alpha=gate_alpha)
+    return FusionResult(state_names=names,
+                        **inp.run(step, x0, P0, fixi, nodes=nodes, keep=keep, smoother=smoother,
+                                  gate_alpha=gate_alpha),
+                        Q=nominal_q(n, inp.noise_var, 1.0 / (1.0 + cal.scale), inp.dt),
+                        estimate_scale=estimate_scale)
 
 
 class LinearStep:
@@ -350,11 +339,11 @@ class LinearStep:
     process noise ``Qk`` (R, n, n) (entries it does not write stay as
     :func:`calib.fusion.kalman.run_filter` set them: identity, zeros)."""
 
-    def __init__(self, nodes: np.ndarray, hold: np.ndarray, acc: np.ndarray,
-                 cal: CalibrationPrior, noise_var: np.ndarray, estimate_scale: bool) -> None:
-        self.nodes, self.hold, self.acc, self.scale = nodes, hold, acc, cal.scale
-        self.sa2, self.estimate_scale = noise_var, estimate_scale
-        self.ss2 = np.zeros(2) if estimate_scale else cal.scale_var
+    def __init__(self, nodes: np.ndarray, hold: np.ndarray, inputs: FilterInputs,
+                 estimate_scale: bool) -> None:
+        self.nodes, self.hold, self.acc, self.scale = nodes, hold, inputs.acc, inputs.cal.scale
+        self.sa2, self.estimate_scale = inputs.noise_var, estimate_scale
+        self.ss2 = np.zeros(2) if estimate_scale else inputs.cal.scale_var
 
     def __call__(self, k: int, x: np.ndarray, F: np.ndarray, Qk: np.ndarray) -> None:
         ax = np.arange(2)

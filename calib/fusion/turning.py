@@ -63,15 +63,10 @@ import numpy as np
 
 from calib.fusion.kalman import (
     CalibrationLike,
-    CalibrationPrior,
-    as_runs,
-    check_times,
-    filter_outputs,
-    fix_measurements,
-    gate_threshold,
+    FilterInputs,
+    filter_inputs,
     initial_cov,
     nominal_q,
-    run_filter,
 )
 from calib.fusion.linear import FusionResult
 
@@ -167,11 +162,9 @@ def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, noise_var, gyro_var, sigma_p
     -------
     TurningFusionResult
     """
-    t = check_times(t, 2)
-    acc, batched = as_runs(acc_m, 2, "acc_m")
-    Rn, N = acc.shape[0], t.shape[0]
-    if acc.shape[1] != N:
-        raise ValueError(f"acc_m has {acc.shape[1]} samples for {N} times")
+    inp = filter_inputs(t, acc_m, t_gps, pos_gps, noise_var=noise_var, sigma_pos=sigma_pos,
+                        calibration=calibration, bias=bias, scale=scale, cal_cov=cal_cov)
+    t, t_gps, Rn, N = inp.t, inp.t_gps, inp.runs, inp.t.shape[0]
     w = np.asarray(gyro, dtype=float)
     w = w[None] if w.ndim == 1 else w
     if w.ndim != 2 or w.shape[1] != N or w.shape[0] not in (1, Rn):
@@ -179,33 +172,26 @@ def fuse_turning(t, acc_m, gyro, t_gps, pos_gps, *, noise_var, gyro_var, sigma_p
     if not np.all(np.isfinite(w)):
         raise ValueError("gyro has NaN or Inf: remove or interpolate those samples")
     w = np.broadcast_to(w, (Rn, N))
-    t_gps = np.asarray(t_gps, dtype=float).reshape(-1)
     tol = 1e-9 * max(1.0, float(np.max(np.abs(t))))
     k_fix = np.clip(np.searchsorted(t, t_gps - tol), 0, N - 1)
     if (np.any(np.diff(t_gps) <= 0) or np.any(np.abs(t[k_fix] - t_gps) > tol)):
         raise ValueError("t_gps must be strictly increasing and each fix on an IMU sample time "
                          "(the heading's trapezoid needs the gyro at both ends of a step)")
-    Z, Rm = fix_measurements(pos_gps, t_gps.shape[0], Rn, sigma_pos)
-    cal = CalibrationPrior.of(calibration, bias=bias, scale=scale, cal_cov=cal_cov)
-    sa2 = np.broadcast_to(np.asarray(noise_var, dtype=float), (2,)).copy()
     sg2 = float(gyro_var)
     n = 7
     P0 = initial_cov(n, p0_cov, v0_cov, {4: float(psi0_var),
-                                         5: cal.cov[np.ix_([0, 2], [0, 2])]})
+                                         5: inp.cal.cov[np.ix_([0, 2], [0, 2])]})
     x0 = np.concatenate([np.asarray(p0, float), np.asarray(v0, float), [float(psi0)],
-                         cal.bias])
+                         inp.cal.bias])
     fixi = np.full(N, -1)
     fixi[k_fix] = np.arange(t_gps.shape[0])
-    step = TurningStep(t, acc, w, cal, sa2, sg2)
-    kept, nu, S_all, used = run_filter(step, x0, P0, fixi, Z, Rm, keep, smoother,
-                                       gate=gate_threshold(gate_alpha, Z.shape[-1]))
-    dt = float(np.median(np.diff(t)))
-    Qnom = nominal_q(n, sa2, step.c, dt)
-    Qnom[4, 4] = sg2 * dt * dt
-    return TurningFusionResult(state_names=TURN_STATE_NAMES, times=t[kept.store], t_gps=t_gps,
-                               **filter_outputs(kept, nu, S_all, used, batched), P0=P0,
-                               Q=Qnom, R=Rm, noise_var=sa2, estimate_scale=False, dt=dt,
-                               gyro_var=sg2, gate_alpha=gate_alpha)
+    step = TurningStep(inp, w, sg2)
+    fields = inp.run(step, x0, P0, fixi, nodes=t, keep=keep, smoother=smoother,
+                     gate_alpha=gate_alpha)
+    Qnom = nominal_q(n, inp.noise_var, step.c, inp.dt)
+    Qnom[4, 4] = sg2 * inp.dt * inp.dt
+    return TurningFusionResult(state_names=TURN_STATE_NAMES, **fields, Q=Qnom,
+                               estimate_scale=False, gyro_var=sg2)
 
 
 class TurningStep:
@@ -213,11 +199,10 @@ class TurningStep:
     ``step(k, x, F, Qk)`` moves ``x`` (R, 7) from sample k-1 to k in place and fills the
     Jacobian ``F`` and the process noise ``Qk`` (R, 7, 7)."""
 
-    def __init__(self, t: np.ndarray, acc: np.ndarray, gyro: np.ndarray,
-                 cal: CalibrationPrior, noise_var: np.ndarray, gyro_var: float) -> None:
-        self.t, self.acc, self.w = t, acc, gyro
-        self.sa2, self.sg2, self.ss2 = noise_var, gyro_var, cal.scale_var
-        self.c = 1.0 / (1.0 + cal.scale)
+    def __init__(self, inputs: FilterInputs, gyro: np.ndarray, gyro_var: float) -> None:
+        self.t, self.acc, self.w = inputs.t, inputs.acc, gyro
+        self.sa2, self.sg2, self.ss2 = inputs.noise_var, gyro_var, inputs.cal.scale_var
+        self.c = 1.0 / (1.0 + inputs.cal.scale)
 
     def __call__(self, k: int, x: np.ndarray, F: np.ndarray, Qk: np.ndarray) -> None:
         c = self.c

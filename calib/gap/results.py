@@ -76,6 +76,7 @@ def gap_units() -> dict[str, str]:
     ``effects.params`` / ``std`` / ``interval``), statistics, z's, χ²/dof, α's and p-values
     dimensionless, a signature's ``size`` in the unit its entry names (``"@unit"``)."""
     out = {f"effects.*.{k}": u for k, u in effect_units().items()}
+    # only alike: the units of other keys (validation/independent/cases.py has its own)
     out.update({
         "effects.statistic": "1", "effects.p_value": "1",
         "gap_before.*.chi2_dof": "1", "gap_before.*.max_signature_z": "1",

@@ -54,8 +54,9 @@ from typing import Any
 
 import numpy as np
 
-from calib.input_rules import MAX_ABS_TIME, DataError
+from calib.input_rules import MAX_ABS_TIME, DataError, file_head
 from calib.logs.table import ACCEL_UNITS, GYRO_UNITS, RawLog
+from calib.results import readonly
 
 LOG_FORMAT_VERSION = 1
 """Version of the provenance record (``provenance.json``)."""
@@ -161,43 +162,44 @@ class ImuLog:
     unchanged."""
 
     def __post_init__(self) -> None:
-        for name in ("acc", "t", "theta", "gyro", "acc_normal"):
-            value = getattr(self, name)
-            if value is not None:
-                arr = np.array(value, dtype=float)
-                arr.setflags(write=False)
-                object.__setattr__(self, name, arr)
-        if self.pose is not None:
-            arr = np.array(self.pose, dtype=int)
-            arr.setflags(write=False)
-            object.__setattr__(self, "pose", arr)
+        for name, dtype in (("acc", float), ("t", float), ("theta", float), ("pose", int),
+                            ("gyro", float), ("acc_normal", float)):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, readonly(getattr(self, name), dtype))
 
     @property
     def n(self) -> int:
         return int(self.acc.shape[0])
 
+    def _course_as(self, kind: type, needed: str, why: str) -> Any:
+        """The course file object this log was read as, when it is a ``kind`` (returned
+        unchanged); else None, after refusing (DataError naming the source, ``why``) a log
+        without the field ``needed``."""
+        if isinstance(self.course, kind):
+            return self.course
+        if getattr(self, needed) is None:
+            raise DataError(f"{self.source}: {why}")
+        return None
+
     def to_ensayo(self):
         """The course :class:`calib.files.course.Ensayo` (θ known); DataError when θ is unknown."""
         from calib.files.course import Ensayo, validate_ensayo
 
-        if isinstance(self.course, Ensayo):
-            return self.course
-        if self.theta is None:
-            raise DataError(f"{self.source}: the table angle is unknown; give the poses' "
-                            "angles (--poses …) or a θ column (--columns theta=…)")
+        course = self._course_as(Ensayo, "theta", "the table angle is unknown; give the poses' "
+                                 "angles (--poses …) or a θ column (--columns theta=…)")
+        if course is not None:
+            return course
         return validate_ensayo(self.theta, self.acc, self.t, self.source)
 
     def to_acel(self):
         """The course :class:`calib.files.course.Acel` (a vehicle run: uniform ``t`` needed)."""
-        from calib.files.course import Acel
+        from calib.files.course import Acel, uniformly_sampled
 
-        if isinstance(self.course, Acel):
-            return self.course
-        if self.t is None:
-            raise DataError(f"{self.source}: no sample times; a vehicle run needs them "
-                            "(--columns t=…)")
-        d = np.diff(self.t)
-        if d.size and np.max(np.abs(d - d.mean())) > 1e-6 * max(d.mean(), 1e-12) + 1e-9:
+        course = self._course_as(Acel, "t", "no sample times; a vehicle run needs them "
+                                 "(--columns t=…)")
+        if course is not None:
+            return course
+        if not uniformly_sampled(self.t):
             raise DataError(f"{self.source}: 't' is not uniformly sampled; a vehicle run is "
                             "integrated on a uniform grid: import it with tiltbench import "
                             "(resamples, recorded in provenance.json)")
@@ -220,13 +222,7 @@ def file_sha256(path: str | os.PathLike) -> str:
 
 
 def _is_mat(path: Path) -> bool:
-    if path.suffix.lower() == ".mat":
-        return True
-    try:
-        with open(path, "rb") as fh:
-            return fh.read(6) == b"MATLAB"
-    except OSError:
-        return False
+    return path.suffix.lower() == ".mat" or file_head(path, 6) == b"MATLAB"
 
 
 def _mat_names(path: Path) -> list[str]:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from calib.input_rules import DataError
+from calib.input_rules import DataError, file_head
 from calib.logs.table import RawLog
 
 IMU = ("sensor_msgs/msg/Imu", "sensor_msgs/Imu")
@@ -25,13 +25,8 @@ def is_bag(path: Path) -> bool:
     ROS 2 storage file (``.db3``, ``.mcap``)."""
     if path.is_dir():
         return (path / "metadata.yaml").exists()
-    if path.suffix.lower() in (".db3", ".mcap"):
-        return True
-    try:
-        with open(path, "rb") as fh:
-            return fh.read(13) == b"#ROSBAG V2.0\n"
-    except OSError:
-        return False
+    return (path.suffix.lower() in (".db3", ".mcap")
+            or file_head(path, 13) == b"#ROSBAG V2.0\n")
 
 
 def read_bag(path: Path, topic: str | None = None) -> RawLog:

@@ -24,8 +24,8 @@ def truncated(traj: Trajectory, k: int) -> Trajectory:
     sl = slice(0, k + 1)
     return Trajectory(traj.t[sl], traj.acc_raw[sl], traj.acc_corrected[sl],
                       traj.pos_raw[sl], traj.vel_raw[sl], traj.pos_corrected[sl],
-                      traj.vel_corrected[sl], traj.p0, traj.v0, traj.bias, traj.scale,
-                      traj.integrator)
+                      traj.vel_corrected[sl], p0=traj.p0, v0=traj.v0, bias=traj.bias,
+                      scale=traj.scale, integrator=traj.integrator)
 
 
 def position_cov_along(traj: Trajectory, cal: Calibration, noise_var,

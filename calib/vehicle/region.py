@@ -62,7 +62,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import stats
 
-from calib.results import ResultMixin
+from calib.results import ResultMixin, readonly
 from calib.vehicle.trajectory import Trajectory
 
 if TYPE_CHECKING:
@@ -70,12 +70,6 @@ if TYPE_CHECKING:
 
 COURSE_BOX_K = 3.0
 """Number of standard deviations in the course reports' box bound ("3σ ≈ 99.7 %")."""
-
-
-def _ro(a) -> np.ndarray:
-    arr = np.array(a, dtype=float)
-    arr.setflags(write=False)
-    return arr
 
 
 def chi2_2dof(level: float) -> float:
@@ -217,7 +211,7 @@ class Decision(ResultMixin):
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "candidates",
-                           {k: _ro(v) for k, v in self.candidates.items()})
+                           {k: readonly(v) for k, v in self.candidates.items()})
         object.__setattr__(self, "level", float(self.level))
         object.__setattr__(self, "inside", tuple(self.inside))
 
@@ -298,7 +292,7 @@ class Ellipse(ResultMixin):
 
     def __post_init__(self) -> None:
         for name in ("center", "cov", "semi_axes"):
-            object.__setattr__(self, name, _ro(getattr(self, name)))
+            object.__setattr__(self, name, readonly(getattr(self, name)))
 
     @classmethod
     def from_cov(cls, center, cov, level: float) -> Ellipse:
@@ -369,7 +363,83 @@ class Ellipse(ResultMixin):
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
-class ArrivalRegion(ResultMixin):
+class DecidedRegion(ResultMixin):
+    """What the dead-reckoning arrival regions share (:class:`ArrivalRegion`,
+    :class:`calib.vehicle.turning_trajectory.TurningRegion`): the arrival point, its
+    covariance, the level-L ellipse and the :class:`Decision` around it (module docstring,
+    "Region and decision"), made by :meth:`decided`.
+
+    Attributes
+    ----------
+    estimate : (2,) arrival point, m (world axes).  cov : (2, 2) its covariance ``Σ_P``, m².
+    level : L.  ellipse : the level-L region around the estimate.
+    decision : the letter or None.  reason : why, in words.
+    candidates : name → (2,) m.  mahalanobis : name → d.  likelihood : name → exp(-d²/2).
+    inside : names with ``d² ≤ χ²₂(L)``.
+
+    A region adds its own fields and lists its arrays in ``_ARRAYS`` (frozen here).
+    """
+
+    estimate: np.ndarray
+    cov: np.ndarray
+    level: float
+    ellipse: Ellipse
+    decision: str | None
+    reason: str
+    candidates: dict
+    mahalanobis: dict
+    likelihood: dict
+    inside: tuple
+
+    _ARRAYS = ("estimate", "cov")
+
+    def __post_init__(self) -> None:
+        for name in self._ARRAYS:
+            object.__setattr__(self, name, readonly(getattr(self, name)))
+        object.__setattr__(self, "candidates",
+                           {k: readonly(v) for k, v in self.candidates.items()})
+
+    @classmethod
+    def decided(cls, estimate: np.ndarray, cov: np.ndarray, candidates: dict, level: float,
+                **fields):
+        """The region around ``estimate`` (2,) m with covariance ``cov`` (2, 2) m² at level
+        ``level``: its ellipse (:meth:`Ellipse.from_cov`) and decision
+        (:meth:`Decision.at`); ``fields`` are the region's own."""
+        dec = Decision.at(estimate, cov, candidates, level)
+        return cls(estimate=estimate, cov=cov, level=dec.level,
+                   ellipse=Ellipse.from_cov(estimate, cov, level), decision=dec.letter,
+                   reason=dec.reason, candidates=dec.candidates, mahalanobis=dec.mahalanobis,
+                   likelihood=dec.likelihood, inside=dec.inside, **fields)
+
+    @property
+    def std(self) -> np.ndarray:
+        """(2,) standard deviation of the arrival point per axis, m."""
+        return np.sqrt(np.diag(self.cov))
+
+    def as_decision(self) -> Decision:
+        """The decision part of this region (:class:`Decision`)."""
+        return Decision(self.level, self.candidates, self.mahalanobis, self.likelihood,
+                        self.inside, self.decision, self.reason)
+
+    def candidate_rows(self) -> dict:
+        """name → ``{"pos": (2,) m, "mahalanobis", "likelihood", "inside"}``, as printed."""
+        return {k: {"pos": v.tolist(), "mahalanobis": self.mahalanobis[k],
+                    "likelihood": self.likelihood[k], "inside": k in self.inside}
+                for k, v in self.candidates.items()}
+
+    @staticmethod
+    def decision_fields(d: dict) -> dict:
+        """The decision's fields from a printed mapping (its ``candidates`` rows,
+        ``inside``, ``decision`` and ``reason``), for a region's ``from_dict`` (exact)."""
+        rows = d["candidates"]
+        return {"candidates": {k: v["pos"] for k, v in rows.items()},
+                "mahalanobis": {k: float(v["mahalanobis"]) for k, v in rows.items()},
+                "likelihood": {k: float(v["likelihood"]) for k, v in rows.items()},
+                "inside": tuple(d["inside"]), "decision": d["decision"], "reason": d["reason"]}
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class ArrivalRegion(DecidedRegion):
     """Arrival point, its covariance, the confidence region and the decision.
 
     Attributes
@@ -394,41 +464,17 @@ class ArrivalRegion(ResultMixin):
               "noise variance (m/s²)²; Mahalanobis distance and relative likelihood "
               "dimensionless; angles in degrees from +x")
 
-    estimate: np.ndarray
-    cov: np.ndarray
     cov_calibration: np.ndarray
     cov_noise: np.ndarray
     jacobian: np.ndarray
     noise_var: np.ndarray
-    level: float
-    ellipse: Ellipse
-    candidates: dict
-    mahalanobis: dict
-    likelihood: dict
-    inside: tuple
-    decision: str | None
-    reason: str
     course_box_bound: np.ndarray
     a_max: np.ndarray
     duration: float
     include_noise: bool = True
 
-    def __post_init__(self) -> None:
-        for name in ("estimate", "cov", "cov_calibration", "cov_noise", "jacobian",
-                     "noise_var", "course_box_bound", "a_max"):
-            object.__setattr__(self, name, _ro(getattr(self, name)))
-        object.__setattr__(self, "candidates",
-                           {k: _ro(v) for k, v in self.candidates.items()})
-
-    @property
-    def std(self) -> np.ndarray:
-        """(2,) standard deviation of the final position per axis, m."""
-        return np.sqrt(np.diag(self.cov))
-
-    def as_decision(self) -> Decision:
-        """The decision part of this region (:class:`Decision`)."""
-        return Decision(self.level, self.candidates, self.mahalanobis, self.likelihood,
-                        self.inside, self.decision, self.reason)
+    _ARRAYS = (*DecidedRegion._ARRAYS, "cov_calibration", "cov_noise", "jacobian", "noise_var",
+               "course_box_bound", "a_max")
 
     def course_box_at_level(self) -> np.ndarray:
         """The course box with ``k = Φ⁻¹((1 + L)/2)`` instead of 3 (same per-axis level)."""
@@ -461,10 +507,7 @@ class ArrivalRegion(ResultMixin):
             "noise_var": self.noise_var.tolist(),
             "include_noise": self.include_noise,
             "ellipse": self.ellipse.to_dict(),
-            "candidates": {k: {"pos": self.candidates[k].tolist(),
-                               "mahalanobis": self.mahalanobis[k],
-                               "likelihood": self.likelihood[k],
-                               "inside": k in self.inside} for k in self.candidates},
+            "candidates": self.candidate_rows(),
             "inside": list(self.inside),
             "decision": self.decision,
             "reason": self.reason,
@@ -507,17 +550,13 @@ class ArrivalRegion(ResultMixin):
         True
         """
         cov = np.asarray(d["cov"], dtype=float)
-        cands = d["candidates"]
         return cls(
             estimate=d["final_corrected"], cov=cov, cov_calibration=d["cov_calibration"],
             cov_noise=d["cov_noise"], jacobian=d["jacobian"], noise_var=d["noise_var"],
             level=float(d.get("level", d["ellipse"]["level"])),
             ellipse=Ellipse.from_dict(d["ellipse"], cov=d["ellipse"].get("cov", cov)),
-            candidates={k: np.asarray(v["pos"], dtype=float) for k, v in cands.items()},
-            mahalanobis={k: float(v["mahalanobis"]) for k, v in cands.items()},
-            likelihood={k: float(v["likelihood"]) for k, v in cands.items()},
-            inside=tuple(d["inside"]), decision=d["decision"], reason=d["reason"],
-            course_box_bound=d["course_box_bound"], a_max=d["course_box_a_max"],
+            **cls.decision_fields(d), course_box_bound=d["course_box_bound"],
+            a_max=d["course_box_a_max"],
             duration=float(d.get("duration", float("nan"))),
             include_noise=bool(d["include_noise"]),
         )
@@ -595,22 +634,17 @@ def arrival_region(
     cov_cal = J @ calibration.cov @ J.T
     cov_noise = noise_position_cov(traj, C) if include_noise else np.zeros((2, 2))
     cov = 0.5 * ((cov_cal + cov_noise) + (cov_cal + cov_noise).T)
-    est = traj.final_corrected
-    ell = Ellipse.from_cov(est, cov, level)
-    dec = Decision.at(est, cov, candidates, level)
     a_max = np.max(np.abs(traj.acc_corrected), axis=0)
     box = course_box_bound(traj.duration, calibration.cov, a_max)
-    return ArrivalRegion(
-        estimate=est, cov=cov, cov_calibration=cov_cal, cov_noise=cov_noise, jacobian=J,
-        noise_var=C, level=float(level), ellipse=ell, candidates=dec.candidates,
-        mahalanobis=dec.mahalanobis, likelihood=dec.likelihood, inside=dec.inside,
-        decision=dec.letter, reason=dec.reason, course_box_bound=box, a_max=a_max,
-        duration=traj.duration, include_noise=include_noise,
-    )
+    return ArrivalRegion.decided(
+        traj.final_corrected, cov, candidates, level, cov_calibration=cov_cal,
+        cov_noise=cov_noise, jacobian=J, noise_var=C, course_box_bound=box, a_max=a_max,
+        duration=traj.duration, include_noise=include_noise)
 
 
 __all__ = [
-    "COURSE_BOX_K", "ArrivalRegion", "Decision", "Ellipse", "arrival_region", "box_k_for_level",
-    "chi2_2dof", "course_box_bound", "course_decision", "decide", "noise_cov_matrix",
-    "noise_position_cov", "position_jacobian", "squared_distances", "stated_noise_var",
+    "COURSE_BOX_K", "ArrivalRegion", "DecidedRegion", "Decision", "Ellipse", "arrival_region",
+    "box_k_for_level", "chi2_2dof", "course_box_bound", "course_decision", "decide",
+    "noise_cov_matrix", "noise_position_cov", "position_jacobian", "squared_distances",
+    "stated_noise_var",
 ]

@@ -33,7 +33,7 @@ from scipy.integrate import cumulative_simpson, cumulative_trapezoid
 
 from calib.calibration.correct import correct
 from calib.files.course import Acel
-from calib.results import ResultMixin
+from calib.results import ResultMixin, readonly
 
 if TYPE_CHECKING:  # only for annotations: calib.calibration.tilt_plane is a sibling module
     from calib.calibration.tilt_plane import Calibration
@@ -199,8 +199,52 @@ def double_integral_weights(t: np.ndarray, integrator: Integrator = "trapezoid")
     return _weights_cached(t.tobytes(), t.shape[0], integrator)
 
 
+def last_row(name: str, doc: str) -> property:
+    """A read-only property of a run: a copy of the last row of its array ``name`` (the
+    final value of a sampled quantity), documented by ``doc``."""
+
+    def final(self) -> np.ndarray:
+        return getattr(self, name)[-1].copy()
+
+    return property(final, doc=doc)
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class SampledRun(ResultMixin):
+    """What the two dead reckonings share (:class:`Trajectory`,
+    :class:`calib.vehicle.turning_trajectory.TurningTrajectory`): the fields below, their float
+    arrays frozen as copies (``_ARRAYS``, the samples a run adds; ``_FIXED``, the four
+    below), and :meth:`to_state`, :meth:`to_dict` plus the samples.
+
+    Attributes (keyword-only)
+    ----------
+    p0 : (2,) m.  v0 : (2,) m/s — the initial position and velocity (world axes).
+    bias : (2,) m/s² and scale : (2,) dimensionless — the correction used.
+    integrator : "trapezoid" or "simpson" (:func:`integrate_twice`).
+    """
+
+    p0: np.ndarray
+    v0: np.ndarray
+    bias: np.ndarray
+    scale: np.ndarray
+    integrator: Integrator = "trapezoid"
+
+    _ARRAYS = ()
+    _FIXED = ("p0", "v0", "bias", "scale")
+
+    def __post_init__(self) -> None:
+        for name in (*self._ARRAYS, *self._FIXED):
+            object.__setattr__(self, name, readonly(getattr(self, name)))
+
+    def to_state(self) -> dict:
+        """:meth:`to_dict` plus every sample array (exact rebuild by ``from_dict``)."""
+        d = self.to_dict()  # type: ignore[attr-defined]
+        d.update({name: getattr(self, name).tolist() for name in self._ARRAYS})
+        return d
+
+
 @dataclass(frozen=True, eq=False)
-class Trajectory(ResultMixin):
+class Trajectory(SampledRun):
     """Raw and corrected trajectories of a vehicle run.
 
     Attributes
@@ -212,6 +256,7 @@ class Trajectory(ResultMixin):
     p0 : (2,) m.  v0 : (2,) m/s.
     bias : (2,) m/s² and scale : (2,) used for the correction.
     integrator : "trapezoid" or "simpson".
+    (``p0`` … ``integrator`` are keyword-only: :class:`SampledRun`.)
 
     Serialisation: :meth:`to_dict` (printed by ``trajectory --json``) holds the final values
     only; :meth:`to_state` adds every array and ``Trajectory.from_dict(tr.to_state()) == tr``.
@@ -228,41 +273,23 @@ class Trajectory(ResultMixin):
     vel_raw: np.ndarray
     pos_corrected: np.ndarray
     vel_corrected: np.ndarray
-    p0: np.ndarray
-    v0: np.ndarray
-    bias: np.ndarray
-    scale: np.ndarray
-    integrator: Integrator = "trapezoid"
 
-    def __post_init__(self) -> None:
-        for name in ("t", "acc_raw", "acc_corrected", "pos_raw", "vel_raw", "pos_corrected",
-                     "vel_corrected", "p0", "v0", "bias", "scale"):
-            arr = np.array(getattr(self, name), dtype=float)
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
+    _ARRAYS = ("t", "acc_raw", "acc_corrected", "pos_raw", "vel_raw", "pos_corrected",
+               "vel_corrected")
 
     @property
     def duration(self) -> float:
         """``t_end - t_0``, s."""
         return float(self.t[-1] - self.t[0])
 
-    @property
-    def final_raw(self) -> np.ndarray:
-        """(2,) final position integrated from the uncorrected readings, m."""
-        return self.pos_raw[-1].copy()
-
-    @property
-    def final_corrected(self) -> np.ndarray:
-        """(2,) final position integrated from the corrected accelerations, m."""
-        return self.pos_corrected[-1].copy()
-
-    @property
-    def final_velocity_corrected(self) -> np.ndarray:
-        return self.vel_corrected[-1].copy()
-
-    @property
-    def final_velocity_raw(self) -> np.ndarray:
-        return self.vel_raw[-1].copy()
+    final_raw = last_row("pos_raw", "(2,) final position integrated from the uncorrected "
+                         "readings, m.")
+    final_corrected = last_row("pos_corrected", "(2,) final position integrated from the "
+                               "corrected accelerations, m.")
+    final_velocity_raw = last_row("vel_raw", "(2,) final velocity integrated from the "
+                                  "uncorrected readings, m/s.")
+    final_velocity_corrected = last_row("vel_corrected", "(2,) final velocity integrated from "
+                                        "the corrected accelerations, m/s.")
 
     def weights(self) -> np.ndarray:
         """Double-integration weights of this run (see :func:`double_integral_weights`)."""
@@ -282,15 +309,6 @@ class Trajectory(ResultMixin):
         if include_arrays:
             d.update(t=self.t.tolist(), pos_raw=self.pos_raw.tolist(),
                      pos_corrected=self.pos_corrected.tolist())
-        return d
-
-    _ARRAYS = ("t", "acc_raw", "acc_corrected", "pos_raw", "vel_raw", "pos_corrected",
-               "vel_corrected")
-
-    def to_state(self) -> dict:
-        """:meth:`to_dict` plus every sample array (exact rebuild by :meth:`from_dict`)."""
-        d = self.to_dict()
-        d.update({name: getattr(self, name).tolist() for name in self._ARRAYS})
         return d
 
     @classmethod
@@ -317,8 +335,8 @@ class Trajectory(ResultMixin):
         True
         """
         if all(k in d for k in cls._ARRAYS):
-            return cls(*(d[k] for k in cls._ARRAYS), d["p0"], d["v0"], d["bias"], d["scale"],
-                       d["integrator"])
+            return cls(*(d[k] for k in cls._ARRAYS), p0=d["p0"], v0=d["v0"], bias=d["bias"],
+                       scale=d["scale"], integrator=d["integrator"])
         if "t" in d and "acc_raw" in d:
             return correct_and_integrate(d["t"], d["acc_raw"], d["bias"], d["scale"], d["p0"],
                                          d["v0"], d["integrator"])
@@ -365,7 +383,8 @@ def correct_and_integrate(
     a_c = correct(a_m, bias, scale)
     pos_r, vel_r = integrate_twice(t, a_m, p0, v0, integrator)
     pos_c, vel_c = integrate_twice(t, a_c, p0, v0, integrator)
-    return Trajectory(t, a_m, a_c, pos_r, vel_r, pos_c, vel_c, p0, v0, bias, scale, integrator)
+    return Trajectory(t, a_m, a_c, pos_r, vel_r, pos_c, vel_c, p0=p0, v0=v0, bias=bias,
+                      scale=scale, integrator=integrator)
 
 
 def compute_trajectory(
@@ -404,8 +423,7 @@ def compute_trajectory(
 
 
 __all__ = [
-    "COURSE_P0", "COURSE_V0", "INTEGRATORS", "Trajectory", "check_integrator",
-    "compute_trajectory",
-    "correct_and_integrate", "cumulative_integral", "double_integral_weights",
-    "integrate_twice", "trapezoid_sum_w2_uniform", "trapezoid_weights_uniform",
+    "COURSE_P0", "COURSE_V0", "INTEGRATORS", "SampledRun", "Trajectory", "check_integrator",
+    "compute_trajectory", "correct_and_integrate", "cumulative_integral", "double_integral_weights",
+    "integrate_twice", "last_row", "trapezoid_sum_w2_uniform", "trapezoid_weights_uniform",
 ]

@@ -44,18 +44,19 @@ import numpy as np
 from calib.calibration.correct import correct
 from calib.fusion.turning import body_to_world, fuse_turning
 from calib.input_rules import DataError
-from calib.results import ResultMixin
-from calib.vehicle.region import Decision, Ellipse
+from calib.vehicle.region import DecidedRegion, Ellipse
 from calib.vehicle.trajectory import (
     Integrator,
+    SampledRun,
     check_integrator,
     cumulative_integral,
     integrate_twice,
+    last_row,
 )
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
-class TurningTrajectory(ResultMixin):
+class TurningTrajectory(SampledRun):
     """Dead reckoning of a turning vehicle (module docstring).
 
     Attributes
@@ -73,33 +74,21 @@ class TurningTrajectory(ResultMixin):
     _UNITS = ("t s; heading and psi0 rad; positions m; velocities m/s; accelerations and bias "
               "m/s²; scale dimensionless")
 
+    psi0: float  # the initial heading, beside SampledRun's p0 and v0
     t: np.ndarray
     heading: np.ndarray
     acc_body: np.ndarray
     acc_world: np.ndarray
     pos: np.ndarray
     vel: np.ndarray
-    p0: np.ndarray
-    v0: np.ndarray
-    psi0: float
-    bias: np.ndarray
-    scale: np.ndarray
-    integrator: Integrator = "trapezoid"
 
-    _ARRAYS = ("t", "heading", "acc_body", "acc_world", "pos", "vel", "p0", "v0", "bias",
-               "scale")
+    _ARRAYS = ("t", "heading", "acc_body", "acc_world", "pos", "vel")
 
     def __post_init__(self) -> None:
-        for name in self._ARRAYS:
-            arr = np.array(getattr(self, name), dtype=float)
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
+        super().__post_init__()
         object.__setattr__(self, "psi0", float(self.psi0))
 
-    @property
-    def final_position(self) -> np.ndarray:
-        """(2,) dead-reckoned arrival point, m."""
-        return self.pos[-1].copy()
+    final_position = last_row("pos", "(2,) dead-reckoned arrival point, m.")
 
     @property
     def final_heading(self) -> float:
@@ -117,15 +106,10 @@ class TurningTrajectory(ResultMixin):
                           "final_heading": "rad", "p0": "m", "v0": "m/s", "psi0": "rad",
                           "bias": "m/s²", "scale": "1", "n_samples": "count"}}
 
-    def to_state(self) -> dict:
-        d = self.to_dict()
-        d.update({k: getattr(self, k).tolist() for k in self._ARRAYS})
-        return d
-
     @classmethod
     def from_dict(cls, d: dict) -> TurningTrajectory:
         """Rebuild from :meth:`to_state` (exact); :meth:`to_dict` alone has no samples."""
-        if not all(k in d for k in cls._ARRAYS):
+        if not all(k in d for k in (*cls._ARRAYS, *cls._FIXED)):
             raise ValueError("this mapping has no samples; rebuild from to_state()")
         return cls(**{f.name: d[f.name] for f in fields(cls)})
 
@@ -207,7 +191,7 @@ def dead_reckoning_path(traj) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
-class TurningRegion(ResultMixin):
+class TurningRegion(DecidedRegion):
     """Level-L arrival region of a turning dead reckoning (module docstring, "Arrival region").
 
     Attributes
@@ -225,46 +209,16 @@ class TurningRegion(ResultMixin):
     _UNITS = ("positions, std, offsets, semi-axes m; covariances m²; heading std rad; "
               "Mahalanobis distance and likelihood dimensionless")
 
-    estimate: np.ndarray
-    cov: np.ndarray
     heading_std: float
     ekf_offset: np.ndarray
-    level: float
-    ellipse: Ellipse
-    candidates: dict
-    mahalanobis: dict
-    likelihood: dict
-    inside: tuple
-    decision: str | None
-    reason: str
 
-    def __post_init__(self) -> None:
-        for name in ("estimate", "cov", "ekf_offset"):
-            arr = np.array(getattr(self, name), dtype=float)
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
-        object.__setattr__(self, "candidates", {k: np.asarray(v, dtype=float)
-                                                for k, v in self.candidates.items()})
-
-    @property
-    def std(self) -> np.ndarray:
-        """(2,) standard deviation of the arrival point per axis, m."""
-        return np.sqrt(np.diag(self.cov))
-
-    def as_decision(self) -> Decision:
-        """The decision part of this region (:class:`calib.vehicle.region.Decision`)."""
-        return Decision(self.level, self.candidates, self.mahalanobis, self.likelihood,
-                        self.inside, self.decision, self.reason)
+    _ARRAYS = (*DecidedRegion._ARRAYS, "ekf_offset")
 
     def to_dict(self) -> dict:
         return {"final_position": self.estimate.tolist(), "cov": self.cov.tolist(),
                 "std": self.std.tolist(), "heading_std": self.heading_std,
                 "ekf_offset": self.ekf_offset.tolist(), "level": self.level,
-                "ellipse": self.ellipse.to_state(),
-                "candidates": {k: {"pos": v.tolist(), "mahalanobis": self.mahalanobis[k],
-                                   "likelihood": self.likelihood[k],
-                                   "inside": k in self.inside}
-                               for k, v in self.candidates.items()},
+                "ellipse": self.ellipse.to_state(), "candidates": self.candidate_rows(),
                 "inside": list(self.inside), "decision": self.decision, "reason": self.reason,
                 "units": {"final_position": "m", "cov": "m²", "std": "m", "heading_std": "rad",
                           "ekf_offset": "m", "level": "1", "ellipse": "m (semi-axes, centre), "
@@ -274,14 +228,10 @@ class TurningRegion(ResultMixin):
     @classmethod
     def from_dict(cls, d: dict) -> TurningRegion:
         """Rebuild from :meth:`to_dict` (exact)."""
-        c = d["candidates"]
         return cls(estimate=d["final_position"], cov=d["cov"],
                    heading_std=float(d["heading_std"]), ekf_offset=d["ekf_offset"],
                    level=float(d["level"]), ellipse=Ellipse.from_dict(d["ellipse"]),
-                   candidates={k: v["pos"] for k, v in c.items()},
-                   mahalanobis={k: float(v["mahalanobis"]) for k, v in c.items()},
-                   likelihood={k: float(v["likelihood"]) for k, v in c.items()},
-                   inside=tuple(d["inside"]), decision=d["decision"], reason=d["reason"])
+                   **cls.decision_fields(d))
 
     def summary(self) -> str:
         e, sd = self.ellipse, self.std
@@ -319,13 +269,9 @@ def turning_arrival_region(traj: TurningTrajectory, acc_m, gyro, *, cal_cov, noi
     P = np.asarray(free.covariances, dtype=float)[-1]
     cov = 0.5 * (P[:2, :2] + P[:2, :2].T)
     est = traj.final_position
-    dec = Decision.at(est, cov, candidates, level)
-    return TurningRegion(estimate=est, cov=cov, heading_std=float(np.sqrt(max(P[4, 4], 0.0))),
-                         ekf_offset=np.asarray(free.final_position, dtype=float) - est,
-                         level=dec.level, ellipse=Ellipse.from_cov(est, cov, level),
-                         candidates=dec.candidates, mahalanobis=dec.mahalanobis,
-                         likelihood=dec.likelihood, inside=dec.inside, decision=dec.letter,
-                         reason=dec.reason)
+    return TurningRegion.decided(
+        est, cov, candidates, level, heading_std=float(np.sqrt(max(P[4, 4], 0.0))),
+        ekf_offset=np.asarray(free.final_position, dtype=float) - est)
 
 
 __all__ = ["TurningRegion", "TurningTrajectory", "dead_reckoning_path", "heading_error",

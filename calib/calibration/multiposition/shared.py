@@ -1,15 +1,23 @@
 """What the planar and the 3-axis multi-position fits share: the held poses (:class:`Poses`,
-:func:`pose_statistics`), the count of distinct orientations and the identifiability limits
-(method and references: :mod:`calib.calibration.multiposition`)."""
+:func:`pose_statistics`), the count of distinct orientations, the identifiability limits, the
+result's common part (:class:`PoseFit`) and the steps of both fits (:class:`PoseProblem`:
+checks, covariance, lack of fit, verdict; method and references:
+:mod:`calib.calibration.multiposition`)."""
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from scipy import stats
+from scipy import linalg as sla
+from scipy import optimize, stats
 
+from calib.calibration.lackoffit import LackOfFit
+from calib.calibration.ls import FitResult, NotIdentifiableError, PoorlyIdentifiedWarning
+from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES
 from calib.input_rules import DataError
 from calib.results import ResultMixin, readonly
 
@@ -38,15 +46,64 @@ same line) cannot identify its scale: refused, naming ``scale_<axis>``."""
 
 Sigma2Source = Literal["given", "estimated"]
 
+_COUNT_WORDS = {2: "two", 3: "three"}
 
+
+@dataclass(frozen=True, eq=False, kw_only=True)
 class PoseFit:
-    """What a multi-position fit (planar or 3-axis) shares: parameters ordered
-    ``[bias, scale]`` per axis, intervals, the parameter table, the σ² line and the tilt-plane
-    fits of :meth:`to_calibration`. The fit provides ``params``, ``cov``, ``param_names``,
-    ``poses``, ``residuals`` (per pose mean, m/s²), ``sigma2``, ``sigma2_source``,
-    ``sigma2_dof``, ``chi2``, ``dof`` and ``cond``. Intervals: normal quantiles when σ² was
-    given, Student t with the pure-error dof when it was estimated within the poses."""
+    """What a multi-position fit (planar or 3-axis) shares: the fields below, parameters
+    ordered ``[bias, scale]`` per axis, intervals, the parameter table, the summary's frame,
+    the ``--json`` object and the tilt-plane :class:`~calib.calibration.tilt_plane.Calibration`.
+    Intervals: normal quantiles when σ² was given, Student t with the pure-error dof when it
+    was estimated within the poses.
 
+    Attributes
+    ----------
+    params : (2k,) ``[bias, scale]`` per axis (m/s², 1); cov : (2k, 2k) their covariance
+        (the pose angles or directions marginalised), products of those units.
+    poses : the :class:`Poses` the fit used (labels, counts, means).
+    residuals : (P, k) m/s², pose mean − model.
+    sigma2 : (k,) (m/s²)², per-sample noise variance per axis; ``sigma2_source`` "given" or
+        "estimated" (pure error, ``sigma2_dof = N − P`` dof: Student t).
+    dof : residual dof of the pose means (P − 4 planar, P − 6 with 3 axes).
+    chi2 : Σ r² (whitened).
+    rank, cond : rank and 2-norm condition number of the column-equilibrated Jacobian.
+    g : m/s².  lack_of_fit : the joint test of the pose means (None when dof = 0).
+    param_names : the parameters' names (each fit's default).
+
+    A fit adds its own fields, lists them in ``_ARRAYS`` (frozen here) and ``_DICT_KEYS``
+    (the order of :meth:`to_dict`, after the ``(key, value)`` pairs of ``_DICT_HEAD``), and
+    sets ``_SUMMARY_TITLE``, ``_SIGMA2_LINE`` (the arguments of :meth:`sigma2_line`) and
+    :meth:`pose_lines`.
+    """
+
+    params: np.ndarray
+    cov: np.ndarray
+    poses: Poses
+    residuals: np.ndarray
+    sigma2: np.ndarray
+    sigma2_source: Sigma2Source
+    sigma2_dof: int
+    dof: int
+    chi2: float
+    rank: int
+    cond: float
+    g: float
+    lack_of_fit: LackOfFit | None = None
+    param_names: tuple[str, ...]
+
+    _ARRAYS = ("params", "cov", "residuals", "sigma2")
+    _DICT_HEAD = ()
+    _DICT_KEYS = ()
+    _SUMMARY_TITLE = ""
+    _SIGMA2_LINE = ("", "dof = 0")
+
+    def __post_init__(self) -> None:
+        for name in self._ARRAYS:
+            object.__setattr__(self, name, readonly(getattr(self, name)))
+        object.__setattr__(self, "param_names", tuple(self.param_names))
+
+    # only alike: sixface.SixFaceFit's accessors read four parameters per axis, not two
     @property
     def std(self) -> np.ndarray:
         """Standard deviations of ``params`` (the units of each)."""
@@ -80,6 +137,47 @@ class PoseFit:
         fit = f"χ²/dof = {self.chi2_dof:.4f}; dof = {self.dof}" if self.dof > 0 else exact
         return f"σ² = {s2} (m/s²)²{per} ({src}); {fit}"
 
+    def pose_lines(self) -> list[str]:
+        """The fit's own summary lines: its identifiability and the per-pose table."""
+        return []
+
+    def summary(self, level: float = 0.95) -> str:
+        out = [f"Calibration: {self._SUMMARY_TITLE}, g = {self.g} m/s², N = {self.n}, "
+               f"{self.poses.count} poses", *self.param_table(level),
+               self.sigma2_line(*self._SIGMA2_LINE), *self.pose_lines()]
+        if self.lack_of_fit is not None:
+            out.append(self.lack_of_fit.summary())
+        return "\n".join(out)
+
+    def to_dict(self) -> dict:
+        """The ``--json`` object: ``method``, the fit's head keys, then ``_DICT_KEYS`` in
+        order (arrays and tuples as lists, the poses and the test as their own objects)."""
+        out = {"method": "multiposition", **dict(self._DICT_HEAD)}
+        for key in self._DICT_KEYS:
+            value = getattr(self, key)
+            if isinstance(value, np.ndarray):
+                value = value.tolist()
+            elif isinstance(value, tuple):
+                value = list(value)
+            elif isinstance(value, (Poses, LackOfFit)):
+                value = value.to_dict()
+            out[key] = value
+        return out
+
+    @classmethod
+    def shared_fields(cls, d: dict, axes: int) -> dict:
+        """The fields above from a :meth:`to_dict` mapping (``axes`` k: the residuals'
+        columns), for a fit's ``from_dict`` (exact, also through JSON)."""
+        lof = d.get("lack_of_fit")
+        return {"params": d["params"], "cov": d["cov"], "poses": Poses.from_dict(d["poses"]),
+                "residuals": np.asarray(d["residuals"], float).reshape(-1, axes),
+                "sigma2": d["sigma2"], "sigma2_source": d["sigma2_source"],
+                "sigma2_dof": int(d["sigma2_dof"]), "dof": int(d["dof"]),
+                "chi2": float(d["chi2"]), "rank": int(d["rank"]), "cond": float(d["cond"]),
+                "g": float(d["g"]),
+                "lack_of_fit": None if lof is None else LackOfFit.from_dict(lof),
+                "param_names": tuple(d["param_names"])}
+
     def plane_fits(self) -> tuple[dict, np.ndarray, dict]:
         """The tilt-plane axes' :class:`~calib.calibration.ls.FitResult` (x, y), the χ² of the
         samples per axis and the ``extra`` of the fits, for :meth:`to_calibration`.
@@ -88,9 +186,6 @@ class PoseFit:
         ``Σ_ij (m_ij − model_i)² / σ² = (SS_within + Σ n_i r_i²) / σ²`` per axis, with
         ``dof = N − P`` (samples less the poses' means): finite also when the pose means fit
         exactly. Residuals: the pose means' (P per axis), m/s²."""
-        from calib.calibration.ls import FitResult
-        from calib.conventions import AXES, PARAM_NAMES
-
         chi2 = (self.poses.ss_within
                 + np.sum(self.poses.n[:, None] * self.residuals**2, axis=0)) / self.sigma2
         extra = {"sigma2_dof": self.sigma2_dof} if self.sigma2_source == "estimated" else {}
@@ -101,6 +196,21 @@ class PoseFit:
                                 self.residuals[:, k], self.sigma2[k], self.sigma2_source,
                                 self.sigma2_dof, 2, self.cond, float(chi2[k]), dict(extra))
         return fits, chi2, extra
+
+    def tilt_plane_calibration(self, rank: int, extra: dict):
+        """The project's :class:`calib.calibration.tilt_plane.Calibration` of the tilt plane
+        (method "multiposition"): the per-axis fits of :meth:`plane_fits` and, in ``joint``,
+        the first four parameters with their 4×4 block (the cross-axis terms the shared
+        angles create), the x and y residuals and σ², ``2·sigma2_dof`` dof, the χ² of the
+        samples of both axes, the Jacobian ``rank`` given and the fit's ``extra``."""
+        from calib.calibration.tilt_plane import Calibration
+
+        fits, chi2, shared = self.plane_fits()
+        joint = FitResult(JOINT_PARAM_NAMES, self.params[:4], self.cov[:4, :4],
+                          self.residuals[:, :2], self.sigma2[:2], self.sigma2_source,
+                          2 * self.sigma2_dof, rank, self.cond, float(chi2[:2].sum()),
+                          {**shared, **extra})
+        return Calibration("multiposition", self.g, fits, self.n, joint=joint)
 
     def quantile(self, level: float) -> float:
         """Two-sided quantile: normal (σ² given) or Student t with ``sigma2_dof``."""
@@ -117,6 +227,7 @@ class PoseFit:
 
     def param_table(self, level: float = 0.95) -> list[str]:
         """The header and one line per parameter: unit, estimate, std, interval."""
+        # only alike: bench.validate.Validation's table prints truth and z, not intervals
         lo, hi = self.conf_int(level).T
         pct = f"{100 * level:g}%"
         out = [f"{'param':<9}{'unit':<6}{'estimate':>14}{'std':>13}{'[' + pct:>14}"
@@ -141,6 +252,7 @@ class Poses(ResultMixin):
     ss : (P, 2) or (P, 3) (m/s²)², each pose's sum of squares about its mean (pure error).
     """
 
+    # only alike (document.MethodComparison): a result's fields and title, not logic
     labels: np.ndarray
     n: np.ndarray
     means: np.ndarray
@@ -236,3 +348,159 @@ def distinct_orientations(poses: Poses, sigma2: np.ndarray, mean_var=0.0) -> int
             if np.all(np.abs(poses.means[i] - poses.means[j]) < SAME_POSE_STD * sd):
                 parent[root(j)] = root(i)
     return len({root(i) for i in range(P)})
+
+
+@dataclass(frozen=True)
+class PoseProblem:
+    """The steps the planar and the 3-axis fits share on one set of held poses: the checks
+    before the fit (:meth:`check_spans`, :meth:`noise_variances`, :meth:`require_distinct`),
+    the solve (:meth:`solve_lm`), the covariance (:meth:`covariance`), the joint test
+    (:meth:`lack_of_fit`) and the verdict on the result (:meth:`judge`). Refusals raise
+    :class:`~calib.calibration.ls.NotIdentifiableError` in one line.
+
+    Attributes
+    ----------
+    poses : the held poses fitted.  g : m/s².
+    axes : the axis names, ("x", "y") or ("x", "y", "n").
+    where : "" or "<file>: ", the start of every message.
+    """
+
+    poses: Poses
+    g: float
+    axes: tuple[str, ...]
+    where: str
+
+    def check_spans(self, hints: Mapping[str, str] | None = None) -> None:
+        """Refuse an axis whose pose means span less than :data:`SPAN_FRACTION`·g: the poses
+        hardly turn it, so its scale is not identified (``scale_<axis>`` named; ``hints``:
+        axis → more advice)."""
+        span = np.ptp(self.poses.means, axis=0)
+        for k, a in enumerate(self.axes):
+            if span[k] < SPAN_FRACTION * self.g:
+                raise NotIdentifiableError(
+                    f"{self.where}cannot identify scale_{a}: the {self.poses.count} poses "
+                    f"hardly turn the {a} axis (its pose means span only {span[k]:.3g} m/s², "
+                    f"under {SPAN_FRACTION:g}·g); hold poses where {a} reads clearly "
+                    f"different values (e.g. {a} up and {a} down)" + (hints or {}).get(a, ""))
+
+    def noise_variances(self, noise_var, floor: np.ndarray | None = None
+                        ) -> tuple[np.ndarray, Sigma2Source]:
+        """σ² per axis, (m/s²)², and where it came from: ``noise_var`` ("given": positive,
+        one per axis; ValueError otherwise) or, when None, the pure error
+        ``SS_within / (N − P)`` ("estimated"; at least ``floor`` per axis when given, e.g.
+        quantization's q²/12). DataError when no pose has two samples or an axis does not
+        scatter."""
+        names = ",".join(f"σ{a}²" for a in self.axes)
+        if noise_var is None:
+            poses = self.poses
+            if poses.dof_within <= 0:
+                raise DataError(f"{self.where}every pose has a single sample: σ² cannot be "
+                                f"estimated within the poses; give --noise-var {names}")
+            sigma2 = poses.ss_within / poses.dof_within
+            if floor is not None:
+                sigma2 = np.maximum(sigma2, floor)
+            if np.any(sigma2 <= 0):
+                raise DataError(f"{self.where}the readings do not scatter within the poses "
+                                f"(zero variance on an axis): give --noise-var {names}")
+            return sigma2, "estimated"
+        sigma2 = np.asarray(noise_var, dtype=float).reshape(-1)
+        k = len(self.axes)
+        if sigma2.shape != (k,) or np.any(~np.isfinite(sigma2)) or np.any(sigma2 <= 0):
+            raise ValueError(f"noise variances must be {_COUNT_WORDS[k]} positive numbers, "
+                             f"got {noise_var}")
+        return sigma2, "given"
+
+    def require_distinct(self, sigma2: np.ndarray, needed: int, purpose: str,
+                         mean_var=0.0) -> None:
+        """Refuse fewer than ``needed`` distinct orientations
+        (:func:`distinct_orientations`; ``purpose``: what they are needed for)."""
+        distinct = distinct_orientations(self.poses, sigma2, mean_var)
+        if distinct < needed:
+            raise NotIdentifiableError(
+                f"{self.where}the {self.poses.count} poses hold only {distinct} distinct "
+                f"orientation{'s' if distinct != 1 else ''} (poses whose mean readings agree "
+                f"within {SAME_POSE_STD:g} std count as one): at least {needed} are needed "
+                f"{purpose}; hold the sensor in other orientations")
+
+    @staticmethod
+    def solve_lm(residuals_and_jacobian: Callable[[np.ndarray], tuple], x0: np.ndarray,
+                 max_nfev: int) -> np.ndarray:
+        """Levenberg–Marquardt (``scipy.optimize.least_squares``, method "lm") from ``x0`` on
+        the whitened residuals and Jacobian ``residuals_and_jacobian(x)[:2]``."""
+        sol = optimize.least_squares(lambda x: residuals_and_jacobian(x)[0], x0,
+                                     jac=lambda x: residuals_and_jacobian(x)[1], method="lm",
+                                     max_nfev=max_nfev)
+        return sol.x
+
+    def covariance(self, J: np.ndarray, names: tuple[str, ...], advice: str
+                   ) -> tuple[np.ndarray, int, float]:
+        """``(cov, rank, cond)`` of all unknowns from the whitened Jacobian ``J`` at the
+        solution: QR of its column-equilibrated form ``J D⁻¹ = Q R``,
+        ``cov = D⁻¹ R⁻¹ R⁻ᵀ D⁻¹`` (no normal matrix inverted); rank and 2-norm condition
+        number of ``R``. Refused when rank-deficient or ``cond >`` :data:`COND_REFUSE`,
+        naming the calibration parameters (``names``, the first unknowns) of the weakest
+        direction; ``advice`` ends the message."""
+        norms = np.linalg.norm(J, axis=0)
+        norms[norms == 0] = 1.0
+        Js = J / norms
+        _, R = np.linalg.qr(Js)
+        sv = np.linalg.svd(R, compute_uv=False)
+        m, n = Js.shape
+        rank = int(np.sum(sv > sv[0] * max(m, n) * np.finfo(float).eps))
+        cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
+        if rank < n or cond > COND_REFUSE:
+            _, _, vt = np.linalg.svd(Js)
+            weak = np.abs(vt[-1][:len(names)])  # the calibration parameters in that direction
+            how = "rank-deficient" if rank < n else f"near-singular (cond {cond:.3g})"
+            involved = [names[i] for i in range(len(names))
+                        if weak[i] > 0.1 * np.abs(vt[-1]).max()]
+            raise NotIdentifiableError(
+                f"{self.where}the {self.poses.count} poses cannot identify "
+                f"{' / '.join(involved or names)}: the Jacobian is {how} — {advice}")
+        Ri = sla.solve_triangular(R, np.eye(n))
+        cov = (Ri @ Ri.T) / np.outer(norms, norms)
+        return 0.5 * (cov + cov.T), rank, cond
+
+    def lack_of_fit(self, sigma2: np.ndarray, source: Sigma2Source, chi2: float, dof: int
+                    ) -> LackOfFit | None:
+        """The joint test of the whitened pose means (None when dof = 0)."""
+        if dof <= 0:
+            return None
+        # Draper & Smith's split, whitened per axis: pure error Σ_a SS_within,a / σ_a² with
+        # k(N − P) dof, lack of fit χ² with ``dof`` dof
+        label, P = "".join(self.axes), self.poses.count
+        ss_pe = float(np.sum(self.poses.ss_within / sigma2))
+        dof_pe = len(self.axes) * self.poses.dof_within
+        if source == "given":
+            return LackOfFit(label, P, chi2, ss_pe, dof, dof_pe, "chi2", chi2,
+                             float(stats.chi2.sf(chi2, dof)))
+        if dof_pe > 0:
+            # σ_a² is the pure error itself, so SS_pe/dof_pe = 1 and F = χ²/dof, referred to
+            # F(dof, k(N − P)) (approximate: k axes, k estimated σ²)
+            value = chi2 / dof
+            return LackOfFit(label, P, chi2, ss_pe, dof, dof_pe, "F", value,
+                             float(stats.f.sf(value, dof, dof_pe)))
+        return None
+
+    def judge(self, fit: PoseFit, *, geometry: str, refuse: str, what: str, warn: str
+              ) -> None:
+        """Refuse a parameter whose std exceeds :data:`UNIDENTIFIED_STD` (named, with its
+        std, the condition number and the poses' ``geometry``; ``refuse`` ends the message);
+        warn (:class:`~calib.calibration.ls.PoorlyIdentifiedWarning`) above
+        :data:`COND_WARN` (``what`` was identified only poorly; ``warn`` ends it)."""
+        names = fit.param_names
+        limit = np.array([UNIDENTIFIED_STD["bias"] * self.g, UNIDENTIFIED_STD["scale"]]
+                         * (len(names) // 2))
+        bad = [nm for nm, sd, lim in zip(names, fit.std, limit, strict=True)
+               if not sd <= lim]
+        if bad:
+            raise NotIdentifiableError(
+                f"{self.where}the {self.poses.count} poses do not identify {' / '.join(bad)} "
+                f"(std {', '.join(f'{fit.std[names.index(nm)]:.3g}' for nm in bad)}; "
+                f"condition number {fit.cond:.3g}, {geometry}): {refuse}")
+        if fit.cond > COND_WARN:
+            warnings.warn(
+                f"{self.where}the poses identify the {what} only poorly (condition number "
+                f"{fit.cond:.3g}, {geometry}): std = {np.round(fit.std, 5).tolist()}; {warn}",
+                PoorlyIdentifiedWarning, stacklevel=3)
+

@@ -4,30 +4,20 @@ the sphere (:func:`fit_multiposition3d`; equations and references:
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import linalg as sla
-from scipy import optimize, stats
 
-from calib.calibration.lackoffit import LackOfFit
-from calib.calibration.ls import FitResult, NotIdentifiableError, PoorlyIdentifiedWarning
+from calib.calibration.ls import NotIdentifiableError
 from calib.calibration.multiposition.shared import (
-    COND_REFUSE,
-    COND_WARN,
-    SAME_POSE_STD,
     SPAN_FRACTION,
-    UNIDENTIFIED_STD,
     PoseFit,
+    PoseProblem,
     Poses,
-    Sigma2Source,
-    distinct_orientations,
 )
 from calib.conventions import JOINT_PARAM_NAMES, G
-from calib.input_rules import DataError
 from calib.logs.static_log import quantization_step as lattice_step
-from calib.results import ResultMixin, readonly
+from calib.results import ResultMixin
 
 POSES_NEEDED_3D = 7
 """Fewest held poses for the 3-axis fit. Unknowns: bias and scale of three axes (6) and each
@@ -61,7 +51,7 @@ def quantization_step(values: np.ndarray) -> float:
     return 0.0 if step is None else step
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class MultiPosition3DFit(PoseFit, ResultMixin):
     """Bias and scale of three axes from held poses, no angle reference
     (:func:`fit_multiposition3d`).
@@ -84,26 +74,6 @@ class MultiPosition3DFit(PoseFit, ResultMixin):
     g : m/s².  lack_of_fit : joint test (axis "xyn"), None when dof = 0.
     """
 
-    params: np.ndarray
-    cov: np.ndarray
-    directions: np.ndarray
-    directions_std: np.ndarray
-    poses: Poses
-    residuals: np.ndarray
-    sigma2: np.ndarray
-    sigma2_source: Sigma2Source
-    sigma2_dof: int
-    quantization: np.ndarray
-    dof: int
-    chi2: float
-    rank: int
-    cond: float
-    min_eig: float
-    largest_cap: float
-    g: float
-    lack_of_fit: LackOfFit | None = None
-    param_names: tuple[str, ...] = field(default=PARAM_NAMES_3D)
-
     _TITLE = "Multi-position calibration, 3 axes (no angle reference)"
     _UNITS = ("bias m/s²; scale dimensionless; directions unit vectors; directions_std rad; "
               "σ² (m/s²)²; quantization m/s²; residuals m/s²; g m/s²")
@@ -116,18 +86,26 @@ class MultiPosition3DFit(PoseFit, ResultMixin):
         "rank": "count", "cond": "1", "min_eig": "1", "largest_cap": "rad", "g": "m/s²",
         "poses.labels": "—", "poses.n": "count", "poses.means": "m/s²", "poses.ss": "(m/s²)²",
     }
+    _ARRAYS = (*PoseFit._ARRAYS, "directions", "directions_std", "quantization")
+    _DICT_HEAD = (("axes", 3),)
+    _DICT_KEYS = ("param_names", "params", "std", "cov", "directions", "directions_std",
+                  "poses", "residuals", "sigma2", "sigma2_source", "sigma2_dof",
+                  "quantization", "dof", "chi2", "rank", "cond", "min_eig", "largest_cap", "g",
+                  "lack_of_fit")
+    _SUMMARY_TITLE = "multi-position, 3 axes (gravity norm, no angle reference)"
+    _SIGMA2_LINE = (" per sample", "dof = 0")
 
-    def __post_init__(self) -> None:
-        for name in ("params", "cov", "directions", "directions_std", "residuals", "sigma2",
-                     "quantization"):
-            object.__setattr__(self, name, readonly(getattr(self, name)))
-        object.__setattr__(self, "param_names", tuple(self.param_names))
+    directions: np.ndarray
+    directions_std: np.ndarray
+    quantization: np.ndarray
+    min_eig: float
+    largest_cap: float
+    param_names: tuple[str, ...] = field(default=PARAM_NAMES_3D)
 
-    def summary(self, level: float = 0.95) -> str:
-        out = [f"Calibration: multi-position, 3 axes (gravity norm, no angle reference), "
-               f"g = {self.g} m/s², N = {self.n}, {self.poses.count} poses",
-               *self.param_table(level)]
-        out.append(self.sigma2_line(" per sample", "dof = 0"))
+    def pose_lines(self) -> list[str]:
+        """The quantization step (when the readings have one), the identifiability line and
+        each pose's direction, its std and residuals."""
+        out = []
         if np.any(self.quantization > 0):
             qs = ", ".join(f"{v:.4g}" for v in self.quantization)
             out.append(f"quantization step q = {qs} m/s²: each pose mean's variance is "
@@ -145,39 +123,15 @@ class MultiPosition3DFit(PoseFit, ResultMixin):
                        f"{u[0]:>+7.4f}{u[1]:>+8.4f}{u[2]:>+8.4f}"
                        f"{np.degrees(self.directions_std[k]):>12.3g}"
                        + "".join(f"{v:>14.4g}" for v in self.residuals[k]))
-        if self.lack_of_fit is not None:
-            out.append(self.lack_of_fit.summary())
-        return "\n".join(out)
-
-    def to_dict(self) -> dict:
-        return {
-            "method": "multiposition", "axes": 3, "param_names": list(self.param_names),
-            "params": self.params.tolist(), "std": self.std.tolist(), "cov": self.cov.tolist(),
-            "directions": self.directions.tolist(),
-            "directions_std": self.directions_std.tolist(), "poses": self.poses.to_dict(),
-            "residuals": self.residuals.tolist(), "sigma2": self.sigma2.tolist(),
-            "sigma2_source": self.sigma2_source, "sigma2_dof": self.sigma2_dof,
-            "quantization": self.quantization.tolist(), "dof": self.dof, "chi2": self.chi2,
-            "rank": self.rank, "cond": self.cond, "min_eig": self.min_eig,
-            "largest_cap": self.largest_cap, "g": self.g,
-            "lack_of_fit": None if self.lack_of_fit is None else self.lack_of_fit.to_dict(),
-        }
+        return out
 
     @classmethod
     def from_dict(cls, d: dict) -> MultiPosition3DFit:
         """Rebuild from :meth:`to_dict` (exact)."""
-        lof = d.get("lack_of_fit")
-        return cls(
-            params=d["params"], cov=d["cov"],
-            directions=np.asarray(d["directions"], float).reshape(-1, 3),
-            directions_std=d["directions_std"], poses=Poses.from_dict(d["poses"]),
-            residuals=np.asarray(d["residuals"], float).reshape(-1, 3), sigma2=d["sigma2"],
-            sigma2_source=d["sigma2_source"], sigma2_dof=int(d["sigma2_dof"]),
-            quantization=d["quantization"], dof=int(d["dof"]), chi2=float(d["chi2"]),
-            rank=int(d["rank"]), cond=float(d["cond"]), min_eig=float(d["min_eig"]),
-            largest_cap=float(d["largest_cap"]), g=float(d["g"]),
-            lack_of_fit=None if lof is None else LackOfFit.from_dict(lof),
-            param_names=tuple(d["param_names"]))
+        return cls(**cls.shared_fields(d, 3),
+                   directions=np.asarray(d["directions"], float).reshape(-1, 3),
+                   directions_std=d["directions_std"], quantization=d["quantization"],
+                   min_eig=float(d["min_eig"]), largest_cap=float(d["largest_cap"]))
 
     def to_calibration(self):
         """The project's :class:`calib.calibration.tilt_plane.Calibration` of the tilt plane (method
@@ -187,16 +141,9 @@ class MultiPosition3DFit(PoseFit, ResultMixin):
 
         Per axis χ² of the samples with ``dof = N − P``, residuals the pose means' (m/s²):
         :meth:`~calib.calibration.multiposition.shared.PoseFit.plane_fits`."""
-        from calib.calibration.tilt_plane import Calibration
-
-        fits, chi2, extra = self.plane_fits()
-        dof = self.sigma2_dof
         normal = {"params": self.params[4:].tolist(), "std": self.std[4:].tolist(),
                   "param_names": list(self.param_names[4:])}
-        joint = FitResult(JOINT_PARAM_NAMES, self.params[:4], self.cov[:4, :4],
-                          self.residuals[:, :2], self.sigma2[:2], self.sigma2_source, 2 * dof,
-                          4, self.cond, float(chi2[:2].sum()), {**extra, "normal": normal})
-        return Calibration("multiposition", self.g, fits, self.n, joint=joint)
+        return self.tilt_plane_calibration(4, {"normal": normal})
 
 
 def quantization_steps(acc: np.ndarray) -> np.ndarray:
@@ -369,35 +316,10 @@ def fit_multiposition3d(
     q = np.zeros(3) if quantization is None else np.asarray(quantization, float).reshape(-1)
     if q.shape != (3,) or np.any(~np.isfinite(q)) or np.any(q < 0):
         raise ValueError(f"quantization must be three steps ≥ 0, got {quantization}")
-    span = np.ptp(poses.means, axis=0)
-    for k, a in enumerate(AXES_3D):
-        if span[k] < SPAN_FRACTION * g:
-            raise NotIdentifiableError(
-                f"{where}cannot identify scale_{a}: the {P} poses hardly turn the {a} axis (its "
-                f"pose means span only {span[k]:.3g} m/s², under {SPAN_FRACTION:g}·g); hold "
-                f"poses where {a} reads clearly different values (e.g. {a} up and {a} down)"
-                + ("; or calibrate the tilt plane alone (planar fit)" if a == "n" else ""))
-    if noise_var is None:
-        if poses.dof_within <= 0:
-            raise DataError(f"{where}every pose has a single sample: σ² cannot be estimated "
-                            "within the poses; give --noise-var σx²,σy²,σn²")
-        sigma2 = np.maximum(poses.ss_within / poses.dof_within, q**2 / 12)
-        source_s2: Sigma2Source = "estimated"
-        if np.any(sigma2 <= 0):
-            raise DataError(f"{where}the readings do not scatter within the poses (zero "
-                            "variance on an axis): give --noise-var σx²,σy²,σn²")
-    else:
-        sigma2 = np.asarray(noise_var, dtype=float).reshape(-1)
-        if sigma2.shape != (3,) or np.any(~np.isfinite(sigma2)) or np.any(sigma2 <= 0):
-            raise ValueError(f"noise variances must be three positive numbers, got {noise_var}")
-        source_s2 = "given"
-    distinct = distinct_orientations(poses, sigma2, q**2 / 12)
-    if distinct < POSES_NEEDED_3D:
-        raise NotIdentifiableError(
-            f"{where}the {P} poses hold only {distinct} distinct orientation"
-            f"{'s' if distinct != 1 else ''} (poses whose mean readings agree within "
-            f"{SAME_POSE_STD:g} std count as one): at least {POSES_NEEDED_3D} are needed for "
-            "the 3-axis fit; hold the sensor in other orientations")
+    problem = PoseProblem(poses, g, AXES_3D, where)
+    problem.check_spans({"n": "; or calibrate the tilt plane alone (planar fit)"})
+    sigma2, source_s2 = problem.noise_variances(noise_var, floor=q**2 / 12)
+    problem.require_distinct(sigma2, POSES_NEEDED_3D, "for the 3-axis fit", q**2 / 12)
     means = poses.means
     sd = np.sqrt(sigma2[None, :] / poses.n[:, None] + q[None, :] ** 2 / 12)
     p0 = _initial3(means, g)
@@ -414,16 +336,10 @@ def fit_multiposition3d(
             "calibrate the tilt plane alone (planar fit)")
     E = _tangent_basis(u0)
 
-    def fun(x):
-        return _residuals3(x, means, sd, g, u0, E)[0]
-
-    def jac(x):
-        return _residuals3(x, means, sd, g, u0, E)[1]
-
-    sol = optimize.least_squares(fun, np.concatenate([p0, np.zeros(2 * P)]), jac=jac,
-                                 method="lm", max_nfev=200 * (6 + 2 * P))
-    params = sol.x[:6].copy()
-    u = _residuals3(sol.x, means, sd, g, u0, E)[2]
+    x = problem.solve_lm(lambda x: _residuals3(x, means, sd, g, u0, E),
+                         np.concatenate([p0, np.zeros(2 * P)]), 200 * (6 + 2 * P))
+    params = x[:6].copy()
+    u = _residuals3(x, means, sd, g, u0, E)[2]
     # Gauss–Newton polish on the sphere: re-centre each chart at the current direction (δ = 0)
     # so the last digits do not depend on where LM stopped
     for _ in range(20):
@@ -439,61 +355,19 @@ def fit_multiposition3d(
     E = _tangent_basis(u)
     x = np.concatenate([params, np.zeros(2 * P)])
     r, J, u = _residuals3(x, means, sd, g, u, E)
-    norms = np.linalg.norm(J, axis=0)
-    norms[norms == 0] = 1.0
-    Js = J / norms
-    _, R = np.linalg.qr(Js)
-    sv = np.linalg.svd(R, compute_uv=False)
-    m, n = Js.shape
-    rank = int(np.sum(sv > sv[0] * max(m, n) * np.finfo(float).eps))
-    cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
-    if rank < n or cond > COND_REFUSE:
-        _, _, vt = np.linalg.svd(Js)
-        weak = np.abs(vt[-1][:6])
-        how = "rank-deficient" if rank < n else f"near-singular (cond {cond:.3g})"
-        involved = [PARAM_NAMES_3D[i] for i in range(6)
-                    if weak[i] > 0.1 * np.abs(vt[-1]).max()]
-        raise NotIdentifiableError(
-            f"{where}the {P} poses cannot identify {' / '.join(involved or PARAM_NAMES_3D)}: "
-            f"the Jacobian is {how} — the pose directions do not spread over the sphere; add "
-            "poses with other sides up")
-    Ri = sla.solve_triangular(R, np.eye(n))
-    cov_full = (Ri @ Ri.T) / np.outer(norms, norms)
-    cov_full = 0.5 * (cov_full + cov_full.T)
+    spread = "the pose directions do not spread over the sphere; add poses with other sides up"
+    cov_full, rank, cond = problem.covariance(J, PARAM_NAMES_3D, spread)
     dvar = np.diag(cov_full)[6:].reshape(P, 2).sum(axis=1)
-    resid = means - params[0::2] - (1 + params[1::2]) * g * u
     chi2 = float(r @ r)
     dof = P - 6
-    lof = None
-    if dof > 0:
-        ss_pe = float(np.sum(poses.ss_within / sigma2))
-        dof_pe = 3 * poses.dof_within
-        if source_s2 == "given":
-            lof = LackOfFit("xyn", P, chi2, ss_pe, dof, dof_pe, "chi2", chi2,
-                            float(stats.chi2.sf(chi2, dof)))
-        elif dof_pe > 0:
-            value = chi2 / dof
-            lof = LackOfFit("xyn", P, chi2, ss_pe, dof, dof_pe, "F", value,
-                            float(stats.f.sf(value, dof, dof_pe)))
     fit = MultiPosition3DFit(
         params=params, cov=cov_full[:6, :6], directions=u, directions_std=np.sqrt(dvar),
-        poses=poses, residuals=resid, sigma2=sigma2, sigma2_source=source_s2,
-        sigma2_dof=poses.dof_within, quantization=q, dof=dof, chi2=chi2, rank=rank,
-        cond=cond, min_eig=float(np.linalg.eigvalsh(u.T @ u / P)[0]),
-        largest_cap=_largest_cap(u), g=float(g), lack_of_fit=lof)
-    limit = np.array([UNIDENTIFIED_STD["bias"] * g, UNIDENTIFIED_STD["scale"]] * 3)
-    bad = [nm for nm, sdv, lim in zip(PARAM_NAMES_3D, fit.std, limit, strict=True)
-           if not sdv <= lim]
-    if bad:
-        raise NotIdentifiableError(
-            f"{where}the {P} poses do not identify {' / '.join(bad)} (std "
-            f"{', '.join(f'{fit.std[PARAM_NAMES_3D.index(nm)]:.3g}' for nm in bad)}; condition "
-            f"number {cond:.3g}, largest empty cap {np.degrees(fit.largest_cap):.0f}°): the "
-            "pose directions do not spread over the sphere; add poses with other sides up")
-    if cond > COND_WARN:
-        warnings.warn(
-            f"{where}the poses identify the 3-axis calibration only poorly (condition number "
-            f"{cond:.3g}, largest empty cap {np.degrees(fit.largest_cap):.0f}°): std = "
-            f"{np.round(fit.std, 5).tolist()}; spread the poses over all sides",
-            PoorlyIdentifiedWarning, stacklevel=2)
+        poses=poses, residuals=means - params[0::2] - (1 + params[1::2]) * g * u,
+        sigma2=sigma2, sigma2_source=source_s2, sigma2_dof=poses.dof_within, quantization=q,
+        dof=dof, chi2=chi2, rank=rank, cond=cond,
+        min_eig=float(np.linalg.eigvalsh(u.T @ u / P)[0]), largest_cap=_largest_cap(u),
+        g=float(g), lack_of_fit=problem.lack_of_fit(sigma2, source_s2, chi2, dof))
+    problem.judge(fit, geometry=f"largest empty cap {np.degrees(fit.largest_cap):.0f}°",
+                  refuse=spread, what="3-axis calibration",
+                  warn="spread the poses over all sides")
     return fit
