@@ -4,7 +4,7 @@
     python benchmarks/gap_command.py --sizes 20001 60001 --repeat 3
 
 For each size N a timed sweep is generated in a temporary directory (``tiltbench generate
-calibration --mode sweep --profile constant --rate 100 --duration (N-1)/100`` with one
+calibration --mode sweep --sweep-profile constant --rate 100 --duration (N-1)/100`` with one
 effect, ``--effect misalignment:x:delta=0.01``: one physical effect, so the ``mujoco.sysid``
 refinement runs) and timed two ways, each in a fresh process:
 
@@ -58,7 +58,7 @@ def _child_cpu() -> float:
 def make_input(n: int, out: Path) -> Path:
     """A timed constant sweep of ``n`` samples at :data:`RATE` Hz with :data:`EFFECT`."""
     cmd = [sys.executable, "-m", "bench.cli", "generate", "calibration", "--mode", "sweep",
-           "--profile", "constant", "--rate", f"{RATE:g}", "--duration",
+           "--sweep-profile", "constant", "--rate", f"{RATE:g}", "--duration",
            f"{(n - 1) / RATE:.10g}", "--effect", EFFECT, "--seed", "1", "--out", str(out)]
     subprocess.run(cmd, env=_env(), cwd=REPO, check=True, capture_output=True, text=True)
     return out / "ensayo.mat"

@@ -23,6 +23,7 @@ from calib.calibration.tilt_plane import calibrate
 from calib.files.angles import compare_angle_units
 from calib.files.course import DataError, read_ensayo
 from tests.cli import run as _run
+from tests.cli import unwrap
 
 G = 9.8
 BIAS = np.array([0.08, -0.02])
@@ -172,7 +173,7 @@ def test_every_command_refuses_degrees(command, tmp_path, capsys, course_like):
     path = _save(tmp_path / "deg.mat", deg, readings(np.deg2rad(deg)))
     rc, out, err = _run(capsys, *_commands(path, *course_like)[command])
     assert rc == 2 and out == ""
-    lines = err.strip().splitlines()
+    lines = unwrap(err).splitlines()
     assert len(lines) == 1, err
     assert "deg.mat" in lines[0] and "'tita'" in lines[0] and "degrees" in lines[0]
 

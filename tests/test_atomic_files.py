@@ -26,7 +26,7 @@ import pytest
 
 from bench.cli import main
 from calib.files import atomic
-from tests.cli import one_line_error, run
+from tests.cli import one_line_error, run, unwrap
 
 NV = ("--noise-var", "0.25,0.64")
 
@@ -119,7 +119,7 @@ def test_two_writers_of_one_file_one_wins_the_other_is_refused(tmp_path, files, 
     assert sorted(rcs.values()) == [0, 2], errs
     win = next(nv for nv in nvs if rcs[nv] == 0)
     lose = next(nv for nv in nvs if rcs[nv] == 2)
-    line, = errs[lose].strip().splitlines()
+    line, = unwrap(errs[lose]).splitlines()
     assert line.startswith("tiltbench calibrate: error: ")
     assert f"another tiltbench run is writing {out} (pid {procs[win].pid})" in line
     assert "nothing was written by this run" in line and "run it again" in line

@@ -19,6 +19,7 @@ from calib.units import missing_units
 from tests.checks import assert_same_tree
 from tests.cli import one_line_error as _error
 from tests.cli import run as _run
+from tests.cli import unwrap
 
 
 @pytest.fixture(scope="module")
@@ -90,7 +91,7 @@ def test_trajectory_refuses_ensayo_and_calibration_together(saved, course_dir, c
               str(course_dir / "ensayo.mat"), "--acel", str(course_dir / "acel.mat"),
               "--puntos", str(course_dir / "puntos.mat")])
     assert exit_.value.code == 2
-    assert "not allowed with" in capsys.readouterr().err
+    assert "not allowed with" in unwrap(capsys.readouterr().err)
 
 
 @pytest.mark.parametrize("name", ["cal.json", "cal.mat"])

@@ -23,6 +23,7 @@ import pytest
 import scipy.io
 
 from bench.cli import main
+from tests.cli import unwrap
 
 SEED = 23
 JSON_KINDS = ("sign", "scale_cov", "rho", "n", "nonfinite", "string", "type", "missing",
@@ -231,7 +232,7 @@ def _check(capsys, files, path, kind, label, base, others, problems, accepted):
         runs[name] = (rc, out, err)
         want_rc, want_out = base[name]
         if rc == 2:
-            lines = err.strip().splitlines()
+            lines = unwrap(err).splitlines()
             if out or len(lines) != 1 or "error:" not in lines[0] or "Traceback" in err:
                 problems.append(f"{label} {kind} {name}: not one line: {err[:300]!r}")
         elif rc == want_rc and out.replace(str(path), "<cal>") == want_out:
@@ -243,7 +244,7 @@ def _check(capsys, files, path, kind, label, base, others, problems, accepted):
                             f"traceback: {err[:300]!r}")
         if name == "validate" and rc == 2 and others:
             commands += ["trajectory", "nmin", "fuse"]
-    msgs = {n: r[2].split("error:", 1)[-1].strip() for n, r in runs.items() if r[0] == 2}
+    msgs = {n: unwrap(r[2]).split("error:", 1)[-1].strip() for n, r in runs.items() if r[0] == 2}
     if len(set(msgs.values())) > 1 or (msgs and len(msgs) != len(runs)):
         problems.append(f"{label} {kind}: the commands disagree: {runs}")
     if kind == COSMETIC and label not in accepted:

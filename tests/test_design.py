@@ -105,7 +105,7 @@ def test_constant_sweep_cannot_tell_lag_from_misalignment_a_reversal_can():
 
 def test_cli_json_has_units_and_plot_writes_png(tmp_path, capsys):
     png = tmp_path / "p.png"
-    rc = main(["design", "--designs", "uniform,reversal", "--n", "301", "--runs", "2",
+    rc = main(["design", "--designs", "uniform,reversal", "--count", "301", "--runs", "2",
                "--workers", "1", "--effects", "misalignment,tilt_offset,noise_level",
                "--json", "--plot", str(png)])
     out = capsys.readouterr().out
@@ -122,7 +122,8 @@ def test_cli_json_has_units_and_plot_writes_png(tmp_path, capsys):
     (["--designs", "spiral"], "choose from"), (["--size", "misalignment"], "NAME=VALUE"),
     (["--size", "saturation=-1"], "positive"), (["--alpha", "2"], "[1e-12, 1)"),
     (["--alpha", "5e-324"], "[1e-12, 1)"), (["--effects", "gravity_mismatch"], "choose from"),
-    (["--rate", "0"], "within [1e-06, 1000] rad/s"), (["--rate", "1e300"], "within")])
+    (["--sweep-rate", "0"], "within [1e-06, 1000] rad/s"),
+    (["--sweep-rate", "1e300"], "within")])
 def test_bad_options_are_clear_errors(capsys, argv, words):
     assert main(["design", *argv]) == 2
     assert words in capsys.readouterr().err
@@ -157,7 +158,7 @@ def test_mc_grid_strength_inverts_and_saturation_runs_the_other_way():
         strength("saturation", 10.0, NV, "x", G)
 
 
-MC_ARGV = ["design", "--designs", "reversal", "--n", "101", "--runs", "6", "--seed", "1",
+MC_ARGV = ["design", "--designs", "reversal", "--count", "101", "--runs", "6", "--seed", "1",
            "--effects", "misalignment,lowpass_lag", "--json"]
 
 

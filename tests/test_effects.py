@@ -339,8 +339,8 @@ def test_effects_round_trip_through_truth():
 # ------------------------------------------------------------------------- CLI
 
 def test_generate_with_effects_same_seed_same_bytes(tmp_path):
-    args = ["generate", "calibration", "--mode", "sweep", "--duration", "4", "--profile", "sine",
-            "--cycles", "2", "--effect", "lever_arm:x:pos_x=0.2", "--effect",
+    args = ["generate", "calibration", "--mode", "sweep", "--duration", "4", "--sweep-profile",
+            "sine", "--cycles", "2", "--effect", "lever_arm:x:pos_x=0.2", "--effect",
             "bias_random_walk:y:q=0.05", "--effect", "quantization:y:lsb=0.05", "--seed", "3"]
     assert main([*args, "--out", str(tmp_path / "a")]) == 0
     assert main([*args, "--out", str(tmp_path / "b")]) == 0
@@ -372,9 +372,9 @@ def test_generate_bad_effect_is_a_clear_error(tmp_path, capsys):
     ["--positions", "12", "--per-position", "80"],                # discrete held positions
     ["--theta-range", "0.3,2.0", "--count", "1000"],              # partial
     ["--theta-list", "0.1,0.5,0.6,2.5,2.6,4.0,6.0"],              # non-uniform
-    ["--mode", "sweep", "--profile", "accel", "--duration", "10"],  # non-uniform in time
-    ["--mode", "sweep", "--profile", "updown", "--duration", "10", "--cycles", "1"],
-    ["--mode", "sweep", "--profile", "sine", "--duration", "10", "--cycles", "3"],
+    ["--mode", "sweep", "--sweep-profile", "accel", "--duration", "10"],  # non-uniform in time
+    ["--mode", "sweep", "--sweep-profile", "updown", "--duration", "10", "--cycles", "1"],
+    ["--mode", "sweep", "--sweep-profile", "sine", "--duration", "10", "--cycles", "3"],
 ])
 def test_generate_all_theta_designs_with_an_effect(tmp_path, design):
     assert main(["generate", "calibration", *design, "--effect", "cross_axis:x:k_ip=0.001",

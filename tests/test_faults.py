@@ -23,6 +23,7 @@ import pytest
 
 from bench.cli import main
 from calib.files import atomic
+from tests.cli import unwrap
 
 # small sets: the faults, not the physics, are under test
 COURSE = ["generate", "course", "--count", "201", "--duration", "5"]
@@ -172,7 +173,7 @@ def test_second_run_on_the_same_out_is_refused_and_the_first_completes(capsys, t
     assert _wait_for_tmp(tmp_path, "class", first), "the first run ended before writing"
     rc, err = _run(capsys, *COURSE, "--out", target)
     assert rc == 2
-    line, = err.strip().splitlines()
+    line, = unwrap(err).splitlines()
     assert f"another tiltbench run is writing {target} (pid {first.pid})" in line
     assert first.wait(timeout=60) == 0, first.stderr.read().decode()
     first.stderr.close()
@@ -241,7 +242,7 @@ def test_read_only_target_directory_is_a_clean_error(capsys, tmp_path):
                 ro.chmod(0o755)
                 target.chmod(0o755)
         assert rc == 2
-        line, = err.strip().splitlines()
+        line, = unwrap(err).splitlines()
         assert str(target) in line and ("Read-only" in line or "Permission denied" in line)
         assert "Traceback" not in err and ".tmp" not in line
         assert _tree(ro) == old
@@ -258,7 +259,7 @@ def test_full_disk_set_is_a_clean_error_and_leaves_nothing(capsys, tmp_path):
         rc, err = _run(capsys, "generate", "course", "--seed", "2", "--out", target, "--force")
         assert time.monotonic() - t0 < 30
         assert rc == 2
-        line, = err.strip().splitlines()
+        line, = unwrap(err).splitlines()
         assert "No space left on device" in line and str(target) in line and ".tmp" not in line
         assert _tree(fs) == old
         assert _leftovers(fs) == []
@@ -278,7 +279,7 @@ def test_full_disk_recording_ends_within_seconds(tmp_path):
             pytest.fail("--rrd onto a full disk hangs")
         err = err.decode()
         assert proc.returncode == 2, err
-        line, = err.strip().splitlines()
+        line, = unwrap(err).splitlines()
         assert f"{fs / 'cal.rrd'}: No space left on device" in line
         assert _tree(fs) == old
         assert _leftovers(fs) == []
@@ -295,7 +296,7 @@ def test_read_only_filesystem_single_file_is_one_line_and_loses_nothing(capsys, 
         rc, err = _run(capsys, "calibrate", course_dir / "ensayo.mat", "--noise-var",
                        "0.25,0.64", "--save", out, "--force")
         assert rc == 2
-        line, = err.strip().splitlines()
+        line, = unwrap(err).splitlines()
         assert line.endswith(f"{out}: Read-only file system") and ".lock" not in line
         assert _tree(ro) == {"cal.json": b"the previous result"}
 
@@ -309,7 +310,7 @@ def test_full_disk_single_file_is_one_line_and_loses_nothing(capsys, tmp_path, c
         rc, err = _run(capsys, "calibrate", course_dir / "ensayo.mat", "--noise-var",
                        "0.25,0.64", "--save", out, "--force")
         assert rc == 2
-        line, = err.strip().splitlines()
+        line, = unwrap(err).splitlines()
         assert line.endswith(f"{out}: No space left on device") and ".tmp" not in line
         assert _tree(fs) == old
         assert _leftovers(fs) == []
@@ -335,7 +336,7 @@ def test_injected_enospc_on_a_set(capsys, tmp_path, monkeypatch):
     monkeypatch.setattr(atomic.os, "fsync", _no_space_under(tmp_path))
     rc, err = _run(capsys, *COURSE, "--seed", "2", "--out", target, "--force")
     assert rc == 2
-    line, = err.strip().splitlines()
+    line, = unwrap(err).splitlines()
     assert "No space left on device" in line and str(target) in line and ".tmp" not in line
     assert _tree(tmp_path) == old
     assert _leftovers(tmp_path) == []
@@ -351,7 +352,7 @@ def test_injected_enospc_on_a_recording(capsys, tmp_path, monkeypatch):
                    tmp_path / "cal", "--rrd", rrd, "--force")
     assert time.monotonic() - t0 < 30
     assert rc == 2
-    line, = err.strip().splitlines()
+    line, = unwrap(err).splitlines()
     assert f"{rrd}: No space left on device" in line
     assert _tree(rrd.parent) == {"cal.rrd": b"previous recording"}
     assert _leftovers(tmp_path) == []

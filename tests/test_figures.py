@@ -221,6 +221,39 @@ def test_calibration_figure_states_one_level_everywhere(large_errors):
             plt.close(fig)
 
 
+def test_multiposition_figure_states_one_level_everywhere():
+    """The pose ellipses, the residual bars and the estimates box are at the one level asked
+    (issue 29: the box said ± 1 std beside 95 % bars): the box gives ± q·std with q the fit's
+    quantile at that level, the bars ± q·σ/√n."""
+    from bench.figures.multiposition import multiposition_figure
+    from calib.calibration.multiposition import fit_multiposition, pose_statistics
+    from tests.test_multiposition import SIGMA2, samples
+
+    rng = np.random.default_rng(8)
+    fit = fit_multiposition(pose_statistics(*samples(rng, np.radians(np.arange(0, 360, 45)),
+                                                     200)), SIGMA2)
+    for level in (0.95, 0.99):
+        fig = multiposition_figure(fit, level)
+        try:
+            q = fit.quantile(level)
+            texts = [t.get_text() for a in fig.axes for t in a.texts]
+            box = next(t for t in texts if "bias_x" in t)
+            assert f"± {100 * level:g}% half-width = {q:.3g} std" in box
+            assert "1 std" not in " ".join(texts)
+            for name, value, std in zip(fit.param_names, fit.params, fit.std, strict=True):
+                assert f"{name} = {value:.5g} ± {q * std:.2g}" in box
+            labels = [h for a in fig.axes for h in a.get_legend_handles_labels()[1]
+                      if "%" in h]
+            assert labels and all(f"{100 * level:g}%" in h for h in labels)
+            rx = fig.axes[1]
+            bars = [c for c in rx.containers if getattr(c, "has_yerr", False)]
+            segs = bars[0].lines[2][0].get_segments()
+            half = q * np.sqrt(fit.sigma2[0] / fit.poses.n)
+            assert np.allclose([s[1, 1] - s[0, 1] for s in segs], 2 * half, rtol=1e-9)
+        finally:
+            plt.close(fig)
+
+
 @pytest.fixture(scope="module")
 def course_analysis(course_dir):
     from bench.demo import analyze_course_dir

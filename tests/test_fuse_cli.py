@@ -9,6 +9,7 @@ import pytest
 
 from bench.cli import main
 from tests.cli import run as _run
+from tests.cli import unwrap
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +59,7 @@ def test_missing_gps_file_is_one_line(capsys, course, tmp_path):
     rc, _, err = _run(capsys, "fuse", "--acel", course / "acel.mat", "--gps",
                       tmp_path / "none.mat", "--puntos", course / "puntos.mat", "--ensayo",
                       course / "ensayo.mat", "--datos", course / "datos.txt")
-    assert rc == 2 and len(err.strip().splitlines()) == 1 and "none.mat" in err
+    assert rc == 2 and len(unwrap(err).splitlines()) == 1 and "none.mat" in err
 
 
 def test_fuse_plot_shows_the_fused_region_smaller_than_dead_reckoning(capsys, course, tmp_path):

@@ -37,6 +37,7 @@ from bench.cli import main
 from bench.vehicle import VehicleConfig, simulate_vehicle
 from calib.fusion.turning import TurningFusionResult, fuse_turning
 from calib.units import missing_units
+from tests.cli import unwrap
 
 SEED = 20261123
 R_RUNS = 500
@@ -223,7 +224,7 @@ def test_cli_generate_turning_then_fuse(capsys, tmp_path):
                  "final heading"):
         assert word in text, word
     assert main(["fuse", *map(str, files), "--gps-vel-sigma", "0.1"]) == 2
-    assert "position fixes only" in capsys.readouterr().err
+    assert "position fixes only" in unwrap(capsys.readouterr().err)
 
 
 def test_gate_and_consistency_rates_of_the_extended_filter(nominal):

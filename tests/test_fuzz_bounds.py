@@ -189,7 +189,7 @@ def test_design_power_with_a_tiny_stated_variance(capsys):
 
     assert power_from_lambda(np.array([LAMBDA_SURE * 10, 1e300]), 1, 30.0).tolist() == [1, 1]
     obj = _clean_result(*run(capsys, "design", "--effects", "misalignment", "--designs",
-                             "uniform", "--n", "201", "--noise-var", "1e-50,0.64", "--json",
+                             "uniform", "--count", "201", "--noise-var", "1e-50,0.64", "--json",
                              "--workers", "1", "--quiet"))
     powers = [e["power"] for e in obj["effects"]["misalignment"]["per_experiment"]]
     assert powers and all(p == 1.0 for p in powers)
@@ -200,7 +200,7 @@ def test_monte_carlo_runaway_is_refused_with_its_estimate(capsys):
     line with the estimate, before any run (bench.limits.WORK_LIMIT_SECONDS)."""
     for extra in (["--runs", "1e12"], ["--runs", "40", "--mc-grid", "1e15"]):
         msg = one_line_error(capsys, "design", "--effects", "saturation", "--designs",
-                             "uniform", "--n", "201", "--workers", "1", "--quiet", *extra)
+                             "uniform", "--count", "201", "--workers", "1", "--quiet", *extra)
         assert "CPU hours" in msg and "--runs" in msg
 
 

@@ -27,6 +27,7 @@ from bench.gnss import (
 )
 from bench.vehicle import VehicleConfig, simulate_vehicle
 from calib.units import missing_units
+from tests.cli import unwrap
 
 SEED = 20260513
 
@@ -276,6 +277,6 @@ def test_bad_receiver_options_are_one_line_and_write_nothing(tmp_path, argv, opt
     out = tmp_path / "o"
     rc, stdout, err = _run("generate", "vehicle", "--out", out, *argv)
     assert rc == 2 and stdout == "" and "Traceback" not in err
-    lines = [ln for ln in err.splitlines() if ln.strip()]
+    lines = unwrap(err).splitlines()
     assert len(lines) == 1 and option in lines[0], err
     assert not out.exists() or not any(out.iterdir())

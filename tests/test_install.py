@@ -29,6 +29,7 @@ import pytest
 
 from bench.cli import build_parser, main
 from bench.cli.examples import FOLDERS, shipped_files
+from tests.cli import unwrap
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
@@ -128,14 +129,14 @@ def test_recordings_are_an_extra(wheel):
 def test_examples_writes_every_shipped_file_and_refuses_to_overwrite(tmp_path, capsys):
     out = tmp_path / "ex"
     assert main(["examples", str(out)]) == 0
-    printed = capsys.readouterr().out
+    printed = unwrap(capsys.readouterr().out)  # "wrote: PATH" over 100 columns: two lines
     files = shipped_files()
     for rel, src in files.items():
         assert (out / rel).read_bytes() == src.read_bytes(), rel
         assert f"wrote: {out / rel}" in printed
     (out / "docs" / "gap.md").write_text("edited")
     assert main(["examples", str(out)]) == 2  # exists: nothing is written
-    assert "pass --force" in capsys.readouterr().err
+    assert "pass --force" in unwrap(capsys.readouterr().err)
     assert (out / "docs" / "gap.md").read_text() == "edited"
     assert main(["examples", str(out), "--force"]) == 0
     assert (out / "docs" / "gap.md").read_bytes() == files["docs/gap.md"].read_bytes()
@@ -230,7 +231,7 @@ def test_missing_recording_extra_is_one_line(monkeypatch, capsys, tmp_path):
     parser_main = cli.main
     monkeypatch.setattr(cli, "build_parser", _parser_with_handler(cli.build_parser, no_rerun))
     rc = parser_main(["examples", str(tmp_path / "ex")])
-    err = capsys.readouterr().err.strip().splitlines()
+    err = unwrap(capsys.readouterr().err).splitlines()
     assert rc == 2 and len(err) == 1 and 'pip install "tiltbench[rrd]"' in err[0]
 
 

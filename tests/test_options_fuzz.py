@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 from bench import limits
 from bench.cli import main
 from bench.cli.output import NonFiniteError, check_finite, print_json
+from tests.cli import unwrap
 
 
 def _run(*argv) -> tuple[int, str, str]:
@@ -39,7 +40,8 @@ def _refuse_constant(name: str):
 
 
 def _assert_clean(rc: int, out: str, err: str) -> None:
-    """Exit 0 with one finite JSON object, or exit 2 with one error line and no output."""
+    """Exit 0 with one finite JSON object, or exit 2 with one error message (wrapped at 100
+    columns: :func:`tests.cli.unwrap` joins its continuation lines) and no output."""
     assert "Traceback" not in err
     event(f"exit code {rc}")  # counts shown by --hypothesis-show-statistics
     if rc == 0:
@@ -48,7 +50,8 @@ def _assert_clean(rc: int, out: str, err: str) -> None:
     else:
         assert rc == 2, err
         assert out == ""
-        errors = [ln for ln in err.splitlines() if not ln.startswith(("note:", "warning:", "["))]
+        errors = [ln for ln in unwrap(err).splitlines()
+                  if not ln.startswith(("note:", "warning:", "["))]
         assert len(errors) == 1 and "error:" in errors[0], err
 
 
@@ -57,7 +60,7 @@ def _error(*argv) -> str:
     rc, out, err = _run(*argv)
     assert rc == 2, err
     assert out == "" and "Traceback" not in err
-    lines = [ln for ln in err.splitlines() if not ln.startswith("note:")]
+    lines = [ln for ln in unwrap(err).splitlines() if not ln.startswith("note:")]
     assert len(lines) == 1, err
     assert lines[0].startswith("tiltbench ") and "error:" in lines[0]
     return lines[0]
@@ -93,12 +96,12 @@ REFUSED_GENERATE = [
     (["generate", "vehicle", "--rate", "inf"], "--rate"),
     ([*SWEEP, "--rate", "inf"], "--rate"),
     (["generate", "course", "--min-separation", "nan"], "--min-separation"),
-    ([*SWEEP, "--profile", "updown", "--cycles", "0"], "--cycles"),
-    ([*SWEEP, "--profile", "sine", "--cycles", "nan"], "--cycles"),
-    ([*SWEEP, "--profile", "sine", "--cycles", "inf"], "--cycles"),
+    ([*SWEEP, "--sweep-profile", "updown", "--cycles", "0"], "--cycles"),
+    ([*SWEEP, "--sweep-profile", "sine", "--cycles", "nan"], "--cycles"),
+    ([*SWEEP, "--sweep-profile", "sine", "--cycles", "inf"], "--cycles"),
     ([*SWEEP, "--duration", "1e-9"], "--duration"),
     ([*SWEEP, "--theta-range", "1,1"], "--theta-range"),
-    ([*SWEEP, "--profile", "sine", "--cycles", "5000"], "--cycles"),
+    ([*SWEEP, "--sweep-profile", "sine", "--cycles", "5000"], "--cycles"),
     (["generate", "vehicle", "--p0", "1e308,0"], "--p0"),
     (["generate", "vehicle", "--v0", "0,-1e300"], "--v0"),
     (["generate", "vehicle", "--profile", "inf:1,0"], "--profile"),
@@ -237,7 +240,7 @@ def test_generate_sweep_numbers(rate, duration, cycles, profile):
         duration = 2000 / rate
     with tempfile.TemporaryDirectory() as d:
         out = Path(d) / "out"
-        rc, so, se = _run(*SWEEP, "--profile", profile, f"--rate={rate!r}",
+        rc, so, se = _run(*SWEEP, "--sweep-profile", profile, f"--rate={rate!r}",
                           f"--duration={duration!r}", f"--cycles={cycles!r}", "--out", out,
                           "--json")
         _assert_clean(rc, so, se)
@@ -292,6 +295,6 @@ def test_nmin_numbers(course, level, mc_n, runs):
 def test_design_numbers(n, rate, alpha, size):
     """`design` (analytic effects only: fast): a finite JSON result or a one-line error."""
     _assert_clean(*_run("design", "--effects", "misalignment,tilt_offset", "--designs",
-                        "uniform,sweep", "--n", str(n), "--rate", repr(rate), "--alpha",
+                        "uniform,sweep", "--count", str(n), "--sweep-rate", repr(rate), "--alpha",
                         repr(alpha), "--size", f"misalignment={size!r}", "--json",
                         "--workers", "1"))

@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 
 from calib.calibration.tilt_plane import calibrate
 from calib.files.course import DataError, DataNote, read_acel, read_datos, read_ensayo, read_puntos
-from tests.cli import one_line_error
+from tests.cli import one_line_error, unwrap
 from tests.cli import run as _run
 
 G = 9.8
@@ -629,9 +629,8 @@ def test_property_ensayo_cli(variables, command, tmp_path_factory, capsys):
     assert "Traceback" not in err
     event(f"exit code {rc}")
     if rc == 2:
-        # warnings (wrapped at 100 columns: their continuation lines are indented) aside
-        lines = [ln for ln in err.strip().splitlines()
-                 if not ln.startswith(("warning:", "    "))]
+        # warnings aside (each wrapped at 100 columns like the error: unwrapped first)
+        lines = [ln for ln in unwrap(err).splitlines() if not ln.startswith("warning:")]
         assert len(lines) == 1 and str(path) in lines[0] and out == "", err
         return
     assert rc == 0, err

@@ -2,17 +2,25 @@
 examples, and its printed numbers carry units (issue 22, part 3).
 
 Lines longer than 100 columns are broken at spaces by ``bench.cli.output.fit_columns``
-(``main`` runs every command inside it); error lines are printed after it and stay one line
-(they are not run here: these are the commands of a user who got the inputs right).
+(``main`` runs every command inside it), error lines included (issue 29); a single word wider
+than 100 columns (a long path) stays whole on its own line. Error lines are checked on the fuzz
+corpus's refusals in ``tests/test_error_lines.py``; these are the commands of a user who got the
+inputs right.
 """
 
 from __future__ import annotations
 
+import doctest
 import json
 import re
 
+from hypothesis import given
+from hypothesis import strategies as st
+
+from bench.cli import output
 from bench.cli.output import COLUMNS, FitColumns, fit_line
-from tests.cli import run
+from tests.cli import run, unwrap
+from validation.fuzz.runner import wide_lines
 
 
 def _fits(capsys, *argv) -> str:
@@ -24,7 +32,7 @@ def _fits(capsys, *argv) -> str:
         cap = capsys.readouterr()
         rc, out, err = exc.code, cap.out, cap.err
     assert rc in (0, 1), err
-    wide = [ln for ln in (out + err).splitlines() if len(ln) > COLUMNS]
+    wide = wide_lines(out + err, COLUMNS)
     assert wide == [], f"{argv[0]}: {len(wide)} line(s) wider than {COLUMNS}: {wide[:2]}"
     return out
 
@@ -35,8 +43,31 @@ def test_fit_line_breaks_at_spaces_with_a_hanging_indent():
     assert len(parts) > 1 and all(len(p) <= COLUMNS for p in parts)
     assert parts[0].startswith("  word000") and all(p.startswith("      ") for p in parts[1:])
     assert " ".join(p.strip() for p in parts) == line.strip()  # no word lost or split
-    path = "/" + "x" * 150
-    assert fit_line(f"wrote: {path}") == [f"wrote: {path}"]  # a long path stays whole
+    path = "/" + "x" * 150  # a path wider than the terminal: whole, alone on its line
+    assert fit_line(f"wrote: {path}") == ["wrote:", f"    {path}"]
+    assert fit_line(f"tiltbench calibrate: error: {path}: file not found") == [
+        "tiltbench calibrate: error:", f"    {path}:", "    file not found"]
+    near = "/" + "y" * 95  # fits alone, not after its label: moved to the next line, whole
+    assert fit_line(f"wrote: {near}") == ["wrote:", f"    {near}"]
+    url = "https://example.org/" + "-".join(["a-long-anchor"] * 8)  # hyphens: no break
+    assert fit_line(f"see {url} for the format of the file named above {'z' * 30}")[1] == (
+        f"    {url}")
+    assert doctest.testmod(output).failed == 0
+
+
+WORDS = st.text(st.sampled_from("ab/-.:=…"), min_size=1, max_size=130)
+
+
+@given(st.lists(WORDS, min_size=1, max_size=40), st.integers(0, 8))
+def test_fit_line_never_loses_or_splits_a_word(words, indent):
+    """Any line: the parts give back its words in order (unwrapped: the line itself), every
+    part fits 100 columns or is one word alone, continuations indented 4 past the line."""
+    line = " " * indent + " ".join(words)
+    parts = fit_line(line)
+    assert [w for p in parts for w in p.split()] == words
+    assert wide_lines("\n".join(parts)) == []
+    assert all(p.startswith(" " * (indent + 4)) for p in parts[1:])
+    assert unwrap("\n".join(parts)) == line.strip()
 
 
 def test_fit_columns_passes_carriage_return_redraws_through():
@@ -79,7 +110,7 @@ def test_readme_examples_fit(capsys, tmp_path, monkeypatch):
     _fits(capsys, "gap", "eff/ensayo.mat", "--noise-var", "0.25,0.64")
     _fits(capsys, "generate", "class", "--students", "2", "--seed", "7", "--out", "class",
           "--workers", "1")
-    _fits(capsys, "design", "--runs", "0", "--n", "201", "--workers", "1")
+    _fits(capsys, "design", "--runs", "0", "--count", "201", "--workers", "1")
     # the measured-data examples (README "Measured data")
     out = _fits(capsys, "calibrate", "ex/data/real/axivity-ax3-wrist-night.csv.gz", "--units",
                 "counts", "--sensitivity", "256", "--min-hold", "100")

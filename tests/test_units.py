@@ -14,6 +14,7 @@ import pytest
 from bench.cli import main
 from calib.gap.results import EffectEstimate
 from calib.units import format_estimate, format_p, missing_units, unit_of
+from tests.cli import unwrap
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -119,6 +120,7 @@ def test_effect_line_has_units_and_an_underflowed_p_is_a_bound():
 def test_a_text_file_given_as_the_ensayo_is_named_as_such(course_args):
     code, out, err = _run(["calibrate", course_args["d"]])
     assert code == 2 and out == ""
+    err = unwrap(err)  # the message, wrapped at 100 columns, on one line
     assert "is a text file" in err and "datos.txt" in err and "ensayo .mat" in err
     assert "index out of range" not in err
 
@@ -128,7 +130,7 @@ def test_a_json_file_given_as_a_mat_file_is_named_as_such(tmp_path, course_args)
     p.write_text('{"method": "ols"}')
     code, _, err = _run(["trajectory", "--ensayo", course_args["e"], "--acel", str(p),
                          "--puntos", course_args["p"], "--datos", course_args["d"]])
-    assert code == 2 and "JSON" in err and "acel .mat" in err
+    assert code == 2 and "JSON" in err and "acel .mat" in unwrap(err)
 
 
 def test_validate_json_and_the_class_answer_key_have_units(tmp_path):

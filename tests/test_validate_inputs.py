@@ -17,7 +17,7 @@ from bench.validate import std_ratio_limits
 from calib.calibration.tilt_plane import calibrate
 from calib.conventions import reference_accel
 from calib.files.course import Ensayo
-from tests.cli import one_line_error
+from tests.cli import one_line_error, unwrap
 from tests.cli import run as run_cli
 
 G = 9.8
@@ -294,7 +294,7 @@ def test_random_json_gives_a_verdict_or_a_one_line_error(capsys, tmp_path, data)
     rc, out, err = _cli(capsys, "--truth", truth_path, "--estimates", est_path, "--std", std)
     assert "Traceback" not in err
     if rc == 2:
-        lines = err.strip().splitlines()
+        lines = unwrap(err).splitlines()
         assert len(lines) == 1 and (str(truth_path) in lines[0] or str(est_path) in lines[0]), err
     else:
         assert rc in (0, 1) and "joint test" in out

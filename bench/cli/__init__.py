@@ -3,8 +3,10 @@
 One module per command (:data:`COMMANDS`); each has ``register(subparsers)``, which adds its
 parser and sets ``handler``: a function of the parsed args that returns the exit code.
 Bad input (:class:`calib.files.course.DataError` and other ``ValueError``, ``OSError`` such as a
-directory given for a file) is one line on stderr and exit code 2; an existing output without
-``--force`` (``FileExistsError`` from the library) says "pass --force to overwrite".
+directory given for a file) is one error message on stderr and exit code 2; an existing output
+without ``--force`` (``FileExistsError`` from the library) says "pass --force to overwrite".
+Every stderr line fits 100 columns, error messages included: a longer one goes on in lines
+indented 4 spaces, broken at spaces only (:func:`bench.cli.output.fit_line`).
 Exit 1 is a graded FAIL (``validate``), exit 3 a result its own consistency check rejects
 (``fuse``: windowed NIS out of its band, docs/fusion.md).
 
@@ -84,6 +86,18 @@ def _warning_to_stderr(message, category, filename, lineno, file=None, line=None
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
+    try:
+        # every stderr line fits 100 columns: argparse's errors, the error line of a refused
+        # input, warnings, notes and progress (bench.cli.output.fit_columns)
+        with fit_columns(stdout=False):
+            return _run(parser, argv)
+    except BrokenPipeError:  # output piped into `head`: not an error
+        sys.stderr.close()
+        return 0
+
+
+def _run(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:
+    """Parse, run the command, turn bad input into one error message and exit code 2."""
     args = parser.parse_args(argv)
     if args.command is None:  # `tiltbench` alone: the help, not an error
         parser.print_help()
@@ -91,13 +105,13 @@ def main(argv: list[str] | None = None) -> int:
     resolve_deferred(args)
     warnings.showwarning = _warning_to_stderr
     try:
-        with fit_columns(stdout=not getattr(args, "json", False)):  # lines ≤ 100 columns
+        # readable stdout fits 100 columns too (--json is machine text, left whole)
+        with fit_columns(stdout=not getattr(args, "json", False), stderr=False):
             refuse_numbers(args)  # NaN / Inf / absurd numbers, before any work
             with command_outputs(args):  # outputs locked, inputs protected, until the end
                 return int(args.handler(args) or 0)
-    except BrokenPipeError:  # output piped into `head`: not an error
-        sys.stderr.close()
-        return 0
+    except BrokenPipeError:  # an OSError, but not bad input: main's
+        raise
     except OSError as exc:  # FileExistsError, FileNotFoundError, IsADirectoryError, …
         print(f"tiltbench {args.command}: error: {_os_error_message(exc)}", file=sys.stderr)
         return 2

@@ -20,12 +20,14 @@ from pathlib import Path
 from bench.cli.logopts import add_log_options
 from bench.cli.options import (
     OptionError,
+    add_command,
     add_force,
     add_gravity,
     add_json,
     add_noise_inputs,
     check_level,
     check_positive,
+    gravity_from_args,
     noise_var_from_args,
     parse_variances,
 )
@@ -36,6 +38,7 @@ from bench.cli.output import (
     refuse_overwrite,
     warnings_to_stderr,
 )
+from bench.cli.vocabulary import add_option
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
@@ -46,6 +49,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
     check_level(args.level)
     check_positive(args.g, "--g")
+    args.g, args.g_source = gravity_from_args(args)
     if args.save and Path(args.save).suffix.lower() not in (".json", ".mat"):
         raise OptionError(f"--save {args.save}: the name must end in .json (the calibration "
                           "file) or .mat (the MATLAB/Octave export)")
@@ -93,6 +97,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         record_calibration(cal, ensayo, args.rrd, force=args.force)
     for line in cal.lack_of_fit_warnings():
         print(f"warning: {line}", file=sys.stderr)
+    _gravity_note(args, log)
     if args.json:
         print_json(cal.to_dict())
         return 0
@@ -110,6 +115,15 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _gravity_note(args: argparse.Namespace, log) -> None:
+    """On a measured log calibrated with neither --g nor --latitude: say what g was assumed
+    (printed with the result, so that an error stays one line)."""
+    if args.g_source == "assumed" and log.course is None:
+        print(f"note: g = {args.g:g} m/s² assumed (the course value); the scale factors "
+              f"absorb g_true/{args.g:g} − 1 (−2.0e-3 … +3.3e-3 over the Earth): give "
+              "--latitude DEG [--height M] or --g", file=sys.stderr)
+
+
 def _multiposition(args: argparse.Namespace, log, nv) -> int:
     """θ unknown (or ``--method multiposition``): the gravity-norm fit on the held poses,
     compared with the θ-based least squares when θ is known."""
@@ -125,6 +139,7 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
         quantization_steps,
         three_axis_applies,
     )
+    from calib.calibration.sixface import on_faces
     from calib.calibration.tilt_plane import calibrate
     from calib.input_rules import DataError
 
@@ -141,6 +156,8 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
     if log.acc_normal is not None:
         acc3 = np.column_stack([log.acc, log.acc_normal])
         poses3 = pose_statistics(acc3, pose, args.ensayo)
+        if on_faces(poses3):
+            return _six_face(args, poses3, log)
         why_planar = three_axis_applies(poses3, args.g)
         three = why_planar is None
     if three:
@@ -180,6 +197,7 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
     if why_planar is not None:
         print(f"note: planar fit of the tilt plane ({', '.join(args.axes.split(','))}); not "
               f"the 3-axis fit: {why_planar}", file=sys.stderr)
+    _gravity_note(args, log)
     if args.json:
         print_json(doc)
         return 0
@@ -201,6 +219,42 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
     return 0
 
 
+def _six_face(args: argparse.Namespace, poses, log) -> int:
+    """Every hold of a 3-axis log on a face of the case: the six-face test (bias, scale and
+    misalignment of the three axes, hold-to-hold repeatability in the intervals)."""
+    from calib.calibration.sixface import fit_six_face
+
+    if args.save:
+        raise OptionError("--save: the calibration file does not hold a six-face fit yet "
+                          "(three axes and misalignment); use --json for its numbers")
+    if args.noise_var is not None:
+        raise OptionError("--noise-var: the six-face fit measures the scatter within and "
+                          "between holds itself; drop --noise-var")
+    fit = fit_six_face(poses, g=args.g, g_source=args.g_source, level=args.level,
+                       source=args.ensayo)
+    check_finite(fit.to_dict(), "the estimates")
+    if args.plot:
+        from bench.figures.sixface import save_sixface_plot
+
+        save_sixface_plot(args.plot, fit, force=args.force, level=args.level)
+    for axis, p in zip("xyz", fit.lack_of_fit_p, strict=True):
+        if p < 0.05:
+            print(f"warning: axis {axis}: the linear model misses the hold means beyond their "
+                  f"repeatability (lack of fit p = {p:.2g}); a term is missing or a face is "
+                  "not flat", file=sys.stderr)
+    _gravity_note(args, log)
+    if args.json:
+        print_json({"method": "six-face", "axes": log.provenance.get("axes"),
+                    "normal_axis": log.provenance.get("normal_axis"), "fit": fit.to_dict()})
+        return 0
+    print(args.ensayo)
+    normal = log.provenance.get("normal_axis") or "the third axis"
+    print(f"method: six-face test, 3 axes (x, y, n = {normal}); every hold on a face")
+    print(fit.summary())
+    print_files([args.plot])
+    return 0
+
+
 def _save(args: argparse.Namespace, cal) -> None:
     """``--save``: the calibration file (docs/calibration-file.md), or its .mat export."""
     from bench.version import __version__
@@ -213,22 +267,23 @@ def _save(args: argparse.Namespace, cal) -> None:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("calibrate", help="estimate bias and scale from a calibration run")
+    p = add_command(sub, "calibrate", _cmd_calibrate,
+                    help="estimate bias and scale from a calibration run")
     p.add_argument("ensayo", help="ensayo.mat with tita (N×1, rad) and datos (N×2, m/s²), or "
                    "a measured log (see the log options below)")
     add_noise_inputs(p)
-    p.add_argument("--method", choices=["ols", "wls", "multiposition"], default=None,
-                   help="ols: per axis (course method; the default when θ is known); wls: "
-                   "joint 4-parameter WLS; multiposition: θ unknown, from held poses and the "
-                   "gravity norm (the default when θ is unknown; with θ known it is compared "
-                   "with the least squares) — docs/poses-calibration.md")
-    add_gravity(p)
-    p.add_argument("--level", type=float, default=0.95, help="confidence level of intervals")
+    add_option(p, "--method", choices=["ols", "wls", "multiposition"], default=None,
+               help="ols: per axis (course method; the default when θ is known); wls: "
+               "joint 4-parameter WLS; multiposition: θ unknown, from held poses and the "
+               "gravity norm (the default when θ is unknown; with θ known it is compared "
+               "with the least squares) — docs/poses-calibration.md")
+    add_gravity(p, local=True)
+    add_option(p, "--level", type=float, default=0.95,
+               help="confidence level of every interval (table and figure)")
     add_json(p)
-    p.add_argument("--rrd", help="write a rerun recording of the fit to this file")
-    p.add_argument("--plot", help="write the fit figure (.png or .svg)")
-    p.add_argument("--save", metavar="CAL", help="write the calibration file (cal.json, read "
-                   "by trajectory/validate --calibration) or its MATLAB/Octave export (cal.mat)")
+    add_option(p, "--rrd", help="write a rerun recording of the fit to this file")
+    add_option(p, "--plot", help="write the fit figure (.png or .svg)")
+    add_option(p, "--save", metavar="CAL", help="write the calibration file (cal.json, read "
+               "by trajectory/validate --calibration) or its MATLAB/Octave export (cal.mat)")
     add_force(p, "an existing --save / --rrd / --plot file")
     add_log_options(p)
-    p.set_defaults(handler=_cmd_calibrate)

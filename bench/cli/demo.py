@@ -7,6 +7,7 @@ import sys
 
 from bench.cli.options import (
     Deferred,
+    add_command,
     add_force,
     add_json,
     add_sweep_options,
@@ -17,6 +18,7 @@ from bench.cli.options import (
 )
 from bench.cli.output import print_json
 from bench.cli.progress import Progress
+from bench.cli.vocabulary import add_option
 
 
 # The demo's defaults live in bench.demo, which imports scipy: read when needed (start-up time).
@@ -102,30 +104,27 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        "demo", help="the whole job end to end: generate, calibrate, decide, validate, "
-        "figures, report, recording",
+    p = add_command(
+        sub, "demo", _cmd_demo, help="the whole job end to end: generate, calibrate, decide, "
+        "validate, figures, report, recording",
         description="Generates a course set with the MuJoCo bench (or uses --course-data), "
         "calibrates, corrects and integrates the vehicle run, decides the arrival point, "
         "validates against the truth, writes figures, a Markdown report and a rerun "
         "recording, and prints truth beside estimates. Exit code 1 if the validation fails "
         "or the recording does not give the numbers back.")
-    p.add_argument("--out", default="demo-out", help="output directory")
-    p.add_argument("--seed", type=int, default=Deferred(_seed), help="seed of the course set")
+    add_option(p, "--out", default="demo-out")
+    add_option(p, "--seed", type=int, default=Deferred(_seed), help="seed of the course set")
     add_force(p)
-    p.add_argument("--course-data", metavar="DIR",
-                   help="use the course files in DIR (ensayo.mat, acel.mat, puntos.mat, "
-                   "datos.txt) instead of generating a set")
-    p.add_argument("--level", type=float, default=Deferred(_level),
-                   help="confidence level of the arrival region")
-    p.add_argument("--coverage-runs", type=integer, default=Deferred(_coverage_runs),
-                   help="fresh synthetic calibrations in the coverage check (0: skip)")
-    p.add_argument("--figures", choices=["png", "svg", "both"], default="both",
-                   help="figure format(s) written to OUT/figures")
-    p.add_argument("--no-rrd", action="store_true",
-                   help="do not write the rerun recording demo.rrd (without rerun-sdk, the "
-                   "rrd extra, it is skipped anyway, with a one-line note)")
+    add_option(p, "--course-data", help="use the course files in DIR (ensayo.mat, acel.mat, "
+               "puntos.mat, datos.txt) instead of generating a set")
+    add_option(p, "--level", type=float, default=Deferred(_level),
+               help="confidence level of the arrival region")
+    add_option(p, "--coverage-runs", type=integer, default=Deferred(_coverage_runs),
+               help="fresh synthetic calibrations in the coverage check (0: skip)")
+    add_option(p, "--figures", choices=["png", "svg", "both"], default="both",
+               help="figure format(s) written to OUT/figures")
+    add_option(p, "--no-rrd", help="do not write the rerun recording demo.rrd (without "
+               "rerun-sdk, the rrd extra, it is skipped anyway, with a one-line note)")
     add_sweep_options(p)
     add_json(p)
-    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    p.set_defaults(handler=_cmd_demo)
+    add_option(p, "--quiet")

@@ -13,13 +13,22 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from bench.cli.options import add_force, add_json
+from bench.cli.options import add_command, add_force, add_json
 from bench.cli.output import print_json
 
 FOLDERS = ("data", "docs")
 """What is shipped, under the same names in a checkout, in a wheel (``bench/…``) and in DIR."""
 
 _BENCH_DIR = Path(__file__).resolve().parent.parent
+
+DESCRIPTION = """\
+Copy the datasets the README's examples use (data/…: course, misalignment, sweep-lever-arm,
+positions; data/README.md says what each holds) and the documentation pages the --help texts
+refer to (docs/gap.md, docs/effects.md, docs/validate.md, docs/recordings.md,
+docs/python-api.md) into DIR/data/ and DIR/docs/. Without DIR: print where they are installed.
+Existing files are kept unless --force.
+"""
+"""What ``--help`` says before the options (argparse reflows it)."""
 
 
 def source_dir(folder: str) -> Path:
@@ -93,15 +102,8 @@ def _cmd_examples(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        "examples", help="write the example datasets (data/) and the docs pages (docs/) to DIR",
-        description="Copy the datasets the README's examples use (data/…: course, "
-        "misalignment, sweep-lever-arm, positions; data/README.md says what each holds) and "
-        "the documentation pages the --help texts refer to (docs/gap.md, docs/effects.md, "
-        "docs/validate.md, docs/recordings.md, docs/python-api.md) into DIR/data/ and "
-        "DIR/docs/. Without DIR: print where they are installed. Existing files are kept "
-        "unless --force.")
+    p = add_command(sub, "examples", _cmd_examples, description=DESCRIPTION, help="write the "
+                    "example datasets (data/) and the docs pages (docs/) to DIR")
     p.add_argument("dir", nargs="?", metavar="DIR", help="output folder (created if needed)")
     add_force(p, "existing files in DIR")
     add_json(p)
-    p.set_defaults(handler=_cmd_examples)

@@ -37,6 +37,7 @@ import argparse
 from bench.cli.inputs import add_course_inputs, read_calibration_file, read_course_inputs
 from bench.cli.options import (
     OptionError,
+    add_command,
     add_force,
     check_initial_state,
     check_level,
@@ -44,6 +45,7 @@ from bench.cli.options import (
     integer,
 )
 from bench.cli.output import check_finite, print_files, print_json, refuse_overwrite
+from bench.cli.vocabulary import add_option
 
 EXIT_INCONSISTENT = 3
 """Exit status of a fused run whose windowed NIS is out of its band (no region printed)."""
@@ -178,48 +180,40 @@ def _truth(args: argparse.Namespace):
 
 
 def register(sub) -> None:
-    p = sub.add_parser("fuse", help="fuse the vehicle's accelerometers with position fixes "
-                                    "(Kalman filter, docs/fusion.md)")
+    p = add_command(sub, "fuse", _cmd_fuse, help="fuse the vehicle's accelerometers with "
+                    "position fixes (Kalman filter, docs/fusion.md)")
     add_course_inputs(p)
-    p.add_argument("--gps", required=True, help="gps.mat: t_gps M×1 s, pos M×2 m, "
-                                                "optional vel M×2 m/s (docs/gnss.md)")
-    p.add_argument("--gps-sigma", type=float, default=3.0,
-                   help="σ of each position fix coordinate, m (3 if not given)")
-    p.add_argument("--gps-vel-sigma", type=float,
-                   help="σ of each velocity fix coordinate, m/s (velocity fixes used only "
-                        "when given)")
-    p.add_argument("--gyro-sigma", type=float, default=0.005, metavar="RADPS",
-                   help="turning run (acel.mat with 'gyro'): white gyro noise std, rad/s "
-                        "(0.005, the bench's, if not given)")
-    p.add_argument("--psi0", type=float, default=0.0, metavar="RAD",
-                   help="turning run: initial heading, rad from world +x (0 if not given)")
-    p.add_argument("--psi0-sigma", type=float, default=0.0, metavar="RAD",
-                   help="turning run: std of the initial heading, rad (0: known)")
-    p.add_argument("--p0-std", type=float, default=0.0, metavar="M",
-                   help="σ of the initial position per axis, m; 0: the course gives P0 "
-                        "exactly in datos.txt, which states no uncertainty")
-    p.add_argument("--v0-std", type=float, default=0.0, metavar="MPS",
-                   help="σ of the initial velocity per axis, m/s; 0 as --p0-std")
-    p.add_argument("--smoother", action="store_true",
-                   help="also run the Rauch-Tung-Striebel smoother")
-    p.add_argument("--plot", help="write a figure (.png or .svg): dead reckoning, fixes, "
-                                  "the fused path and both arrival regions (turning run: "
-                                  "also the truth and a heading panel)")
-    p.add_argument("--rrd", help="write a rerun recording: truth (if known), dead reckoning, "
-                                 "fixes, the fused path with its ellipses, the innovations, "
-                                 "the rejected fixes, the NIS and its windowed test "
-                                 "(INCONSISTENT: no fused region), the heading of a turning "
-                                 "run (docs/recordings.md)")
-    p.add_argument("--truth", help="truth.json for the recording and a turning run's figure "
-                                   "(default: truth.json beside --acel, if there is one)")
-    p.add_argument("--gate-alpha", type=float, default=GATE_ALPHA, metavar="A",
-                   help="innovation gate: a fix with NIS >= chi2_d(1 - A) is rejected, a right "
-                        f"fix with probability A ({GATE_ALPHA:g}; 0: no gate)")
-    p.add_argument("--consistency-alpha", type=float, default=CONSISTENCY_ALPHA, metavar="A",
-                   help="false-alarm rate of the windowed NIS test of the whole run "
-                        f"({CONSISTENCY_ALPHA:g}); inconsistent: no region, exit 3")
-    p.add_argument("--nis-window", type=integer, default=NIS_WINDOW, metavar="K",
-                   help=f"fixes per window of the NIS test ({NIS_WINDOW}; at most "
-                        f"{NIS_WINDOW_MAX})")
+    add_option(p, "--gps", required=True)
+    add_option(p, "--gps-sigma", type=float, default=3.0)
+    add_option(p, "--gps-vel-sigma", type=float,
+               help="velocity fix noise std per axis, m/s (velocity fixes used only when given)")
+    turning = p.add_argument_group("a turning run (acel.mat with 'gyro')")
+    add_option(turning, "--gyro-sigma", type=float, default=0.005,
+               help="white gyro noise std, rad/s (the bench's)")
+    add_option(turning, "--psi0", type=float, default=0.0)
+    add_option(turning, "--psi0-sigma", type=float, default=0.0,
+               help="std of the initial heading, rad (0: known)")
+    add_option(p, "--p0-std", type=float, default=0.0,
+               help="σ of the initial position per axis, m; 0: the course gives P0 "
+                    "exactly in datos.txt, which states no uncertainty")
+    add_option(p, "--v0-std", type=float, default=0.0, help="σ of the initial velocity per "
+               "axis, m/s; 0 as --p0-std")
+    add_option(p, "--smoother")
+    add_option(p, "--plot", help="write a figure (.png or .svg): dead reckoning, fixes, the "
+               "fused path and both arrival regions (turning run: also the truth and a "
+               "heading panel)")
+    add_option(p, "--rrd", help="write a rerun recording: truth (if known), dead reckoning, "
+               "fixes, the fused path with its ellipses, the innovations, the rejected fixes, "
+               "the NIS and its windowed test (INCONSISTENT: no fused region), the heading of "
+               "a turning run (docs/recordings.md)")
+    add_option(p, "--truth", help="truth.json for the recording and a turning run's figure "
+               "(default: truth.json beside --acel, if there is one)")
+    add_option(p, "--gate-alpha", type=float, default=GATE_ALPHA,
+               help="innovation gate: a fix with NIS >= chi2_d(1 - A) is rejected, a right "
+                    "fix with probability A (0: no gate)")
+    add_option(p, "--consistency-alpha", type=float, default=CONSISTENCY_ALPHA,
+               help="false-alarm rate of the windowed NIS test of the whole run; "
+                    "inconsistent: no region, exit 3")
+    add_option(p, "--nis-window", type=integer, default=NIS_WINDOW,
+               help=f"fixes per window of the NIS test (at most {NIS_WINDOW_MAX})")
     add_force(p, "an existing --plot / --rrd file")
-    p.set_defaults(handler=_cmd_fuse)

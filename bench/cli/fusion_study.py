@@ -18,8 +18,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from bench.cli.options import add_force, add_sweep_options, check_count, integer
+from bench.cli.options import add_command, add_force, add_sweep_options, check_count, integer
 from bench.cli.output import check_finite, print_files, print_json
+from bench.cli.vocabulary import add_option
 
 FILES = ("fusion-study.md", "fusion-study.png")
 
@@ -60,16 +61,14 @@ def _cmd_fusion_study(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("fusion-study", help="dead reckoning vs fixes vs Kalman filter vs "
-                                            "smoother on the course geometry (docs/fusion.md)")
-    p.add_argument("--out", default="fusion-study",
-                   help="folder for fusion-study.md and fusion-study.png")
-    p.add_argument("--runs", type=integer, default=200,
-                   help="Monte Carlo runs per scenario (200: a NEES band of about ±0.6 "
-                        "around 2)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the runs")
-    p.add_argument("--json", action="store_true", help="print one JSON object (units map)")
-    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p = add_command(sub, "fusion-study", _cmd_fusion_study, help="dead reckoning vs fixes vs "
+                    "Kalman filter vs smoother on the course geometry (docs/fusion.md)")
+    add_option(p, "--out", default="fusion-study",
+               help="folder for fusion-study.md and fusion-study.png")
+    add_option(p, "--runs", type=integer, default=200,
+               help="Monte Carlo runs per scenario (200: a NEES band of about ±0.6 around 2)")
+    add_option(p, "--seed", type=int, default=0, help="seed of the runs")
+    add_option(p, "--json", help="print one JSON object (units map)")
+    add_option(p, "--quiet")
     add_sweep_options(p)
     add_force(p, "fusion-study.md and fusion-study.png in --out")
-    p.set_defaults(handler=_cmd_fusion_study)

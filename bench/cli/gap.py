@@ -23,6 +23,7 @@ from bench.cli.logopts import add_log_options, read_log_from_args
 from bench.cli.options import (
     OptionError,
     RawDescriptionHelpFormatter,
+    add_command,
     add_force,
     add_gravity,
     add_json,
@@ -32,6 +33,7 @@ from bench.cli.options import (
 )
 from bench.cli.output import print_files, print_json
 from bench.cli.progress import Progress
+from bench.cli.vocabulary import add_option
 
 EPILOG = """\
 the report starts with the verdict: explained | UNEXPLAINED (each signature that remains:
@@ -92,22 +94,21 @@ def _cmd_gap(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("gap", help="find the effect the model is missing (discrepancy "
-                       "workflow)", epilog=EPILOG,
-                       formatter_class=RawDescriptionHelpFormatter)
+    p = add_command(sub, "gap", _cmd_gap, help="find the effect the model is missing "
+                    "(discrepancy workflow)", epilog=EPILOG,
+                    formatter_class=RawDescriptionHelpFormatter)
     p.add_argument("ensayo", help="ensayo.mat with tita (N×1, rad), datos (N×2, m/s²), "
                    "optional t (N×1, s); or a measured log with θ (log options below)")
     add_noise_inputs(p, stated=True)
-    p.add_argument("--rate", type=float, help="sample rate in Hz of a file without t "
-                   "(samples in time order)")
+    add_option(p, "--rate", type=float, help="sample rate in Hz of a file without t "
+               "(samples in time order)")
     add_gravity(p)
     add_json(p)
-    p.add_argument("--report", help="write " + ", ".join(REPORT_FILES[:-1]) + " and "
-                   f"{REPORT_FILES[-1]} into this directory")
-    p.add_argument("--rrd", help="write a rerun recording of the residuals before/after")
-    p.add_argument("--sensor", help="sensor.json (tiltbench noise): the bias random walk's "
-                   "intensity q is taken from its rate_random_walk (within its interval, "
-                   "charged no parameter; no walk where it is null); needs sample times")
+    add_option(p, "--report", help="write " + ", ".join(REPORT_FILES[:-1]) + " and "
+               f"{REPORT_FILES[-1]} into this folder")
+    add_option(p, "--rrd", help="write a rerun recording of the residuals before/after")
+    add_option(p, "--sensor", help="sensor.json (tiltbench noise): the bias "
+               "random walk's intensity q is taken from its rate_random_walk (within its "
+               "interval, charged no parameter; no walk where it is null); needs sample times")
     add_force(p)
     add_log_options(p)
-    p.set_defaults(handler=_cmd_gap)

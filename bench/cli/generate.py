@@ -16,6 +16,7 @@ from bench.cli.options import (
     DEFAULT_NOISE,
     FULL_TURN,
     OptionError,
+    add_command,
     add_generate_common,
     add_gravity,
     add_sensor_options,
@@ -30,6 +31,7 @@ from bench.cli.options import (
 )
 from bench.cli.output import check_finite, print_summary, refuse_overwrite
 from bench.cli.progress import Progress
+from bench.cli.vocabulary import add_option
 
 
 # ---------------------------------------------------------------- option values → config
@@ -101,7 +103,7 @@ def calibration_config(args: argparse.Namespace):
     else:
         theta = ThetaDesign(kind="range", start=start, stop=stop,
                             count=check_count(args.count, "--count", 3))
-    sweep = SweepProfile(kind=args.profile, start=start, stop=stop,
+    sweep = SweepProfile(kind=args.sweep_profile, start=start, stop=stop,
                          duration=check_positive(args.duration, "--duration"),
                          rate=check_positive(args.rate, "--rate"),
                          cycles=check_positive(args.cycles, "--cycles"))
@@ -508,127 +510,126 @@ def _add_gps_options(p: argparse.ArgumentParser) -> None:
         "Any of these writes gps.mat and the receiver into truth.json; without them the "
         "outputs are unchanged. Fixes fall on the IMU grid: --rate a whole multiple of "
         "--gps-rate, --gps-latency whole IMU periods.")
-    g.add_argument("--gps", action="store_true",
-                   help="write gps.mat with the default receiver (1 Hz, 3 m, no velocity)")
-    g.add_argument("--gps-rate", type=float, metavar="HZ", help="fix rate, Hz (1 if not given)")
-    g.add_argument("--gps-sigma", type=float, metavar="M",
-                   help="position noise std per axis, m (3 if not given)")
-    g.add_argument("--gps-vel-sigma", type=float, metavar="MPS",
-                   help="also velocity fixes with this noise std per axis, m/s (thesis: 0.1)")
-    g.add_argument("--gps-latency", type=float, metavar="S",
-                   help="the fix at t reports the state at t - S, s (0 if not given)")
-    g.add_argument("--gps-outage", action="append", metavar="A,B",
-                   help="no fixes for A <= t <= B, s (repeatable)")
+    add_option(g, "--gps", action="store_true",
+               help="write gps.mat with the default receiver (1 Hz, 3 m, no velocity)")
+    add_option(g, "--gps-rate", type=float, help="fix rate, Hz (1 if not given)")
+    add_option(g, "--gps-sigma", type=float,
+               help="position fix noise std per axis, m (3 if not given)")
+    add_option(g, "--gps-vel-sigma", type=float,
+               help="also velocity fixes with this noise std per axis, m/s (thesis: 0.1)")
+    add_option(g, "--gps-latency", type=float,
+               help="the fix at t reports the state at t - S, s (0 if not given)")
+    add_option(g, "--gps-outage", action="append",
+               help="no fixes for A <= t <= B, s (repeatable)")
 
 
 def _add_vehicle_options(p: argparse.ArgumentParser, profile_default: str | None) -> None:
-    p.add_argument("--duration", type=float, default=60.0, help="run length, s")
-    p.add_argument("--rate", type=float, default=100.0, help="sample rate, Hz")
-    p.add_argument("--p0", default="0,0", help="initial position x,y in m")
-    p.add_argument("--v0", default="1,3", help="initial velocity x,y in m/s")
-    p.add_argument("--profile", default=profile_default,
-                   help="acceleration segments 'dur:ax,ay;dur:ax,ay;…' (s : m/s²) or 'course'"
-                        + ("" if profile_default else "; omitted: drawn from the seed"))
+    add_option(p, "--duration", type=float, default=60.0, help="run length, s")
+    add_option(p, "--rate", type=float, default=100.0)
+    add_option(p, "--p0", default="0,0")
+    add_option(p, "--v0", default="1,3")
+    add_option(p, "--profile", default=profile_default,
+               help="acceleration segments 'dur:ax,ay;dur:ax,ay;…' (s : m/s²) or 'course'"
+                    + ("" if profile_default else "; omitted: drawn from the seed"))
 
 
 def _add_turning_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--turning", action="store_true",
-                   help="free yaw hinge driven by the default yaw profile (heading turns "
-                        "143°): body-frame readings and acel.mat 'gyro' M×1, the yaw rate in "
-                        "rad/s (docs/fusion.md)")
-    p.add_argument("--gyro-sigma", type=float, metavar="RADPS",
-                   help="with --turning: white gyro noise std, rad/s (0.005 if not given)")
+    add_option(p, "--turning", help="free yaw hinge driven by the default yaw profile "
+               "(heading turns 143°): body-frame readings and acel.mat 'gyro' M×1, the yaw "
+               "rate in rad/s (docs/fusion.md)")
+    add_option(p, "--gyro-sigma", type=float,
+               help="with --turning: white gyro noise std, rad/s (0.005 if not given)")
+
+
+def _add_vehicle_run(p: argparse.ArgumentParser, profile_default: str | None, what: str) -> None:
+    """The options of the kinds that run the vehicle (``vehicle``, ``course``): its motion,
+    the turning hinge, ``--rrd`` (the ``what``, run or set, next to its truth) and the
+    receiver."""
+    _add_vehicle_options(p, profile_default)
+    _add_turning_options(p)
+    add_option(p, "--rrd", help=f"also record the {what} next to its truth to this rerun file")
+    _add_gps_options(p)
+
+
+def _add_kind(kinds, name: str, handler, **kwargs) -> argparse.ArgumentParser:
+    """A ``generate`` kind: its parser, run by ``handler``, with the options every kind has
+    (``--seed``, ``--out``, ``--force``, ``--json``)."""
+    p = add_command(kinds, name, handler, **kwargs)
+    add_generate_common(p)
+    return p
 
 
 def _register_calibration(kinds) -> None:
-    p = kinds.add_parser("calibration", help="a tilt-table calibration run (ensayo.mat)")
-    add_generate_common(p)
+    p = _add_kind(kinds, "calibration", _cmd_calibration,
+                  help="a tilt-table calibration run (ensayo.mat)")
     add_sensor_options(p)
-    p.add_argument("--mode", choices=["static", "sweep"], default="static",
-                   help="static: held poses; sweep: servo-driven rotation, θ from the encoder")
-    p.add_argument("--theta-range", default=FULL_TURN,
-                   help="θ range start,stop in rad, any finite values (static range/positions; "
-                        "sweep)")
-    p.add_argument("--count", type=integer, default=20001, help="static: samples over the range")
-    p.add_argument("--theta-list",
-                   help="static: explicit θ values in rad (any finite), comma separated")
-    p.add_argument("--theta-from", metavar="ENSAYO",
-                   help="static: the θ of every sample of this ensayo.mat (e.g. a measured "
-                        "run's import), in order: its twin holds the same poses")
-    p.add_argument("--positions", type=integer, help="static: number of discrete held positions")
-    p.add_argument("--per-position", type=integer, default=100,
-                   help="static: samples held at each position")
-    p.add_argument("--profile", choices=["constant", "accel", "updown", "sine"],
-                   default="constant", help="sweep: commanded angle profile")
-    p.add_argument("--duration", type=float, default=20.0, help="sweep: duration, s")
-    p.add_argument("--rate", type=float, default=100.0, help="sweep: sample rate, Hz")
-    p.add_argument("--cycles", type=float, default=1.0, help="sweep: up-down/sine cycles")
-    p.add_argument("--effect", action="append", metavar="NAME:AXIS:KEY=VALUE[,KEY=VALUE]",
-                   help="add a catalog effect (repeatable), e.g. misalignment:x:delta=0.02, "
-                        "tilt_offset:both:delta=0.01, lever_arm:x:pos_x=0.2 (docs/effects.md)")
-    p.add_argument("--rrd", help="also record the truth to this rerun file")
-    p.set_defaults(handler=_cmd_calibration)
+    add_option(p, "--mode", choices=["static", "sweep"], default="static",
+               help="static: held poses; sweep: servo-driven rotation, θ from the encoder")
+    add_option(p, "--theta-range", default=FULL_TURN, help="θ range start,stop in rad, any "
+               "finite values (static range/positions; sweep)")
+    add_option(p, "--count", type=integer, default=20001, help="static: samples over the range")
+    add_option(p, "--theta-list",
+               help="static: explicit θ values in rad (any finite), comma separated")
+    add_option(p, "--theta-from", help="static: the θ of every sample of this ensayo.mat (e.g. "
+               "a measured run's import), in order: its twin holds the same poses")
+    add_option(p, "--positions", type=integer, help="static: number of discrete held positions")
+    add_option(p, "--per-position", type=integer, default=100,
+               help="static: samples held at each position")
+    add_option(p, "--sweep-profile", choices=["constant", "accel", "updown", "sine"],
+               default="constant", old="--profile", help="sweep: commanded angle profile")
+    add_option(p, "--duration", type=float, default=20.0, help="sweep: duration, s")
+    add_option(p, "--rate", type=float, default=100.0, help="sweep: sample rate, Hz")
+    add_option(p, "--cycles", type=float, default=1.0, help="sweep: up-down/sine cycles")
+    add_option(p, "--effect", action="append", help="add a catalog effect (repeatable), e.g. "
+               "misalignment:x:delta=0.02, tilt_offset:both:delta=0.01, lever_arm:x:pos_x=0.2 "
+               "(docs/effects.md)")
+    add_option(p, "--rrd", help="also record the truth to this rerun file")
 
 
 def _register_vehicle(kinds) -> None:
-    p = kinds.add_parser("vehicle", help="a planar vehicle run (acel.mat)")
-    add_generate_common(p)
+    p = _add_kind(kinds, "vehicle", _cmd_vehicle, help="a planar vehicle run (acel.mat)")
     add_sensor_options(p)
-    _add_vehicle_options(p, profile_default="course")
-    _add_turning_options(p)
-    p.add_argument("--rrd", help="also record the run next to its truth to this rerun file")
-    _add_gps_options(p)
-    p.set_defaults(handler=_cmd_vehicle)
+    _add_vehicle_run(p, "course", "run")
 
 
 def _register_course(kinds) -> None:
-    p = kinds.add_parser("course", help="a full course set",
-                         epilog="Without --profile the acceleration profile is drawn from the "
-                         "seed (--profile course gives the course's).")
-    add_generate_common(p)
-    _add_vehicle_options(p, profile_default=None)
-    _add_turning_options(p)
-    p.add_argument("--noise-var", default=DEFAULT_NOISE, help="noise variances x,y (m/s²)²")
-    p.add_argument("--bias", help="true bias x,y in m/s²; omitted: drawn from the seed")
-    p.add_argument("--scale", help="true scale-factor error x,y; omitted: drawn from the seed")
-    p.add_argument("--count", type=integer, default=20001, help="calibration samples over [0, 2π]")
-    p.add_argument("--min-separation", type=float, default=100.0,
-                   help="smallest distance between candidate points, m")
+    p = _add_kind(kinds, "course", _cmd_course, help="a full course set",
+                  epilog="Without --profile the acceleration profile is drawn from the seed "
+                  "(--profile course gives the course's).")
+    _add_vehicle_run(p, None, "set")
+    add_option(p, "--noise-var", default=DEFAULT_NOISE, help="noise variances x,y (m/s²)²")
+    add_option(p, "--bias", help="true bias x,y in m/s²; omitted: drawn from the seed")
+    add_option(p, "--scale", help="true scale-factor error x,y; omitted: drawn from the seed")
+    add_option(p, "--count", type=integer, default=20001,
+               help="calibration samples over [0, 2π]")
+    add_option(p, "--min-separation", type=float, default=100.0,
+               help="smallest distance between candidate points, m")
     add_gravity(p)
-    p.add_argument("--rrd", help="also record the set next to its truth to this rerun file")
-    _add_gps_options(p)
-    p.set_defaults(handler=_cmd_course)
 
 
 def _register_class(kinds) -> None:
-    p = kinds.add_parser("class", help="K unique course sets + answer key",
-                         description="K unique course sets (one folder each, no truth inside) "
-                         "and the private answer key DIR/answer_key.csv and "
-                         "DIR/answer_key.json.")
-    add_generate_common(p)
-    p.add_argument("--students", type=integer, required=True, metavar="K",
-                   help="number of students K")
-    p.add_argument("--prefix", default="student", help="folder prefix (student_001, …)")
-    p.add_argument("--noise-var", default=DEFAULT_NOISE,
-                   help="noise variances x,y (m/s²)² of every set")
-    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p = _add_kind(kinds, "class", _cmd_class, help="K unique course sets + answer key",
+                  description="K unique course sets (one folder each, no truth inside) and "
+                  "the private answer key DIR/answer_key.csv and DIR/answer_key.json.")
+    add_option(p, "--students", type=integer, required=True)
+    add_option(p, "--prefix", default="student")
+    add_option(p, "--noise-var", default=DEFAULT_NOISE,
+               help="noise variances x,y (m/s²)² of every set")
+    add_option(p, "--quiet")
     add_sweep_options(p)
-    p.set_defaults(handler=_cmd_class)
 
 
 def _register_static(kinds) -> None:
-    p = kinds.add_parser("static", help="a static log of one held pose (static.mat), e.g. "
-                         "for `tiltbench noise`",
-                         description="The table held at --theta for --duration s sampled at "
-                         "--rate Hz: static.mat (t, Aerr: the course acel.mat layout) and "
-                         "truth.json. With --sensor, the measured sensor's noise terms.")
-    add_generate_common(p)
+    p = _add_kind(kinds, "static", _cmd_static, help="a static log of one held pose "
+                  "(static.mat), e.g. for `tiltbench noise`",
+                  description="The table held at --theta for --duration s sampled at --rate "
+                  "Hz: static.mat (t, Aerr: the course acel.mat layout) and truth.json. With "
+                  "--sensor, the measured sensor's noise terms.")
     add_sensor_options(p)
-    p.add_argument("--duration", type=float, default=600.0, help="log length, s")
-    p.add_argument("--rate", type=float, default=None,
-                   help="sample rate, Hz (default: the --sensor profile's, else 100)")
-    p.add_argument("--theta", type=float, default=0.0, help="table angle, rad")
-    p.set_defaults(handler=_cmd_static)
+    add_option(p, "--duration", type=float, default=600.0, help="log length, s")
+    add_option(p, "--rate", type=float, default=None,
+               help="sample rate, Hz (default: the --sensor profile's, else 100)")
+    add_option(p, "--theta", type=float, default=0.0)
 
 
 def register(sub) -> None:

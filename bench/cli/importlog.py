@@ -19,8 +19,9 @@ import argparse
 from pathlib import Path
 
 from bench.cli.logopts import add_log_options, log_options_from_args
-from bench.cli.options import add_force, add_gravity, add_json, check_positive
+from bench.cli.options import add_command, add_force, add_gravity, add_json, check_positive
 from bench.cli.output import print_files, print_json
+from bench.cli.vocabulary import add_option
 
 UNITS = {"provenance.units.g": "m/s²", "provenance.units.acc_to_m_s2": "m/s² per log unit",
          "provenance.units.sensitivity_counts_per_g": "counts/g",
@@ -76,13 +77,12 @@ def _cmd_import(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("import", help="turn a measured log (CSV, phyphox, Sensor Logger, ROS "
-                       "bag, .mat) into the course files plus provenance.json")
+    p = add_command(sub, "import", _cmd_import, help="turn a measured log (CSV, phyphox, Sensor "
+                    "Logger, ROS bag, .mat) into the course files plus provenance.json")
     p.add_argument("log", help="the log: a CSV/TSV file (optionally .gz), a ROS 1 .bag, a "
                    "ROS 2 bag directory, or a .mat")
     add_log_options(p)
     add_gravity(p)
-    p.add_argument("--out", required=True, type=Path, help="output directory")
+    add_option(p, "--out", required=True, type=Path)
     add_json(p)
     add_force(p, "existing files in --out")
-    p.set_defaults(handler=_cmd_import)

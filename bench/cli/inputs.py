@@ -28,6 +28,7 @@ from bench.cli.options import (
     check_positive,
     parse_pair,
 )
+from bench.cli.vocabulary import add_option
 
 
 class _Given(argparse.Action):
@@ -51,25 +52,24 @@ def add_course_inputs(p: argparse.ArgumentParser, calibration: bool = True) -> N
     """The course inputs; ``calibration``: ``--calibration`` may replace ``--ensayo``."""
     if calibration:
         src = p.add_mutually_exclusive_group(required=True)
-        src.add_argument("--ensayo", help="calibration run ensayo.mat (tita, datos)")
-        src.add_argument("--calibration", metavar="CAL", help="calibration file cal.json "
-                         "(calibrate --save) instead of re-fitting on --ensayo")
+        add_option(src, "--ensayo")
+        add_option(src, "--calibration", help="calibration file cal.json (calibrate --save) "
+                   "instead of re-fitting on --ensayo")
     else:
-        p.add_argument("--ensayo", required=True, help="calibration run ensayo.mat (tita, "
-                       "datos)")
-    p.add_argument("--acel", required=True, help="vehicle run acel.mat (t, Aerr)")
-    p.add_argument("--puntos", required=True, help="candidate points puntos.mat (A, B, …)")
-    p.add_argument("--datos", help="course datos.txt (P0, V0, noise variances)")
-    p.add_argument("--p0", help="initial position x,y in m (overrides datos.txt)")
-    p.add_argument("--v0", help="initial velocity x,y in m/s (overrides datos.txt)")
-    p.add_argument("--level", type=float, default=0.997,
-                   help="confidence level of the region (χ², 2 dof)")
-    p.add_argument("--method", choices=["ols", "wls"], default="ols", action=_Given,
-                   help="calibration: per-axis OLS (course) or joint WLS")
-    # an explicit metavar: argparse would list the choices (and import scipy) when building
-    p.add_argument("--integrator", choices=Deferred(_integrators), default="trapezoid",
-                   metavar="RULE", help="double integration rule: %(choices)s")
-    p.add_argument("--g", type=float, default=GRAVITY, action=_Given, help="gravity, m/s²")
+        add_option(p, "--ensayo", required=True)
+    add_option(p, "--acel", required=True)
+    add_option(p, "--puntos", required=True)
+    add_option(p, "--datos")
+    add_option(p, "--p0", help="initial position x,y in m (overrides datos.txt)")
+    add_option(p, "--v0", help="initial velocity x,y in m/s (overrides datos.txt)")
+    add_option(p, "--level", type=float, default=0.997,
+               help="confidence level of the arrival region (χ², 2 dof)")
+    add_option(p, "--method", choices=["ols", "wls"], default="ols", action=_Given,
+               help="calibration: per-axis OLS (course) or joint WLS")
+    # an explicit metavar (the term's): argparse would list the choices (and import scipy)
+    add_option(p, "--integrator", choices=Deferred(_integrators), default="trapezoid",
+               help="double integration rule: %(choices)s")
+    add_option(p, "--g", type=float, default=GRAVITY, action=_Given)
     add_json(p)
     add_log_options(p)
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 
 from bench.cli.options import OptionError, parse_floats
+from bench.cli.vocabulary import add_option
 
 FORMATS = ("auto", "course", "csv", "phyphox", "sensorlogger", "rosbag", "mat")
 ACCEL_UNITS = ("m/s2", "g", "mg", "counts")
@@ -30,37 +31,34 @@ THETA_SOURCES = ("poses", "gyro")
 def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
     """Add the log options (module docstring) to a command's parser."""
     g = p.add_argument_group("reading a measured log (docs/real-data.md)")
-    g.add_argument("--format", dest="log_format", choices=FORMATS, default="auto",
-                   help="log format (auto: recognized from the content)")
-    g.add_argument("--columns", help="column names by role: t=…,x=…,y=…,z=…,theta=…,label=…,"
-                   "gyro=… (topic=… for a bag)")
-    g.add_argument("--axes", default="x,y", help="the log's axes that are the tilt plane's x,y, "
-                   "with signs (e.g. -y,z)")
-    g.add_argument("--units", choices=ACCEL_UNITS, help="acceleration unit of the log "
-                   "(if not given: recognized from the header, else refused)")
-    g.add_argument("--sensitivity", type=float, help="counts per g (with --units counts)")
-    g.add_argument("--gyro-unit", choices=GYRO_UNITS, help="unit of the gyro columns "
-                   "(if not given: recognized from the header)")
-    g.add_argument("--angle-unit", choices=("rad", "deg"), help="unit of θ, --poses and "
-                   "label angles (if not given: rad, with the data-based degrees check)")
-    g.add_argument("--map", help=".mat variable names: tita=NAME,datos=NAME,t=NAME")
-    g.add_argument("--allow-gaps", action="store_true", help="read a log with gaps in time "
-                   "(> 5 median steps; refused by default, listed in the provenance)")
-    g.add_argument("--allow-saturation", action="store_true", help="read a log with stretches "
-                   "at a column's extreme value (refused by default as saturated)")
+    add_option(g, "--format", dest="log_format", choices=FORMATS, default="auto")
+    add_option(g, "--columns")
+    add_option(g, "--axes", default="x,y")
+    add_option(g, "--units", choices=ACCEL_UNITS, help="acceleration unit of the log "
+               "(if not given: recognized from the header, else refused)")
+    add_option(g, "--sensitivity", type=float)
+    add_option(g, "--gyro-unit", choices=GYRO_UNITS, help="unit of the gyro columns "
+               "(if not given: recognized from the header)")
+    add_option(g, "--angle-unit", choices=("rad", "deg"), help="unit of θ, --poses and "
+               "label angles (if not given: rad, with the data-based degrees check)")
+    add_option(g, "--map")
+    add_option(g, "--allow-gaps", help="read a log with gaps in time (> 5 median steps; "
+               "refused by default, listed in the provenance)")
+    add_option(g, "--allow-saturation", help="read a log with stretches at a column's extreme "
+               "value (refused by default as saturated)")
     if poses:
-        g.add_argument("--poses", help="angle of each held pose, in order (e.g. 0,90,180,270 "
-                       "--angle-unit deg); without it, poses found in the log keep θ unknown")
-        g.add_argument("--label-angles", help="angle of each value of the label column, e.g. "
-                       "1=0,2=90 (in --angle-unit)")
-        g.add_argument("--theta-source", choices=THETA_SOURCES, default="poses",
-                       help="θ from the poses' angles (poses: the held samples only) or from "
-                       "the gyro about the tilt axis integrated over time and anchored to "
-                       "them (gyro: every sample, a timed sweep; closure errors printed)")
-        g.add_argument("--static-window", type=float, metavar="S", help="pose detector's "
-                       "window, s (samples if the log has no times; if not given 0.5 s / 25)")
-        g.add_argument("--min-hold", type=float, metavar="S", help="shortest held pose, s "
-                       "(samples if the log has no times; if not given 1 s / 100)")
+        add_option(g, "--poses", help="angle of each held pose, in order (e.g. 0,90,180,270 "
+                   "--angle-unit deg); without it, poses found in the log keep θ unknown")
+        add_option(g, "--label-angles", help="angle of each value of the label column, e.g. "
+                   "1=0,2=90 (in --angle-unit)")
+        add_option(g, "--theta-source", choices=THETA_SOURCES, default="poses",
+                   help="θ from the poses' angles (poses: the held samples only) or from "
+                   "the gyro about the tilt axis integrated over time and anchored to "
+                   "them (gyro: every sample, a timed sweep; closure errors printed)")
+        add_option(g, "--static-window", type=float, help="the pose detector's window, s "
+                   "(samples if the log has no times; if not given 0.5 s / 25)")
+        add_option(g, "--min-hold", type=float, help="shortest held pose, s (samples if the "
+                   "log has no times; if not given 1 s / 100)")
 
 
 def _pairs(text: str | None, what: str) -> dict[str, str]:

@@ -16,6 +16,7 @@ from bench.cli.inputs import add_course_inputs, read_calibration_file, read_cour
 from bench.cli.options import (
     Deferred,
     OptionError,
+    add_command,
     add_sweep_options,
     check_count,
     check_initial_state,
@@ -26,6 +27,7 @@ from bench.cli.options import (
 )
 from bench.cli.output import check_finite, print_json
 from bench.cli.progress import Progress
+from bench.cli.vocabulary import add_option
 
 
 def _course_steps() -> str:
@@ -84,22 +86,22 @@ def _cmd_nmin(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    q = sub.add_parser("nmin", help="calibration samples needed to decide the arrival point")
+    q = add_command(sub, "nmin", _cmd_nmin,
+                    help="calibration samples needed to decide the arrival point")
     add_course_inputs(q)
-    q.add_argument("--steps", default=Deferred(_course_steps),
-                   help="subsampling steps of the course experiment (every k-th sample)")
-    q.add_argument("--draws", type=integer, default=100_000,
-                   help="draws from the calibration's sampling law for the fixed-run N "
-                        "(this vehicle run given; >= 100000, 0: skip)")
-    q.add_argument("--confirm-runs", type=integer, default=1000,
-                   help="regenerated calibrations at the fixed-run N (0: none); the output "
-                        "says what the count supports")
-    q.add_argument("--mc-n", default="20001,1539,1429",
-                   help="calibration sizes N for fresh synthetic runs with the vehicle noise "
-                        "redrawn (the design N is added)")
-    q.add_argument("--runs", type=integer, default=0,
-                   help="synthetic runs per --mc-n N, vehicle noise redrawn (0: none)")
-    q.add_argument("--seed", type=int, default=0, help="seed of the draws and synthetic runs")
-    q.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    add_option(q, "--steps", default=Deferred(_course_steps),
+               help="subsampling steps of the course experiment (every k-th sample)")
+    add_option(q, "--draws", type=integer, default=100_000,
+               help="draws from the calibration's sampling law for the fixed-run N "
+                    "(this vehicle run given; >= 100000, 0: skip)")
+    add_option(q, "--confirm-runs", type=integer, default=1000,
+               help="regenerated calibrations at the fixed-run N (0: none); the output "
+                    "says what the count supports")
+    add_option(q, "--mc-n", default="20001,1539,1429",
+               help="calibration sizes N for fresh synthetic runs with the vehicle noise "
+                    "redrawn (the design N is added)")
+    add_option(q, "--runs", type=integer, default=0,
+               help="synthetic runs per --mc-n N, vehicle noise redrawn (0: none)")
+    add_option(q, "--seed", type=int, default=0, help="seed of the draws and synthetic runs")
+    add_option(q, "--quiet")
     add_sweep_options(q)
-    q.set_defaults(handler=_cmd_nmin)

@@ -10,8 +10,23 @@ from __future__ import annotations
 import argparse
 
 from bench.cli.logopts import add_log_options, read_log_from_args
-from bench.cli.options import OptionError, add_force, add_json, check_level, parse_pair
+from bench.cli.options import (
+    OptionError,
+    add_command,
+    add_force,
+    add_json,
+    check_level,
+    parse_pair,
+)
 from bench.cli.output import check_finite, print_files, print_json, refuse_overwrite
+from bench.cli.vocabulary import add_option
+
+DESCRIPTION = """\
+Overlapping Allan deviation per axis with χ² intervals from its equivalent degrees of freedom;
+white-noise density, bias instability and rate random walk fitted by GLS with score-type
+intervals, each with the τ range it was read from (docs/noise.md).
+"""
+"""What ``--help`` says before the options (argparse reflows it)."""
 
 
 def _calibration_entry(path: str) -> dict:
@@ -101,34 +116,28 @@ def _cmd_noise(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        "noise", help="Allan deviation and noise terms of a static log (sensor.json)",
-        description="Overlapping Allan deviation per axis with χ² intervals from its "
-        "equivalent degrees of freedom; white-noise density, bias instability and rate "
-        "random walk fitted by GLS with score-type intervals, each with the τ range it was "
-        "read from (docs/noise.md).")
+    p = add_command(sub, "noise", _cmd_noise, description=DESCRIPTION,
+                    help="Allan deviation and noise terms of a static log (sensor.json)")
     p.add_argument("log", metavar="STATIC_LOG", help="a log of one held pose")
     add_log_options(p, poses=False)
-    p.add_argument("--rate", type=float, metavar="HZ",
-                   help="sample rate, Hz (required when the log has no sample times; "
-                        "overrides them otherwise)")
-    p.add_argument("--level", type=float, default=0.683,
-                   help="two-sided level of every interval (default 0.683, one sigma)")
-    p.add_argument("--alpha", type=float, default=0.05,
-                   help="one-sided significance for calling a term resolved (default 0.05)")
-    p.add_argument("--tau-range", metavar="MIN,MAX",
-                   help="fit only the octave τ within MIN,MAX s (e.g. to leave out a filter's "
-                        "τ)")
-    p.add_argument("--static-window", type=float, default=1.0, metavar="S",
-                   help="window of the static check, s (default 1)")
-    p.add_argument("--static-shift", type=float, default=0.3, metavar="MS2",
-                   help="largest window-mean shift of a held pose, m/s² (default 0.3)")
-    p.add_argument("--static-var-ratio", type=float, default=9.0, metavar="R",
-                   help="largest window variance over the median window's (default 9)")
-    p.add_argument("--calibration", metavar="CAL_JSON",
-                   help="a cal.json whose bias/scale (with covariance) go into --save")
-    p.add_argument("--plot", help="write the Allan deviation figure (.png or .svg)")
-    p.add_argument("--save", metavar="SENSOR_JSON", help="write the sensor profile")
+    add_option(p, "--rate", type=float, help="sample rate, Hz (required when the log has no "
+               "sample times; overrides them otherwise)")
+    add_option(p, "--level", type=float, default=0.683,
+               help="two-sided level of every interval, the figure's error bars included "
+                    "(one sigma: the Allan-deviation convention, and the interval sensor.json "
+                    "hands to gap --sensor)")
+    add_option(p, "--alpha", type=float, default=0.05,
+               help="one-sided significance for calling a term resolved")
+    add_option(p, "--tau-range", help="fit only the octave τ within MIN,MAX s (e.g. to leave "
+               "out a filter's τ)")
+    add_option(p, "--static-window", type=float, default=1.0,
+               help="window of the static check, s (longer than the pose detector's 0.5 s: "
+                    "each window's variance needs a few samples even at 5 Hz)")
+    add_option(p, "--static-shift", type=float, default=0.3)
+    add_option(p, "--static-var-ratio", type=float, default=9.0)
+    add_option(p, "--calibration", help="a cal.json whose bias/scale (with covariance) go "
+               "into --save")
+    add_option(p, "--plot", help="write the Allan deviation figure (.png or .svg)")
+    add_option(p, "--save", metavar="SENSOR_JSON", help="write the sensor profile")
     add_json(p)
     add_force(p, "an existing --plot / --save file")
-    p.set_defaults(handler=_cmd_noise)

@@ -1,8 +1,10 @@
 """Options shared by several commands, the parsing of option values, and the help formatter.
 
-Each option has one meaning across commands (``--count``: calibration samples; ``--students``:
-students of a class; ``--g``: gravity in m/s²; ``--force``: overwrite existing outputs;
-``--json``: one JSON object on stdout and nothing else there).
+Each option has one meaning and unit across commands, declared once in
+:mod:`bench.cli.vocabulary` (``--count``: calibration samples; ``--rate``: a sample rate in Hz;
+``--g``: gravity in m/s²; ``--force``: overwrite existing outputs; ``--json``: one JSON object on
+stdout and nothing else there); every option is added through
+:func:`bench.cli.vocabulary.add_option`.
 
 Start-up time: nothing here imports numpy, scipy or mujoco at module level. Defaults that are
 domain constants (``calib.conventions.G``, ``calib.vehicle.nmin.COURSE_STEPS``, …) are
@@ -17,6 +19,8 @@ import math
 import re
 from collections.abc import Callable, Iterator
 from typing import Any
+
+from bench.cli.vocabulary import DeprecatedAlias, add_option
 
 
 class OptionError(ValueError):
@@ -57,10 +61,12 @@ class Deferred:
 
 
 def resolve_deferred(args: argparse.Namespace) -> argparse.Namespace:
-    """Replace every :class:`Deferred` default left in ``args`` by its value (in place)."""
-    for key, value in vars(args).items():
-        if isinstance(value, Deferred):
-            setattr(args, key, value.read())
+    """Replace every :class:`Deferred` default left in ``args`` by its value (in place); the
+    names of those options go to ``args.deferred_defaults`` (they were not given)."""
+    defaulted = [key for key, value in vars(args).items() if isinstance(value, Deferred)]
+    for key in defaulted:
+        setattr(args, key, getattr(args, key).read())
+    args.deferred_defaults = frozenset(defaulted)
     return args
 
 
@@ -113,6 +119,8 @@ class Parser(argparse.ArgumentParser):
         namespace, extras = super().parse_known_args(args, namespace)
         refused = list(getattr(namespace, "numbers_refused", []))
         for action in self._actions:
+            if isinstance(action, DeprecatedAlias):  # its value is the new option's: checked there
+                continue
             value = getattr(namespace, action.dest, None)
             if "--seed" in action.option_strings and isinstance(value, int) and value < 0:
                 refused.append(f"--seed must be >= 0 (a numpy seed), got {value}")
@@ -134,43 +142,81 @@ def refuse_numbers(args: argparse.Namespace) -> None:
         raise OptionError(refused[0])
 
 
-# ---------------------------------------------------------------- option groups
+# ---------------------------------------------------------------- commands and option groups
+def add_command(sub, name: str, handler: Callable[[argparse.Namespace], int], **kwargs):
+    """A command's (or a ``generate`` kind's) parser: ``sub.add_parser(name, **kwargs)`` run
+    by ``handler`` (a function of the parsed args that returns the exit code)."""
+    p = sub.add_parser(name, **kwargs)
+    p.set_defaults(handler=handler)
+    return p
+
+
 def add_json(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    add_option(p, "--json")
 
 
 def add_force(p: argparse.ArgumentParser, what: str = "existing outputs") -> None:
-    p.add_argument("--force", action="store_true", help=f"overwrite {what}")
+    add_option(p, "--force", help=f"overwrite {what}")
 
 
-def add_gravity(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--g", type=float, default=GRAVITY, help="gravity, m/s²")
+def add_gravity(p: argparse.ArgumentParser, local: bool = False) -> None:
+    """``--g``; ``local``: also ``--latitude``/``--height`` (WGS84 normal gravity) for the
+    commands that calibrate measured logs."""
+    add_option(p, "--g", type=float, default=GRAVITY)
+    if local:
+        add_option(p, "--latitude", type=float, default=None,
+                   help="geodetic latitude of the site in deg (north +): g becomes the WGS84 "
+                   "normal gravity there (instead of --g)")
+        add_option(p, "--height", type=float, default=None,
+                   help="height of the site above the WGS84 ellipsoid in m (with --latitude; "
+                   "default 0)")
+
+
+def gravity_from_args(args: argparse.Namespace) -> tuple[float, str]:
+    """The local gravity g (m/s²) and where it came from: ``--latitude [--height]`` (WGS84
+    normal gravity, :func:`calib.conventions.normal_gravity`), ``--g``, or the course value
+    assumed (``"assumed"``)."""
+    lat, height = getattr(args, "latitude", None), getattr(args, "height", None)
+    given = "g" not in getattr(args, "deferred_defaults", frozenset({"g"}))
+    if height is not None and lat is None:
+        raise OptionError("--height needs --latitude (the WGS84 normal gravity of the site)")
+    if lat is not None:
+        if given:
+            raise OptionError("--g and --latitude both set the local gravity; give one of them")
+        from calib.conventions import normal_gravity
+
+        h = 0.0 if height is None else height
+        try:
+            g = normal_gravity(lat, h)
+        except ValueError as exc:
+            raise OptionError(f"--latitude/--height: {exc}") from None
+        return g, f"WGS84 normal gravity at latitude {lat:g} deg, height {h:g} m"
+    return float(args.g), ("--g" if given else "assumed")
 
 
 def add_noise_inputs(p: argparse.ArgumentParser, stated: bool = False) -> None:
     """``--noise-var`` / ``--datos`` of the commands that read measured data."""
-    p.add_argument("--noise-var", help=f"{'stated ' if stated else ''}noise variances x,y in "
-                   "(m/s²)², e.g. 0.25,0.64")
-    p.add_argument("--datos", help="course datos.txt (noise variances are read from it)")
+    add_option(p, "--noise-var", help=f"{'stated ' if stated else ''}noise variances x,y in "
+               "(m/s²)², e.g. 0.25,0.64")
+    add_option(p, "--datos", help="course datos.txt (noise variances are read from it)")
 
 
 def add_generate_common(p: argparse.ArgumentParser) -> None:
     """``--seed``, ``--out``, ``--force``, ``--json`` of every ``generate`` kind."""
-    p.add_argument("--seed", type=int, default=0, help="random seed")
-    p.add_argument("--out", required=True, help="output directory")
+    add_option(p, "--seed", type=int, default=0)
+    add_option(p, "--out", required=True)
     add_force(p, "existing files")
     add_json(p)
 
 
 def add_sensor_options(p: argparse.ArgumentParser) -> None:
     """True sensor errors of a generated run (``--bias``, ``--scale``, ``--noise-var``, ``--g``)."""
-    p.add_argument("--bias", default=DEFAULT_BIAS, help="true bias x,y in m/s²")
-    p.add_argument("--scale", default=DEFAULT_SCALE, help="true scale-factor error x,y")
-    p.add_argument("--noise-var", default=DEFAULT_NOISE, help="noise variances x,y (m/s²)²")
-    p.add_argument("--sensor", metavar="SENSOR_JSON",
-                   help="simulate a measured sensor (`tiltbench noise --save`): its white "
-                        "noise, bias instability, rate random walk and quantization replace "
-                        "--noise-var, its calibration (if any) --bias/--scale (docs/noise.md)")
+    add_option(p, "--bias", default=DEFAULT_BIAS, help="true bias x,y in m/s²")
+    add_option(p, "--scale", default=DEFAULT_SCALE, help="true scale-factor error x,y")
+    add_option(p, "--noise-var", default=DEFAULT_NOISE, help="noise variances x,y (m/s²)²")
+    add_option(p, "--sensor", help="simulate a measured sensor (`tiltbench noise --save`): "
+               "its white noise, bias instability, rate random walk and quantization replace "
+               "--noise-var, its calibration (if any) --bias/--scale (docs/noise.md)")
     add_gravity(p)
 
 
@@ -377,12 +423,8 @@ def noise_var_from_args(args: argparse.Namespace):
 def add_sweep_options(p: argparse.ArgumentParser) -> None:
     """``--workers K`` (local processes; default: every core) and ``--scheduler ADDR``
     (a dask.distributed scheduler, e.g. ``tcp://10.0.0.5:8786``) for the long sweeps."""
-    p.add_argument("--workers", type=integer, default=None, metavar="K",
-                   help="local processes for the Monte Carlo runs (default: every core; 1 = "
-                        "this process); results do not depend on it")
-    p.add_argument("--scheduler", default=None, metavar="ADDR",
-                   help="run the Monte Carlo on a dask.distributed cluster whose scheduler "
-                        "is at ADDR (tcp://host:port); needs tiltbench[cluster]")
+    add_option(p, "--workers", type=integer, default=None)
+    add_option(p, "--scheduler", default=None)
 
 
 def mapper_from_args(args: argparse.Namespace):

@@ -2,8 +2,10 @@
 
 ``--json``: one JSON object on stdout and nothing else there (:func:`print_json`). Readable
 output names every file the command wrote (:func:`print_summary`, :func:`print_files`) and
-fits 100 columns: ``main`` runs every command inside :func:`fit_columns`, which breaks a
-longer line at spaces with a hanging indent (error lines, printed after it, stay one line).
+fits 100 columns, and so does every line on stderr, error lines included: ``main`` runs
+inside :func:`fit_columns`, which breaks a longer line at spaces with a hanging indent, never
+inside a word, a path or a URL (a single word wider than 100 columns stays whole on its own
+line).
 
 Outputs are claimed before any work (:func:`command_outputs`, around every command in
 ``main``): each output named on the command line (:data:`OUTPUT_OPTIONS`) is locked
@@ -263,11 +265,19 @@ COLUMNS = 100
 
 def fit_line(line: str, width: int = COLUMNS) -> list[str]:
     """``line`` as lines of at most ``width`` columns, broken at spaces, each continuation
-    indented 4 columns past the line's own indent. A line holding a word longer than the
-    width (a long path), or a label and a path ("wrote: PATH"), is left whole: broken, the path
-    would be unusable or stand alone."""
-    words = line.split()
-    if len(line) <= width or (len(words) == 2 and "/" in words[1]):  # "wrote: PATH"
+    indented 4 columns past the line's own indent (``error: …`` lines too: a reader joins a
+    message back by its indented continuations).
+
+    Never broken inside a word, so a path, a URL or an option stays whole and can be copied;
+    the one line that may be wider than ``width`` holds a single word wider than it (a long
+    path), alone.
+
+    >>> [len(part) for part in fit_line("error: " + "word " * 30)]
+    [96, 63]
+    >>> fit_line("wrote: /" + "d" * 99) == ["wrote:", "    /" + "d" * 99]
+    True
+    """
+    if len(line) <= width:
         return [line]
     import textwrap
 
@@ -275,7 +285,7 @@ def fit_line(line: str, width: int = COLUMNS) -> list[str]:
     parts = textwrap.wrap(line, width, subsequent_indent=indent + "    ", expand_tabs=False,
                           replace_whitespace=False, break_long_words=False,
                           break_on_hyphens=False)
-    return parts if parts and max(map(len, parts)) <= width else [line]
+    return parts or [line]
 
 
 class FitColumns(io.TextIOBase):
@@ -329,19 +339,23 @@ class FitColumns(io.TextIOBase):
 
 
 @contextlib.contextmanager
-def fit_columns(stdout: bool = True) -> Iterator[None]:
-    """Within the block, stderr (and stdout unless ``stdout`` is False: ``--json`` output is
-    machine text and never re-wrapped) go through :class:`FitColumns`."""
+def fit_columns(stdout: bool = True, stderr: bool = True) -> Iterator[None]:
+    """Within the block, stderr and stdout (each unless False) go through :class:`FitColumns`.
+
+    ``main`` wraps stderr around all it does (argparse's errors, the error line of a refused
+    input, warnings, notes, progress) and stdout around a command's work unless ``--json``
+    (machine text, never re-wrapped)."""
     saved = sys.stdout, sys.stderr
-    err = FitColumns(sys.stderr)
+    err = FitColumns(sys.stderr) if stderr else None
     out = FitColumns(sys.stdout) if stdout else None
-    sys.stderr = err
+    if err is not None:
+        sys.stderr = err
     if out is not None:
         sys.stdout = out
     try:
         yield
     finally:
         sys.stdout, sys.stderr = saved
-        err.close_pending()
-        if out is not None:
-            out.close_pending()
+        for stream in (err, out):
+            if stream is not None:
+                stream.close_pending()

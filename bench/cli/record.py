@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import argparse
 
-from bench.cli.options import add_json
+from bench.cli.options import add_command, add_json
 from bench.cli.output import print_json
+from bench.cli.vocabulary import add_option
 
 
 def _flat(obj, prefix: str = "", key: str = "") -> list[tuple[str, str, object]]:
@@ -79,13 +80,12 @@ def _cmd_entities(args: argparse.Namespace) -> int:
 def register(sub) -> None:
     p = sub.add_parser("record", help="read rerun recordings written by tiltbench")
     kinds = p.add_subparsers(dest="action", required=True, metavar="ACTION")
-    r = kinds.add_parser("read", help="truth and estimates back from a .rrd")
+    r = add_command(kinds, "read", _cmd_read, help="truth and estimates back from a .rrd")
     r.add_argument("file", help="recording (.rrd)")
-    r.add_argument("--json", action="store_true",
-                   help='print {"truth": ..., "estimates": ..., "trajectory": ...} as JSON')
-    r.set_defaults(handler=_cmd_read)
-    e = kinds.add_parser("entities", help="entity paths with their documented pattern")
+    add_option(r, "--json", help='print {"truth": ..., "estimates": ..., "trajectory": ...} '
+               "as JSON")
+    e = add_command(kinds, "entities", _cmd_entities,
+                    help="entity paths with their documented pattern")
     e.add_argument("file", help="recording (.rrd)")
-    e.add_argument("--all", action="store_true", help="also list the JSON tree nodes")
+    add_option(e, "--all")
     add_json(e)
-    e.set_defaults(handler=_cmd_entities)

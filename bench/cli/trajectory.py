@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 
 from bench.cli.inputs import add_course_inputs, read_calibration_file, read_course_inputs
-from bench.cli.options import add_force, check_initial_state, check_level
+from bench.cli.options import add_command, add_force, check_initial_state, check_level
 from bench.cli.output import (
     check_finite,
     print_files,
@@ -19,6 +19,7 @@ from bench.cli.output import (
     refuse_overwrite,
     warnings_to_stderr,
 )
+from bench.cli.vocabulary import add_option
 
 
 def _cmd_trajectory(args: argparse.Namespace) -> int:
@@ -60,9 +61,9 @@ def _cmd_trajectory(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("trajectory", help="correct, integrate and decide the arrival point")
+    p = add_command(sub, "trajectory", _cmd_trajectory,
+                    help="correct, integrate and decide the arrival point")
     add_course_inputs(p)
-    p.add_argument("--plot", help="write a figure (.png or .svg)")
-    p.add_argument("--rrd", help="write a rerun recording of the run to this file")
+    add_option(p, "--plot")
+    add_option(p, "--rrd", help="write a rerun recording of the run to this file")
     add_force(p, "an existing --plot / --rrd file")
-    p.set_defaults(handler=_cmd_trajectory)

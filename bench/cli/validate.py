@@ -12,8 +12,17 @@ from __future__ import annotations
 import argparse
 import sys
 
-from bench.cli.options import OptionError, add_json
+from bench.cli.options import OptionError, add_command, add_json
 from bench.cli.output import print_json
+from bench.cli.vocabulary import add_option
+
+DESCRIPTION = """\
+Per-parameter z-scores of bias and scale against truth.json and a joint chi-square test at the
+level (pass probability = level for an honest estimator); a reported std outside [1/2, 2]× the
+std the design implies also fails (the interval widens for N < 30). Exit code 0: pass, 1: fail,
+2: bad input. Formats: docs/validate.md.
+"""
+"""What ``--help`` says before the options (argparse reflows it)."""
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
@@ -65,28 +74,21 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        "validate", help="check estimates against the truth (exit 0 pass, 1 fail, 2 bad input)",
-        description="Per-parameter z-scores of bias and scale against truth.json and a joint "
-        "chi-square test at the level (pass probability = level for an honest estimator); a "
-        "reported std outside [1/2, 2]× the std the design implies also fails (the interval "
-        "widens for N < 30). Exit code 0: pass, 1: fail, 2: bad input. Formats: "
-        "docs/validate.md.")
-    p.add_argument("--truth", required=True,
-                   help="truth.json of the generated set, or a class answer_key.json")
-    p.add_argument("--student", help="student folder name when --truth is a class "
-                   "answer_key.json (e.g. student_001)")
+    p = add_command(sub, "validate", _cmd_validate, description=DESCRIPTION, help="check "
+                    "estimates against the truth (exit 0 pass, 1 fail, 2 bad input)")
+    add_option(p, "--truth", required=True,
+               help="truth.json of the generated set, or a class answer_key.json")
+    add_option(p, "--student", help="student folder name when --truth is a class "
+               "answer_key.json (e.g. student_001)")
     est = p.add_mutually_exclusive_group(required=True)
-    est.add_argument("--estimates",
-                     help="est.json: the calibrate --json object or {axes: {x: {bias, scale}, "
-                     "y: {...}}}")
-    est.add_argument("--calibration", metavar="CAL",
-                     help="calibration file cal.json (calibrate --save) instead of --estimates")
-    p.add_argument("--level", type=float, default=0.99, help="test level")
-    p.add_argument("--std", choices=["auto", "reported", "design"], default="auto",
-                   help="standard deviations: reported in est.json, or recomputed from the "
-                   "design with the true noise variances (auto: reported if present)")
-    p.add_argument("--ensayo", help="ensayo.mat the estimates came from (θ for the design "
-                   "std; refused when its N or θ does not match the truth or the estimates)")
+    add_option(est, "--estimates")
+    add_option(est, "--calibration",
+               help="calibration file cal.json (calibrate --save) instead of --estimates")
+    add_option(p, "--level", type=float, default=0.99,
+               help="level of the test: an honest estimator passes with this probability")
+    add_option(p, "--std", choices=["auto", "reported", "design"], default="auto",
+               help="standard deviations: reported in est.json, or recomputed from the "
+               "design with the true noise variances (auto: reported if present)")
+    add_option(p, "--ensayo", help="ensayo.mat the estimates came from (θ for the design "
+               "std; refused when its N or θ does not match the truth or the estimates)")
     add_json(p)
-    p.set_defaults(handler=_cmd_validate)

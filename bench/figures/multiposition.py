@@ -5,7 +5,10 @@ of each mean, semi-axes ``k·σ_a/√n_i``, magnified by a stated factor: at the
 would be invisible), the fitted ellipse ``b + (1 + s)·(−g sin θ, −g cos θ)`` with its centre
 (the biases) and the ideal sensor's circle of radius g about 0. Right: each pose's residual
 (mean − fitted ellipse) per axis against its estimated angle θ_i (deg), with the same
-intervals unmagnified: a model that fits leaves them around 0 within their bars.
+intervals unmagnified: a model that fits leaves them around 0 within their bars. The
+estimates box gives each parameter ± the half-width of its level-``L`` interval: every band,
+bar and ± of the figure is at the one level ``L``, with the fit's quantile ``k`` (normal when σ²
+was given, Student t on the within-pose dof when it was estimated).
 """
 
 from __future__ import annotations
@@ -42,10 +45,8 @@ def _magnification(half: np.ndarray, g: float) -> float:
 
 
 def multiposition_figure(fit: MultiPositionFit, level: float = 0.95) -> Figure:
-    """The figure of the module docstring for ``fit``; intervals at ``level``."""
-    from scipy import stats
-
-    k = float(stats.norm.ppf(0.5 + level / 2))
+    """The figure of the module docstring for ``fit``; every interval at ``level``."""
+    k = fit.quantile(level)
     g = fit.g
     means = fit.poses.means
     half = k * np.sqrt(fit.sigma2[None, :] / fit.poses.n[:, None])  # (P, 2) m/s²
@@ -91,9 +92,10 @@ def multiposition_figure(fit: MultiPositionFit, level: float = 0.95) -> Figure:
                  fontsize=9)
     rx.grid(True, alpha=0.3)
     rx.legend(fontsize=7)
-    lines = [f"{n} = {v:.5g} ± {sd:.2g} {'m/s²' if n.startswith('bias') else ''}".rstrip()
+    lines = [f"{n} = {v:.5g} ± {k * sd:.2g} {'m/s²' if n.startswith('bias') else ''}".rstrip()
              for n, v, sd in zip(fit.param_names, fit.params, fit.std, strict=True)]
-    rx.text(0.02, 0.03, "\n".join(lines + [f"(± 1 std, σ² {fit.sigma2_source})"]),
+    rx.text(0.02, 0.03, "\n".join(lines + [f"(± {100 * level:g}% half-width = {k:.3g} std;"
+                                           f" σ² {fit.sigma2_source})"]),
             transform=rx.transAxes, fontsize=8, family="monospace", va="bottom",
             bbox={"facecolor": "white", "alpha": 0.9, "edgecolor": "0.7"})
     fig.tight_layout()

@@ -14,8 +14,11 @@ Classification of one run (a case can carry several faults)
 ``traceback``      stderr holds ``Traceback``
 ``last_resort``    stderr holds a last-resort message: ``please report``, ``would be nan``,
                    ``Singular matrix``, ``OverflowError``
-``multi_line``     an error exit (2, or undocumented) whose error is not one line (``note:``,
-                   ``warning:`` and ``[progress]`` lines and their indented continuations aside)
+``multi_line``     an error exit (2, or undocumented) whose error is not one message: one line
+                   and its continuation lines (wrapped at 100 columns, indented 4 spaces);
+                   ``note:``, ``warning:`` and ``[progress]`` lines and theirs aside
+``wide_line``      a line on stderr (or readable stdout: not a JSON object) wider than 100
+                   columns, unless it is a single token (a path or URL longer than that)
 ``hang``           still running after the timeout (60 s): killed with its process group
 ``leftover``       a hidden file (``.name``, not a ``*.lock``) beside a target that was not
                    there before the run (after a killed run: after the *next* run too)
@@ -29,6 +32,8 @@ Classification of one run (a case can carry several faults)
                    be refused (an edited calibration graded, |ρ| > 1, n = 0)
 =================  ===========================================================================
 
-A case with none of these is ``clean``. The harness imports neither ``bench`` nor ``calib``
-(it judges the command line from outside, as a user would).
+A case with none of these is ``clean``. The summary ends with the widest line printed (of
+every case; of the refused ones) and the widest single word (a path may be wider than 100).
+The harness imports neither ``bench`` nor ``calib`` (it judges the command line from
+outside, as a user would).
 """

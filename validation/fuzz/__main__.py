@@ -13,7 +13,7 @@ from pathlib import Path
 
 from validation.fuzz.cases import KINDS, all_cases
 from validation.fuzz.fixtures import build
-from validation.fuzz.runner import FAULTS, Outcome, run_case
+from validation.fuzz.runner import FAULTS, WIDTH, Outcome, run_case
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -68,6 +68,17 @@ def main(argv: list[str] | None = None) -> int:
     for o in bad:
         print(f"- {o.kind}: {o.name}: {','.join(o.faults)} (exit {o.codes}) {o.detail} "
               f"| {o.stderr_tail[:160]}")
+    if outcomes:  # the widths of issue 29 (stderr and readable stdout)
+        top = max(outcomes, key=lambda o: o.widest)
+        word = max(outcomes, key=lambda o: o.widest_word)
+        errors = [o for o in outcomes if 2 in o.codes]  # refused: exit 2
+        top_error = max(errors, key=lambda o: o.widest, default=None)
+        print(f"widest line: {top.widest} columns (limit {WIDTH}), in: {top.name}")
+        if top_error is not None:
+            print(f"widest line of the {len(errors)} refused cases (exit 2): "
+                  f"{top_error.widest} columns, in: {top_error.name}")
+        print(f"widest single word (a path, may exceed {WIDTH}): {word.widest_word} columns, "
+              f"in: {word.name}")
     report = {"seed": args.seed, "src": str(args.src.resolve()),
               "seconds": round(time.monotonic() - t0, 1), "faults": list(FAULTS),
               "table": text, "cases": [o.to_dict() for o in outcomes]}

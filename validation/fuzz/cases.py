@@ -418,6 +418,68 @@ def int_sweep(f: dict[str, Path]) -> list[Case]:
     return cases
 
 
+LONG_DIR = "/".join(["a-folder-whose-name-is-long-enough"] * 4)
+"""A relative folder of 139 characters: its paths are wider than a terminal of 100 columns
+(a message shows such a path whole, alone on its line)."""
+
+
+def messages(f: dict[str, Path]) -> list[Case]:
+    """A refusal of each kind on every command: argparse's own errors (an unknown command,
+    kind, action, option or choice; a missing or malformed argument), a missing input, a
+    folder or a file of the wrong kind given for an input, an existing output without
+    ``--force``, an output onto its input, a path wider than the terminal. Each must be one
+    error message (wrapped at 100 columns like every line) that names what it refuses."""
+    c1 = _course(f, "c1")
+    ens = {"ensayo.mat": f["c1.ensayo"]}
+    veh = ["--calibration", "cal.json", *VEH]
+    cal = {"truth.json": f["c1.truth"], "cal.json": f["c1.cal"]}
+    argvs = [
+        ("unknown command", ["calibrat", "ensayo.mat"], ens),
+        ("unknown option", ["calibrate", "ensayo.mat", "--noise-variance", "1,1"], ens),
+        ("invalid choice", ["calibrate", "ensayo.mat", "--method", "ml"], ens),
+        ("required options missing", ["trajectory", "--ensayo", "ensayo.mat"], ens),
+        ("not an integer", ["generate", "class", "--students", "many", "--out", "o"], {}),
+        ("unknown generate kind", ["generate", "calibratoin", "--out", "o"], {}),
+        ("unknown record action", ["record", "write", "x.rrd"], {}),
+        ("unknown effect", ["design", "--effects", "misalignmnet", "--json"], {}),
+        ("runs below the minimum", ["fusion-study", "--runs", "1", "--out", "fs"], {}),
+        ("level out of range", ["demo", "--level", "2", "--out", "d"], {}),
+        ("calibrate missing input", ["calibrate", "missing.mat"], {}),
+        ("gap missing input", ["gap", "missing.mat"], {}),
+        ("trajectory missing input", ["trajectory", "--calibration", "cal.json", "--acel",
+                                      "acel.mat", "--puntos", "missing.mat"], c1),
+        ("nmin missing input", ["nmin", "--calibration", "cal.json", "--acel", "missing.mat",
+                                "--puntos", "puntos.mat", *NMIN_FAST], c1),
+        ("fuse missing input", ["fuse", *veh, "--gps", "missing.mat"], c1),
+        ("validate missing input", ["validate", "--truth", "missing.json", "--calibration",
+                                    "cal.json"], cal),
+        ("noise missing input", ["noise", "missing.csv"], {}),
+        ("import missing input", ["import", "missing.csv", "--out", "imp"], {}),
+        ("record missing input", ["record", "read", "missing.rrd"], {}),
+        ("demo missing course data", ["demo", "--course-data", "nowhere", "--out", "d"], {}),
+        ("a folder for a file", ["calibrate", "."], {}),
+        ("a JSON file for a recording", ["record", "entities", "truth.json"], cal),
+        ("a JSON file for a .mat", ["gap", "truth.json"], cal),
+        ("a path wider than the terminal", ["calibrate", f"{LONG_DIR}/ensayo.mat",
+                                            "--noise-var", "nan,1"],
+         {f"{LONG_DIR}/ensayo.mat": f["c1.ensayo"]}),
+        ("a missing path wider than the terminal", ["gap", f"{LONG_DIR}/missing.mat"], {}),
+        ("existing output without --force", ["calibrate", "ensayo.mat", "--save",
+                                             "cal.json"], {**ens, "cal.json": f["c1.cal"]}),
+        ("existing outputs without --force", ["generate", "course", "--out", "set"],
+         {"set/ensayo.mat": f["c1.ensayo"]}),
+        ("existing example without --force", ["examples", "ex"],
+         {"ex/data/README.md": f["c1.datos"]}),
+        ("fusion-study table without --force", ["fusion-study", "--runs", "2", "--out", "fs"],
+         {"fs/fusion-study.md": f["c1.datos"]}),
+        ("output onto its input", ["calibrate", "ensayo.mat", "--save", "ensayo.mat",
+                                   "--force"], ens),
+    ]
+    return [Case("message", name, argv, files, expect="refuse",
+                 inputs_unchanged=tuple(n for n in files if n == "ensayo.mat"))
+            for name, argv, files in argvs]
+
+
 KINDS = {
     "cal_file": calibration_files,
     "gps_fault": faulty_fixes,
@@ -429,6 +491,7 @@ KINDS = {
     "opt_sweep": option_sweep,
     "int_sweep": int_sweep,
     "writers": writers,
+    "message": messages,
 }
 
 

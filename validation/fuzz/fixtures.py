@@ -11,6 +11,7 @@ import copy
 import json
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -39,8 +40,10 @@ def _ensayo(path: Path, n: int, rng: np.random.Generator, noise: bool = True) ->
     return _mat(path, tita=tita[:, None], datos=datos)
 
 
-def build(base: Path, seed: int, env: dict) -> dict[str, Path]:
-    """Write every input; return {name: path}."""
+def build(base: Path, seed: int, env: dict,
+          run: Callable[[list[str], Path, dict], None] = tiltbench) -> dict[str, Path]:
+    """Write every input; return {name: path}. ``run(argv, cwd, env)`` runs a fixture-building
+    command (default :func:`tiltbench`, a subprocess; a test may run them in its process)."""
     base.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)
     f: dict[str, Path] = {}
@@ -59,7 +62,7 @@ def build(base: Path, seed: int, env: dict) -> dict[str, Path]:
     for name, argv in gen:
         out = base / name
         if not (out / "truth.json").exists():
-            tiltbench([*argv, "--out", str(out), "--force"], base, env)
+            run([*argv, "--out", str(out), "--force"], base, env)
     for name in ("c1", "c3", "t1"):
         d = base / name
         for kind in ("ensayo", "acel", "puntos", "gps"):
@@ -68,8 +71,7 @@ def build(base: Path, seed: int, env: dict) -> dict[str, Path]:
         f[f"{name}.truth"] = d / "truth.json"
         for cal in ("cal.json", "cal.mat"):  # (kept between runs, as the sets are)
             if not (d / cal).exists():
-                tiltbench(["calibrate", "ensayo.mat", "--datos", "datos.txt", "--save", cal],
-                          d, env)
+                run(["calibrate", "ensayo.mat", "--datos", "datos.txt", "--save", cal], d, env)
         f[f"{name}.cal"] = d / "cal.json"
         f[f"{name}.calmat"] = d / "cal.mat"
     for name in ("sw", "q1", "q2"):

@@ -20,8 +20,11 @@ TIMEOUT = 60.0
 LAST_RESORT = ("please report", "would be nan", "singular matrix", "overflowerror")
 """Messages that mean a check is missing (case-insensitive)."""
 
-FAULTS = ("traceback", "last_resort", "multi_line", "hang", "leftover", "result_lost",
-          "bad_exit", "silent_wrong")
+FAULTS = ("traceback", "last_resort", "multi_line", "wide_line", "hang", "leftover",
+          "result_lost", "bad_exit", "silent_wrong")
+
+WIDTH = 100
+"""Widest line a command may print, in columns (the README's promise; issue 29)."""
 
 Check = Callable[[int, str, str, Path], "str | None"]
 """Truth check of a finished run: (exit code, stdout, stderr, case dir) → why it is wrong."""
@@ -72,6 +75,11 @@ class Outcome:
     faults: list[str]
     detail: str
     stderr_tail: str
+    widest: int = 0
+    """Widest line of the run's stderr and readable (non-JSON) stdout, columns: a line that
+    could be broken (more than one word), the ones :data:`WIDTH` limits."""
+    widest_word: int = 0
+    """Widest line that is a single word (a long path: allowed wider than :data:`WIDTH`)."""
 
     def to_dict(self) -> dict:
         return self.__dict__.copy()
@@ -100,18 +108,44 @@ def _wait(proc: subprocess.Popen, timeout: float) -> tuple[int | None, str, str]
 
 
 def error_lines(err: str) -> list[str]:
-    """stderr lines that are not notes, warnings, progress or their continuations."""
-    lines, skipping = [], False
+    """The messages on stderr that are not notes, warnings or progress, each as one line: a
+    message wrapped at :data:`WIDTH` columns goes on in lines indented 4 spaces, joined back
+    here (with one space, as the wrap took it)."""
+    lines: list[str] = []
+    skipping = False
     for ln in err.strip().splitlines():
-        skipping = (ln.startswith(("note:", "warning:", "[")) or
-                    (skipping and ln.startswith("    ")))
+        if ln.startswith("    ") and (skipping or lines):  # a continuation line
+            if not skipping:
+                lines[-1] += " " + ln.strip()
+            continue
+        skipping = ln.startswith(("note:", "warning:", "["))
         if not skipping and ln.strip():
             lines.append(ln)
     return lines
 
 
-def run_case(case: Case, root: Path, env: dict) -> Outcome:
-    """Run ``case`` in ``root`` (created, inputs copied) and classify it."""
+def columns(line: str) -> int:
+    """Terminal columns of ``line``: one per character (what we print is Latin, Greek and
+    math signs, one column each; no tabs)."""
+    return len(line)
+
+
+def wide_lines(text: str, width: int = WIDTH) -> list[str]:
+    """The lines of ``text`` wider than ``width`` columns, except a line that holds a single
+    token (after its indent): a path or URL longer than the width, which must stay whole.
+    Progress redrawn in place (``\\r``) counts each redraw as a line."""
+    return [ln for ln in text.splitlines() if columns(ln) > width and len(ln.split()) > 1]
+
+
+def max_columns(text: str, words: str = "many") -> int:
+    """Columns of the widest line of ``text`` that holds more than one word (``words="many"``)
+    or a single word (``"one"``); 0 if there is none."""
+    return max((columns(ln) for ln in text.splitlines()
+                if (len(ln.split()) > 1) == (words == "many")), default=0)
+
+
+def stage(case: Case, root: Path) -> None:
+    """Make ``root`` the case's fresh folder: emptied, its input files copied in."""
     if root.exists():
         shutil.rmtree(root)
     root.mkdir(parents=True)
@@ -119,6 +153,11 @@ def run_case(case: Case, root: Path, env: dict) -> Outcome:
         dst = root / name
         dst.parent.mkdir(parents=True, exist_ok=True)
         shutil.copy2(src, dst)
+
+
+def run_case(case: Case, root: Path, env: dict) -> Outcome:
+    """Run ``case`` in ``root`` (created, inputs copied) and classify it."""
+    stage(case, root)
     before_hidden = _hidden(root)
     before_bytes = {n: (root / n).read_bytes() for n in case.inputs_unchanged}
     faults: list[str] = []
@@ -153,6 +192,11 @@ def run_case(case: Case, root: Path, env: dict) -> Outcome:
         if code not in (None, 0, verdict) and len(error_lines(e)) != 1:
             faults.append("multi_line")
             break
+    readable = [e for _, _, e in results] + ([out] if _json(out) is None else [])
+    wide = [ln for text in readable for ln in wide_lines(text)]
+    if wide:
+        faults.append("wide_line")
+        details.append(f"{len(wide)} line(s) over {WIDTH} columns, e.g. {wide[0][:120]!r}")
     if any(c is not None and c not in case.ok_codes for c in codes):
         faults.append("bad_exit")
     new_hidden = sorted(_hidden(root) - before_hidden)
@@ -177,7 +221,9 @@ def run_case(case: Case, root: Path, env: dict) -> Outcome:
             details.append(why)
     tail = " | ".join(error_lines(err)[-2:])[:300]
     return Outcome(case.kind, case.name, case.argv, codes, round(seconds, 2),
-                   sorted(set(faults), key=FAULTS.index), "; ".join(details), tail)
+                   sorted(set(faults), key=FAULTS.index), "; ".join(details), tail,
+                   widest=max(max_columns(t) for t in readable),
+                   widest_word=max(max_columns(t, "one") for t in readable))
 
 
 # ---------------------------------------------------------------- truth checks
