@@ -94,7 +94,8 @@ def test_held_samples_carry_the_true_angle(logs):
 
 
 def test_units_and_conversion_with_g(tmp_path):
-    """g, mg and counts are converted with the g given (not 9.80665 silently)."""
+    """g, mg and counts are converted with the unit g, standard gravity 9.80665 m/s², whatever
+    local gravity ``g`` the sensor feels (issue 30: ``--g`` is the local gravity)."""
     rng = np.random.default_rng(0)
     n = 400
     theta = np.repeat([0.0, 1.0], n // 2)
@@ -108,12 +109,12 @@ def test_units_and_conversion_with_g(tmp_path):
     cs = "\n".join(",".join(repr(float(v)) for v in r) for r in np.c_[t, counts])
     (tmp_path / "c.csv").write_text("t,ax,ay\n" + cs + "\n")
     log = read_log(tmp_path / "g.csv", LogOptions(g=9.81))
-    assert np.allclose(log.acc, 9.81 * g_units, rtol=1e-15, atol=0)
+    assert np.allclose(log.acc, 9.80665 * g_units, rtol=1e-15, atol=0)
     assert log.provenance["units"]["acc"] == "g"
     log = read_log(tmp_path / "mg.csv")
-    assert np.allclose(log.acc, 9.8 * g_units, rtol=1e-12, atol=0)
+    assert np.allclose(log.acc, 9.80665 * g_units, rtol=1e-12, atol=0)
     log = read_log(tmp_path / "c.csv", LogOptions(units="counts", sensitivity=4096.0))
-    assert np.allclose(log.acc, counts / 4096.0 * 9.8, rtol=1e-15, atol=0)
+    assert np.allclose(log.acc, counts / 4096.0 * 9.80665, rtol=1e-15, atol=0)
     with pytest.raises(DataError, match=r"'ax'.*--units"):
         read_log(tmp_path / "c.csv")  # unit neither stated nor recognized: refused
     with pytest.raises(DataError, match="states the acceleration in g but --units m/s2"):

@@ -22,7 +22,7 @@ from calib.calibration.multiposition import (
     quantization_step,
     three_axis_applies,
 )
-from calib.conventions import G
+from calib.conventions import STANDARD_GRAVITY, G
 from calib.logs.reader import LogOptions, read_log
 from calib.units import missing_units
 from tests.checks import assert_honest_intervals
@@ -274,19 +274,20 @@ def independent_fit(means: np.ndarray, g: float) -> np.ndarray:
 def test_ax3_calibrate_agrees_with_an_independent_fit(capsys):
     """``calibrate`` on the AX3 log (counts, 256 per g, steps of 4 counts = 15.6 mg) picks the
     3-axis fit; every parameter agrees with the independent fit on the 12 reference pose
-    means (tests/reference/real_data.py, g_unit = the command's g) within its stated 95 %
-    interval. σ²: the pure error, floored at q²/12 (the readings' quantization step q, found
-    on the data); each pose mean's variance σ²/n + q²/12."""
+    means (tests/reference/real_data.py) within its stated 95 % interval (the unit g:
+    standard gravity; the local g: the command's). σ²: the pure error, floored at q²/12 (the
+    readings' quantization step q, found on the data); each pose mean's variance σ²/n +
+    q²/12."""
     rc, out, err = run(capsys, "calibrate", AX3, *AX3_OPTS, "--json")
     assert rc == 0, err
     d = json.loads(out)
     assert missing_units(d) == []
     fit = d["fit"]
     assert fit["axes"] == 3 and len(fit["params"]) == 6
-    q = 4 / 256 * G
+    q = 4 / 256 * STANDARD_GRAVITY  # counts → m/s² with the unit g
     assert np.allclose(fit["quantization"], q, rtol=1e-9)
     assert np.all(np.asarray(fit["sigma2"]) >= q**2 / 12 * (1 - 1e-12))
-    ref = pose_means(AX3, g_unit=G)
+    ref = pose_means(AX3, g_unit=STANDARD_GRAVITY)
     means = np.array([[p["mean"][a] for a in "xyz"] for p in ref["poses"].values()])
     indep = independent_fit(means, G)
     params, std = np.asarray(fit["params"]), np.asarray(fit["std"])
@@ -298,13 +299,24 @@ def test_ax3_calibrate_agrees_with_an_independent_fit(capsys):
 
 
 def test_cli_three_variances_planar_fallback_and_plot(capsys, tmp_path):
-    csv = tmp_path / "six.csv"
     rng = np.random.default_rng(7)
-    u = unit(SIX)
-    acc = np.repeat(model(TRUTH, u), 200, axis=0) + rng.standard_normal((1200, 3)) * 0.05
-    lab = np.repeat(np.arange(6), 200)
-    csv.write_text("ax (m/s2),ay (m/s2),az (m/s2),label\n" + "".join(
-        f"{a:.6f},{b:.6f},{c:.6f},{k}\n" for (a, b, c), k in zip(acc, lab, strict=True)))
+
+    def write(path, orientations):
+        u = unit(orientations)
+        noise = rng.standard_normal((200 * len(u), 3)) * 0.05
+        acc = np.repeat(model(TRUTH, u), 200, axis=0) + noise
+        lab = np.repeat(np.arange(len(u)), 200)
+        path.write_text("ax (m/s2),ay (m/s2),az (m/s2),label\n" + "".join(
+            f"{a:.6f},{b:.6f},{c:.6f},{k}\n" for (a, b, c), k in zip(acc, lab, strict=True)))
+        return path
+
+    # six faces of the case: the six-face test (calib.calibration.sixface), not a fallback
+    rc, out, err = run(capsys, "calibrate", write(tmp_path / "faces.csv", SIX), "--columns",
+                       "label=label")
+    assert rc == 0, err
+    assert "method: six-face test, 3 axes" in out
+    # six poses, one of them tilted off every face: too few for the 3-axis fit → planar
+    csv = write(tmp_path / "six.csv", SIX[:5] + [[1, 1, 0]])
     rc, out, err = run(capsys, "calibrate", csv, "--columns", "label=label")
     assert rc == 0, err
     assert "not the 3-axis fit: 6 held poses" in err and "method: multiposition (" in out

@@ -9,7 +9,8 @@ command line in-process (tests/cli.py) and through :func:`calib.logs.reader.read
   run in one line naming ``scale_x``, and the per-axis least squares of the y axis
   (:func:`calib.calibration.ls.fit_axis`, what ``calibrate`` runs per axis) is compared with
   ``tests/reference/real_data.six_position`` (plain csv + numpy). Gravity: the readers convert
-  g with ``--g`` (9.8 here), so the reference is called with ``g_unit = g = 9.8``.
+  the unit g with standard gravity (9.80665 m/s²) and take ``--g`` (9.8 here) as the local
+  gravity of ``A_r``, so the reference is called with ``g = 9.8, g_unit = 9.80665``.
   Criterion: on the reference's own rows the two are the same computation (equal to 1e-9);
   on the detected rows they must agree within the 95 % interval of the difference,
   ``|Δ| ≤ 1.96·sqrt(std_a² + std_b²)`` (the fits share most rows, so this is conservative).
@@ -39,7 +40,8 @@ from tests.cli import one_line_error, run
 from tests.logfixtures import imu_messages, seconds
 from tests.reference import real_data as ref
 
-G = 9.8  # m/s²: the readers' default g, used for the unit g and for A_r
+G = 9.8  # m/s²: the readers' default local gravity, used for A_r
+G_UNIT = ref.G_UNIT  # m/s² per g: the unit g (standard gravity), whatever --g says
 YEI = ref.REAL_DIR / "yei-3space-z-flip.csv"
 NGIMU = ref.REAL_DIR / "ngimu-sensors.csv"
 POLOLU = ref.REAL_DIR / "pololu-minimu9-x-flip.csv"
@@ -62,7 +64,7 @@ FLIPS = {
 
 def _reference_y(path: Path = YEI, axis: str = "z") -> dict:
     """The six-position axis, turned into the tilt plane's y = -axis."""
-    z = ref.six_position(path, g=G, g_unit=G)["axes"][axis]
+    z = ref.six_position(path, g=G, g_unit=G_UNIT)["axes"][axis]
     return {"bias": -z["bias"], "bias_std": z["bias_std"], "scale": z["scale"],
             "scale_std": z["scale_std"], "rows": ((z["up"], 0.0), (z["down"], math.pi))}
 
@@ -94,11 +96,11 @@ def test_one_command_import_agrees_with_the_six_position_reference(capsys, tmp_p
     doc = json.loads(stdout)
     prov = doc["provenance"]
     assert prov["source"]["name"] == YEI.name and prov["units"]["acc"] == "g"
-    assert prov["units"]["acc_to_m_s2"] == G and doc["units"]["provenance.units.g"] == "m/s²"
+    assert prov["units"]["acc_to_m_s2"] == G_UNIT and doc["units"]["provenance.units.g"] == "m/s²"
     segments = prov["poses"]["detection"]["segments"]
     assert len(segments) == 6
     # the detected flat/turned-over holds overlap the reference's rows and read like them
-    means = ref.pose_means(YEI, g_unit=G)["poses"]
+    means = ref.pose_means(YEI, g_unit=G_UNIT)["poses"]
     for name, k in (("z_up", 0), ("z_down", 2)):
         seg, pose = segments[k], means[name]
         assert seg["start"] < pose["stop"] and pose["start"] < seg["stop"]
@@ -127,7 +129,7 @@ def _yei_si() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     _, rows = ref.read_rows(YEI)
     table = np.array(rows)
     t_ns = table[:, spec.time_column].astype(np.int64) * 1000  # µs → ns, exact
-    return t_ns, table[:, list(spec.acc_columns)] * G, table[:, list(spec.gyro_columns)]
+    return t_ns, table[:, list(spec.acc_columns)] * G_UNIT, table[:, list(spec.gyro_columns)]
 
 
 def _text(path: Path, head: str, body: str) -> Path:
@@ -268,7 +270,7 @@ def test_noise_on_the_longest_shipped_static_stretch(capsys, tmp_path):
     within 4 half-widths of its 68 % interval; the bias instability and the random walk are
     not resolved (τ reaches 1.28 s) and are reported as upper bounds, null in the profile."""
     spec = ref.SPECS[NGIMU.name]
-    pose = ref.pose_means(NGIMU, g_unit=G)["poses"]["z_up"]
+    pose = ref.pose_means(NGIMU, g_unit=G_UNIT)["poses"]["z_up"]
     lines = NGIMU.read_bytes().splitlines(keepends=True)
     still = tmp_path / "still.csv"
     still.write_bytes(b"".join([lines[0], *lines[1 + pose["start"]:1 + pose["stop"]]]))

@@ -43,12 +43,13 @@ import pytest
 import scipy.io
 
 from calib.calibration.ls import fit_axis
+from calib.conventions import STANDARD_GRAVITY
 from calib.logs.gyro_angle import CLOSURE_BOUND_DEG
 from tests import logfixtures as fx
 from tests.cli import one_line_error, run
 from tests.reference import real_data as ref
 
-G = 9.8  # m/s²: the commands' default g (converts the unit g and makes A_r)
+G = 9.8  # m/s²: the commands' default local g (makes A_r; the unit g is 9.80665 m/s²)
 K = 4.0  # band, in stated std, for an estimate against its reference
 
 
@@ -157,7 +158,7 @@ def loop(capsys, log: LoopLog, d: Path) -> dict:
     # 7. design for that sensor: its per-sample noise variance (N²·fs) on each axis
     n = out["twin"]["datos"].shape[0]
     text, _ = _ok(capsys, "design", f"--noise-var={float(nv[0])!r},{float(nv[1])!r}", "--designs",
-                  "held,uniform", "--n", str(n), "--runs", "0", "--json")
+                  "held,uniform", "--count", str(n), "--runs", "0", "--json")
     out["design"] = json.loads(text)
     _units_present(out["design"])
     return out
@@ -205,7 +206,8 @@ def test_twin_loop_on_the_shipped_real_log(capsys, tmp_path, monkeypatch):
     assert "cannot identify scale_x" in line
     out = loop(capsys, log, tmp_path)
     prov = out["import"]["provenance"]
-    assert prov["source"]["name"] == log.path.name and prov["units"]["acc_to_m_s2"] == G
+    assert prov["source"]["name"] == log.path.name
+    assert prov["units"]["acc_to_m_s2"] == STANDARD_GRAVITY
     assert len(prov["poses"]["detection"]["segments"]) == 6
     # every sample kept, at the log's own times (independent reference: plain csv + numpy)
     spec = ref.SPECS[log.path.name]
@@ -230,7 +232,7 @@ def test_twin_loop_on_the_shipped_real_log(capsys, tmp_path, monkeypatch):
     assert all(bounds[a]["bias_instability"] > 0 for a in "xy")
     # the YEI's "Raw" accelerometer steps by 1/4096 g (data/real/README.md)
     for step in sensor["quantization_step"]:
-        assert abs(step - G / 4096) < 1e-9
+        assert abs(step - STANDARD_GRAVITY / 4096) < 1e-9
     # calibrate: the turns make both axes identifiable — the design [1, A_r] of each axis
     # (columns scaled to unit length) is well conditioned; from the holds alone x's is singular
     cal = out["calibrate"]

@@ -92,6 +92,21 @@ def faces_of(means: np.ndarray, source: str = "<memory>") -> np.ndarray:
     return u
 
 
+def on_faces(poses: Poses) -> bool:
+    """True when the holds of a 3-axis log make a six-face test: every hold within 20° of a
+    case axis, on faces that identify every parameter (:func:`fit_six_face` would not refuse
+    the design)."""
+    means = np.asarray(poses.means, dtype=float)
+    if means.ndim != 2 or means.shape[1] != 3 or len(means) < 4:
+        return False
+    try:
+        u = faces_of(means)
+    except DataError:
+        return False
+    x = np.column_stack([np.ones(len(u)), u])
+    return not any(_unidentified(x, a) for a in AXES_3)
+
+
 def _unidentified(x: np.ndarray, axis: str) -> list[str]:
     """Names of the row parameters of ``axis`` in the null space of the design ``x``."""
     _, s, vt = np.linalg.svd(x / np.linalg.norm(x, axis=0).clip(min=1e-300),
@@ -215,13 +230,13 @@ class SixFaceFit(ResultMixin):
         pct = f"{100 * self.level:g} %"
         lines = [f"six-face calibration of {self.source}: {len(self.faces)} holds on "
                  f"{len(set(self.faces))} faces ({', '.join(sorted(set(self.faces)))}), "
-                 f"g = {self.g:.6g} m/s² ({self.g_source})",
+                 f"g = {self.g:.7g} m/s² ({self.g_source})",
                  f"{'parameter':<18} {'estimate':>12} {'std':>10}   {pct} interval"]
         for name, v, s, (lo, hi) in zip(self.param_names, self.params, self.std, ci,
                                         strict=True):
             unit = "m/s²" if name.startswith("bias") else (
                 "rad" if name.startswith("misalignment") else "")
-            lines.append(f"{name:<18} {v:>12.6g} {s:>10.3g}   [{lo:.6g}, {hi:.6g}] {unit}")
+            lines.append(f"{name:<18} {v:>12.6g} {s:>10.3g}   [{lo:.6g}, {hi:.6g}] {unit}".rstrip())
         lines.append(self.repeatability_line())
         lof = ", ".join("n/a" if not np.isfinite(p) else f"{a} p = {p:.2g}"
                         for a, p in zip(AXES_3, self.lack_of_fit_p, strict=True))
@@ -411,4 +426,4 @@ def fit_six_face(poses: Poses, g: float = G, g_source: str = "given", level: flo
 
 
 __all__ = ["AXES_3", "FACE_COS", "LOF_ALPHA", "SixFaceFit", "face_name", "faces_of",
-           "fit_six_face"]
+           "fit_six_face", "on_faces"]

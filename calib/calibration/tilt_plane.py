@@ -233,7 +233,9 @@ def calibrate(
 
     Parameters
     ----------
-    ensayo : the run (θ in rad, readings in m/s²).
+    ensayo : the run (θ in rad, readings in m/s²), or a measured log
+        (:class:`calib.logs.reader.ImuLog`) that gives θ (its held poses, if any, are the
+        groups).
     noise_var : (2,) noise variances [σx², σy²] (m/s²)², a 2×2 covariance (WLS only), or
         None to estimate them from the residuals.
     method : "ols" — per axis, ``A_m - A_r = bias + scale·A_r`` (course method);
@@ -262,6 +264,15 @@ def calibrate(
     """
     if method not in ("ols", "wls"):
         raise ValueError(f"method must be 'ols' or 'wls', got {method!r}")
+    if not isinstance(ensayo, Ensayo) and hasattr(ensayo, "to_ensayo"):  # a measured log
+        if getattr(ensayo, "theta", None) is None:
+            raise TypeError(f"{ensayo.source}: calibrate needs the table angle θ, which this log "
+                            "does not give; for held poses without θ call "
+                            "calib.fit_multiposition(pose_statistics(log.acc, log.pose)) (or "
+                            "fit_multiposition3d / fit_six_face with the third axis)")
+        if groups is None and ensayo.pose is not None:
+            groups = ensayo.pose
+        ensayo = ensayo.to_ensayo()
     try:
         if groups is None:
             return _calibrate(ensayo, noise_var, method, g)

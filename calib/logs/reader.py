@@ -171,6 +171,17 @@ class ImuLog:
     def n(self) -> int:
         return int(self.acc.shape[0])
 
+    def __repr__(self) -> str:
+        """One short line: what the log holds (the arrays themselves are not printed)."""
+        axes = ",".join(self.provenance.get("axes") or ("x", "y"))
+        span = ("no t" if self.t is None or self.t.size == 0
+                else f"t {self.t[0]:g}–{self.t[-1]:g} s")
+        poses = "no poses" if self.pose is None else f"{len(set(self.pose[self.pose >= 0]))} poses"
+        return (f"ImuLog({self.source!r}: {self.n} samples, axes {axes}"
+                f"{' + normal' if self.acc_normal is not None else ''}, {span}, θ "
+                f"{'unknown' if self.theta is None else 'known'}, {poses}, gyro "
+                f"{'yes' if self.gyro is not None else 'no'})")
+
     def _course_as(self, kind: type, needed: str, why: str) -> Any:
         """The course file object this log was read as, when it is a ``kind`` (returned
         unchanged); else None, after refusing (DataError naming the source, ``why``) a log
@@ -377,7 +388,9 @@ def tilt_axis(axes: tuple[str, str]) -> str:
 
 
 def accel_factor(unit: str, g: float, sensitivity: float | None, where: str) -> float:
-    """m/s² per unit of the log: 1, g, g/1000 or g/sensitivity."""
+    """m/s² per unit of the log: 1, g, g/1000 or g/sensitivity, where the unit g is
+    ``g`` = :data:`calib.conventions.STANDARD_GRAVITY` (9.80665 m/s²) as the callers pass it —
+    never the local gravity (``--g``, ``--latitude``), which is what the sensor feels."""
     if unit == "m/s2":
         return 1.0
     if unit == "g":
@@ -455,7 +468,7 @@ def _angles(values, unit: str | None) -> np.ndarray:
 def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
     """Axes, units, checks, θ and poses: a :class:`RawLog` as an :class:`ImuLog` (module
     docstring)."""
-    from calib.conventions import G
+    from calib.conventions import STANDARD_GRAVITY, G
 
     g = G if options.g is None else float(options.g)
     where = str(path)
@@ -477,7 +490,8 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         cols = ", ".join(repr(raw.mapping.get(a, a)) for _, a in acc_cols)
         raise DataError(f"{path}: the unit of column(s) {cols} is neither stated in the header "
                         "nor known for this format; give --units m/s2|g|mg|counts")
-    factor = accel_factor(unit, g, options.sensitivity, where)
+    # the unit g is standard gravity whatever --g says (that is the local gravity felt)
+    factor = accel_factor(unit, STANDARD_GRAVITY, options.sensitivity, where)
     for _, axis in acc_cols:
         what = f"column '{raw.mapping.get(axis, axis)}'"
         _check_finite(raw, raw.acc[axis], what, path)
