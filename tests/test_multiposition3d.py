@@ -224,15 +224,15 @@ def test_round_trip(tmp_path):
 def test_acc_normal_is_the_third_axis_right_handed(tmp_path):
     path = tmp_path / "imu.csv"
     rows = ["t (s),ax (m/s2),ay (m/s2),az (m/s2)"]
-    rows += [f"{0.01 * i:.2f},{1 + 0.001 * i},{2 + 0.001 * i},{3 + 0.001 * i}"
-             for i in range(50)]
+    rows += [f"{0.01 * i:.2f},{2 + 0.001 * i},{4 + 0.001 * i},{8.5 + 0.001 * i}"
+             for i in range(50)]  # at rest: ‖a‖ ≈ 9.6 m/s², 1 g (calib.logs.physics)
     path.write_text("\n".join(rows) + "\n")
     log = read_log(path, LogOptions(detect=False))
-    assert np.array_equal(log.acc_normal, 3 + 0.001 * np.arange(50))
+    assert np.array_equal(log.acc_normal, 8.5 + 0.001 * np.arange(50))
     assert log.provenance["normal_axis"] == "az (m/s2)"
     # --axes -y,z: x̂' = −ŷ, ŷ' = ẑ, n = x̂' × ŷ' = −x̂
     log = read_log(path, LogOptions(axes=("-y", "z"), detect=False))
-    assert np.array_equal(log.acc_normal, -(1 + 0.001 * np.arange(50)))
+    assert np.array_equal(log.acc_normal, -(2 + 0.001 * np.arange(50)))
     assert log.provenance["normal_axis"] == "-ax (m/s2)"
     assert np.allclose(np.cross([0, -1, 0], [0, 0, 1]), [-1, 0, 0])
 

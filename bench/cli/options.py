@@ -82,7 +82,16 @@ GRAVITY = Deferred(_gravity)
 
 class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
     """Shows an option's default when it has one worth showing (not None, not a flag's False)
-    and its help text does not already state it."""
+    and its help text does not already state it; lines fit 100 columns on any terminal (as
+    every other line the commands print, :func:`bench.cli.output.fit_line`)."""
+
+    def __init__(self, prog: str, indent_increment: int = 2, max_help_position: int = 24,
+                 width: int | None = None) -> None:
+        import shutil
+
+        if width is None:  # argparse's own default, capped at the project's 100 columns
+            width = min(shutil.get_terminal_size().columns, 100) - 2
+        super().__init__(prog, indent_increment, max_help_position, min(width, 98))
 
     def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""

@@ -54,7 +54,9 @@ from typing import Any
 
 import numpy as np
 
+from calib.conventions import G
 from calib.input_rules import MAX_ABS_TIME, DataError, file_head
+from calib.logs.physics import check_one_g
 from calib.logs.table import ACCEL_UNITS, GYRO_UNITS, RawLog
 from calib.results import readonly
 
@@ -287,7 +289,8 @@ def read_log(path: str | os.PathLike, options: LogOptions | None = None,
     Raises
     ------
     DataError : a format not recognized, a missing column, units neither stated nor
-        recognized, non-monotone time, NaN/Inf; the message names the file, the line or
+        recognized, a log that does not read 1 g at rest (:mod:`calib.logs.physics`),
+        non-monotone time, NaN/Inf; the message names the file, the line or
         column and what to do.
     """
     from calib.files.course import read_acel, read_ensayo
@@ -310,7 +313,13 @@ def read_log(path: str | os.PathLike, options: LogOptions | None = None,
     if fmt == "course":
         return _read_course(path, options, read_ensayo, read_acel)
     raw = _read_raw(path, fmt, options)
-    return assemble(raw, options, path)
+    log = assemble(raw, options, path)
+    if expect != "acel":  # a vehicle run's readings are its motion, not gravity at rest
+        check_one_g(log.acc, log.acc_normal, log.pose, G if options.g is None else options.g,
+                    str(path), tilt_plane=expect == "ensayo" or log.theta is not None,
+                    units=(log.provenance.get("units") or {}).get("acc"),
+                    sensitivity=options.sensitivity)
+    return log
 
 
 def _course_pose(path: Path, n: int) -> np.ndarray:
@@ -468,7 +477,7 @@ def _angles(values, unit: str | None) -> np.ndarray:
 def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
     """Axes, units, checks, θ and poses: a :class:`RawLog` as an :class:`ImuLog` (module
     docstring)."""
-    from calib.conventions import STANDARD_GRAVITY, G
+    from calib.conventions import STANDARD_GRAVITY
 
     g = G if options.g is None else float(options.g)
     where = str(path)
