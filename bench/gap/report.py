@@ -382,7 +382,7 @@ class GapReport:
         for s in self.adequacy.get("sponges", []):
             out.append(f"{'named' if s['named'] else 'not named'}: {s['reason']}")
         units = effect_units()
-        out.append("effects named:" if d["effects"] else "effects named: none")
+        out.append("effects named (estimate ± 1 std):" if d["effects"] else "effects named: none")
         for e in d["effects"]:
             params = ", ".join(
                 f"{k} = " + format_estimate(v, e["std"].get(k, float("nan")), units.get(k, ""))
