@@ -140,3 +140,12 @@ def test_round_trip_and_summary_units():
     assert max(len(line) for line in text.splitlines()) <= 100
     fit6 = fit_six_face(_log(rng, 1, 50, 0.03, 0.0)[0], g=G)
     assert SixFaceFit.from_dict(fit6.to_dict()) == fit6
+
+
+def test_readings_without_scatter_are_refused_not_divided_by_zero():
+    from calib.calibration.multiposition import Poses
+    means = 9.81 * np.repeat(FACES, 2, axis=0)
+    ss = np.ones((12, 3))
+    ss[:, 1] = 0.0  # y never changes within a hold (coarse quantization)
+    with pytest.raises(DataError, match="axis y does not vary within any hold"):
+        fit_six_face(Poses(np.arange(12), np.full(12, 50), means, ss), g=G)

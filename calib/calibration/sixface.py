@@ -396,8 +396,13 @@ def fit_six_face(poses: Poses, g: float = G, g_source: str = "given", level: flo
     if np.any(n < 2):
         raise DataError(f"{source}: every hold needs at least 2 samples (the scatter within "
                         "it); got a hold of 1")
-    fits = [_fit_axis(x, means[:, k], n, float(np.sum(poses.ss[:, k])), face)
-            for k in range(3)]
+    ss_w = np.sum(np.asarray(poses.ss, dtype=float), axis=0)
+    if np.any(ss_w <= 0):
+        axis = AXES_3[int(np.argmin(ss_w))]
+        raise DataError(f"{source}: axis {axis} does not vary within any hold (no scatter to "
+                        "weigh the holds by): its readings are quantized coarser than their "
+                        "noise; the six-face test needs noise to estimate its intervals")
+    fits = [_fit_axis(x, means[:, k], n, float(ss_w[k]), face) for k in range(3)]
     k_matrix = np.array([f.row[1:] for f in fits])
     params, blocks, names = [], [], []
     for k, (a, f) in enumerate(zip(AXES_3, fits, strict=True)):
