@@ -375,3 +375,21 @@ def test_a_repeated_orientation_on_a_lattice_counts_once():
     with pytest.raises(NotIdentifiableError, match="only 6 distinct orientations"):
         fit_multiposition3d(poses, SIGMA2, quantization=[q, q, q])
     assert distinct_orientations(poses, SIGMA2) == 7
+
+
+def test_re_holds_of_one_orientation_are_not_counted_twice():
+    """13 holds of 6 faces (every face re-held, one three times, each re-hold tilted ≈ 2°) are
+    6 orientations: the 3-axis fit does not apply (it needs 7), whatever the sample count."""
+    from calib.calibration.multiposition import Poses, distinct_directions, three_axis_applies
+
+    rng = np.random.default_rng(3)
+    faces = np.repeat(np.array(SIX, dtype=float), [3, 2, 2, 2, 2, 2], axis=0)
+    tilt = np.radians(1.5) * rng.standard_normal(faces.shape)
+    means = G * (faces + tilt) / np.linalg.norm(faces + tilt, axis=1, keepdims=True)
+    poses = Poses(np.arange(13), np.full(13, 10_000), means, np.ones((13, 3)))
+    assert distinct_directions(means) == 6
+    why = three_axis_applies(poses, G)
+    assert why is not None and "only 6 distinct orientations" in why
+    spread = means.copy()
+    spread[0] = G * np.array([1, 1, 1]) / np.sqrt(3)  # a seventh orientation
+    assert distinct_directions(spread) == 7

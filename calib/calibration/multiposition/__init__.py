@@ -71,11 +71,13 @@ from calib.calibration.multiposition.planar import (
 from calib.calibration.multiposition.shared import (
     COND_REFUSE,
     COND_WARN,
+    SAME_DIRECTION_DEG,
     SAME_POSE_STD,
     SPAN_FRACTION,
     UNIDENTIFIED_STD,
     Poses,
     Sigma2Source,
+    distinct_directions,
     distinct_orientations,
     pose_statistics,
 )
@@ -91,10 +93,10 @@ from calib.calibration.multiposition.spatial import (
     three_axis_applies,
 )
 
-__all__ = ["COND_REFUSE", "COND_WARN", "PARAM_NAMES_3D", "PLANE_FRACTION", "POSES_NEEDED",
-           "POSES_NEEDED_3D", "SAME_POSE_STD", "SPAN_FRACTION", "SPHERE_EIG_MIN",
-           "UNIDENTIFIED_STD", "MethodComparison", "MultiPosition3DFit", "MultiPositionFit",
-           "OutOfPlaneWarning", "Poses", "compare_methods", "distinct_orientations",
+__all__ = ["AXES_3D", "COND_REFUSE", "COND_WARN", "PARAM_NAMES_3D", "PLANE_FRACTION",
+           "POSES_NEEDED", "POSES_NEEDED_3D", "SAME_DIRECTION_DEG", "SAME_POSE_STD",
+           "SPAN_FRACTION", "SPHERE_EIG_MIN", "UNIDENTIFIED_STD", "MethodComparison",
+           "MultiPosition3DFit", "MultiPositionFit", "OutOfPlaneWarning", "Poses",
+           "Sigma2Source", "compare_methods", "distinct_directions", "distinct_orientations",
            "fit_multiposition", "fit_multiposition3d", "in_plane", "multiposition_document",
-           "pose_statistics", "quantization_step", "quantization_steps",
-           "three_axis_applies", "AXES_3D", "Sigma2Source"]
+           "pose_statistics", "quantization_step", "quantization_steps", "three_axis_applies"]

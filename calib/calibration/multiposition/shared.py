@@ -327,6 +327,32 @@ def pose_statistics(acc: np.ndarray, pose: np.ndarray, source: str = "<memory>")
     return Poses(labels, n, means, ss)
 
 
+SAME_DIRECTION_DEG: float = 10.0
+"""Held poses whose mean readings point within this angle (deg) of each other are re-holds of
+one orientation: a hand or a fixture puts a face back within a few degrees, while the
+orientations of a multi-position test differ by tens of degrees."""
+
+
+def distinct_directions(means: np.ndarray, max_angle_deg: float = SAME_DIRECTION_DEG) -> int:
+    """Number of distinct orientations among pose means (P, k) m/s²: poses whose readings
+    point within ``max_angle_deg`` of each other are merged (single linkage). Unlike
+    :func:`distinct_orientations` (a noise test, which tells re-holds apart once the samples
+    are many) this is geometry: re-holding a face adds samples, not an orientation."""
+    u = np.asarray(means, dtype=float)
+    u = u / np.linalg.norm(u, axis=1, keepdims=True).clip(min=1e-300)
+    same = u @ u.T >= np.cos(np.radians(max_angle_deg))
+    parent = list(range(len(u)))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            i = parent[i]
+        return i
+
+    for i, j in zip(*np.nonzero(np.triu(same, 1)), strict=True):
+        parent[root(int(i))] = root(int(j))
+    return len({root(i) for i in range(len(u))})
+
+
 def distinct_orientations(poses: Poses, sigma2: np.ndarray, mean_var=0.0) -> int:
     """Number of distinct orientations among the poses: poses whose means differ by less
     than :data:`SAME_POSE_STD` std of their difference on every axis (``σ_a² (1/n_i +

@@ -10,10 +10,12 @@ import numpy as np
 
 from calib.calibration.ls import NotIdentifiableError
 from calib.calibration.multiposition.shared import (
+    SAME_DIRECTION_DEG,
     SPAN_FRACTION,
     PoseFit,
     PoseProblem,
     Poses,
+    distinct_directions,
 )
 from calib.conventions import JOINT_PARAM_NAMES, G
 from calib.logs.static_log import quantization_step as lattice_step
@@ -162,6 +164,11 @@ def three_axis_applies(poses: Poses, g: float = G) -> str | None:
     if poses.count < POSES_NEEDED_3D:
         return (f"{poses.count} held poses, the 3-axis fit needs at least {POSES_NEEDED_3D} "
                 "(6 unknowns, and a 7th pose to check the fit)")
+    distinct = distinct_directions(poses.means)
+    if distinct < POSES_NEEDED_3D:
+        return (f"{poses.count} held poses in only {distinct} distinct orientations (re-holds "
+                f"within {SAME_DIRECTION_DEG:g}° pooled), the 3-axis fit needs at least "
+                f"{POSES_NEEDED_3D}")
     span = float(np.ptp(poses.means[:, 2]))
     if span < SPAN_FRACTION * g:
         return (f"the poses hardly turn the normal axis (its pose means span {span:.3g} m/s², "
