@@ -29,19 +29,13 @@ FACE_ORDER = ("+x", "-x", "+y", "-y", "+z", "-z")
 FACE_COLORS = dict(zip(FACE_ORDER, plt.get_cmap("tab10").colors[:6], strict=True))
 
 
-def _face_vectors(faces: tuple[str, ...]) -> np.ndarray:
-    u = np.zeros((len(faces), 3))
-    for h, f in enumerate(faces):
-        u[h, "xyz".index(f[1])] = 1.0 if f[0] == "+" else -1.0
-    return u
-
-
 def sixface_figure(fit: SixFaceFit, level: float = 0.95) -> Figure:
     """The figure of the module docstring for ``fit``; every bar and ± at ``level``."""
     order = sorted(range(len(fit.faces)), key=lambda h: (FACE_ORDER.index(fit.faces[h]), h))
-    u = _face_vectors(fit.faces)
+    from calib.calibration.sixface import face_vectors
+
+    u = face_vectors(fit.faces)
     g = fit.g
-    model = fit.residuals * 0.0
     ci = fit.conf_int(level)
     fig, axes = plt.subplots(2, 3, figsize=(14.5, 7.0), sharex=True)
     xs = np.arange(len(order))

@@ -72,6 +72,14 @@ def face_name(u: np.ndarray) -> str:
     return ("+" if u[k] > 0 else "-") + AXES_3[k]
 
 
+def face_vectors(faces: tuple[str, ...]) -> np.ndarray:
+    """The inverse of :func:`face_name`: (H, 3) unit vectors ``±e_k`` of faces ``"+x"`` …"""
+    u = np.zeros((len(faces), 3))
+    for h, f in enumerate(faces):
+        u[h, AXES_3.index(f[1])] = 1.0 if f[0] == "+" else -1.0
+    return u
+
+
 def faces_of(means: np.ndarray, source: str = "<memory>") -> np.ndarray:
     """The face ``u_h = ±e_k`` (H, 3) of each hold from its mean reading ``means`` (H, 3) m/s²:
     the axis with the largest |mean| and its sign; DataError for a hold more than 20° from
@@ -104,24 +112,26 @@ def on_faces(poses: Poses) -> bool:
     except DataError:
         return False
     x = np.column_stack([np.ones(len(u)), u])
-    return not any(_unidentified(x, a) for a in AXES_3)
+    return not _unidentified(x)
 
 
-def _unidentified(x: np.ndarray, axis: str) -> list[str]:
-    """Names of the row parameters of ``axis`` in the null space of the design ``x``."""
+def _unidentified(x: np.ndarray) -> list[str]:
+    """Names of the parameters the faces cannot identify: every row shares the design ``x``
+    (H, 4) = ``[1, g·u_h]``, so a column in its null space leaves that parameter free on each
+    axis. Empty when ``x`` has full rank (which needs at least 4 distinct faces)."""
     _, s, vt = np.linalg.svd(x / np.linalg.norm(x, axis=0).clip(min=1e-300),
                              full_matrices=True)
     rank = int(np.sum(s > s[0] * 1e-10)) if s.size else 0
-    null = vt[rank:]
-    involved = np.flatnonzero(np.any(np.abs(null) > 1e-8, axis=0))
+    free = np.flatnonzero(np.any(np.abs(vt[rank:]) > 1e-8, axis=0))
     out = []
-    for j in involved:
-        if j == 0:
-            out.append(f"bias_{axis}")
-        elif AXES_3[j - 1] == axis:
-            out.append(f"scale_{axis}")
-        else:
-            out.append(f"misalignment_{axis}{AXES_3[j - 1]}")
+    for axis in AXES_3:
+        for j in free:
+            if j == 0:
+                out.append(f"bias_{axis}")
+            elif AXES_3[j - 1] == axis:
+                out.append(f"scale_{axis}")
+            else:
+                out.append(f"misalignment_{axis}{AXES_3[j - 1]}")
     return out
 
 
@@ -386,12 +396,11 @@ def fit_six_face(poses: Poses, g: float = G, g_source: str = "given", level: flo
     face = np.array([AXES_3.index(f[1]) * 2 + (f[0] == "-") for f in names_h])
     x = np.column_stack([np.ones(len(u)), g * u])
     missing = [f"{s}{a}" for a in AXES_3 for s in "+-" if f"{s}{a}" not in names_h]
-    bad = [name for a in AXES_3 for name in _unidentified(x, a)]
-    if bad or len(np.unique(face)) < 4:
+    bad = _unidentified(x)
+    if bad:
         raise NotIdentifiableError(
             f"{source}: the faces held ({', '.join(sorted(set(names_h)))}) cannot identify "
-            f"{', '.join(bad) or 'the 4 parameters of each axis (fewer than 4 faces)'}; "
-            f"hold the case also on {', '.join(missing) or 'more faces'}")
+            f"{', '.join(bad)}; hold the case also on {', '.join(missing) or 'more faces'}")
     n = np.asarray(poses.n, dtype=int)
     if np.any(n < 2):
         raise DataError(f"{source}: every hold needs at least 2 samples (the scatter within "
@@ -430,5 +439,5 @@ def fit_six_face(poses: Poses, g: float = G, g_source: str = "given", level: flo
         level=level, source=source)
 
 
-__all__ = ["AXES_3", "FACE_COS", "LOF_ALPHA", "SixFaceFit", "face_name", "faces_of",
+__all__ = ["AXES_3", "FACE_COS", "LOF_ALPHA", "SixFaceFit", "face_name", "face_vectors", "faces_of",
            "fit_six_face", "on_faces"]

@@ -54,7 +54,7 @@ from typing import Any
 
 import numpy as np
 
-from calib.conventions import G
+from calib.conventions import STANDARD_GRAVITY, G
 from calib.input_rules import MAX_ABS_TIME, DataError, file_head
 from calib.logs.physics import check_one_g
 from calib.logs.table import ACCEL_UNITS, GYRO_UNITS, RawLog
@@ -477,8 +477,6 @@ def _angles(values, unit: str | None) -> np.ndarray:
 def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
     """Axes, units, checks, θ and poses: a :class:`RawLog` as an :class:`ImuLog` (module
     docstring)."""
-    from calib.conventions import STANDARD_GRAVITY
-
     g = G if options.g is None else float(options.g)
     where = str(path)
     # the two tilt-plane axes, signed
