@@ -42,7 +42,7 @@ axes is not in the model and shows as lack of fit.
 Three axes (:func:`fit_multiposition3d`): a 3-axis IMU held in arbitrary orientations (a
 phone, a wrist sensor) — the log's third axis :attr:`calib.logs.reader.ImuLog.acc_normal` — gives
 ``‖(m̄_i − b) ⊘ (1 + s)‖ = g`` on the sphere, each pose's gravity direction a nuisance (two
-angles), bias and scale of all three axes from at least :data:`POSES_NEEDED_3D` = 7 poses
+angles), bias and scale of all three axes from at least :data:`POSES_NEEDED_3D` = 8 poses
 whose directions span the sphere; quantized readings (raw counts) add ``q²/12`` to each pose
 mean's variance. Its first four parameters and their 4×4 block are the planar result's, so it
 gives the same :class:`calib.calibration.tilt_plane.Calibration`.
