@@ -146,6 +146,11 @@ class ImuLog:
         the log has only the two axes (course files). The 3-axis multi-position calibration
         (:func:`calib.calibration.multiposition.fit_multiposition3d`) uses it; the provenance's
         ``normal_axis`` names the column.
+    acc_s : (N, 3) float, m/s², the log's own x, y, z accelerometer axes in the sensor frame
+        (as the log labels them: not signed or reordered by ``--axes``), or None when the log
+        has fewer than three. The six-face test and the noise of every axis read these.
+    gyro_s : (N, 3) float, rad/s, the log's own x, y, z gyro axes (sensor frame), or None when
+        the log has no three gyro axes of stated unit.
     source : str — the file name, for messages.
     provenance : dict — source name and sha256, format, mapping, units, segments (JSON-able).
     """
@@ -156,6 +161,8 @@ class ImuLog:
     pose: np.ndarray | None = None
     gyro: np.ndarray | None = None
     acc_normal: np.ndarray | None = None
+    acc_s: np.ndarray | None = None
+    gyro_s: np.ndarray | None = None
     source: str = "<memory>"
     provenance: dict[str, Any] = field(default_factory=dict)
     course: Any = field(default=None, repr=False, compare=False)
@@ -165,7 +172,8 @@ class ImuLog:
 
     def __post_init__(self) -> None:
         for name, dtype in (("acc", float), ("t", float), ("theta", float), ("pose", int),
-                            ("gyro", float), ("acc_normal", float)):
+                            ("gyro", float), ("acc_normal", float), ("acc_s", float),
+                            ("gyro_s", float)):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, readonly(getattr(self, name), dtype))
 
@@ -178,11 +186,14 @@ class ImuLog:
         axes = ",".join(self.provenance.get("axes") or ("x", "y"))
         span = ("no t" if self.t is None or self.t.size == 0
                 else f"t {self.t[0]:g}–{self.t[-1]:g} s")
-        poses = "no poses" if self.pose is None else f"{len(set(self.pose[self.pose >= 0]))} poses"
+        count = 0 if self.pose is None else len(set(self.pose[self.pose >= 0]))
+        poses = "no poses" if self.pose is None else f"{count} pose{'' if count == 1 else 's'}"
+        gyro = ("x, y, z" if self.gyro_s is not None
+                else "tilt axis" if self.gyro is not None else "none")
         return (f"ImuLog({self.source!r}: {self.n} samples, axes {axes}"
-                f"{' + normal' if self.acc_normal is not None else ''}, {span}, θ "
-                f"{'unknown' if self.theta is None else 'known'}, {poses}, gyro "
-                f"{'yes' if self.gyro is not None else 'no'})")
+                f"{' + normal' if self.acc_normal is not None else ''}"
+                f"{' (3-axis accel)' if self.acc_s is not None else ''}, {span}, θ "
+                f"{'unknown' if self.theta is None else 'known'}, {poses}, gyro {gyro})")
 
     def _course_as(self, kind: type, needed: str, why: str) -> Any:
         """The course file object this log was read as, when it is a ``kind`` (returned
@@ -519,6 +530,11 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         sign = -1.0 if normal_spec.startswith("-") else 1.0
         acc_normal = sign * raw.acc[normal_axis] * factor
         normal_from = f"{'-' if sign < 0 else ''}{raw.mapping.get(normal_axis, normal_axis)}"
+    acc_s = None
+    if all(k in raw.acc for k in "xyz"):
+        for k in "xyz":
+            _check_finite(raw, raw.acc[k], f"column '{raw.mapping.get(k, k)}'", path)
+        acc_s = np.column_stack([raw.acc[k] * factor for k in "xyz"])
     n = acc.shape[0]
     if n < 3:
         raise DataError(f"{path}: only {n} samples; at least 3 are needed")
@@ -528,7 +544,7 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         _check_finite(raw, t, f"time column '{raw.mapping.get('t', 't')}'", path)
         gaps = _check_time(raw, t, path, options.allow_gaps)
     # gyro about the tilt axis
-    gyro, gyro_from = None, None
+    gyro, gyro_from, gyro_s = None, None, None
     g_unit = options.gyro_unit or raw.gyro_unit
     gyro_note = None
     if raw.gyro and g_unit not in GYRO_UNITS:
@@ -549,6 +565,11 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
                 gyro_from = f"{'-' if sign < 0 else ''}{raw.mapping.get('gyro_' + k, k)}"
         if gyro is not None:
             _check_finite(raw, gyro, f"gyro '{gyro_from}'", path)
+        if all(k in raw.gyro for k in "xyz"):
+            for k in "xyz":
+                _check_finite(raw, raw.gyro[k], f"gyro '{raw.mapping.get('gyro_' + k, k)}'",
+                              path)
+            gyro_s = np.column_stack([raw.gyro[k] * gfac for k in "xyz"])
     # θ
     theta = None
     theta_unit = None
@@ -569,7 +590,8 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         "normal_axis": normal_from,
         "units": {"acc": unit, "acc_to_m_s2": factor, "g": g,
                   "sensitivity_counts_per_g": options.sensitivity,
-                  "gyro": g_unit if gyro is not None else None, "gyro_from": gyro_from,
+                  "gyro": g_unit if gyro is not None or gyro_s is not None else None,
+                  "gyro_from": gyro_from,
                   "gyro_note": gyro_note,
                   "theta": None if theta is None else (theta_unit or "rad (degrees check)"),
                   "t": "s"},
@@ -579,17 +601,19 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
     }
     if raw.fmt == "mat" and options.units is None:
         prov["units"]["acc_note"] = "the course variable's unit (m/s²)"
-    log = ImuLog(acc=acc, t=t, theta=theta, gyro=gyro, acc_normal=acc_normal, source=where,
-                 provenance=prov)
+    log = ImuLog(acc=acc, t=t, theta=theta, gyro=gyro, acc_normal=acc_normal, acc_s=acc_s,
+                 gyro_s=gyro_s, source=where, provenance=prov)
     return _poses(log, raw, options, path)
 
 
 def _sub(log: ImuLog, keep: np.ndarray, theta: np.ndarray, pose: np.ndarray,
          prov: dict) -> ImuLog:
-    return ImuLog(acc=log.acc[keep], t=None if log.t is None else log.t[keep], theta=theta,
-                  pose=pose, gyro=None if log.gyro is None else log.gyro[keep],
-                  acc_normal=None if log.acc_normal is None else log.acc_normal[keep],
-                  source=log.source, provenance=prov)
+    def cut(a: np.ndarray | None) -> np.ndarray | None:
+        return None if a is None else a[keep]
+
+    return replace(log, acc=log.acc[keep], t=cut(log.t), theta=theta, pose=pose,
+                   gyro=cut(log.gyro), acc_normal=cut(log.acc_normal), acc_s=cut(log.acc_s),
+                   gyro_s=cut(log.gyro_s), provenance=prov)
 
 
 def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
@@ -607,8 +631,7 @@ def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         pose = None
         if raw.label is not None:
             pose, _ = _labels(raw.label)
-        return ImuLog(acc=log.acc, t=log.t, theta=log.theta, pose=pose, gyro=log.gyro,
-                      acc_normal=log.acc_normal, source=log.source, provenance=prov)
+        return replace(log, pose=pose, provenance=prov)
     if raw.label is not None:
         pose, values = _labels(raw.label)
         prov["poses"] = {"source": f"label column '{raw.mapping.get('label', 'label')}'",
@@ -646,8 +669,7 @@ def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         if options.theta_source == "gyro":
             raise DataError(f"{path}: --theta-source gyro anchors the integrated gyro to the "
                             "held poses' angles: give them (--poses … or --label-angles …)")
-        return ImuLog(acc=log.acc, t=log.t, pose=pose, gyro=log.gyro,
-                      acc_normal=log.acc_normal, source=log.source, provenance=prov)
+        return replace(log, pose=pose, provenance=prov)
     rad = _angles(angles, options.angle_unit)
     if options.theta_source == "gyro":
         return _theta_from_gyro(log, pose, rad, prov, options, path)
@@ -683,8 +705,7 @@ def _theta_from_gyro(log: ImuLog, pose: np.ndarray | None, rad: np.ndarray, prov
     prov["units"]["theta"] = "rad (integrated gyro)"
     prov["pose_angles_rad"] = rad.tolist()
     prov["samples"] = dict(prov["samples"], kept=log.n)
-    return ImuLog(acc=log.acc, t=log.t, theta=res.theta, pose=pose, gyro=log.gyro,
-                  acc_normal=log.acc_normal, source=log.source, provenance=prov)
+    return replace(log, theta=res.theta, pose=pose, provenance=prov)
 
 
 def _degrees_check(theta: np.ndarray, acc: np.ndarray, path: Path, what: str) -> None:
