@@ -59,7 +59,16 @@ def _cmd_gap(args: argparse.Namespace) -> int:
     if args.rate is not None:
         check_positive(args.rate, "--rate")
     # a course ensayo.mat is read as before; a measured log through the log options
-    ensayo = read_log_from_args(args, args.ensayo, expect="ensayo").to_ensayo()
+    log = read_log_from_args(args, args.ensayo, expect="ensayo")
+    if log.theta is None:  # a six-face log: its holds on faces in the tilt plane, θ per face
+        from calib.calibration.plane_faces import tilt_plane_faces
+
+        plane = tilt_plane_faces(log)
+        if plane is not None:
+            print(f"note: {args.ensayo}: {plane.provenance['held_samples_only']}",
+                  file=sys.stderr)
+            log = plane
+    ensayo = log.to_ensayo()
     nv = noise_var_from_args(args)
     if nv is None:  # held poses repeat θ: their scatter is the noise (pure error)
         from calib.calibration.lackoffit import groups_from, pure_error_variance
