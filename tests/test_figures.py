@@ -459,3 +459,13 @@ def test_fuse_plot_gets_the_smoothed_path_and_the_truth_beside_the_data(tmp_path
     true_path = seen["kwargs"]["true_path"]
     assert true_path is not None and np.asarray(true_path).shape[1] == 2
     assert_png(tmp_path / "f.png")
+
+
+def test_fit_quality_says_when_no_degree_of_freedom_is_left():
+    """A figure title never prints "nan" for χ²/dof: with no dof left it says so."""
+    from bench.figures.fit_quality import fit_quality
+
+    assert fit_quality(1.02345, 6) == "χ²/dof = 1.02 (dof 6)"
+    for chi2_dof, dof in ((float("nan"), 0), (0.0, 0), (float("inf"), 3)):
+        text = fit_quality(chi2_dof, dof)
+        assert "nan" not in text and "no degrees of freedom left" in text

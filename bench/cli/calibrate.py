@@ -164,9 +164,6 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
         if nv is not None and args.nv3 is None:
             raise OptionError("the 3-axis fit needs three noise variances, --noise-var "
                               "σx²,σy²,σn² (or none: estimated within the poses)")
-        if args.plot:
-            raise OptionError("--plot draws the planar multi-position fit; the 3-axis fit "
-                              "has no figure yet (drop --plot)")
         q = quantization_steps(acc3[pose >= 0])
         fit = warnings_to_stderr(lambda: fit_multiposition3d(
             poses3, args.nv3, args.g, quantization=q, source=args.ensayo))
@@ -187,7 +184,11 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
     check_finite({"fit": doc, "calibration": cal.to_dict()}, "the estimates")
     if args.save:
         _save(args, cal)
-    if args.plot:
+    if args.plot and three:
+        from bench.figures.multiposition3d import save_multiposition3d_plot
+
+        save_multiposition3d_plot(args.plot, fit, force=args.force, level=args.level)
+    elif args.plot:
         from bench.figures.multiposition import save_multiposition_plot
 
         save_multiposition_plot(args.plot, fit, force=args.force, level=args.level)

@@ -27,6 +27,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
+from bench.figures.fit_quality import fit_quality
 from bench.figures.parameters import true_params
 from bench.figures.save import save_figure
 from calib.conventions import AXES, reference_accel
@@ -70,6 +71,11 @@ def _estimates_box(ax, f, axis: str, tp: Mapping | None, level: float) -> None:
     ax.text(0.98, 0.03, "\n".join(lines), transform=ax.transAxes, ha="right",
             va="bottom", fontsize=8, family="monospace", zorder=Z_TEXT,
             bbox={"facecolor": "white", "alpha": 0.9, "edgecolor": "0.7"})
+
+
+def _quality(fit) -> str:
+    """χ²/dof of one axis's fit, or that no degree of freedom is left."""
+    return fit_quality(fit.chi2_dof, fit.dof)
 
 
 def _pct(level: float) -> str:
@@ -194,7 +200,7 @@ def calibration_axis_figure(cal: Calibration, ensayo: Ensayo, axis: str,
     fig = plt.figure(figsize=(12, 7.5), constrained_layout=True)
     _axis_panels(fig, cal, ensayo, axis, truth, level)
     fig.suptitle(title or f"Calibration, axis {AXIS_LABEL[axis]}: A_m − A_r = scale·A_r + bias"
-                 f" — χ²/dof = {cal.fits[axis].chi2_dof:.3f}; bands at {_pct(level)}")
+                 f" — {_quality(cal.fits[axis])}; bands at {_pct(level)}")
     return fig
 
 
@@ -208,7 +214,7 @@ def calibration_figure(cal: Calibration, ensayo: Ensayo, truth: Mapping | None =
     for k, a in enumerate(AXES):
         _axis_panels(subs[k], cal, ensayo, a, truth, level)
         subs[k].suptitle(f"axis {AXIS_LABEL[a]}: A_m − A_r = scale·A_r + bias — "
-                         f"χ²/dof = {cal.fits[a].chi2_dof:.3f}; bands at {_pct(level)}")
+                         f"{_quality(cal.fits[a])}; bands at {_pct(level)}")
     return fig
 
 

@@ -21,6 +21,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse
 
+from bench.figures.fit_quality import fit_quality
 from bench.figures.save import save_figure
 
 if TYPE_CHECKING:
@@ -88,7 +89,7 @@ def multiposition_figure(fit: MultiPositionFit, level: float = 0.95) -> Figure:
     lof = fit.lack_of_fit
     test = "" if lof is None else (
         f"; lack of fit {lof.statistic} = {lof.value:.3g}, p = {lof.p_value:.2g}")
-    rx.set_title(f"residuals per pose: χ²/dof = {fit.chi2_dof:.3g} (dof {fit.dof}){test}",
+    rx.set_title(f"residuals per pose: {fit_quality(fit.chi2_dof, fit.dof)}{test}",
                  fontsize=9)
     rx.grid(True, alpha=0.3)
     rx.legend(fontsize=7)
