@@ -3,12 +3,15 @@ reference values of tests/reference/real_data.py are sane.
 
 What is checked, file by file: listed in the README's checksum table (and nothing unlisted
 shipped), sha256, row and byte counts as listed; every row parses with plain ``csv`` to
-finite numbers with the header's number of cells; time strictly increasing without gaps; the
-acceleration columns the reference reads are the ones the header names. Then the reference
-numbers: each held pose is held (small scatter, gyro quiet), its norm is g within 5 % and its
-vertical axis carries it; the turn-over really turns the sensor over; the six-position bias
-and scale are plausible for a MEMS part (|scale| < 0.1, |bias| < 1 m/s²). The reference
-formulas themselves are checked on a synthetic file with known bias and scale.
+finite numbers with the header's number of cells; time strictly increasing without gaps (a
+log without times: its sample counter steps by exactly 1); the acceleration columns the
+reference reads are the ones the header names; each licence copy is its notice. Then the
+reference numbers: each held pose is held (small scatter, gyro quiet), its norm is g within
+the log's tolerance (5 % unless the README says why not) and its vertical axis carries it; the
+turn-over really turns the sensor over; the six-position bias and scale are plausible for a
+MEMS part (|scale| < 0.1, |bias| < 1 m/s²). The imucal session's poses are the source's own
+annotation, byte for byte the shipped JSON. The reference formulas themselves (six-position,
+six-face least squares with its stds) are checked on synthetic files with known values.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import ast
 import csv
 import gzip
 import hashlib
+import json
 import math
 import re
 from pathlib import Path
@@ -30,8 +34,10 @@ REAL = ref.REAL_DIR
 README = REAL / "README.md"
 G = 9.80665  # m/s²: the checks below compare with standard gravity; local g differs < 0.3 %
 LOGS = ("yei-3space-z-flip.csv", "ngimu-sensors.csv", "pololu-minimu9-x-flip.csv",
-        "axivity-ax3-wrist-night.csv.gz")
+        "axivity-ax3-wrist-night.csv.gz", "imucal-ferraris-session.csv.gz")
 AX3 = "axivity-ax3-wrist-night.csv.gz"
+IMUCAL = "imucal-ferraris-session.csv.gz"
+IMUCAL_LIST = "imucal-ferraris-session-list.json"
 
 
 def _checksums() -> dict[str, tuple[str, int, int]]:
@@ -90,11 +96,27 @@ def test_readme_tilted_pose_readings_are_the_reference_means():
             assert abs(value - poses[pose]["mean"][axis] / ref.G_UNIT) <= 0.005 + 1e-9, (pose, axis)
 
 
-def test_licence_copy_is_the_bsd_3_clause_notice():
-    text = (REAL / "LICENSE-scikit-kinematics").read_text()
-    assert "Copyright (C) 2016 Thomas Haslwanter" in text
-    assert "Redistribution and use in source and binary forms" in text
-    assert "Redistributions of source code must retain the above copyright" in text
+BSD_3 = ("Redistribution and use in source and binary forms",
+         "Redistributions of source code must retain the above copyright")
+MIT = ("MIT License",
+       "Permission is hereby granted, free of charge, to any person obtaining a copy",
+       "The above copyright notice and this permission notice shall be included in all\n"
+       "copies or substantial portions of the Software.")
+
+
+@pytest.mark.parametrize(("name", "copyright_line", "terms"), [
+    ("LICENSE-scikit-kinematics", "Copyright (C) 2016 Thomas Haslwanter", BSD_3),
+    ("LICENSE-labda-accelerometers", "Copyright (c) 2025, Josef Heidler", BSD_3),
+    ("LICENSE-imucal", "Copyright (c) 2018 MaD-Lab Erlangen", MIT),
+])
+def test_licence_copy_is_its_notice(name, copyright_line, terms):
+    """Each licence file is the notice its licence requires to travel with the copies (BSD
+    3-Clause, MIT), and the README names it for its files."""
+    text = (REAL / name).read_text()
+    assert copyright_line in text
+    for words in terms:
+        assert words in text
+    assert f"[`{name}`]({name})" in README.read_text()
 
 
 @pytest.mark.parametrize("name", LOGS)
@@ -109,7 +131,10 @@ def test_log_parses_with_plain_csv(name):
     assert np.isfinite(table).all()
     for column, expected in zip(spec.acc_columns, spec.acc_names, strict=True):
         assert expected in header[-1][column]
-    t = table[:, spec.time_column] * spec.time_to_s
+    if spec.time_column is None:  # a sample counter instead: no sample missing or repeated
+        counter = table[:, spec.sample_column]
+        assert counter[0] == 0 and (np.diff(counter) == 1).all()
+    t = ref.times(spec, table)
     step = np.diff(t)
     assert (step > 0).all(), "time must increase strictly"
     assert step.max() < 1.5 * np.median(step), "a gap in the log"
@@ -160,6 +185,122 @@ def test_six_position_values_are_plausible(name, axis, up, down):
     assert abs(fit["scale"]) < 0.1 and abs(fit["bias"]) < 1.0
     assert 0 < fit["bias_std"] < 0.01
     assert fit["scale_std"] == pytest.approx(fit["bias_std"] / G)
+
+
+def test_imucal_poses_are_the_source_annotation():
+    """The six face holds of the imucal session are the source's own annotation, the shipped
+    JSON: imucal takes ``data.iloc[start:end]`` (end exclusive, rows counted from 0 after the
+    header, n_samples = row), the reference ``[start, stop)``. x_p: the x axis up, reading +g
+    (imucal's FerrarisCalibration docstring: "x-acc measures +1g"); x_a: x down, −g. The three
+    rotations (x_rot, y_rot, z_rot) are not held poses and are not used."""
+    listed = json.loads((REAL / IMUCAL_LIST).read_text())
+    assert set(listed) == {"x_p", "x_a", "y_p", "y_a", "z_p", "z_a", "x_rot", "y_rot", "z_rot"}
+    spec = ref.SPECS[IMUCAL]
+    assert {p.name: (p.start, p.stop) for p in spec.poses} == {
+        k: (v["start"], v["end"]) for k, v in listed.items() if not k.endswith("_rot")}
+    for pose in spec.poses:
+        assert (pose.axis, pose.sign) == (pose.name[0], +1 if pose.name[2] == "p" else -1)
+    assert "annotation" in spec.pose_source
+
+
+def test_imucal_readings_are_whole_steps_of_16_bit_counts():
+    """The README's observation: every acceleration is a whole multiple of 9.81/2048 m/s²
+    (16 bit at ±16 g, converted with g = 9.81) and every gyro reading of 2000/32768 deg/s
+    (16 bit at ±2000 deg/s), none at a 16-bit limit."""
+    _, rows = ref.read_rows(REAL / IMUCAL)
+    table = np.array(rows)
+    for columns, step in (((4, 5, 6), 9.81 / 2048), ((1, 2, 3), 2000 / 32768)):
+        counts = table[:, list(columns)] / step
+        assert np.abs(counts - np.round(counts)).max() < 1e-6
+        assert np.abs(counts).max() < 32767
+
+
+def test_imucal_six_position_covers_all_three_axes():
+    result = ref.six_position(REAL / IMUCAL, G)
+    assert set(result["axes"]) == {"x", "y", "z"}
+    for axis, fit in result["axes"].items():
+        assert (fit["up"], fit["down"]) == (f"{axis}_p", f"{axis}_a")
+        assert abs(fit["scale"]) < 0.1 and abs(fit["bias"]) < 1.0
+
+
+def test_six_face_scale_is_the_six_position_scale():
+    """Six faces held once each: the least-squares K_aa is (m_up − m_down)/(2g), so its scale
+    is the six-position scale; its bias is the mean of the six readings (module docstring)."""
+    lsq = ref.six_face(REAL / IMUCAL, G)
+    two = ref.six_position(REAL / IMUCAL, G)["axes"]
+    params = dict(zip(lsq["param_names"], lsq["params"], strict=True))
+    assert lsq["faces"] == ["x_p", "x_a", "y_p", "y_a", "z_p", "z_a"] and lsq["dof"] == 2
+    poses = ref.pose_means(REAL / IMUCAL)["poses"]
+    for axis in "xyz":
+        assert params[f"scale_{axis}"] == pytest.approx(two[axis]["scale"], abs=1e-12)
+        mean = np.mean([p["mean"][axis] for p in poses.values()])
+        assert params[f"bias_{axis}"] == pytest.approx(mean, abs=1e-12)
+
+
+def _synthetic_imucal(path: Path, b: np.ndarray, k: np.ndarray, g: float,
+                      shift: dict[tuple[str, int], float]) -> None:
+    """A gzip CSV laid out like the imucal session: in each face pose the readings
+    ``b + g·K·u + shift`` (``shift[(pose, axis index)]`` m/s², default 0) with a ±0.02 m/s²
+    alternation that sums to zero over the pose (the last sample of an odd pose is left out of
+    it), zeros elsewhere."""
+    spec = ref.SPECS[IMUCAL]
+    n = max(p.stop for p in spec.poses) + 10
+    acc = np.zeros((n, 3))
+    for pose in spec.poses:
+        u = np.zeros(3)
+        u["xyz".index(pose.axis)] = pose.sign
+        m = b + g * k @ u + np.array([shift.get((pose.name, a), 0.0) for a in range(3)])
+        length = pose.stop - pose.start
+        wiggle = 0.02 * (-1.0) ** np.arange(length)
+        if length % 2:
+            wiggle[-1] = 0.0
+        acc[pose.start:pose.stop] = m + wiggle[:, None] * np.array([1.0, -1.0, 1.0])
+    lines = ["n_samples,gyr_x,gyr_y,gyr_z,acc_x,acc_y,acc_z"]
+    lines += [f"{i},0,0,0," + ",".join(repr(float(v)) for v in acc[i]) for i in range(n)]
+    path.write_bytes(gzip.compress(("\n".join(lines) + "\n").encode()))
+
+
+def test_six_face_formulas_on_known_bias_scale_and_misalignment(tmp_path):
+    """Exact readings: the fit returns b, K_aa − 1 and K_ab/K_aa to 1e-12 with zero residual
+    scatter. Then both readings of axis z on the x faces are shifted by δ (a hold that read
+    differently): b_z moves by δ/3, the residuals are +2δ/3 on the x pair and −δ/3 on the
+    others, σ̂_z² = RSS/2 = 2δ²/3, std(b_z) = σ̂_z/√6 = δ/3; K is untouched."""
+    g = 9.8
+    b = np.array([0.5, -0.6, 0.4])
+    k = np.array([[0.997, -0.013, -0.008], [0.007, 1.004, 0.003], [0.013, 0.002, 1.025]])
+    path = tmp_path / IMUCAL
+    _synthetic_imucal(path, b, k, g, {})
+    fit = ref.six_face(path, g)
+    params = dict(zip(fit["param_names"], fit["params"], strict=True))
+    for a, axis in enumerate("xyz"):
+        assert params[f"bias_{axis}"] == pytest.approx(b[a], abs=1e-12)
+        assert params[f"scale_{axis}"] == pytest.approx(k[a, a] - 1, abs=1e-12)
+        for j in (j for j in range(3) if j != a):
+            assert params[f"misalignment_{axis}{'xyz'[j]}"] == pytest.approx(
+                k[a, j] / k[a, a], abs=1e-12)
+        assert fit["hold_sigma"][axis] < 1e-12
+    # within-pose stds: the ±0.02 alternation, s²/n per pose mean, through the OLS weights
+    assert 0 < max(fit["std_within"]) < 0.02
+
+    delta = 0.03
+    _synthetic_imucal(path, b, k, g, {("x_p", 2): delta, ("x_a", 2): delta})
+    shifted = ref.six_face(path, g)
+    p2 = dict(zip(shifted["param_names"], shifted["params"], strict=True))
+    s2 = dict(zip(shifted["param_names"], shifted["std"], strict=True))
+    assert p2["bias_z"] == pytest.approx(b[2] + delta / 3, abs=1e-12)
+    assert s2["bias_z"] == pytest.approx(delta / 3, rel=1e-9)
+    assert shifted["hold_sigma"]["z"] == pytest.approx(delta * math.sqrt(2 / 3), rel=1e-9)
+    for name in ("scale_z", "misalignment_zx", "misalignment_zy", "bias_x", "bias_y"):
+        assert p2[name] == pytest.approx(params[name], abs=1e-12), name
+    resid = np.array(shifted["residuals"])[:, 2]
+    np.testing.assert_allclose(resid, [2 * delta / 3] * 2 + [-delta / 3] * 4, atol=1e-12)
+
+
+def test_six_face_needs_faces_along_every_axis():
+    """The YEI log has z poses only: bias, scale and misalignment of three axes cannot be
+    fitted from them, and the reference says so instead of returning numbers."""
+    with pytest.raises(ValueError, match="do not identify"):
+        ref.six_face(REAL / "yei-3space-z-flip.csv", G)
 
 
 @pytest.mark.parametrize("name", ["ngimu-sensors.csv", AX3])
