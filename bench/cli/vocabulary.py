@@ -273,6 +273,9 @@ def add_option(p, name: str, *, old: str | None = None, **kwargs: Any) -> argpar
         raise KeyError(f"{name}: not in bench.cli.vocabulary.VOCABULARY; declare its meaning "
                        "and unit there first") from None
     kwargs.setdefault("help", term.help)
+    if (term.unit in PATH_UNITS and not term.flag
+            and kwargs.get("action") in (None, "store", "append")):
+        kwargs["type"] = _nonempty_path(kwargs.get("type"), name)
     if term.flag:
         kwargs.setdefault("action", "store_true")
     elif term.metavar is not None and kwargs.get("action") not in ("store_true", "store_false"):
@@ -285,6 +288,22 @@ def add_option(p, name: str, *, old: str | None = None, **kwargs: Any) -> argpar
                                default=argparse.SUPPRESS, help=argparse.SUPPRESS)
         alias.term = None
     return action
+
+
+PATH_UNITS = ("file", "folder", "path")
+"""Units of options that name a file or folder: an empty value is refused by the parser."""
+
+
+def _nonempty_path(convert: Any, name: str):
+    """An argparse ``type`` that refuses an empty or blank path (``--out ''`` would write into
+    the current folder) and then applies ``convert`` (e.g. ``Path``), if any."""
+    def parse(text: str) -> Any:
+        if not str(text).strip():
+            raise argparse.ArgumentTypeError("an empty path; give a file or folder name")
+        return text if convert is None else convert(text)
+
+    parse.__name__ = getattr(convert, "__name__", "path")  # argparse names the type in errors
+    return parse
 
 
 # ---------------------------------------------------------------- the table and its check

@@ -416,7 +416,9 @@ def _exchange(a: Path, b: Path) -> bool:
 
 
 def _carry_over(old: Path, new: Path, exclusive: set[str], rel: str = "") -> None:
-    """Hard-link (else copy) into ``new`` every entry of ``old`` that ``new`` does not have."""
+    """Hard-link (else copy) into ``new`` every entry of ``old`` that ``new`` does not have,
+    except the ``exclusive`` ones (relative paths, folders or files): those belong to the set,
+    so an old one the new set does not write goes with the old set."""
     for entry in os.scandir(old):
         if _ANY_TMP.match(entry.name):  # a killed writer's leftover: dropped with the old set
             continue
@@ -431,6 +433,8 @@ def _carry_over(old: Path, new: Path, exclusive: set[str], rel: str = "") -> Non
             elif not dst.is_dir() or dst.is_symlink():
                 continue
             _carry_over(Path(entry.path), dst, exclusive, r + "/")
+        elif r in exclusive:
+            continue
         elif not os.path.lexists(dst):
             if entry.is_symlink():
                 os.symlink(os.readlink(entry.path), dst)
@@ -486,7 +490,9 @@ def _commit_in_place(tmp: Path, real: Path, exclusive: set[str]) -> None:
     not): for a target that cannot be swapped (a mount point, the working directory)."""
     for rel in sorted(exclusive):
         old, new = real / rel, tmp / rel
-        if new.is_dir() and old.is_dir() and not old.is_symlink():
+        if not os.path.lexists(new) and os.path.lexists(old) and not old.is_dir():
+            _remove(old)  # an exclusive file the new set does not write
+        elif new.is_dir() and old.is_dir() and not old.is_symlink():
             for entry in os.listdir(old):
                 if not os.path.lexists(new / entry):
                     _remove(old / entry)
@@ -515,7 +521,10 @@ def atomic_dir(target: str | os.PathLike, force: bool = False, owned: Iterable[s
     force : replace the ``owned`` entries if they exist; else :class:`FileExistsError`
         (checked under the lock, before anything is written).
     owned : relative paths the set writes (the overwrite check).
-    exclusive : relative folders replaced whole: nothing of the old one is carried over.
+    exclusive : relative folders replaced whole (nothing of the old one is carried over) and
+        relative files that belong to the set: an old one the new set does not write is
+        removed, so the target never holds a mix of old and new (``tiltbench import`` over
+        an earlier import: a new ``acel.mat`` never sits beside an old ``ensayo.mat``).
     """
     shown = Path(target)
     real = Path(os.path.realpath(shown))

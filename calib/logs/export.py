@@ -17,7 +17,8 @@ no held poses or only one   ``acel.mat``: ``t`` M×1 s (uniform), ``Aerr`` M×2 
 plus ``provenance.json``: the reader's record (source name and sha256, format, column
 mapping, units and conversion, axes, detected segments and thresholds, gaps) with the tool
 version and :data:`calib.logs.reader.LOG_FORMAT_VERSION`. The set is written atomically: all files
-or none.
+or none, and as one set: with ``force`` over an earlier import, its course file of the other
+kind is removed with it (never an old ``ensayo.mat`` beside a new ``acel.mat``).
 
 ``acel.mat`` must be uniformly sampled (``calib.files.course.read_acel``); a log whose steps jitter
 (phones, USB loggers) is resampled by linear interpolation onto the grid ``t0 + k·dt``, ``dt``
@@ -126,7 +127,11 @@ def write_course_set(log, out: str | Path, force: bool = False, tool_version: st
     if name == "ensayo.mat" and "tita" not in variables:
         prov["theta"] = "unknown: ensayo.mat holds datos, t and pose labels, no tita"
     prov.update(extra or {})
-    with atomic_dir(out, force=force, owned=FILES) as tmp:
+    if str(out).strip() == "":
+        raise DataError("--out: an empty folder name; give the folder to write the set into")
+    # the set's files are exclusive: an earlier import's ensayo.mat does not survive beside a
+    # new acel.mat (nor the reverse), so the folder always holds one set and its provenance
+    with atomic_dir(out, force=force, owned=FILES, exclusive=FILES) as tmp:
         (tmp / name).write_bytes(mat_bytes(variables, prov["source"]["name"]))
         (tmp / "provenance.json").write_text(dumps(prov), encoding="utf-8")
     return [Path(out) / name, Path(out) / "provenance.json"], prov

@@ -1,0 +1,62 @@
+"""``tiltbench import`` writes one set: ``--out ''`` is refused (it would write into the
+current folder), and ``--force`` over an earlier import replaces the set as a whole — never a
+new ``acel.mat`` beside an old ``ensayo.mat`` with a provenance naming only the new log."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from tests.cli import run, unwrap
+from tests.reference.real_data import REAL_DIR
+
+YEI = (REAL_DIR / "yei-3space-z-flip.csv", "--units", "g", "--gyro-unit", "rad/s")  # 2 poses
+NGIMU = (REAL_DIR / "ngimu-sensors.csv",)  # one pose: a vehicle-style acel.mat
+
+
+@pytest.mark.parametrize("command", [("import", *NGIMU, "--out"),
+                                     ("calibrate", REAL_DIR / "ngimu-sensors.csv", "--save"),
+                                     ("calibrate", REAL_DIR / "ngimu-sensors.csv", "--plot")])
+@pytest.mark.parametrize("empty", ["", "  "])
+def test_an_empty_output_path_is_refused(capsys, tmp_path, monkeypatch, command, empty):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exit_:  # argparse refuses it while parsing
+        run(capsys, *command, empty)
+    assert exit_.value.code == 2
+    cap = capsys.readouterr()
+    msg = unwrap(cap.err).splitlines()[-1]
+    assert cap.out == "" and "Traceback" not in cap.err
+    assert f"argument {command[-1]}: an empty path" in msg
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_force_replaces_the_set_as_one_set(capsys, tmp_path):
+    out = tmp_path / "set"
+    rc, _, err = run(capsys, "import", *YEI, "--out", out)
+    assert rc == 0, err
+    assert sorted(p.name for p in out.iterdir()) == ["ensayo.mat", "provenance.json"]
+    (out / "notes.txt").write_text("mine")  # not the set's: kept
+    rc, _, err = run(capsys, "import", *NGIMU, "--out", out)
+    assert rc != 0 and "already exist" in err  # without --force nothing changes
+    rc, _, err = run(capsys, "import", *NGIMU, "--out", out, "--force")
+    assert rc == 0, err
+    assert sorted(p.name for p in out.iterdir()) == ["acel.mat", "notes.txt", "provenance.json"]
+    prov = json.loads((out / "provenance.json").read_text())
+    assert prov["source"]["name"] == "ngimu-sensors.csv"
+    assert list(prov["written"]) == ["acel.mat"]
+    # and back: the acel.mat goes when a calibration set replaces it
+    rc, _, err = run(capsys, "import", *YEI, "--out", out, "--force")
+    assert rc == 0, err
+    assert sorted(p.name for p in out.iterdir()) == ["ensayo.mat", "notes.txt", "provenance.json"]
+
+
+def test_force_in_the_working_folder_replaces_the_set_too(capsys, tmp_path, monkeypatch):
+    """A target holding the working directory is written file by file (it cannot be swapped):
+    the old course file of the other kind is still removed."""
+    monkeypatch.chdir(tmp_path)
+    rc, _, err = run(capsys, "import", *YEI, "--out", ".")
+    assert rc == 0, err
+    rc, _, err = run(capsys, "import", *NGIMU, "--out", ".", "--force")
+    assert rc == 0, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["acel.mat", "provenance.json"]
