@@ -176,14 +176,51 @@ def test_pose_count_and_bag_and_mat_errors_name_what_to_do(capsys, tmp_path, fil
 
 
 def test_gaps_allowed_are_recorded(capsys, tmp_path):
+    """Two held poses on both sides of a gap: a calibration set, the gap recorded."""
     rows = "".join(f"{0.01 * k},{0.0},{-1.0}\n" for k in range(300))
-    rows += "".join(f"{5 + 0.01 * k},{0.0},{-1.0}\n" for k in range(300))
+    rows += "".join(f"{5 + 0.01 * k},{-1.0},{0.0}\n" for k in range(300))
     path = _table(tmp_path / "g.csv", "t,ax (g),ay (g)\n" + rows)
     rc, stdout, err = run(capsys, "import", path, "--out", tmp_path / "o", "--allow-gaps",
                           "--allow-saturation", "--json")
     assert rc == 0, err
-    gaps = json.loads(stdout)["provenance"]["gaps"]
+    doc = json.loads(stdout)
+    gaps = doc["provenance"]["gaps"]
     assert len(gaps) == 1 and gaps[0]["after"] == "line 301"
+    assert list(doc["provenance"]["written"]) == ["ensayo.mat"]
+    # t is written as read: nothing inside the 2-s gap
+    t = scipy.io.loadmat(tmp_path / "o" / "ensayo.mat")["t"].ravel()
+    assert t.size == 600 and not np.any((t > 2.995) & (t < 5.0))
+
+
+def test_a_gap_is_never_filled_in_a_vehicle_run(capsys, tmp_path):
+    """No held poses (a vehicle run, acel.mat on one uniform grid): a gap would be filled with
+    readings the log does not have — refused, nothing written."""
+    rng = np.random.default_rng(2)
+    t = np.concatenate([0.01 * np.arange(400), 83.0 + 0.01 * np.arange(400)])
+    acc = rng.standard_normal((800, 2)) * 0.5
+    path = _table(tmp_path / "v.csv", "t,ax (m/s^2),ay (m/s^2)\n" + "".join(
+        f"{a:.3f},{b:.5f},{c:.5f}\n" for a, (b, c) in zip(t, acc, strict=True)))
+    line = one_line_error(capsys, "import", path, "--out", tmp_path / "o", "--allow-gaps")
+    assert "gap(s) in time" in line and "never writes readings" in line
+    assert not (tmp_path / "o").exists()
+
+
+def test_jittered_times_report_their_true_deviation_from_the_grid(capsys, tmp_path):
+    """A clock that runs slow for half the log: the largest |t_k − grid_k| is what import
+    prints, not the distance to the nearest grid point (which would hide the drift)."""
+    rng = np.random.default_rng(3)
+    steps = np.where(np.arange(999) < 500, 0.0100, 0.0104) + rng.uniform(-1e-4, 1e-4, 999)
+    t = np.concatenate([[0.0], np.cumsum(steps)])
+    acc = rng.standard_normal((1000, 2)) * 0.5
+    path = _table(tmp_path / "j.csv", "t,ax (m/s^2),ay (m/s^2)\n" + "".join(
+        f"{a:.6f},{b:.5f},{c:.5f}\n" for a, (b, c) in zip(t, acc, strict=True)))
+    rc, stdout, err = run(capsys, "import", path, "--out", tmp_path / "o", "--json")
+    assert rc == 0, err
+    r = json.loads(stdout)["provenance"]["resampled"]
+    grid = t[0] + (t[-1] - t[0]) / 999 * np.arange(1000)
+    # times written to 1 µs: equal within that
+    assert r["max_deviation_from_grid_s"] == pytest.approx(np.max(np.abs(t - grid)), abs=2e-6)
+    assert r["max_deviation_from_grid_s"] > 0.05  # the drift: far beyond one step
 
 
 def test_course_files_as_csv_logs_give_the_course_trajectory(capsys, tmp_path, course_dir):

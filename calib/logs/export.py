@@ -22,8 +22,10 @@ kind is removed with it (never an old ``ensayo.mat`` beside a new ``acel.mat``).
 
 ``acel.mat`` must be uniformly sampled (``calib.files.course.read_acel``); a log whose steps jitter
 (phones, USB loggers) is resampled by linear interpolation onto the grid ``t0 + k·dt``, ``dt``
-the mean step (same sample count), and the provenance says so with the largest deviation of
-the log's times from that grid. A
+the mean step (same sample count), and the provenance says so with the largest deviation
+``max |t_k − (t0 + k·dt)|`` of the log's times from that grid. A log with gaps in time
+(``--allow-gaps``) is refused for ``acel.mat``: filling a gap would write readings the log does
+not have; a calibration set (``ensayo.mat``) keeps its held poses on both sides of a gap. A
 ``tita``-less ``ensayo.mat`` is read back by :func:`calib.logs.reader.read_log` (pose labels, θ
 unknown); ``calibrate``/``gap`` need θ and say so.
 """
@@ -74,7 +76,9 @@ def uniform(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict 
     grid = t[0] + step * np.arange(count)
     cols = np.atleast_2d(x.T).T if x.ndim == 1 else x
     out = np.column_stack([np.interp(grid, t, cols[:, k]) for k in range(cols.shape[1])])
-    dev = float(np.max(np.abs(t - (t[0] + step * np.round((t - t[0]) / step)))))
+    # each sample i goes to grid point i: its time moves by |t_i − grid_i| (not to the
+    # nearest grid point, which would hide a drift of the log's clock)
+    dev = float(np.max(np.abs(t - grid)))
     return grid, out if x.ndim > 1 else out[:, 0], {
         "method": "linear interpolation onto a uniform grid", "step_s": step,
         "samples_in": int(t.size), "samples_out": int(count),
@@ -103,6 +107,14 @@ def course_variables(log) -> tuple[str, dict[str, np.ndarray], dict | None]:
         raise DataError(f"{log.source}: no θ, fewer than two held poses and no sample times: "
                         "neither a calibration run nor a vehicle run; give --poses, a θ "
                         "column or --columns t=…")
+    gaps = log.provenance.get("gaps") or []
+    if gaps:  # acel.mat is one uniform grid: a gap would be filled with readings never made
+        g0 = gaps[0]
+        raise DataError(f"{log.source}: {len(gaps)} gap(s) in time (the first "
+                        f"{g0['length_s']:.4g} s after {g0['after']}); a vehicle run "
+                        "(acel.mat) is one uniformly sampled stretch and import never writes "
+                        "readings the log does not have: cut the log at the gap and import "
+                        "each stretch on its own")
     cols = log.acc if log.gyro is None else np.column_stack([log.acc, log.gyro])
     t, x, record = uniform(log.t, cols)
     out = {"t": t, "Aerr": x[:, :2]}
