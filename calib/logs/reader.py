@@ -265,7 +265,10 @@ def detect_format(path: Path, options: LogOptions) -> str:
     """
     from calib.logs.csvlog import looks_like_table
     from calib.logs.rosbag import is_bag
+    from calib.logs.ziplog import is_zip
 
+    if options.fmt in ("auto", "phyphox") and is_zip(path):  # phyphox's "CSV (zip)" export
+        return "zip"
     if options.fmt in ("phyphox", "sensorlogger"):
         return "csv"
     if options.fmt != "auto":
@@ -373,6 +376,13 @@ def _course_log(path: Path, kind: str, names: list[str], prov: dict, read_ensayo
 
 
 def _read_raw(path: Path, fmt: str, options: LogOptions) -> RawLog:
+    if fmt == "zip":
+        from calib.logs.ziplog import choose_member, extracted
+
+        member = choose_member(path)
+        with extracted(path, member) as inner:
+            raw = _read_raw(inner, "csv", options)
+        return replace(raw, notes=dict(raw.notes, zip_member=member))
     if fmt == "csv":
         from calib.logs.csvlog import read_csv
 
