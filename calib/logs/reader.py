@@ -57,6 +57,7 @@ import numpy as np
 from calib.conventions import STANDARD_GRAVITY, G
 from calib.input_rules import MAX_ABS_TIME, DataError, file_head
 from calib.logs.physics import check_one_g
+from calib.logs.poses import LOOSE, MARGIN
 from calib.logs.table import ACCEL_UNITS, GYRO_UNITS, RawLog
 from calib.results import readonly
 
@@ -644,6 +645,7 @@ def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         return replace(log, pose=pose, provenance=prov)
     if raw.label is not None:
         pose, values = _labels(raw.label)
+        _check_labels_still(log, pose, values, path, raw.mapping.get("label", "label"))
         prov["poses"] = {"source": f"label column '{raw.mapping.get('label', 'label')}'",
                          "labels": values}
     elif not options.detect:
@@ -727,6 +729,34 @@ def _degrees_check(theta: np.ndarray, acc: np.ndarray, path: Path, what: str) ->
         raise DataError(f"{path}: {what} look like degrees, not radians: the nominal model "
                         f"fits θ·π/180 far better than θ ({units.summary()}); give "
                         "--angle-unit deg")
+
+
+LABEL_STILL_RATIO = LOOSE * MARGIN
+"""(20) A labelled hold whose scatter (variance summed over the axes) exceeds this many times the
+quietest label's is not held still: the pose detector's own allowance for holds that differ
+in noise (:data:`calib.logs.poses.LOOSE` × :data:`calib.logs.poses.MARGIN`: a hand-held pose
+beside one on a table), while a turn spreads the readings over a good part of g."""
+
+
+def _check_labels_still(log: ImuLog, pose: np.ndarray, values: list[str], path: Path,
+                        column: str) -> None:
+    """Refuse a label column whose labelled stretches are not all held still (a rotation
+    labelled as a pose would enter every fit as a hold with a hundred times the scatter)."""
+    acc = log.acc if log.acc_normal is None else np.column_stack([log.acc, log.acc_normal])
+    var = np.array([acc[pose == k].var(axis=0).sum() if np.sum(pose == k) > 1 else 0.0
+                    for k in range(len(values))])
+    floor = float(np.min(var[var > 0])) if np.any(var > 0) else 0.0
+    if floor <= 0:
+        return
+    loud = np.flatnonzero(var > LABEL_STILL_RATIO * floor)
+    if loud.size:
+        k = int(loud[np.argmax(var[loud])])
+        raise DataError(
+            f"{path}: label column '{column}': label {values[k]!r} is not held still (its "
+            f"readings scatter {var[k] / floor:.3g}× the quietest label's variance, more than "
+            f"{LABEL_STILL_RATIO:g}×; {loud.size} such label(s)); label only the held "
+            "stretches (moving rows empty, -1 or 'moving'), or remove the label column and "
+            "let the pose detector find the holds")
 
 
 def _labels(label: np.ndarray) -> tuple[np.ndarray, list[str]]:
