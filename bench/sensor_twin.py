@@ -19,6 +19,11 @@ calibration bias, scale    ``AxisErrors.bias`` / ``scale`` (the profile's estima
 A term the profile leaves null (not resolved by its log) is left out. The walk and the
 flicker are per sample, so a static run without sample times is simulated as consecutive
 samples at fs (``generate calibration --sensor``: the profile's own rate; a sweep: ``--rate``).
+
+Every function here takes a profile object and runs the checks of the one loader first
+(:func:`calib.noise.sensor_profile.check_profile`, the checks of ``load_profile``): a profile
+built in Python with a negative N, one axis or a calibration that does not cover x and y is
+refused in one line (:class:`calib.input_rules.DataError`), never an IndexError.
 """
 
 from __future__ import annotations
@@ -30,10 +35,10 @@ import numpy as np
 from bench.sensors import AxisErrors, SensorErrorModel
 from bench.terms import BiasInstability, BiasRandomWalk, Quantization
 from calib.conventions import AXES
-from calib.noise.sensor_profile import SensorProfile
+from calib.noise.sensor_profile import NoiseTerm, SensorProfile, check_profile
 
 
-def _value(terms, k: int) -> float | None:
+def _value(terms: tuple[NoiseTerm | None, ...] | None, k: int) -> float | None:
     if terms is None or terms[k] is None:
         return None
     return float(terms[k].value)
@@ -44,22 +49,28 @@ def calibration_pairs(profile: SensorProfile) -> tuple[tuple[float, float], tupl
     """(bias (x, y) m/s², scale (x, y)) from the profile's calibration, or None if it has none.
 
     The calibration is ``{"param_names", "params", ...}`` of a calibration file
-    (``scale_x, bias_x, scale_y, bias_y`` in any order) or ``{"bias": [x, y], "scale": [x, y]}``.
+    (``scale_x, bias_x, scale_y, bias_y`` in any order) or ``{"bias", "scale"}``, each an
+    object keyed by axis name (the file's form) or a list in the order of ``profile.axes``.
+    The profile is checked first (:func:`calib.noise.sensor_profile.check_profile`).
     """
+    profile = check_profile(profile)
     cal = profile.calibration
     if not cal:
         return None
     if "bias" in cal and "scale" in cal:
-        return tuple(float(v) for v in cal["bias"]), tuple(float(v) for v in cal["scale"])
+        bias, scale = cal["bias"], cal["scale"]
+        return (tuple(float(bias[a]) for a in AXES), tuple(float(scale[a]) for a in AXES))
     named = dict(zip(cal["param_names"], cal["params"], strict=True))
-    return ((float(named["bias_x"]), float(named["bias_y"])),
-            (float(named["scale_x"]), float(named["scale_y"])))
+    return (tuple(float(named[f"bias_{a}"]) for a in AXES),
+            tuple(float(named[f"scale_{a}"]) for a in AXES))
 
 
 def twin_axis(profile: SensorProfile, k: int, rate: float, bias: float = 0.0,
               scale: float = 0.0) -> AxisErrors:
-    """The bench's :class:`AxisErrors` of axis ``k`` of ``profile`` at ``rate`` Hz (table in
-    the module docstring)."""
+    """The bench's :class:`AxisErrors` of axis ``k`` (0 = x, 1 = y) of ``profile`` at
+    ``rate`` Hz (table in the module docstring); bias m/s², scale 1."""
+    profile = check_profile(profile)
+    k = profile.axis_index(AXES[k])
     n_d = _value(profile.white_noise_density, k)
     b = _value(profile.bias_instability, k)
     q = _value(profile.rate_random_walk, k)
@@ -77,10 +88,13 @@ def twin_axis(profile: SensorProfile, k: int, rate: float, bias: float = 0.0,
 
 
 def twin_sensor(profile: SensorProfile, rate: float | None = None,
-                bias=(0.0, 0.0), scale=(0.0, 0.0)) -> SensorErrorModel:
+                bias: tuple[float, float] = (0.0, 0.0),
+                scale: tuple[float, float] = (0.0, 0.0)) -> SensorErrorModel:
     """The :class:`SensorErrorModel` of ``profile`` at ``rate`` Hz (default: the profile's).
-    Bias and scale come from the profile's calibration when it has one, else from the
-    arguments."""
+    Bias (m/s²) and scale come from the profile's calibration when it has one, else from the
+    arguments (x, y). Raises :class:`calib.input_rules.DataError` on a profile the loader
+    would refuse."""
+    profile = check_profile(profile)
     rate = float(profile.sample_rate if rate is None else rate)
     if not (np.isfinite(rate) and rate > 0):
         raise ValueError(f"sample rate must be a positive number of Hz, got {rate}")
@@ -92,15 +106,19 @@ def twin_sensor(profile: SensorProfile, rate: float | None = None,
 
 
 def twin_truth(profile: SensorProfile, rate: float, source: str | None = None) -> dict:
-    """What ``truth.json`` records of the twin: the profile's values and where it came from."""
+    """What ``truth.json`` records of the twin: the profile's values (per axis x, y; units
+    as :data:`calib.noise.sensor_profile.TERM_UNITS`), the run's rate (Hz) and the profile's
+    file name."""
+    profile = check_profile(profile)
     cal = calibration_pairs(profile)
+    idx = [profile.axis_index(a) for a in AXES]
+    q = profile.quantization_step
     return {
         "source": source, "sample_rate": float(profile.sample_rate), "run_rate": float(rate),
-        "white_noise_density": [_value(profile.white_noise_density, k) for k in range(2)],
-        "bias_instability": [_value(profile.bias_instability, k) for k in range(2)],
-        "rate_random_walk": [_value(profile.rate_random_walk, k) for k in range(2)],
-        "quantization_step": (None if profile.quantization_step is None
-                              else list(profile.quantization_step)),
+        "white_noise_density": [_value(profile.white_noise_density, k) for k in idx],
+        "bias_instability": [_value(profile.bias_instability, k) for k in idx],
+        "rate_random_walk": [_value(profile.rate_random_walk, k) for k in idx],
+        "quantization_step": None if q is None else [q[k] for k in idx],
         "calibration": None if cal is None else {"bias": list(cal[0]), "scale": list(cal[1])},
     }
 

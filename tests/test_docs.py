@@ -70,6 +70,8 @@ def test_python_snippets_run_as_written(page, tmp_path, monkeypatch, course_dir)
     for name in sorted(_named_inputs("".join(blocks))):
         if (course_dir / name).is_file():
             shutil.copy(course_dir / name, tmp_path / name)
+    if "data/real/" in "".join(blocks):  # the shipped real logs, where a clone has them
+        shutil.copytree(REPO / "data" / "real", tmp_path / "data" / "real")
     given = {p.name for p in tmp_path.iterdir()}
     monkeypatch.chdir(tmp_path)
     ns: dict = {"__name__": "__docs__"}

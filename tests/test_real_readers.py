@@ -285,10 +285,10 @@ def test_noise_on_the_longest_shipped_static_stretch(capsys, tmp_path):
     fs = (t.size - 1) / (t[-1] - t[0])
     assert abs(profile["sample_rate"] / fs - 1) < 1e-6
     for i, axis in enumerate("xz"):
-        w = profile["white_noise_density"][i]
+        w = profile["axes"]["xy"[i]]["white_noise_density"]
         lo, hi = w["interval"]
         half = 0.5 * (hi - lo) * math.sqrt(fs)
         assert abs(w["value"] * math.sqrt(fs) - pose["std"][axis]) <= 4 * half, axis
-    assert profile["bias_instability"] is None and profile["rate_random_walk"] is None
-    bounds = profile["extra"]["unresolved_upper_bounds"]
-    assert all(bounds[a]["rate_random_walk"] > 0 for a in "xy")
+    axes = profile["axes"]
+    assert all(axes[a][k] is None for a in "xy" for k in ("bias_instability", "rate_random_walk"))
+    assert all(axes[a]["unresolved_upper_bounds"]["rate_random_walk"] > 0 for a in "xy")

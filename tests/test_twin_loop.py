@@ -139,7 +139,7 @@ def loop(capsys, log: LoopLog, d: Path) -> dict:
     out["twin_truth"] = json.loads((d / "twin" / "truth.json").read_text())
     out["twin"] = scipy.io.loadmat(d / "twin" / "ensayo.mat")
     fs = out["sensor"]["sample_rate"]
-    nv = [w["value"] ** 2 * fs for w in out["sensor"]["white_noise_density"]]
+    nv = [out["sensor"]["axes"][a]["white_noise_density"]["value"] ** 2 * fs for a in "xy"]
     # 6. gap of the real run (gap simulates its own twin with the fitted parameters); with
     # the profile: its per-sample noise N²·fs and (--sensor) its walk, and gap of the twin
     if log.gap_from_profile:
@@ -171,7 +171,7 @@ def _check_common(out: dict, log: LoopLog, fs_ref: float, sigma_ref: tuple[float
     assert sensor["format"] == "tiltbench-sensor" and sensor["units"]["white_noise_density"]
     assert abs(sensor["sample_rate"] / fs_ref - 1) < 1e-6
     for i in range(2):
-        w = sensor["white_noise_density"][i]
+        w = sensor["axes"]["xy"[i]]["white_noise_density"]
         lo, hi = w["interval"]
         assert lo <= w["value"] <= hi and w["level"] == pytest.approx(0.683)
         # white noise: per-sample std = N·√fs; the interval's half-width as its std
@@ -184,7 +184,7 @@ def _check_common(out: dict, log: LoopLog, fs_ref: float, sigma_ref: tuple[float
     assert out["twin_truth"]["sensor_profile"]["source"] == "sensor.json"
     design = out["design"]
     fs = sensor["sample_rate"]
-    nv = [w["value"] ** 2 * fs for w in sensor["white_noise_density"]]
+    nv = [sensor["axes"][a]["white_noise_density"]["value"] ** 2 * fs for a in "xy"]
     assert design["settings"]["noise_var"] == pytest.approx(nv, rel=1e-12)
     n = out["twin"]["datos"].shape[0]
     uniform = next(e for e in design["experiments"] if e["design"] == "uniform")
@@ -227,12 +227,12 @@ def test_twin_loop_on_the_shipped_real_log(capsys, tmp_path, monkeypatch):
     _check_common(out, log, fs_ref, (pose["std"]["x"], pose["std"]["z"]))
     sensor = out["sensor"]
     # a 1.45 s stretch resolves the white noise only; the rest are upper bounds, not numbers
-    assert sensor["bias_instability"] is None and sensor["rate_random_walk"] is None
-    bounds = sensor["extra"]["unresolved_upper_bounds"]
-    assert all(bounds[a]["bias_instability"] > 0 for a in "xy")
+    axes = sensor["axes"]
+    assert all(axes[a][k] is None for a in "xy" for k in ("bias_instability", "rate_random_walk"))
+    assert all(axes[a]["unresolved_upper_bounds"]["bias_instability"] > 0 for a in "xy")
     # the YEI's "Raw" accelerometer steps by 1/4096 g (data/real/README.md)
-    for step in sensor["quantization_step"]:
-        assert abs(step - STANDARD_GRAVITY / 4096) < 1e-9
+    for a in "xy":
+        assert abs(axes[a]["quantization_step"] - STANDARD_GRAVITY / 4096) < 1e-9
     # calibrate: the turns make both axes identifiable — the design [1, A_r] of each axis
     # (columns scaled to unit length) is well conditioned; from the holds alone x's is singular
     cal = out["calibrate"]

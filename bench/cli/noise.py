@@ -1,8 +1,14 @@
 """``tiltbench noise STATIC_LOG``: Allan deviation and noise terms of a static log
 (:mod:`calib.noise.allan`), a log–log figure (``--plot``), the sensor profile (``--save
-sensor.json``, :mod:`calib.noise.sensor_profile`) with a calibration's bias/scale if given
-(``--calibration cal.json``). ``--json`` prints one object: the
-:class:`calib.noise.allan.NoiseCharacterization` with its ``units``, plus the files written.
+sensor.json``, :func:`calib.noise.sensor_profile.save_profile`: the loader's checks, nothing
+written when they fail) with a calibration's bias/scale if given (``--calibration cal.json``).
+``--json`` prints one object: the :class:`calib.noise.allan.NoiseCharacterization` with its
+``units``, plus the files written.
+
+Refused before any fit, in one line naming the file, the axis and the fix
+(:func:`calib.logs.static_log.check_static`): θ varying or several poses, a stuck axis, a
+window shift or variance, a gyro rate, scatter beyond the sample-to-sample noise (a log that
+is not still).
 """
 
 from __future__ import annotations
@@ -64,8 +70,17 @@ def _static_reading(args: argparse.Namespace):
     rate = sample_rate_of(log.t, args.rate, log.source)
     checked = check_static(log.acc, rate, log.source, window=args.static_window,
                            shift=args.static_shift, var_ratio=args.static_var_ratio,
-                           gyro=log.gyro)
+                           gyro=log.gyro, axes=_axis_labels(log.provenance.get("axes")))
     return log, rate, checked
+
+
+def _axis_labels(mapped: list[str] | None) -> tuple[str, str]:
+    """The tilt plane's axes as the messages name them: ``x``, ``y``, with the log's own
+    axis when ``--axes`` mapped another one (``y (the log's -z)``)."""
+    labels = []
+    for name, src in zip(("x", "y"), mapped or ("x", "y"), strict=False):
+        labels.append(name if src == name else f"{name} (the log's {src})")
+    return tuple(labels) if len(labels) == 2 else ("x", "y")
 
 
 def _cmd_noise(args: argparse.Namespace) -> int:
@@ -94,7 +109,7 @@ def _cmd_noise(args: argparse.Namespace) -> int:
     out = result.to_dict()
     check_finite(out, "the result")
     written = {}
-    if args.save:
+    if args.save:  # the saver runs the loader's checks and writes nothing when they fail
         profile = result.to_profile(calibration=cal, tool_version=__version__)
         written["profile"] = str(save_profile(args.save, profile, force=args.force))
     if args.plot:
@@ -107,10 +122,13 @@ def _cmd_noise(args: argparse.Namespace) -> int:
         return 0
     print(result.summary())
     c = checked
+    excess = ", ".join(f"{a} {e:.3g} (limit {lim:.3g})" for a, e, lim in
+                       zip("xy", c["excess_std"], c["excess_limit"], strict=False))
     print(f"static check: {c['window']:g} s windows, largest mean shift {c['max_shift']:.3g} "
           f"m/s² (limit {max([c['shift'], *c.get('shift_noise_floor', [])]):.3g} m/s²: "
           f"{c['shift']:g} or the noise floor), largest variance ratio {c['max_var_ratio']:.3g} "
-          f"(limit {c['var_ratio']:g})")
+          f"(limit {c['var_ratio']:g}); scatter beyond the sample-to-sample noise {excess} "
+          "m/s²")
     print_files(written.values())
     return 0
 

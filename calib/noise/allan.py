@@ -95,6 +95,8 @@ UNITS = {
     "static_check.shift": "m/s^2", "static_check.var_ratio": "1",
     "static_check.max_shift": "m/s^2", "static_check.max_var_ratio": "1",
     "static_check.max_rate": "rad/s", "static_check.max_gyro_rate": "rad/s",
+    "static_check.shift_noise_floor": "m/s^2", "static_check.excess_std": "m/s^2",
+    "static_check.excess_limit": "m/s^2",
 }
 MIN_SAMPLES = 64
 """Shortest log: octaves m = 1 … N/4 must give at least 5 Allan points (3 terms + 2 dof)."""
