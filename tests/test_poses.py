@@ -139,3 +139,24 @@ def test_poses_of_different_noise_are_each_found_and_trimmed_at_their_own_level(
     quiet = [s.threshold for k, s in enumerate(det.segments) if k != 2]
     assert det.segments[2].threshold > 3 * max(quiet)  # its own level, ≈ 5× (χ² spread)
     assert all(s.threshold <= det.threshold for s in det.segments)
+
+
+def test_a_turn_that_moves_only_the_normal_axis_is_not_a_hold():
+    """A 3-axis log on face +y turned about x in 3 s: y reads g·cos α (second order in α), z
+    reads g·sin α (first order). Watching x, y alone the first 0.4 s of the turn read as held
+    (they would bias the hold's mean); with the normal axis watched (``more_acc``) the hold
+    ends within half a window of the turn's start, and the faces +y, +z stay two poses."""
+    rng = np.random.default_rng(0)
+    g = 9.81
+    alpha = np.linspace(0, np.pi / 2, 300)  # +y up → +z up about x
+    acc = np.vstack([np.tile([0.0, g, 0.0], (300, 1)),
+                     np.column_stack([np.zeros(300), g * np.cos(alpha), g * np.sin(alpha)]),
+                     np.tile([0.0, 0.0, g], (300, 1))])
+    acc += rng.normal(0, 0.03, acc.shape)
+    t = np.arange(acc.shape[0]) / 100.0
+    plane = detect_poses(acc[:, :2], t, window=0.25, min_hold=1.0)
+    both = detect_poses(acc[:, :2], t, window=0.25, min_hold=1.0, more_acc=acc[:, 2])
+    assert both.axes_watched == 3 and "var_n" in both.thresholds_line()
+    assert both.count == 2 and plane.count == 2
+    assert both.segments[0].stop <= 300  # the turn starts at sample 300
+    assert plane.segments[0].stop >= 330

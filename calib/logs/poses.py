@@ -17,8 +17,11 @@ so a slow rotation would read as static. With a gyro (rate ω about the tilt axi
     W_i = mean over the window of (ω - median(ω))²        (rad/s)²
 
 (the log-wide median is the bias while mostly held: a constant turning rate has no variance
-but a large W). A sample is *static* when ``V_i ≤ τ_V`` (and ``W_i ≤ τ_W``): its whole window
-is quiet, so the samples within half a window of any motion are excluded.
+but a large W). A 3-axis log is watched on every axis (``more_acc``: V sums the three
+variances, ν = 3(w − 1); a gyro of m axes sums its m mean squares, ν = m·w): a turn about a
+tilt-plane axis moves the normal axis first, and the pose ±n must not merge with ∓n because
+x and y read alike on both. A sample is *static* when ``V_i ≤ τ_V`` (and ``W_i ≤ τ_W``): its
+whole window is quiet, so the samples within half a window of any motion are excluded.
 
 Thresholds from the data's own quiet level (two stages)
 -------------------------------------------------------
@@ -145,6 +148,8 @@ class PoseDetection(ResultMixin):
     window, min_samples : window and minimum hold, samples.
     quiet_level, threshold : q and τ_V, (m/s²)².
     gyro_quiet_level, gyro_threshold : the same for the gyro, (rad/s)², or None.
+    axes_watched : acceleration axes whose variances V sums (2: the tilt plane; 3 with the
+        normal axis of a 3-axis log).
     """
 
     segments: tuple[Segment, ...]
@@ -155,6 +160,7 @@ class PoseDetection(ResultMixin):
     threshold: float
     gyro_quiet_level: float | None = None
     gyro_threshold: float | None = None
+    axes_watched: int = 2
 
     _TITLE = "Held poses"
     _UNITS = {"quiet_level": "(m/s²)²", "threshold": "(m/s²)²",
@@ -171,7 +177,9 @@ class PoseDetection(ResultMixin):
 
     def thresholds_line(self) -> str:
         """One line: the window, the minimum hold and the thresholds with how they came."""
-        line = (f"candidate holds where var_x + var_y over {self.window} samples ≤ "
+        watched = "var_x + var_y" + (" + var_n" if self.axes_watched == 3 else "") if (
+            self.axes_watched <= 3) else f"the variances of {self.axes_watched} axes"
+        line = (f"candidate holds where {watched} over {self.window} samples ≤ "
                 f"{self.threshold:.3g} (m/s²)² (= {LOOSE:g} × {MARGIN:g} × the static 99.9 % "
                 f"point from the quiet level {self.quiet_level:.3g} (m/s²)², the 10th "
                 "percentile)")
@@ -201,7 +209,7 @@ class PoseDetection(ResultMixin):
                 "window": self.window, "min_samples": self.min_samples,
                 "quiet_level": self.quiet_level, "threshold": self.threshold,
                 "gyro_quiet_level": self.gyro_quiet_level,
-                "gyro_threshold": self.gyro_threshold,
+                "gyro_threshold": self.gyro_threshold, "axes_watched": self.axes_watched,
                 "units": dict(self._UNITS, **{"segments.mean": "m/s²", "segments.std": "m/s²",
                                              "segments.t_start": "s",
                                              "segments.t_stop": "s"})}
@@ -214,7 +222,8 @@ class PoseDetection(ResultMixin):
                    labels=labels, window=d["window"], min_samples=d["min_samples"],
                    quiet_level=d["quiet_level"], threshold=d["threshold"],
                    gyro_quiet_level=d.get("gyro_quiet_level"),
-                   gyro_threshold=d.get("gyro_threshold"))
+                   gyro_threshold=d.get("gyro_threshold"),
+                   axes_watched=int(d.get("axes_watched", 2)))
 
 
 def window_variance(x: np.ndarray, w: int) -> np.ndarray:
@@ -263,15 +272,20 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 
 def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray | None = None,
-                 *, window: float | None = None, min_hold: float | None = None
-                 ) -> PoseDetection:
+                 *, window: float | None = None, min_hold: float | None = None,
+                 more_acc: np.ndarray | None = None) -> PoseDetection:
     """Find the held poses of a log (module docstring).
 
     Parameters
     ----------
-    acc : (N, 2) m/s², the tilt-plane readings.
+    acc : (N, 2) m/s², the tilt-plane readings (the segments' means and stds are of these).
     t : (N,) s, increasing, or None.
-    gyro : (N,) rad/s about the tilt axis, or None.
+    gyro : (N,) rad/s about the tilt axis, or (N, m) every gyro axis of the log, or None.
+        With m axes the gyro statistic sums them: ``W_i`` over the axes, ν = m·w.
+    more_acc : (N,) or (N, j) m/s², the log's other acceleration axes (a 3-axis log's
+        normal axis), watched too: ``V_i`` then sums the variances of all k = 2 + j axes,
+        ν = k(w − 1), and two runs merge only when they agree on every axis. Without it, a
+        tumble about the tilt-plane x axis that starts by moving z alone reads as held.
     window, min_hold : s when ``t`` is given (defaults 0.5 and 1), samples when not (25 and
         100).
 
@@ -298,18 +312,23 @@ def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray 
         hold = int(DEFAULT_HOLD_N if min_hold is None else min_hold)
     w = max(w, 5)
     hold = max(hold, w)
-    nu_v, nu_w = 2.0 * (w - 1), float(w)
-    v = window_variance(acc[:, 0], w) + window_variance(acc[:, 1], w)
-    floor = sum(_quant_step(acc[:, k]) ** 2 / 12.0 for k in range(2))
+    watch = acc[:, :2] if more_acc is None else np.column_stack(
+        [acc[:, :2], np.asarray(more_acc, dtype=float).reshape(n, -1)])
+    k_acc = watch.shape[1]
+    nu_v = k_acc * (w - 1.0)
+    v = sum(window_variance(watch[:, k], w) for k in range(k_acc))
+    floor = sum(_quant_step(watch[:, k]) ** 2 / 12.0 for k in range(k_acc))
     q = max(float(np.quantile(v, QUIET_QUANTILE)), floor, 1e-18)
     thr = LOOSE * MARGIN * q * _ratio(nu_v, QUIET_QUANTILE)
     coarse = v <= thr
     gq = gthr = wsq = None
     gfloor = 0.0
     if gyro is not None:
-        g = np.asarray(gyro, dtype=float)
-        wsq = _window_mean((g - np.median(g)) ** 2, w)
-        gfloor = max(_quant_step(g) ** 2 / 12.0, 1e-24)
+        g = np.asarray(gyro, dtype=float).reshape(n, -1)
+        nu_w = float(w * g.shape[1])
+        wsq = sum(_window_mean((g[:, j] - np.median(g[:, j])) ** 2, w)
+                  for j in range(g.shape[1]))
+        gfloor = max(sum(_quant_step(g[:, j]) ** 2 / 12.0 for j in range(g.shape[1])), 1e-24)
         gq = max(float(np.quantile(wsq, QUIET_QUANTILE)), gfloor)
         gthr = LOOSE * MARGIN * gq * _ratio(nu_w, QUIET_QUANTILE)
         coarse &= wsq <= gthr
@@ -333,8 +352,8 @@ def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray 
     taus: list[tuple[float, float | None]] = []
     for (a, b), tau in zip(runs, own, strict=True):
         if groups and a - groups[-1][-1][1] < hold:
-            prev = np.concatenate([acc[x:y] for x, y in groups[-1]])
-            here = acc[a:b]
+            prev = np.concatenate([watch[x:y] for x, y in groups[-1]])
+            here = watch[a:b]
             limit = MERGE_STDS * np.maximum(prev.std(0, ddof=1), here.std(0, ddof=1))
             if np.all(np.abs(prev.mean(0) - here.mean(0)) <= limit):
                 groups[-1].append((a, b))
@@ -356,7 +375,7 @@ def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray 
             gyro_threshold=taus[k][1]))
     return PoseDetection(segments=tuple(segments), labels=labels, window=w, min_samples=hold,
                          quiet_level=q, threshold=thr, gyro_quiet_level=gq,
-                         gyro_threshold=gthr)
+                         gyro_threshold=gthr, axes_watched=k_acc)
 
 
 __all__ = ["DEFAULT_HOLD_N", "DEFAULT_HOLD_S", "DEFAULT_WINDOW_N", "DEFAULT_WINDOW_S",

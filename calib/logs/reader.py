@@ -651,8 +651,8 @@ def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
     elif not options.detect:
         pose, values = None, None
     else:
-        det = detect_poses(log.acc, log.t, log.gyro, window=options.window,
-                           min_hold=options.min_hold)
+        det = detect_poses(log.acc, log.t, log.gyro, more_acc=log.acc_normal,
+                           window=options.window, min_hold=options.min_hold)
         pose, values = det.labels, None
         prov["poses"] = {"source": "detected", "detection": det.to_dict(),
                          "thresholds": det.thresholds_line()}
