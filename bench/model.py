@@ -22,6 +22,7 @@ _CANDIDATES = (_BENCH_DIR / "models", _BENCH_DIR.parent / "models")
 MODELS_DIR = next((d for d in _CANDIDATES if d.is_dir()), _CANDIDATES[-1])
 TILT_TABLE_XML = MODELS_DIR / "tilt_table.xml"
 VEHICLE_XML = MODELS_DIR / "vehicle.xml"
+SIX_FACE_XML = MODELS_DIR / "six_face_fixture.xml"
 
 # Tilt table element names (models/tilt_table.xml).
 TILT_JOINT = "tilt"
@@ -42,6 +43,17 @@ VEHICLE_SLIDE_JOINTS = {"x": "slide_x", "y": "slide_y"}
 VEHICLE_DRIVES = {"x": "drive_x", "y": "drive_y"}
 VEHICLE_ACC_SITES = {"x": "acc_x_site", "y": "acc_y_site"}
 VEHICLE_ACC_SENSORS = {"x": "acc_x", "y": "acc_y"}
+
+# Six-face fixture element names (models/six_face_fixture.xml): three nested hinges, outer to
+# inner (about world x, then y, then the case's z), their position servos and encoders, and the
+# case's 3-axis accelerometer and gyro on the site "imu" (site frame = case axes).
+FIXTURE_JOINTS = ("tumble_x", "tumble_y", "tumble_z")
+FIXTURE_SERVOS = ("servo_x", "servo_y", "servo_z")
+FIXTURE_ENCODERS = ("enc_x", "enc_y", "enc_z")
+CASE_BODY = "case"
+IMU_SITE = "imu"
+IMU_ACCEL = "imu_accel"
+IMU_GYRO = "imu_gyro"
 
 
 def load_spec(path: Path = TILT_TABLE_XML) -> mujoco.MjSpec:
@@ -105,6 +117,14 @@ def tilt_table(edits: TableEdits | None = None) -> tuple[mujoco.MjModel, mujoco.
     """Compile the tilt table (optionally edited). Returns ``(model, spec)``."""
     spec = load_spec(TILT_TABLE_XML)
     edit_tilt_table(spec, edits or TableEdits())
+    return spec.compile(), spec
+
+
+def six_face_fixture(g: float = G) -> tuple[mujoco.MjModel, mujoco.MjSpec]:
+    """Compile the six-face tumble fixture with gravity ``(0, 0, -g)``, g in m/s² (an
+    ``MjSpec`` edit). Returns ``(model, spec)``."""
+    spec = load_spec(SIX_FACE_XML)
+    spec.option.gravity = [0.0, 0.0, -float(g)]
     return spec.compile(), spec
 
 

@@ -79,6 +79,7 @@ MESSAGE_NAMES = {
     "trajectory missing input": ("missing.mat",), "nmin missing input": ("missing.mat",),
     "fuse missing input": ("missing.mat",), "validate missing input": ("missing.json",),
     "noise missing input": ("missing.csv",), "import missing input": ("missing.csv",),
+    "apply missing input": ("missing.csv",),
     "record missing input": ("missing.rrd",), "demo missing course data": ("nowhere",),
     "a folder for a file": (".:",), "a JSON file for a recording": ("truth.json",),
     "a JSON file for a .mat": ("truth.json",), "a path wider than the terminal": ("--noise-var",),

@@ -31,6 +31,7 @@ import warnings  # noqa: E402
 
 from bench import __version__  # noqa: E402
 from bench.cli import (  # noqa: E402
+    apply,
     calibrate,
     demo,
     design,
@@ -49,8 +50,8 @@ from bench.cli import (  # noqa: E402
 from bench.cli.options import Parser, refuse_numbers, resolve_deferred  # noqa: E402
 from bench.cli.output import command_outputs, fit_columns  # noqa: E402
 
-COMMANDS = (generate, calibrate, trajectory, nmin, design, fuse, fusion_study, record, validate,
-            gap, importlog, noise, demo, examples)
+COMMANDS = (generate, calibrate, apply, trajectory, nmin, design, fuse, fusion_study, record,
+            validate, gap, importlog, noise, demo, examples)
 """Command modules, in the order of the help."""
 
 

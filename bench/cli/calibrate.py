@@ -86,7 +86,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
                                                groups=groups))
     if args.save:
         check_finite(cal.to_dict(), "the estimates")  # a file of finite numbers only
-        _save(args, cal)
+        _save(args, cal, log)
     if args.plot:
         from bench.figures import save_calibration_plot
 
@@ -183,7 +183,7 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
     doc = multiposition_document(fit, comparison, chosen)
     check_finite({"fit": doc, "calibration": cal.to_dict()}, "the estimates")
     if args.save:
-        _save(args, cal)
+        _save(args, cal, log)
     if args.plot and three:
         from bench.figures.multiposition3d import save_multiposition3d_plot
 
@@ -225,15 +225,14 @@ def _six_face(args: argparse.Namespace, poses, log) -> int:
     misalignment of the three axes, hold-to-hold repeatability in the intervals)."""
     from calib.calibration.sixface import fit_six_face
 
-    if args.save:
-        raise OptionError("--save: the calibration file does not hold a six-face fit yet "
-                          "(three axes and misalignment); use --json for its numbers")
     if args.noise_var is not None:
         raise OptionError("--noise-var: the six-face fit measures the scatter within and "
                           "between holds itself; drop --noise-var")
     fit = fit_six_face(poses, g=args.g, g_source=args.g_source, level=args.level,
                        source=args.ensayo)
     check_finite(fit.to_dict(), "the estimates")
+    if args.save:
+        _save(args, fit, log, poses)
     if args.plot:
         from bench.figures.sixface import save_sixface_plot
 
@@ -252,19 +251,32 @@ def _six_face(args: argparse.Namespace, poses, log) -> int:
     normal = log.provenance.get("normal_axis") or "the third axis"
     print(f"method: six-face test, 3 axes (x, y, n = {normal}); every hold on a face")
     print(fit.summary())
-    print_files([args.plot])
+    print_files([args.save, args.plot])
     return 0
 
 
-def _save(args: argparse.Namespace, cal) -> None:
-    """``--save``: the calibration file (docs/calibration-file.md), or its .mat export."""
+def _save(args: argparse.Namespace, cal, log, poses=None) -> None:
+    """``--save``: the calibration file (docs/calibration-file.md, version 3), or its .mat
+    export, with the log's readings (``--axes``, unit) and where g came from; a six-face fit
+    (``poses``: its holds) carries its hold means."""
     from bench.version import __version__
     from calib.calibration.calfile import save_calibration
+    from calib.calibration.readings import GravitySource, readings_of
 
+    if args.latitude is not None:
+        gravity = GravitySource("latitude", args.latitude, args.height)
+    else:
+        gravity = GravitySource("given" if args.g_source == "--g" else "assumed")
+    if poses is not None:  # six-face: σ measured within and between the holds
+        save_calibration(args.save, cal, source=args.ensayo, tool_version=__version__,
+                         force=args.force, readings=readings_of(log), gravity=gravity,
+                         poses=poses)
+        return
     source = ("given" if args.noise_var is not None else
               "datos.txt" if args.datos else "estimated")
     save_calibration(args.save, cal, source=args.ensayo, sigma2_source=source,
-                     noise_file=args.datos, tool_version=__version__, force=args.force)
+                     noise_file=args.datos, tool_version=__version__, force=args.force,
+                     readings=readings_of(log), gravity=gravity)
 
 
 def register(sub) -> None:

@@ -13,8 +13,12 @@ import argparse
 import math
 
 from bench.cli.options import (
+    DEFAULT_BIAS,
     DEFAULT_NOISE,
+    DEFAULT_SCALE,
     FULL_TURN,
+    VARIANCE_RANGE,
+    Deferred,
     OptionError,
     add_command,
     add_generate_common,
@@ -22,6 +26,7 @@ from bench.cli.options import (
     add_sensor_options,
     add_sweep_options,
     check_count,
+    check_number,
     check_positive,
     integer,
     mapper_from_args,
@@ -329,6 +334,12 @@ def _announce(command: str, need: float) -> None:
 def _cmd_calibration(args: argparse.Namespace) -> int:
     from bench.tilt import generate_calibration, write_calibration
 
+    if args.faces is not None:
+        return _cmd_six_face(args)
+    given = [_option(d) for d in SIX_FACE_ONLY if getattr(args, d) is not None]
+    if given:
+        raise OptionError(f"{given[0]} is an option of the six-face twin: give --faces too "
+                          "(docs/six-face-twin.md)")
     refuse_overwrite([args.rrd], args.force)  # before writing the set: nothing half-written
     config = calibration_config(args)
     _announce("generate calibration", _check_calibration_size(config))
@@ -503,6 +514,191 @@ def _gps_title(gps) -> str:
     return "" if gps is None else f", {gps.n} GNSS fixes"
 
 
+# ---------------------------------------------------------------- the six-face twin (--faces)
+SIX_FACE_DEFAULTS: dict[str, object] = {
+    "bias": "0.1,-0.05,0.2", "scale": "0.01,-0.01,0.02", "noise_var": "0.0016,0.0016,0.0025",
+    "misalignment": "0.004,-0.002,0.001,0.003,0.002,-0.001", "holds_per_face": 2,
+    "hold_seconds": 5.0, "between_hold_std": 0.002, "gyro_sigma": 0.005,
+}
+"""``generate calibration --faces`` when an option is not given: a MEMS-grade 3-axis sensor
+(σ 0.04, 0.04, 0.05 m/s² at 100 Hz, about 400–500 µg/√Hz; bias m/s², scale 1, misalignment rad)
+placed by hand (a tilt of 0.002 rad ≈ 0.1° per hold), each face held twice, 5 s, and a gyro
+with 0.005 rad/s of white noise."""
+
+SIX_FACE_ONLY = ("holds_per_face", "hold_seconds", "misalignment", "between_hold_std",
+                 "gyro_sigma")
+"""Destinations of the options that only the six-face twin has (default None: not given)."""
+
+TILT_DEFAULTS: dict[str, object] = {
+    "mode": "static", "theta_range": FULL_TURN, "count": 20001, "theta_list": None,
+    "theta_from": None, "positions": None, "per_position": 100, "sweep_profile": "constant",
+    "duration": 20.0, "cycles": 1.0, "effect": None, "rrd": None,
+}
+"""The tilt table's options of ``generate calibration`` and their defaults (the parser's);
+the six-face twin refuses any of them set otherwise."""
+
+SIX_FACE_SAMPLE_BYTES = 600
+"""Peak per sample of a six-face run: the MuJoCo rows (specific force, rate, hinge angles),
+the readings and the CSV text (≈ 75 B a row) built in memory."""
+
+
+def _option(dest: str) -> str:
+    return "--" + dest.replace("_", "-")
+
+
+def _given(args: argparse.Namespace, dest: str) -> bool:
+    """Whether an option whose default is :class:`Deferred` was on the command line."""
+    return dest not in getattr(args, "deferred_defaults", frozenset())
+
+
+def _six_face_value(args: argparse.Namespace, dest: str):
+    value = getattr(args, dest)
+    return SIX_FACE_DEFAULTS[dest] if value is None or not _given(args, dest) else value
+
+
+def _numbers(text: str, dest: str, count: int, names: str):
+    """``count`` finite numbers of option ``dest`` (comma-separated), within the option's
+    magnitude limit; OptionError naming the option and the values expected."""
+    import numpy as np
+
+    what = _option(dest)
+    values = parse_floats(text, what)
+    if len(values) != count:
+        raise OptionError(f"{what}: the six-face twin's sensor has three axes: give {count} "
+                          f"values {names}, got {text!r}")
+    for v in values:
+        check_number(v, what)
+    return np.array(values)
+
+
+def six_face_sensor(args: argparse.Namespace, rate: float):
+    """:class:`bench.six_face.ThreeAxisSensor` and the profile's record (or None) from
+    ``--bias``, ``--scale``, ``--misalignment``, ``--noise-var`` or ``--sensor``,
+    ``--gyro-sigma``."""
+    from bench.sensors import AxisErrors
+    from bench.six_face import MAX_TILT, ThreeAxisSensor, twin_axes
+    from calib.input_rules import DataError
+
+    bias = _numbers(_six_face_value(args, "bias"), "bias", 3, "x,y,z in m/s²")
+    scale = _numbers(_six_face_value(args, "scale"), "scale", 3, "x,y,z")
+    if any(s <= -1 for s in scale):
+        raise OptionError(f"--scale: each scale error must be > -1 (the gain 1 + scale is "
+                          f"positive), got {_six_face_value(args, 'scale')}")
+    mis = _numbers(_six_face_value(args, "misalignment"), "misalignment", 6,
+                   "m_xy,m_xz,m_yx,m_yz,m_zx,m_zy in rad")
+    if any(abs(m) > MAX_TILT for m in mis):
+        raise OptionError(f"--misalignment: small angles, at most {MAX_TILT:g} rad each "
+                          f"(K = (I + S)(I + M) is the small-angle model), got "
+                          f"{args.misalignment}")
+    gyro_sigma = float(_six_face_value(args, "gyro_sigma"))
+    if not (math.isfinite(gyro_sigma) and gyro_sigma >= 0):
+        raise OptionError(f"--gyro-sigma must be a finite number >= 0 rad/s, got {gyro_sigma}")
+    twin = None
+    profile = sensor_profile(args)  # calib.noise.sensor_profile.load_profile
+    if profile is not None:
+        if _given(args, "noise_var"):
+            raise OptionError("give --sensor or --noise-var, not both: the profile's white "
+                              "noise is the sensor's noise")
+        try:
+            axes, axis_map = twin_axes(profile, rate)
+        except (KeyError, IndexError, TypeError) as exc:
+            raise DataError(f"{args.sensor}: the profile's noise terms do not fit its axes "
+                            f"({exc})") from None
+        twin = dict(twin_record(args, rate), axis_map=axis_map)
+    else:
+        nv = _numbers(_six_face_value(args, "noise_var"), "noise_var", 3,
+                      "x,y,z in (m/s²)²")
+        lo, hi = VARIANCE_RANGE
+        if any(v != 0 and not lo <= v <= hi for v in nv):  # 0: a noiseless axis
+            raise OptionError(f"--noise-var: variances must be 0 or between {lo:g} and {hi:g} "
+                              f"(m/s²)², got {_six_face_value(args, 'noise_var')}")
+        axes = tuple(AxisErrors(noise_var=float(v)) for v in nv)
+    sensor = ThreeAxisSensor(bias=tuple(bias), scale=tuple(scale), misalignment=tuple(mis),
+                             axes=axes, gyro_sigma=gyro_sigma)
+    return sensor, twin
+
+
+def six_face_config(args: argparse.Namespace):
+    """:class:`bench.six_face.SixFaceConfig` from the options of ``generate calibration
+    --faces``; OptionError naming the option for anything the run cannot use."""
+    from bench.model import six_face_fixture
+    from bench.six_face import (
+        MAX_TILT,
+        MIN_HOLD_SECONDS,
+        SixFaceConfig,
+        check_faces,
+        check_identifiable,
+        sample_stride,
+    )
+
+    tilt = [_option(d) for d, v in TILT_DEFAULTS.items() if getattr(args, d) != v]
+    if tilt:
+        raise OptionError(f"{tilt[0]} is an option of the tilt table; the six-face twin "
+                          "(--faces) does not use it")
+    try:
+        faces = check_faces([f.strip() for f in args.faces.split(",")])
+    except ValueError as exc:
+        raise OptionError(f"--faces {args.faces}: {exc}") from None
+    holds = check_count(int(_six_face_value(args, "holds_per_face")), "--holds-per-face")
+    hold_s = check_positive(float(_six_face_value(args, "hold_seconds")), "--hold-seconds")
+    if hold_s < MIN_HOLD_SECONDS:
+        raise OptionError(f"--hold-seconds {hold_s:g}: at least {MIN_HOLD_SECONDS:g} s, so that "
+                          "the pose detector finds each hold (it ignores holds under 1 s and "
+                          "trims half a 0.5 s window at each edge)")
+    wobble = float(_six_face_value(args, "between_hold_std"))
+    if not (math.isfinite(wobble) and 0 <= wobble <= MAX_TILT):
+        raise OptionError(f"--between-hold-std: a placement tilt in [0, {MAX_TILT:g}] rad "
+                          f"(beyond, a hold is no longer on a face), got {wobble:g}")
+    check_positive(args.g, "--g")
+    rate = check_positive(args.rate, "--rate")
+    try:
+        sample_stride(rate, six_face_fixture(args.g)[0].opt.timestep)
+    except ValueError as exc:
+        raise OptionError(f"--rate: {exc}") from None
+    sensor, twin = six_face_sensor(args, rate)
+    config = SixFaceConfig(faces=faces, holds_per_face=holds, hold_seconds=hold_s, rate=rate,
+                           g=args.g, sensor=sensor, wobble_std=wobble, twin=twin)
+    try:  # the message the six-face fit (tiltbench calibrate) gives on such holds
+        check_identifiable(config.schedule(), config.g, source=f"--faces {args.faces}")
+    except ValueError as exc:
+        raise OptionError(str(exc)) from None
+    return config
+
+
+def _cmd_six_face(args: argparse.Namespace) -> int:
+    """``generate calibration --faces``: the six-face test of a 3-axis sensor on the MuJoCo
+    tumble fixture (:mod:`bench.six_face`): ``log.csv`` and ``truth.json``."""
+    from bench import limits
+    from bench.six_face import (
+        SETTLE_SECONDS,
+        TUMBLE_SECONDS,
+        generate_six_face,
+        run_samples,
+        write_six_face,
+    )
+
+    config = six_face_config(args)
+    n = run_samples(config)
+    holds = len(config.schedule())
+    what = (f"--hold-seconds {config.hold_seconds:g} × {holds} holds at --rate "
+            f"{config.rate:g} Hz")
+    longest = max(config.hold_seconds, TUMBLE_SECONDS + SETTLE_SECONDS)
+    _announce("generate calibration", limits.check_memory(
+        limits.sweep_run_bytes(longest, 0.001) + SIX_FACE_SAMPLE_BYTES * n, what))
+    limits.check_disk(80.0 * n, args.out, what)
+    run = generate_six_face(config, args.seed)
+    check_finite({"acc": run.acc, "gyro": run.gyro, "truth": run.truth()},
+                 f"{args.out}: the run")
+    paths = write_six_face(run, args.out, force=args.force)
+    faces = ", ".join(config.faces)
+    print_summary(args, f"generate calibration: six-face twin, {holds} holds on the faces "
+                  f"{faces} ({config.holds_per_face}×), {n} samples at {config.rate:g} Hz, "
+                  f"seed {args.seed} (the truth is in truth.json only)",
+                  {"n": n, "holds": holds, "rate": config.rate, "files": paths},
+                  {"n": "count", "holds": "count", "rate": "Hz"})
+    return 0
+
+
 # ---------------------------------------------------------------- options
 def _add_gps_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group(
@@ -561,29 +757,65 @@ def _add_kind(kinds, name: str, handler, **kwargs) -> argparse.ArgumentParser:
 
 def _register_calibration(kinds) -> None:
     p = _add_kind(kinds, "calibration", _cmd_calibration,
-                  help="a tilt-table calibration run (ensayo.mat)")
+                  help="a tilt-table calibration run (ensayo.mat), or with --faces the "
+                  "six-face test of a 3-axis sensor (log.csv)")
     add_sensor_options(p)
-    add_option(p, "--mode", choices=["static", "sweep"], default="static",
+    # --bias/--scale/--noise-var: the tilt table's pairs unless given (Deferred: --faces tells a
+    # pair it was not given from one it was, and takes its own x,y,z defaults then)
+    p.set_defaults(bias=Deferred(lambda: DEFAULT_BIAS), scale=Deferred(lambda: DEFAULT_SCALE),
+                   noise_var=Deferred(lambda: DEFAULT_NOISE))
+    t = TILT_DEFAULTS
+    add_option(p, "--mode", choices=["static", "sweep"], default=t["mode"],
                help="static: held poses; sweep: servo-driven rotation, θ from the encoder")
-    add_option(p, "--theta-range", default=FULL_TURN, help="θ range start,stop in rad, any "
-               "finite values (static range/positions; sweep)")
-    add_option(p, "--count", type=integer, default=20001, help="static: samples over the range")
+    add_option(p, "--theta-range", default=t["theta_range"], help="θ range start,stop in rad, "
+               "any finite values (static range/positions; sweep)")
+    add_option(p, "--count", type=integer, default=t["count"],
+               help="static: samples over the range")
     add_option(p, "--theta-list",
                help="static: explicit θ values in rad (any finite), comma separated")
     add_option(p, "--theta-from", help="static: the θ of every sample of this ensayo.mat (e.g. "
                "a measured run's import), in order: its twin holds the same poses")
     add_option(p, "--positions", type=integer, help="static: number of discrete held positions")
-    add_option(p, "--per-position", type=integer, default=100,
+    add_option(p, "--per-position", type=integer, default=t["per_position"],
                help="static: samples held at each position")
     add_option(p, "--sweep-profile", choices=["constant", "accel", "updown", "sine"],
-               default="constant", old="--profile", help="sweep: commanded angle profile")
-    add_option(p, "--duration", type=float, default=20.0, help="sweep: duration, s")
-    add_option(p, "--rate", type=float, default=100.0, help="sweep: sample rate, Hz")
-    add_option(p, "--cycles", type=float, default=1.0, help="sweep: up-down/sine cycles")
+               default=t["sweep_profile"], old="--profile", help="sweep: commanded angle profile")
+    add_option(p, "--duration", type=float, default=t["duration"], help="sweep: duration, s")
+    add_option(p, "--rate", type=float, default=100.0,
+               help="sweep and --faces: sample rate, Hz")
+    add_option(p, "--cycles", type=float, default=t["cycles"],
+               help="sweep: up-down/sine cycles")
     add_option(p, "--effect", action="append", help="add a catalog effect (repeatable), e.g. "
                "misalignment:x:delta=0.02, tilt_offset:both:delta=0.01, lever_arm:x:pos_x=0.2 "
                "(docs/effects.md)")
     add_option(p, "--rrd", help="also record the truth to this rerun file")
+    _add_six_face_options(p)
+
+
+def _add_six_face_options(p: argparse.ArgumentParser) -> None:
+    d = SIX_FACE_DEFAULTS
+    g = p.add_argument_group(
+        "six-face twin (docs/six-face-twin.md)",
+        "--faces runs the six-face test of a 3-axis sensor on a MuJoCo tumble fixture "
+        "instead of the tilt table: holds on the faces, tumbles between them; writes log.csv "
+        "(t s, acc_x/y/z m/s², gyro_x/y/z rad/s) and truth.json. --bias, --scale and "
+        f"--noise-var then take x,y,z (if not given: {d['bias']} m/s², {d['scale']}, "
+        f"{d['noise_var']} (m/s²)²); --sensor gives the noise; --rate, --g, --seed, --out, "
+        "--force, --json as above.")
+    add_option(g, "--faces", help="the faces held, in order, e.g. +x,-x,+y,-y,+z,-z (a list "
+               "that starts with '-': --faces=-x,…)")
+    add_option(g, "--holds-per-face", type=integer,
+               help=f"the list of faces is held K times over ({d['holds_per_face']} if not "
+               "given)")
+    add_option(g, "--hold-seconds", type=float,
+               help=f"length of each hold, s ({d['hold_seconds']:g} if not given)")
+    add_option(g, "--misalignment", help="m_xy,m_xz,m_yx,m_yz,m_zx,m_zy in rad: axis a leans "
+               f"toward case axis b (K = (I + S)(I + M); {d['misalignment']} if not given)")
+    add_option(g, "--between-hold-std", type=float,
+               help="std of each hold's placement tilt about each horizontal axis, rad "
+               f"({d['between_hold_std']:g} if not given)")
+    add_option(g, "--gyro-sigma", type=float,
+               help=f"white gyro noise std, rad/s ({d['gyro_sigma']:g} if not given)")
 
 
 def _register_vehicle(kinds) -> None:

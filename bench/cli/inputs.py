@@ -6,7 +6,9 @@ V0 are the course's (0, 0), (1, 3); a note says so on stderr.
 ``--calibration cal.json`` (``calibrate --save``, docs/calibration-file.md) replaces
 ``--ensayo``: the calibration is read, not re-fitted, and its method and g are the file's
 (``--method`` / ``--g`` given with it must agree). ``--datos`` then gives P0, V0 and the
-vehicle's noise variances only.
+vehicle's noise variances only. A six-face (3-axis) file, or one fitted on other log axes
+(``--axes``) or another unit than ``--acel`` reads, is refused in one line
+(:func:`calib.calibration.calfile.check_applies`).
 
 ``--ensayo`` and ``--acel`` may be measured logs (CSV, phyphox, Sensor Logger, ROS bag,
 ``.mat`` with ``--map``): the shared log options (:mod:`bench.cli.logopts`, docs/real-data.md)
@@ -85,7 +87,13 @@ def read_course_inputs(args: argparse.Namespace):
     # course .mat files are read as before; measured logs through the shared log options
     ensayo = (read_log_from_args(args, args.ensayo, expect="ensayo").to_ensayo()
               if args.ensayo else None)
-    acel = read_log_from_args(args, args.acel, expect="acel").to_acel()
+    acel_log = read_log_from_args(args, args.acel, expect="acel")
+    calfile = getattr(args, "calibration_file", None)
+    if calfile is not None:  # --calibration: fitted on the readings of this log's axes/unit
+        from calib.calibration.calfile import check_applies
+
+        check_applies(calfile, acel_log)
+    acel = acel_log.to_acel()
     candidates = read_puntos(args.puntos)
     p0, v0, nv = np.array(COURSE_P0), np.array(COURSE_V0), None
     if args.datos:
@@ -105,13 +113,19 @@ def read_course_inputs(args: argparse.Namespace):
 
 def read_calibration_file(args: argparse.Namespace):
     """The :class:`calib.Calibration` of ``--calibration`` (None without it); sets
-    ``args.method`` and ``args.g`` to the file's, refusing an explicit one that differs."""
+    ``args.method`` and ``args.g`` to the file's, refusing an explicit one that differs, and
+    keeps the checked file as ``args.calibration_file``: :func:`read_course_inputs` refuses a
+    vehicle log whose axes or unit differ from the calibration's
+    (:func:`calib.calibration.calfile.check_applies`, which refuses a six-face file here)."""
     path = getattr(args, "calibration", None)
     if not path:
         return None
-    from calib.calibration.calfile import load_calibration
+    from calib.calibration.calfile import check_applies, load_calibration_file
 
-    cal = load_calibration(path)
+    calfile = load_calibration_file(path)
+    check_applies(calfile)  # a tilt-plane calibration
+    args.calibration_file = calfile
+    cal = calfile.calibration
     given = getattr(args, "given", set())
     if "method" in given and args.method != cal.method:
         raise OptionError(f"--method {args.method} but {path} holds a {cal.method} "

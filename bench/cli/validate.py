@@ -4,7 +4,9 @@ The estimates are ``--estimates est.json`` (any tool, docs/validate.md) or
 ``--calibration cal.json`` (``calibrate --save``: read and checked by
 :func:`calib.calibration.calfile.load_calibration_file`, the reader of every command, and graded
 through its ``calibrate --json`` object; with ``--ensayo`` too, that file must be the one the
-calibration was fitted on, by SHA-256).
+calibration was fitted on, by SHA-256). A generated set reads the course's axes x, y in m/s²:
+a calibration of other log axes or units, or a six-face one, is refused
+(:func:`calib.calibration.calfile.check_applies`).
 """
 
 from __future__ import annotations
@@ -43,11 +45,14 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         truth = student_truth(truth, args.student)
         truth_name = f"{args.truth} (students[{idx}].truth)"
     if args.calibration:
-        from calib.calibration.calfile import file_sha256, load_calibration_file
+        from calib.calibration.calfile import check_applies, file_sha256, load_calibration_file
+        from calib.calibration.readings import COURSE_READINGS
 
         # the one reader of every command: validate grades the numbers trajectory, nmin and
         # fuse use (the calibrate --json object of the checked calibration, not a copy)
         cf = load_calibration_file(args.calibration)
+        # a generated set (and its ensayo.mat) reads the course's axes x, y in m/s²
+        check_applies(cf, COURSE_READINGS, log_name=str(args.ensayo or args.truth))
         est, est_name = cf.calibration.to_dict(), str(args.calibration)
         ref = cf.source
         if args.ensayo and ref and file_sha256(args.ensayo) != ref.get("sha256"):

@@ -101,7 +101,8 @@ VOCABULARY: tuple[Term, ...] = (
          "repeats", "file", metavar="ENSAYO"),
     Term("--truth", "truth.json of a generated set (validate: or a class answer_key.json)",
          "file"),
-    Term("--out", "output folder", "folder", metavar="DIR"),
+    Term("--out", "where the output goes: a folder (apply: the corrected log file)", "path",
+         metavar="DIR"),
     Term("--plot", "write a figure (.png or .svg)", "file", metavar="F"),
     Term("--report", "write the report files into this folder", "folder", metavar="DIR"),
     Term("--rrd", "write a rerun recording to this file", "file", metavar="F"),
@@ -139,11 +140,21 @@ VOCABULARY: tuple[Term, ...] = (
     Term("--static-var-ratio", "largest window variance over the median window's", "1",
          metavar="R"),
     # ---------------------------------------------------------------- the sensor and the table
-    Term("--bias", "the sensor's bias x,y", "m/s²", metavar="BX,BY"),
-    Term("--scale", "the sensor's scale-factor error x,y (gain 1 + scale)", "1",
+    Term("--bias", "the sensor's bias x,y (x,y,z: a 3-axis sensor)", "m/s²", metavar="BX,BY"),
+    Term("--scale", "the sensor's scale-factor error x,y (x,y,z: a 3-axis sensor; gain 1 + "
+         "scale)", "1",
          metavar="SX,SY", defaults="generate: -0.03,0.01 (a sensor with errors, near the "
          "course's); design: 0,0 (an ideal gain unless told)"),
-    Term("--noise-var", "noise variances per axis x,y", "(m/s²)²", metavar="VAR_X,VAR_Y"),
+    Term("--noise-var", "noise variances per axis x,y (x,y,z: a 3-axis sensor)", "(m/s²)²",
+         metavar="VAR_X,VAR_Y"),
+    Term("--misalignment", "a 3-axis sensor's misalignment angles m_xy,m_xz,m_yx,m_yz,m_zx,m_zy "
+         "(K = (I + S)(I + M))", "rad", metavar="MXY,MXZ,MYX,MYZ,MZX,MZY"),
+    Term("--faces", "the faces of a 3-axis sensor's case held up, in order (e.g. "
+         "+x,-x,+y,-y,+z,-z)", "—", metavar="FACES"),
+    Term("--holds-per-face", "how many times the list of faces is held", "count", metavar="K"),
+    Term("--hold-seconds", "length of each hold", "s", metavar="S"),
+    Term("--between-hold-std", "std of each hold's placement tilt about each horizontal axis",
+         "rad", metavar="RAD"),
     Term("--g", "local gravity the sensor feels (not the unit g, which is 9.80665 m/s²)",
          "m/s²"),
     Term("--latitude", "geodetic latitude of the site, for the WGS84 normal gravity (north +)",

@@ -454,6 +454,8 @@ def messages(f: dict[str, Path]) -> list[Case]:
         ("validate missing input", ["validate", "--truth", "missing.json", "--calibration",
                                     "cal.json"], cal),
         ("noise missing input", ["noise", "missing.csv"], {}),
+        ("apply missing input", ["apply", "missing.csv", "--calibration", "cal.json", "--out",
+                                 "corrected.csv"], cal),
         ("import missing input", ["import", "missing.csv", "--out", "imp"], {}),
         ("record missing input", ["record", "read", "missing.rrd"], {}),
         ("demo missing course data", ["demo", "--course-data", "nowhere", "--out", "d"], {}),
