@@ -30,6 +30,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/gap_scaling.py
 	$(BIN)/python benchmarks/gap_command.py
 	$(BIN)/python benchmarks/mc_speed.py
+	$(BIN)/python benchmarks/csv_reader.py
 
 octave-check: $(STAMP)
 	BIN=$(BIN) tools/octave_check.sh

@@ -34,8 +34,24 @@ import numpy as np
 __all__ = ["ResultMixin", "readonly", "same"]
 
 
+def _unwritable(a: np.ndarray) -> bool:
+    """True when nothing can write ``a``'s data: it and every array it views are read-only,
+    down to an owner (a view of a writeable array, or of a buffer, may still change)."""
+    while isinstance(a, np.ndarray):
+        if a.flags.writeable:
+            return False
+        if a.base is None:
+            return True
+        a = a.base
+    return False
+
+
 def readonly(a: Any, dtype: Any = float) -> np.ndarray:
-    """A read-only copy of ``a`` as an array of ``dtype``."""
+    """``a`` as a read-only array of ``dtype``: a copy, unless ``a`` already is one that
+    nothing can write (:func:`_unwritable`) — then it is shared, not copied (a long log's arrays
+    go through several frozen records: ``dataclasses.replace`` must not double its memory)."""
+    if isinstance(a, np.ndarray) and a.dtype == np.dtype(dtype) and _unwritable(a):
+        return a
     arr = np.array(a, dtype=dtype)
     arr.setflags(write=False)
     return arr

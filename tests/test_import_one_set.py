@@ -60,3 +60,23 @@ def test_force_in_the_working_folder_replaces_the_set_too(capsys, tmp_path, monk
     rc, _, err = run(capsys, "import", *NGIMU, "--out", ".", "--force")
     assert rc == 0, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["acel.mat", "provenance.json"]
+
+
+def test_a_dropped_gyro_is_named_with_the_fix(capsys, tmp_path):
+    """Gyro columns whose unit is not stated are not read, and import says so and how to fix
+    it (not just "gyro none")."""
+    import numpy as np
+
+    rng = np.random.default_rng(1)
+    rows = []
+    for k in range(600):
+        u = (0.0, 0.0, 9.8) if k < 300 else (9.8, 0.0, 0.0)
+        acc = np.array(u) + rng.normal(0, 0.01, 3)
+        rows.append(f"{k * 0.01:.2f}," + ",".join(f"{v:.4f}" for v in acc) + ","
+                    + ",".join(f"{v:.4f}" for v in rng.normal(0, 0.01, 3)))
+    path = tmp_path / "g.csv"
+    path.write_text("t (s),ax (m/s2),ay (m/s2),az (m/s2),gx,gy,gz\n" + "\n".join(rows) + "\n")
+    rc, out, err = run(capsys, "import", path, "--out", tmp_path / "o")
+    assert rc == 0, err
+    line = unwrap(out)
+    assert "gyro none (gyro columns ignored: their unit is not stated (give --gyro-unit))" in line

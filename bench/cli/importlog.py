@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from bench.cli.logopts import add_log_options, log_options_from_args
+from bench.cli.logopts import add_log_options, log_options_from_args, reading_progress
 from bench.cli.options import add_command, add_force, add_gravity, add_json, check_positive
 from bench.cli.output import print_files, print_json
 from bench.cli.vocabulary import add_option
@@ -40,7 +40,8 @@ def _cmd_import(args: argparse.Namespace) -> int:
     from calib.logs.reader import read_log
 
     check_positive(args.g, "--g")
-    log = read_log(args.log, log_options_from_args(args))  # what it found is printed below
+    log = read_log(args.log, log_options_from_args(args),  # what it found is printed below
+                   **reading_progress(args, args.log))
     paths, prov = write_course_set(log, args.out, force=args.force, tool_version=__version__)
     if args.json:
         print_json({"files": [str(p) for p in paths], "provenance": prov, "units": UNITS})
@@ -55,7 +56,8 @@ def _cmd_import(args: argparse.Namespace) -> int:
         with_g = "" if units.get("acc") == "m/s2" else f", g = {units.get('g'):g} m/s²"
         print(f"units: acceleration {units.get('acc')} (× {conv:.9g} → m/s²{with_g}); axes "
               f"{','.join(prov.get('axes', []))} (tilt axis {prov.get('tilt_axis')}); gyro "
-              f"{units.get('gyro_from') or 'none'}")
+              f"{units.get('gyro_from') or 'none'}"
+              + (f" ({units['gyro_note']})" if units.get("gyro_note") else ""))
     poses = prov.get("poses")
     if poses and "detection" in poses:
         from calib.logs.poses import PoseDetection

@@ -6,13 +6,17 @@
 columns (``t=…,x=…,y=…,z=…,theta=…,label=…,gyro=…``, ``topic=…`` for a bag); ``--axes`` picks
 and signs the log's two axes that form the tilt plane (``x,y``; ``-y,z``); ``--units`` states
 the acceleration unit (``m/s2``, ``g``, ``mg``, ``counts`` with ``--sensitivity`` counts per
-g); ``--gyro-unit`` the gyro's; ``--angle-unit`` states θ's unit; ``--map`` maps course
-variable names to a ``.mat`` file's (``tita=angle,datos=acc``); ``--poses`` gives each held
-pose's angle in order, ``--label-angles`` each label's; ``--static-window`` and
+g); ``--gyro-unit`` the gyro's; ``--time-unit`` a CSV time column's (``s``, ``ms``, ``us``,
+``ns``: nanosecond stamps need no header edit); ``--angle-unit`` states θ's unit; ``--map``
+maps course variable names to a ``.mat`` file's (``tita=angle,datos=acc``); ``--poses`` gives
+each held pose's angle in order, ``--label-angles`` each label's; ``--static-window`` and
 ``--min-hold`` tune the pose detector; ``--theta-source gyro`` integrates the gyro about the
 tilt axis for θ(t) of every sample, anchored to the poses' angles; ``--allow-gaps`` /
 ``--allow-saturation`` accept what is refused by default. The command's ``--g`` (when it has
 one) converts g, mg and counts.
+
+Reading a long log shows its progress on stderr (:func:`bench.cli.progress.log_progress`: a
+bar on a terminal, lines for a log of 64 MiB or more otherwise), never on stdout.
 """
 
 from __future__ import annotations
@@ -25,11 +29,14 @@ from bench.cli.vocabulary import add_option
 FORMATS = ("auto", "course", "csv", "phyphox", "sensorlogger", "rosbag", "mat")
 ACCEL_UNITS = ("m/s2", "g", "mg", "counts")
 GYRO_UNITS = ("rad/s", "deg/s")
+TIME_UNITS = ("s", "ms", "us", "ns")
 THETA_SOURCES = ("poses", "gyro")
 
 
 def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
     """Add the log options (module docstring) to a command's parser."""
+    # the command's name, for the progress of reading a long log (reading_progress)
+    p.set_defaults(log_command=p.prog.split(" ", 1)[-1])
     g = p.add_argument_group("reading a measured log (docs/real-data.md)")
     add_option(g, "--format", dest="log_format", choices=FORMATS, default="auto")
     add_option(g, "--columns")
@@ -39,6 +46,8 @@ def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
     add_option(g, "--sensitivity", type=float)
     add_option(g, "--gyro-unit", choices=GYRO_UNITS, help="unit of the gyro columns "
                "(if not given: recognized from the header)")
+    add_option(g, "--time-unit", choices=TIME_UNITS, help="unit of a CSV log's time column "
+               "(if not given: recognized from the header, else s)")
     add_option(g, "--angle-unit", choices=("rad", "deg"), help="unit of θ, --poses and "
                "label angles (if not given: rad, with the data-based degrees check)")
     add_option(g, "--map")
@@ -121,11 +130,23 @@ def log_options_from_args(args: argparse.Namespace):
         label_angles=_label_angles(getattr(args, "label_angles", None)),
         g=getattr(args, "g", None),
         gyro_unit=getattr(args, "gyro_unit", None),
+        time_unit=getattr(args, "time_unit", None),
         allow_gaps=bool(getattr(args, "allow_gaps", False)),
         allow_saturation=bool(getattr(args, "allow_saturation", False)),
         theta_source=getattr(args, "theta_source", "poses"),
         window=_positive(getattr(args, "static_window", None), "--static-window"),
         min_hold=_positive(getattr(args, "min_hold", None), "--min-hold"))
+
+
+def reading_progress(args: argparse.Namespace, path: str) -> dict:
+    """``read_log``'s keyword ``progress`` for reading the log ``path`` in the command
+    ``args`` came from (:func:`bench.cli.progress.log_progress`: stderr only), or no keyword
+    when nothing would be shown."""
+    from bench.cli.progress import log_progress
+
+    progress = log_progress(getattr(args, "log_command", "tiltbench"), path,
+                            quiet=bool(getattr(args, "quiet", False)))
+    return {} if progress is None else {"progress": progress}
 
 
 def read_log_from_args(args: argparse.Namespace, path: str, expect: str | None = None):
@@ -137,7 +158,8 @@ def read_log_from_args(args: argparse.Namespace, path: str, expect: str | None =
 
     from calib.logs.reader import read_log
 
-    log = read_log(path, log_options_from_args(args), expect=expect)
+    log = read_log(path, log_options_from_args(args), expect=expect,
+                   **reading_progress(args, path))
     poses = log.provenance.get("poses") or {}
     if poses.get("source") == "detected":
         count = len(poses["detection"]["segments"])

@@ -123,6 +123,7 @@ VOCABULARY: tuple[Term, ...] = (
     Term("--units", "acceleration unit of the log", "—"),
     Term("--sensitivity", "counts per g (with --units counts)", "counts/g"),
     Term("--gyro-unit", "unit of the gyro columns", "—"),
+    Term("--time-unit", "unit of a CSV log's time column", "—"),
     Term("--angle-unit", "unit of θ, --poses and label angles", "—"),
     Term("--map", ".mat variable names: tita=NAME,datos=NAME,t=NAME", "—"),
     Term("--allow-gaps", "read a log with gaps in time", "—", flag=True),
@@ -212,6 +213,12 @@ VOCABULARY: tuple[Term, ...] = (
     Term("--smoother", "also run the Rauch-Tung-Striebel smoother", "—", flag=True),
     Term("--std", "which standard deviations are graded", "—"),
     Term("--tau-range", "fit only the octave τ within MIN,MAX", "s", metavar="MIN,MAX"),
+    Term("--save-failed-fit", "write the sensor profile even when no model describes an axis's "
+         "Allan curve (fit_ok: false in sensor.json)", "—", flag=True),
+    Term("--allow-failed-fit", "accept a sensor profile saved from a failed fit (fit_ok: false)",
+         "—", flag=True),
+    Term("--twin", "simulate the fitted profile for the log's length and rate and test its "
+         "Allan deviation against the log's (twin closure, docs/noise.md)", "—", flag=True),
     # ---------------------------------------------------------------- Monte Carlo and sweeps
     Term("--seed", "seed of every random draw", "—"),
     Term("--runs", "Monte Carlo runs per case", "count",

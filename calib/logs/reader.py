@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -100,6 +101,8 @@ class LogOptions:
     g : m/s², converts ``g``/``mg``/``counts``; None: :data:`calib.conventions.G`.
     gyro_unit : ``rad/s`` or ``deg/s`` of the gyro columns; None: stated by the header or
         the format.
+    time_unit : ``s``, ``ms``, ``us`` or ``ns`` of a CSV's time column; None: stated by the
+        header, else s (:mod:`calib.logs.csvlog`).
     allow_gaps, allow_saturation : accept (and record) gaps in time / saturated stretches.
     window, min_hold : pose detector's window and minimum hold, s (samples without times);
         None: :mod:`calib.logs.poses` defaults.
@@ -121,6 +124,7 @@ class LogOptions:
     label_angles: dict[str, float] | None = None
     g: float | None = None
     gyro_unit: str | None = None
+    time_unit: str | None = None
     allow_gaps: bool = False
     allow_saturation: bool = False
     window: float | None = None
@@ -289,7 +293,8 @@ def detect_format(path: Path, options: LogOptions) -> str:
 
 
 def read_log(path: str | os.PathLike, options: LogOptions | None = None,
-             expect: str | None = None) -> ImuLog:
+             expect: str | None = None,
+             progress: Callable[[int, int], None] | None = None) -> ImuLog:
     """Read a measured log into an :class:`ImuLog` (module docstring).
 
     Parameters
@@ -300,6 +305,9 @@ def read_log(path: str | os.PathLike, options: LogOptions | None = None,
         ``.mat`` file — and any file not recognized as a log — then goes through
         :func:`calib.files.course.read_ensayo` / :func:`calib.files.course.read_acel` unchanged
         (same checks, same messages as before logs were read).
+    progress : ``progress(done, total)``, bytes of a CSV/TSV log read so far (compressed,
+        for gzip), called after each block the reader parses (:mod:`calib.logs.csvlog`);
+        other formats do not call it.
 
     Raises
     ------
@@ -327,7 +335,7 @@ def read_log(path: str | os.PathLike, options: LogOptions | None = None,
                         "or Sensor Logger export, ROS bag, .mat); give --format")
     if fmt == "course":
         return _read_course(path, options, read_ensayo, read_acel)
-    raw = _read_raw(path, fmt, options)
+    raw = _read_raw(path, fmt, options, progress)
     log = assemble(raw, options, path)
     if expect != "acel":  # a vehicle run's readings are its motion, not gravity at rest
         check_one_g(log.acc, log.acc_normal, log.pose, G if options.g is None else options.g,
@@ -376,20 +384,26 @@ def _course_log(path: Path, kind: str, names: list[str], prov: dict, read_ensayo
                   provenance=prov, course=e)
 
 
-def _read_raw(path: Path, fmt: str, options: LogOptions) -> RawLog:
+def _read_raw(path: Path, fmt: str, options: LogOptions,
+              progress: Callable[[int, int], None] | None = None) -> RawLog:
     if fmt == "zip":
         from calib.logs.ziplog import choose_member, extracted
 
         member = choose_member(path)
         with extracted(path, member) as inner:
-            raw = _read_raw(inner, "csv", options)
+            raw = _read_raw(inner, "csv", options, progress)
         return replace(raw, notes=dict(raw.notes, zip_member=member))
     if fmt == "csv":
         from calib.logs.csvlog import read_csv
 
         if path.is_dir():
             raise DataError(f"{path}: is a directory; expected a CSV/TSV file")
-        return read_csv(path, options.columns, options.fmt)
+        return read_csv(path, options.columns, options.fmt, units=options.units,
+                        gyro_unit=options.gyro_unit, time_unit=options.time_unit,
+                        progress=progress)
+    if options.time_unit is not None:
+        raise DataError(f"{path}: --time-unit applies to CSV/TSV logs only; drop it (the "
+                        "time of a ROS bag or a .mat is in seconds)")
     if fmt == "rosbag":
         from calib.logs.rosbag import read_bag
 
@@ -449,7 +463,7 @@ def _check_time(raw: RawLog, t: np.ndarray, path: Path, allow_gaps: bool) -> lis
     big = float(np.max(np.abs(t))) if t.size else 0.0
     if big > MAX_ABS_TIME:
         raise DataError(f"{path}: time column '{col}' reaches {big:.3g} s; state its unit in "
-                        "the header (e.g. 'time (ns)' or time_ns)")
+                        "the header (e.g. 'time (ns)' or time_ns) or with --time-unit")
     d = np.diff(t)
     if np.any(d <= 0):
         i = int(np.argmax(d <= 0)) + 1
@@ -491,6 +505,15 @@ def _check_saturation(raw: RawLog, arr: np.ndarray, what: str, path: Path, facto
                                 "if the sensor is so coarse that a held pose reads one value")
 
 
+def _scaled_columns(columns: list[np.ndarray], factors: list[float]) -> np.ndarray:
+    """(N, k) float array of ``columns[j] · factors[j]``, written in place: no temporary
+    copy of a long log per column."""
+    out = np.empty((columns[0].shape[0], len(columns)))
+    for j, (col, f) in enumerate(zip(columns, factors, strict=True)):
+        np.multiply(col, f, out=out[:, j])
+    return out
+
+
 def _angles(values, unit: str | None) -> np.ndarray:
     arr = np.asarray(values, dtype=float)
     return np.deg2rad(arr) if unit == "deg" else arr
@@ -526,8 +549,9 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         _check_finite(raw, raw.acc[axis], what, path)
         if not options.allow_saturation:
             _check_saturation(raw, raw.acc[axis], what, path, factor, g)
-    acc = np.column_stack([(-1.0 if spec.startswith("-") else 1.0) * raw.acc[a] * factor
-                           for spec, a in acc_cols])
+    acc = _scaled_columns([raw.acc[a] for _, a in acc_cols],
+                          [(-1.0 if spec.startswith("-") else 1.0) * factor
+                           for spec, _ in acc_cols])
     # the third axis, signed as the tilt axis â × b̂: (x, y, normal) right-handed
     normal_spec = tilt_axis(tuple(options.axes))
     normal_axis = normal_spec.lstrip("-")
@@ -539,13 +563,15 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         # z sits still at +g); the 3-axis fit's lack-of-fit test shows a clipped pose
         _check_finite(raw, raw.acc[normal_axis], what, path)
         sign = -1.0 if normal_spec.startswith("-") else 1.0
-        acc_normal = sign * raw.acc[normal_axis] * factor
+        acc_normal = np.multiply(raw.acc[normal_axis], sign * factor, dtype=float)
         normal_from = f"{'-' if sign < 0 else ''}{raw.mapping.get(normal_axis, normal_axis)}"
     acc_s = None
     if all(k in raw.acc for k in "xyz"):
         for k in "xyz":
             _check_finite(raw, raw.acc[k], f"column '{raw.mapping.get(k, k)}'", path)
-        acc_s = np.column_stack([raw.acc[k] * factor for k in "xyz"])
+        acc_s = _scaled_columns([raw.acc[k] for k in "xyz"], [factor] * 3)
+        if tuple(options.axes) == ("x", "y"):  # the tilt plane is the sensor's own x, y, z:
+            acc, acc_normal = acc_s[:, :2], acc_s[:, 2]  # views, not a second copy
     n = acc.shape[0]
     if n < 3:
         raise DataError(f"{path}: only {n} samples; at least 3 are needed")
@@ -580,7 +606,7 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
             for k in "xyz":
                 _check_finite(raw, raw.gyro[k], f"gyro '{raw.mapping.get('gyro_' + k, k)}'",
                               path)
-            gyro_s = np.column_stack([raw.gyro[k] * gfac for k in "xyz"])
+            gyro_s = _scaled_columns([raw.gyro[k] for k in "xyz"], [gfac] * 3)
     # θ
     theta = None
     theta_unit = None
@@ -612,8 +638,17 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
     }
     if raw.fmt == "mat" and options.units is None:
         prov["units"]["acc_note"] = "the course variable's unit (m/s²)"
+    # the arrays are this function's own (built above, or the raw log's, dropped on return):
+    # frozen in place, the record shares them instead of copying a long log once more
+    for arr in (acc, t, theta, gyro, acc_normal, acc_s, gyro_s):
+        if isinstance(arr, np.ndarray) and arr.dtype == float:
+            arr.setflags(write=False)
     log = ImuLog(acc=acc, t=t, theta=theta, gyro=gyro, acc_normal=acc_normal, acc_s=acc_s,
                  gyro_s=gyro_s, source=where, provenance=prov)
+    # the raw columns are in the record now (scaled): let a long log's originals go before
+    # the pose detector needs its own working memory (only labels and names are read later)
+    raw.acc.clear()
+    raw.gyro.clear()
     return _poses(log, raw, options, path)
 
 
@@ -652,7 +687,8 @@ def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         pose, values = None, None
     else:
         det = detect_poses(log.acc, log.t, log.gyro, more_acc=log.acc_normal,
-                           window=options.window, min_hold=options.min_hold)
+                           window=options.window,
+                           min_hold=options.min_hold)
         pose, values = det.labels, None
         prov["poses"] = {"source": "detected", "detection": det.to_dict(),
                          "thresholds": det.thresholds_line()}

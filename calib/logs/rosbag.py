@@ -6,6 +6,11 @@ stamp is zero (a driver that does not stamp); ``linear_acceleration`` x, y, z in
 ``angular_velocity`` x, y, z in rad/s — the units the message definition states (REP 103).
 The topic is the only ``sensor_msgs/Imu`` topic in the bag, else the one named by
 ``--columns topic=/imu``; with several and none named the error lists them.
+
+A damaged bag — one that cannot be opened, or whose messages cannot be read or decoded
+(``rosbags`` raises its own errors, and also ``AssertionError``, ``KeyError``,
+``UnicodeDecodeError`` … on flipped bytes) — is refused in one line naming the file, the
+message that failed and the error, never with a traceback.
 """
 
 from __future__ import annotations
@@ -34,8 +39,8 @@ def read_bag(path: Path, topic: str | None = None) -> RawLog:
 
     Raises
     ------
-    DataError : not a readable bag, no Imu topic, several and none chosen, the chosen topic
-        absent or empty.
+    DataError : not a readable bag, a message that cannot be read or decoded, no Imu topic,
+        several and none chosen, the chosen topic absent or empty.
     """
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
@@ -46,34 +51,19 @@ def read_bag(path: Path, topic: str | None = None) -> RawLog:
         reader = AnyReader([bag], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
         reader.open()
     except Exception as exc:  # rosbags raises its own types for damaged or foreign files
-        raise DataError(f"{path}: not a readable ROS bag ({exc})") from exc
+        raise DataError(f"{path}: not a readable ROS bag ({' '.join(str(exc).split())})"
+                        ) from exc
+    failed = True
     try:
-        imu = [c for c in reader.connections if c.msgtype in IMU]
-        topics = sorted({c.topic for c in imu})
-        if not topics:
-            found = sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections})
-            raise DataError(f"{path}: no sensor_msgs/Imu topic (topics: "
-                            f"{', '.join(found) or 'none'})")
-        if topic is None:
-            if len(topics) > 1:
-                raise DataError(f"{path}: several sensor_msgs/Imu topics ({', '.join(topics)});"
-                                " choose one with --columns topic=NAME")
-            topic = topics[0]
-        elif topic not in topics:
-            raise DataError(f"{path}: --columns topic={topic}: no such sensor_msgs/Imu topic "
-                            f"(Imu topics: {', '.join(topics)})")
-        conns = [c for c in imu if c.topic == topic]
-        stamp, recv, acc, rate = [], [], [], []
-        for conn, t_ns, raw in reader.messages(connections=conns):
-            msg = reader.deserialize(raw, conn.msgtype)
-            s = msg.header.stamp
-            stamp.append(int(s.sec) * 1_000_000_000 + int(s.nanosec))
-            recv.append(int(t_ns))
-            a, w = msg.linear_acceleration, msg.angular_velocity
-            acc.append((a.x, a.y, a.z))
-            rate.append((w.x, w.y, w.z))
+        topic, stamp, recv, acc, rate = _messages(reader, path, topic)
+        failed = False
     finally:
-        reader.close()
+        try:
+            reader.close()
+        except Exception as exc:  # noqa: BLE001 — rosbags' own types, and more on damage
+            if not failed:
+                raise DataError(f"{path}: a damaged ROS bag: closing it failed "
+                                f"({_why(exc)})") from exc
     if not acc:
         raise DataError(f"{path}: topic {topic} holds no messages")
     version = "rosbag2" if bag.is_dir() or bag.suffix.lower() in (".db3", ".mcap") else "rosbag1"
@@ -91,6 +81,54 @@ def read_bag(path: Path, topic: str | None = None) -> RawLog:
                                               for k in "xyz"},
                  **{f"gyro_{k}": f"{topic}: angular_velocity.{k}" for k in "xyz"}},
         notes={"topic": topic, "messages": len(acc), "time": field})
+
+
+def _why(exc: BaseException) -> str:
+    """An exception as one short line: its type and message."""
+    text = " ".join(str(exc).split())
+    text = text if len(text) <= 120 else text[:117] + "..."
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _messages(reader, path: Path, topic: str | None
+              ) -> tuple[str, list[int], list[int], list[tuple], list[tuple]]:
+    """The chosen topic and its messages' stamps (ns), receive times (ns), accelerations
+    and rates; any error while reading or decoding a message is a one-line DataError."""
+    imu = [c for c in reader.connections if c.msgtype in IMU]
+    topics = sorted({c.topic for c in imu})
+    if not topics:
+        found = sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections})
+        raise DataError(f"{path}: no sensor_msgs/Imu topic (topics: "
+                        f"{', '.join(found) or 'none'})")
+    if topic is None:
+        if len(topics) > 1:
+            raise DataError(f"{path}: several sensor_msgs/Imu topics ({', '.join(topics)});"
+                            " choose one with --columns topic=NAME")
+        topic = topics[0]
+    elif topic not in topics:
+        raise DataError(f"{path}: --columns topic={topic}: no such sensor_msgs/Imu topic "
+                        f"(Imu topics: {', '.join(topics)})")
+    conns = [c for c in imu if c.topic == topic]
+    stamp: list[int] = []
+    recv: list[int] = []
+    acc: list[tuple] = []
+    rate: list[tuple] = []
+    try:
+        for conn, t_ns, raw in reader.messages(connections=conns):
+            msg = reader.deserialize(raw, conn.msgtype)
+            s = msg.header.stamp
+            a, w = msg.linear_acceleration, msg.angular_velocity
+            row_a, row_w = (float(a.x), float(a.y), float(a.z)), (float(w.x), float(w.y),
+                                                                  float(w.z))
+            stamp.append(int(s.sec) * 1_000_000_000 + int(s.nanosec))
+            recv.append(int(t_ns))
+            acc.append(row_a)
+            rate.append(row_w)
+    except Exception as exc:  # noqa: BLE001 — rosbags' own types, and more on damage
+        raise DataError(f"{path}: a damaged ROS bag: message {len(acc) + 1} of {topic} "
+                        f"cannot be read ({_why(exc)}); the {len(acc)} before it can: cut "
+                        "the bag before it or record again") from exc
+    return topic, stamp, recv, acc, rate
 
 
 __all__ = ["IMU", "is_bag", "read_bag"]
