@@ -261,7 +261,7 @@ RUNS = [  # one real run per command (small sizes), in order: later runs read ea
     ["calibrate", "cal/ensayo.mat", "--save", "cal.json", "--json"],
     ["noise", "st/static.mat", "--json"],
     ["import", "ex/data/real/yei-3space-z-flip.csv", "--units", "g", "--gyro-unit", "rad/s",
-     "--axes", "x,-z", "--min-hold", "0.5", "--poses", "0,0,180,180,0,0", "--angle-unit", "deg",
+     "--axes", "x,-z", "--min-hold", "0.5", "--poses", "0,0,180,0,0", "--angle-unit", "deg",
      "--out", "imp", "--json"],
     ["trajectory", *COURSE, "--json"],
     ["nmin", *COURSE, "--runs", "0", "--draws", "0", "--json"],

@@ -117,7 +117,7 @@ def test_readme_examples_fit(capsys, tmp_path, monkeypatch):
     assert "multi-position, 3 axes" in out
     out = _fits(capsys, "import", "ex/data/real/yei-3space-z-flip.csv", "--units", "g",
                 "--gyro-unit", "rad/s", "--axes", "x,-z", "--min-hold", "0.5", "--poses",
-                "0,0,180,180,0,0", "--angle-unit", "deg", "--out", "yei")
+                "0,0,180,0,0", "--angle-unit", "deg", "--out", "yei")
     assert "wrote: yei/ensayo.mat" in out
     for cmd in ("calibrate", "trajectory", "nmin", "gap", "fuse", "design", "fusion-study",
                 "validate", "generate", "import", "noise"):
