@@ -107,6 +107,7 @@ TRUTH_UNITS: dict[str, str] = {
     "sensor.axes.*.terms.lsb": "m/s²",
     "params.values": "bias m/s², scale 1, misalignment rad",
     "between_hold.tilt_std": "rad", "between_hold.sigma_between_pooled": "m/s²",
+    "between_hold.sigma_between": "m/s²",
     "holds.start": "sample", "holds.stop": "sample", "holds.t_start": "s", "holds.t_stop": "s",
     "holds.joint_offsets": "rad", "holds.tilt": "rad", "holds.up": "1",
     "holds.mean_specific_force": "m/s²",
@@ -536,12 +537,15 @@ class SixFaceRun:
                 "model": "each hold's three hinge targets offset by N(0, tilt_std²): a tilt "
                          "of std tilt_std about each horizontal axis, one offset a turn "
                          "about the vertical",
+                "sigma_between": [[cfg.g * cfg.wobble_std**2, cfg.g * cfg.wobble_std]] * 3,
                 "sigma_between_pooled": (cfg.g * cfg.wobble_std
                                          * np.sqrt(horizontal)).tolist(),
-                "sigma_between_note": "g·tilt_std·√(share of holds with the axis level): "
-                                      "what the six-face fit's σ_B (pooled over all holds) "
-                                      "estimates, to first order; an axis along gravity "
-                                      "moves only by g·ε²/2",
+                "sigma_between_note": "sigma_between: per axis, what the six-face fit's σ_B "
+                                      "of its two classes estimates, to first order: axis "
+                                      "vertical (faces ±a) g·tilt_std² (the std of "
+                                      "g·(1 − cos ε) ≈ g·ε²/2), axis level g·tilt_std; "
+                                      "sigma_between_pooled: one σ_B pooled over all holds, "
+                                      "g·tilt_std·√(share of holds with the axis level)",
             },
             "holds": self.hold_truth(),
         }

@@ -55,8 +55,9 @@ G55 = normal_gravity(55.0, 5000.0)
 CONSISTENCY = "checksum/consistency failed"
 
 
-def six_face_poses(seed: int = 3, repeats: int = 2, face_error: float = 0.0, g: float = G55):
-    """Holds of 60 samples on the six faces, each ``repeats`` times: readings
+def six_face_poses(seed: int = 3, repeats=2, face_error: float = 0.0, g: float = G55):
+    """Holds of 60 samples on the six faces, each ``repeats`` times (or a list: the count of
+    each face +x, +y, +z, -x, -y, -z): readings
     ``b + β_h + (1 + s)·(d · g u) + φ_f + w`` with axes ``d_a`` tilted by ~5 mrad from the
     case axes, a hold-to-hold bias β (σ 0.005 m/s²), a per-face error φ (a face not flat) and
     white noise (σ 0.03 m/s²)."""
@@ -187,7 +188,23 @@ def test_six_face_without_reholds_round_trips(tmp_path):
                             gravity=GravitySource("latitude", 55.0, 5000.0))
     assert load_calibration_file(path).calibration == fit
     doc = json.loads(str(scipy.io.loadmat(str(path))["document"][0]))
-    assert doc["hold_to_hold_variance"] == [None, None, None]
+    assert doc["hold_to_hold_variance"] == [[None, None]] * 3
+
+
+def test_six_face_with_a_borrowed_class_round_trips_and_is_checked(tmp_path):
+    """Only ±x held twice: x's level class and the vertical class of y and z have no re-held
+    face and carry the other class' σ_B (hold_std re-derived per class); a file whose
+    borrowed σ_B differs from the one it borrows is refused in one line."""
+    poses = six_face_poses(5, repeats=[2, 1, 1, 2, 1, 1])
+    fit = fit_six_face(poses, g=G55)
+    assert fit.borrowed().tolist() == [[False, True], [True, False], [True, False]]
+    path = save_calibration(tmp_path / "b.json", fit, poses=poses,
+                            gravity=GravitySource("latitude", 55.0, 5000.0))
+    assert load_calibration_file(path).calibration == fit
+    bad = _edit(tmp_path / "b.json", tmp_path / "e.json",
+                lambda d: d["calibration"]["sigma_between"][0].__setitem__(1, 0.5))
+    with pytest.raises(DataError, match=r"calibration\.sigma_between\[0\]\[1\].*held twice"):
+        load_calibration_file(bad)
 
 
 def test_tilt_plane_v3_records_axes_unit_and_gravity(tmp_path):
@@ -269,11 +286,15 @@ SIX_EDITS = {
                   "assumed"),
     "sensor_axes": (lambda d: d["sensor_axes"].update(z="x"), "sensor_axes.z"),
     "bias copy": (lambda d: d["bias"].__setitem__(0, 1.0), "bias[0]"),
-    "hold_to_hold": (lambda d: d["hold_to_hold_variance"].__setitem__(1, 1.0),
+    "hold_to_hold": (lambda d: d["hold_to_hold_variance"][1].__setitem__(1, 1.0),
                      "hold_to_hold_variance[1]"),
     "level": (lambda d: d["calibration"].update(level=0.9), "checksum"),
-    "sigma_between null": (lambda d: d["calibration"]["sigma_between"].__setitem__(0, None),
+    "sigma_between null": (lambda d: d["calibration"]["sigma_between"][0].__setitem__(0, None),
                            "sigma_between"),
+    "hold_std of the other class": (lambda d: d["calibration"]["hold_std"][0].__setitem__(
+        0, d["calibration"]["hold_std"][0][0] * 1.5), "hold_std[0][0]"),
+    "dof of one axis": (lambda d: d["calibration"].update(dof=d["calibration"]["dof"][:3]),
+                        "calibration.dof"),
     "asymmetric cov": (lambda d: d["calibration"]["cov"][0].__setitem__(1, 1e-3),
                        "not symmetric"),
     "added field": (lambda d: d.update(bias_x=0.5), "bias_x"),

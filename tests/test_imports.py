@@ -17,7 +17,8 @@
     ``import p.q`` or ``from p import m`` — what another file needs is public there;
 (g) the second, independent generator ``validation/independent/`` imports nothing of
     ``validation`` outside itself (written from the physics alone, it must not share the first
-    generator's effects, designs or cases);
+    generator's effects, designs or cases); the same for the drive part ``validation/drive/``
+    (:data:`SEPARATE_SETS`);
 (h) ``calib`` is built of wings: its top level holds ``__init__.py``, the ground modules
     (:data:`CALIB_GROUND`, at most 8) and the wing packages of :data:`WING_USES`, each with a
     docstring that says what it holds. The ground imports only the ground; a wing imports the
@@ -42,7 +43,8 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 PACKAGES = ("bench", "calib")
 CALIB_FORBIDDEN = ("bench", "mujoco", "argparse", "matplotlib", "rerun")
-VALIDATION_SCORING = ("validation.score", "validation.independent.score")
+VALIDATION_SCORING = ("validation.score", "validation.independent.score",
+                      "validation.drive.score")
 """The only modules of ``validation/`` that may import ``calib`` (they run the analysis)."""
 GENERATOR_FORBIDDEN = ("bench", "calib", *VALIDATION_SCORING)
 
@@ -266,15 +268,20 @@ def check_validation_imports(mods: dict[str, Module], root: Path) -> list[str]:
 
 
 INDEPENDENT = "validation.independent"
+DRIVE = "validation.drive"
+SEPARATE_SETS = (INDEPENDENT, DRIVE)
+"""Validation parts written apart from the rest of ``validation/`` (rule g)."""
 
 
-def check_independent_imports(mods: dict[str, Module], root: Path) -> list[str]:
-    """(g) ``validation.independent`` imports no module of ``validation`` outside itself."""
+def check_independent_imports(mods: dict[str, Module], root: Path,
+                              prefix: str = INDEPENDENT) -> list[str]:
+    """(g) ``prefix`` (a package of :data:`SEPARATE_SETS`) imports no module of
+    ``validation`` outside itself."""
     bad = []
     for mod in mods.values():
-        if _under(mod.name, INDEPENDENT):
+        if _under(mod.name, prefix):
             bad += _flagged(mod, root, lambda n: _under(n, "validation")
-                            and n != "validation" and not _under(n, INDEPENDENT))
+                            and n != "validation" and not _under(n, prefix))
     return sorted(set(bad))
 
 
@@ -465,10 +472,12 @@ def test_validation_generators_import_neither_bench_nor_calib():
 
 def test_the_independent_generator_shares_nothing_with_the_first():
     mods = scan(REPO, ("validation",))
-    assert f"{INDEPENDENT}.generate" in mods and f"{INDEPENDENT}.score" in mods
-    bad = check_independent_imports(mods, REPO)
-    assert not bad, ("validation/independent/ must not import the rest of validation/:\n"
-                     + "\n".join(bad))
+    for prefix in SEPARATE_SETS:
+        assert f"{prefix}.generate" in mods and f"{prefix}.score" in mods
+        bad = check_independent_imports(mods, REPO, prefix)
+        where = prefix.replace(".", "/")
+        assert not bad, (f"{where}/ must not import the rest of validation/:\n"
+                         + "\n".join(bad))
 
 
 # --- each checker can fail: a synthetic tree ------------------------------------------------
@@ -656,6 +665,18 @@ def test_checker_g_finds_imports_of_the_first_generator_in_the_independent_one(t
     assert check_independent_imports(mods, tmp_path) == [
         "validation/independent/cases.py:2 imports validation.effects",
         "validation/independent/physics.py:1 imports validation.effects"]
+    # the drive part: neither the first generator nor the independent one
+    _tree(tmp_path, {
+        "validation/drive/__init__.py": "",
+        "validation/drive/motion.py": "import numpy as np\n",
+        "validation/drive/cases.py": "from ..independent import physics\nfrom . import motion\n",
+        "validation/drive/generate.py": "def f():\n    from validation import effects\n",
+        "validation/drive/score.py": "from .cases import x\n",
+    })
+    mods = scan(tmp_path, ("validation",))
+    assert check_independent_imports(mods, tmp_path, "validation.drive") == [
+        "validation/drive/cases.py:1 imports validation.independent",
+        "validation/drive/generate.py:2 imports validation.effects"]
     # the scorer of the independent set is a scorer: generators may not import it
     mods["validation.independent.generate"].imports.append(
         ("validation.independent.score", (), 9))

@@ -2,12 +2,14 @@
 
 One column per sensor axis a. Top: each hold's reading error ``m̄_h,a − g·u_h,a`` (m/s²: what
 the axis reads beyond an ideal sensor on that face), grouped by face, with its level-``L``
-bar (``k·√(σ̂_B² + σ̂_W²/n_h)``, the std the fit used) and the fitted model's value on that
-face (``b_a + g·(K_a·u) − g·u_a``). Bottom: each hold's residual (mean − model) with the same
+bar (``k·√(σ̂_B,c² + σ̂_W²/n_h)``, the std the fit used, σ̂_B,c that of the hold's class: the
+axis vertical or level) and the fitted model's value on that face
+(``b_a + g·(K_a·u) − g·u_a``). Bottom: each hold's residual (mean − model) with the same
 bars around 0: a model that fits leaves them inside their bars, a face that repeats badly or a
 missing term shows. The title line of each column gives the axis' bias, scale and
 misalignments ± the half-width of their level-``L`` intervals: every bar and ± of the figure
-is at the one level ``L`` (Student t with the axis' Satterthwaite dof).
+is at the one level ``L`` (Student t with the Satterthwaite dof of each parameter, and of each
+hold's variance for its bar: :meth:`SixFaceFit.hold_dof`).
 """
 
 from __future__ import annotations
@@ -37,14 +39,14 @@ def sixface_figure(fit: SixFaceFit, level: float = 0.95) -> Figure:
     u = face_vectors(fit.faces)
     g = fit.g
     ci = fit.conf_int(level)
+    hold_k = stats.t.ppf(0.5 + level / 2, fit.hold_dof())  # (H, 3)
     fig, axes = plt.subplots(2, 3, figsize=(14.5, 7.0), sharex=True)
     xs = np.arange(len(order))
     for a, name in enumerate("xyz"):
-        k = float(stats.t.ppf(0.5 + level / 2, fit.dof[a]))
         row = np.concatenate([[fit.params[4 * a]], fit.k_matrix[a]])
         model = row[0] + g * u @ row[1:] - g * u[:, a]
         error = model + fit.residuals[:, a]
-        bars = k * fit.hold_std[:, a]
+        bars = hold_k[:, a] * fit.hold_std[:, a]
         top, bottom = axes[0, a], axes[1, a]
         for x, h in zip(xs, order, strict=True):
             color = FACE_COLORS[fit.faces[h]]

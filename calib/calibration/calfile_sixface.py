@@ -18,7 +18,8 @@ One JSON object, keys in this order (kind: **d**efining, *derived*, cosmetic)::
     bias, scale                 (3,) m/s², (3,) 1                                   derived
     misalignment, k_matrix      (3, 3) rad (m_ab off the diagonal), (3, 3) 1         derived
     sigma_within                (3,) σ_W m/s², the scatter within holds             derived
-    hold_to_hold_variance       (3,) σ_B² (m/s²)², null when no face is held twice   derived
+    hold_to_hold_variance       (3, 2) σ_B² (m/s²)² per axis, class (axis vertical,  derived
+                                axis level); null when no face is held twice
     poses                       per hold {"face", "n", "mean" (3,) m/s²}            d
     units, checksum             key path → unit; SHA-256 of the defining fields     derived
     calibration                 SixFaceFit.to_dict() but its "source" (a path)      d
@@ -29,8 +30,10 @@ the checksum covers the defining fields. Before that, the numbers are checked ag
 themselves (:func:`check_six_face`): shapes, a positive definite covariance, the scale and
 misalignment parameters equal to their entries of K (exactly), a K that can be solved, faces
 that identify every parameter, each hold's face the one its mean points along, the residuals
-equal to ``mean − (b + g K u)`` and each hold's std to ``√(σ_B² + σ_W²/n)`` (to 10⁻⁹
-relative), σ_B measured exactly when a face is held twice.
+equal to ``mean − (b + g K u)`` and each hold's std to ``√(σ_B,c² + σ_W²/n)`` with σ_B,c
+the σ_B of the hold's class for that axis (vertical on faces ±a, level on the others;
+:func:`calib.calibration.sixface.hold_classes`) (to 10⁻⁹ relative), σ_B measured exactly when
+a face is held twice, and a class with no re-held face carrying the other class' σ_B.
 """
 
 from __future__ import annotations
@@ -71,7 +74,13 @@ from calib.calibration.readings import (
     gravity_from_document,
     readings_from_document,
 )
-from calib.calibration.sixface import AXES_3, SixFaceFit, face_name, face_vectors
+from calib.calibration.sixface import (
+    AXES_3,
+    SixFaceFit,
+    face_name,
+    face_vectors,
+    hold_classes,
+)
 
 METHOD = "six-face"
 """The ``method`` of a six-face calibration file."""
@@ -113,7 +122,8 @@ FILE_UNITS = {
     "calibration.level": "1",
 }
 """The ``units`` object of a six-face calibration file (docs/units.md); the Satterthwaite
-``dof`` are not whole numbers, hence ``1``."""
+``dof`` (one per parameter) are not whole numbers, hence ``1``; ``sigma_between`` (m/s²) and
+``hold_to_hold_variance`` ((m/s²)²) are (3, 2), per axis and class (axis vertical, level)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,7 +140,18 @@ class SixFaceFile:
 
 
 def _none_if_nan(values: np.ndarray) -> list:
-    return [None if not np.isfinite(v) else v for v in np.asarray(values, float).tolist()]
+    """A JSON list (nested for a 2-D array) with null for NaN (not measured)."""
+    def one(v: Any) -> Any:
+        return [one(x) for x in v] if isinstance(v, list) else (
+            None if not np.isfinite(v) else v)
+    return one(np.asarray(values, float).tolist())
+
+
+def _nan_if_none(v: Any) -> Any:
+    """The inverse of :func:`_none_if_nan` before a shape check (anything else unchanged)."""
+    if isinstance(v, list):
+        return [_nan_if_none(x) for x in v]
+    return np.nan if v is None else v
 
 
 def six_face_document(fit: SixFaceFit, hold_means: np.ndarray, source: dict | None,
@@ -197,7 +218,7 @@ def _state_fit(state: Any, path: Any) -> tuple[SixFaceFit, int]:
                    f"{short(n)}")
     array(state["params"], "calibration.params", (12,), path)
     array(state["cov"], "calibration.cov", (12, 12), path)
-    dof = array(state["dof"], "calibration.dof", (3,), path)
+    dof = array(state["dof"], "calibration.dof", (12,), path)
     if np.any(dof <= 0):
         raise fail(path, "calibration.dof", f"must be positive, got {dof.tolist()}")
     array(state["k_matrix"], "calibration.k_matrix", (3, 3), path)
@@ -208,7 +229,8 @@ def _state_fit(state: Any, path: Any) -> tuple[SixFaceFit, int]:
     if not np.all((sw**2 >= SIGMA2_RANGE[0]) & (sw**2 <= SIGMA2_RANGE[1])):
         raise fail(path, "calibration.sigma_within", f"is {sw.tolist()}: each σ_W² must be in "
                    f"[{SIGMA2_RANGE[0]:g}, {SIGMA2_RANGE[1]:g}] (m/s²)²")
-    sb = array(state["sigma_between"], "calibration.sigma_between", (3,), path, nullable=True)
+    sb = array(_nan_if_none(state["sigma_between"]), "calibration.sigma_between", (3, 2), path,
+               nullable=True)
     if np.any(sb < 0):
         raise fail(path, "calibration.sigma_between", "must not be negative")
     array(state["widening"], "calibration.widening", (3,), path, nullable=True)
@@ -289,15 +311,23 @@ def check_six_face(fit: SixFaceFit, hold_means: np.ndarray, g: float, path: Any)
     if not cond <= K_COND_MAX:
         raise fail(path, "calibration.k_matrix", f"has condition number {cond:.3g} (at most "
                    f"{K_COND_MAX:g}): the correction cannot solve K a = m − b")
-    if np.isnan(fit.sigma_between).any() != (len(set(fit.faces)) == len(fit.faces)):
-        raise inconsistent(path, "calibration.sigma_between", "must be measured (a number) "
+    sb = np.asarray(fit.sigma_between, dtype=float)
+    nan = np.isnan(sb)
+    if nan.any() != (len(set(fit.faces)) == len(fit.faces)) or (nan.any() and not nan.all()):
+        raise inconsistent(path, "calibration.sigma_between", "must be measured (numbers) "
                            "exactly when a face is held twice")
+    # a class (axis vertical / level) none of whose faces is held twice carries the other's
+    for a, c in zip(*np.nonzero(fit.borrowed()), strict=True):
+        if sb[a, c] != sb[a, 1 - c]:
+            raise inconsistent(path, f"calibration.sigma_between[{a}][{c}]",
+                               f"is {sb[a, c]!r}, but no face of that class is held twice: "
+                               f"it must be the other class' {sb[a, 1 - c]!r}")
     # an axis whose lack of fit went into its intervals (SixFaceFit.misfit_in_intervals)
     # has its estimate from the face means: its widening is measured, its hold std at least
     # the face-level scatter
     misfit = np.array(getattr(fit, "misfit_in_intervals", (False,) * 3), dtype=bool)
     plain = ~misfit
-    if not np.array_equal(np.isnan(fit.widening[plain]), np.isnan(fit.sigma_between[plain])):
+    if not np.array_equal(np.isnan(fit.widening[plain]), nan[plain].any(axis=1)):
         raise inconsistent(path, "calibration.widening", "must be null exactly where "
                            "sigma_between is")
     # the fit's faces are the case axes its hold means point along (sixface.faces_of)
@@ -314,15 +344,16 @@ def check_six_face(fit: SixFaceFit, hold_means: np.ndarray, g: float, path: Any)
         raise inconsistent(path, f"calibration.residuals[{i}][{a}]",
                            f"is {fit.residuals[i, a]!r} but the hold's mean and the model give "
                            f"{hold_means[i, a] - model[i, a]!r}")
-    sb2 = np.where(np.isnan(fit.sigma_between), 0.0, fit.sigma_between) ** 2
-    v = sb2 + fit.sigma_within**2 / np.asarray(fit.n, float)[:, None]
+    sb2 = np.where(nan, 0.0, sb) ** 2
+    v = (np.take_along_axis(sb2.T, hold_classes(fit.faces), axis=0)  # σ_B,c(h)² per axis
+         + fit.sigma_within**2 / np.asarray(fit.n, float)[:, None])
     rel = (fit.hold_std**2 - v) / v
     rel[:, plain] = np.abs(rel[:, plain])
     rel[:, misfit] = -np.minimum(rel[:, misfit], 0.0)  # at least √(σ_B² + σ_W²/n)
     if np.max(rel) > RELATIVE_TOLERANCE:
         i, a = np.unravel_index(np.argmax(rel), rel.shape)
         raise inconsistent(path, f"calibration.hold_std[{i}][{a}]",
-                           f"is {fit.hold_std[i, a]!r}, not √(σ_B² + σ_W²/n) = "
+                           f"is {fit.hold_std[i, a]!r}, not √(σ_B,c² + σ_W²/n) = "
                            f"{float(np.sqrt(v[i, a]))!r}")
 
 
@@ -384,7 +415,8 @@ def six_face_mat_variables(doc: dict) -> dict[str, Any]:
         "misalignment": np.asarray(doc["misalignment"], float),
         "k_matrix": np.asarray(doc["k_matrix"], float),
         "sigma_within": np.asarray(doc["sigma_within"], float).reshape(1, 3),
-        "hold_to_hold_variance": np.array([[num(v) for v in doc["hold_to_hold_variance"]]]),
+        "hold_to_hold_variance": np.array([[num(v) for v in row]
+                                           for row in doc["hold_to_hold_variance"]]),
         "faces": ",".join(p["face"] for p in doc["poses"]),
         "hold_n": np.array([[float(p["n"]) for p in doc["poses"]]]),
         "hold_means": np.array([p["mean"] for p in doc["poses"]], float).reshape(-1, 3),
@@ -393,8 +425,8 @@ def six_face_mat_variables(doc: dict) -> dict[str, Any]:
         "checksum": doc["checksum"]["value"],
         "units": "g m/s^2; params per axis [bias m/s^2, scale 1, misalignment rad x2]; cov "
                  "products of the params' units; bias, sigma_within, hold_means m/s^2; "
-                 "hold_to_hold_variance (m/s^2)^2; misalignment rad; k_matrix 1; latitude deg; "
-                 "height m",
+                 "hold_to_hold_variance (m/s^2)^2, 3x2 (axis x y z; class axis vertical, axis "
+                 "level); misalignment rad; k_matrix 1; latitude deg; height m",
     }
 
 
