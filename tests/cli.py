@@ -29,13 +29,17 @@ def unwrap(text: str) -> str:
 def one_line_error(capsys, *argv, prefix: str = "tiltbench ",
                    ignore: tuple[str, ...] = ()) -> str:
     """Run a command that must fail on bad input: exit 2, nothing on stdout, no traceback,
-    one message on stderr (messages starting with ``ignore`` aside) that starts with ``prefix``
+    one message on stderr (messages starting with ``ignore`` and the provenance note aside) that
+    starts with ``prefix``
     and says ``error:``; return that message as one line (:func:`unwrap`)."""
     rc, out, err = run(capsys, *argv)
     assert rc == 2, err
     assert out == ""
     assert "Traceback" not in err
-    lines = [ln for ln in unwrap(err).splitlines() if not ln.startswith(ignore or ("\0",))]
+    # the provenance note (how the log was read, printed before any later refusal) is not a
+    # second message
+    skip = (*ignore, "note: read ")
+    lines = [ln for ln in unwrap(err).splitlines() if not ln.startswith(skip)]
     assert len(lines) == 1, err
     assert lines[0].startswith(prefix) and "error:" in lines[0]
     return lines[0]

@@ -31,6 +31,22 @@ ACCEL_UNITS = ("m/s2", "g", "mg", "counts")
 GYRO_UNITS = ("rad/s", "deg/s")
 TIME_UNITS = ("s", "ms", "us", "ns")
 THETA_SOURCES = ("poses", "gyro")
+OUT_OF_PLANE = "-"
+"""The ``--poses`` mark of a held pose outside the tilt plane (its samples are set aside)."""
+
+
+def parse_pose_angles(text: str) -> tuple[float, ...]:
+    """``--poses``: finite angles, or ``-`` (:data:`OUT_OF_PLANE`) for a pose outside the
+    tilt plane, which becomes NaN (:class:`calib.logs.reader.LogOptions` ``poses``)."""
+    cells = [c.strip() for c in text.split(",")]
+    if OUT_OF_PLANE not in cells:
+        return tuple(parse_floats(text, "--poses"))
+    if all(c == OUT_OF_PLANE for c in cells):
+        raise OptionError("--poses: every pose is marked '-' (outside the tilt plane); give "
+                          "the angle of at least two")
+    angles = [c for c in cells if c != OUT_OF_PLANE]
+    values = iter(parse_floats(",".join(angles), "--poses"))
+    return tuple(float("nan") if c == OUT_OF_PLANE else next(values) for c in cells)
 
 
 def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
@@ -57,7 +73,9 @@ def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
                "value (refused by default as saturated)")
     if poses:
         add_option(g, "--poses", help="angle of each held pose, in order (e.g. 0,90,180,270 "
-                   "--angle-unit deg); without it, poses found in the log keep θ unknown")
+                   "--angle-unit deg; - for a pose outside the tilt plane, e.g. a six-face "
+                   "log's ±z faces: 0,-,90,-); without it, poses found in the log keep θ "
+                   "unknown")
         add_option(g, "--label-angles", help="angle of each value of the label column, e.g. "
                    "1=0,2=90 (in --angle-unit)")
         add_option(g, "--theta-source", choices=THETA_SOURCES, default="poses",
@@ -126,7 +144,7 @@ def log_options_from_args(args: argparse.Namespace):
         units=getattr(args, "units", None), sensitivity=sens,
         angle_unit=getattr(args, "angle_unit", None),
         mapping=_pairs(getattr(args, "map", None), "--map"),
-        poses=None if poses is None else tuple(parse_floats(poses, "--poses")),
+        poses=None if poses is None else parse_pose_angles(poses),
         label_angles=_label_angles(getattr(args, "label_angles", None)),
         g=getattr(args, "g", None),
         gyro_unit=getattr(args, "gyro_unit", None),
@@ -156,10 +174,13 @@ def read_log_from_args(args: argparse.Namespace, path: str, expect: str | None =
     (stdout stays the command's own: one JSON object with ``--json``)."""
     import sys
 
-    from calib.logs.reader import read_log
+    from calib.logs.reader import provenance_line, read_log
 
     log = read_log(path, log_options_from_args(args), expect=expect,
                    **reading_progress(args, path))
+    line = provenance_line(log.provenance)
+    if line:  # how the log was read: which column became what, units, factors
+        print(f"note: {line}", file=sys.stderr)
     poses = log.provenance.get("poses") or {}
     if poses.get("source") == "detected":
         count = len(poses["detection"]["segments"])

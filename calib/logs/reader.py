@@ -514,6 +514,32 @@ def _scaled_columns(columns: list[np.ndarray], factors: list[float]) -> np.ndarr
     return out
 
 
+def provenance_line(prov: dict[str, Any]) -> str | None:
+    """One line saying how a log was read — format, which column became what, the units and
+    their factor to SI — from its provenance record; None for a course file (read as the
+    course defines it)."""
+    if not prov or prov.get("format") == "course":
+        return None
+    mapping = prov.get("mapping") or {}
+    units = prov.get("units") or {}
+    axes = prov.get("axes") or ["x", "y"]
+    member = (prov.get("reader") or {}).get("zip_member")
+    cols = [f"{role} ← {mapping[role]!r}" for role in ("t", "theta", "label") if role in mapping]
+    acc = ", ".join(f"{a} ← {mapping.get(a.lstrip('-'), a)!r}" for a in axes)
+    if prov.get("normal_axis"):
+        acc += f", n ← {prov['normal_axis']!r}"
+    factor = units.get("acc_to_m_s2")
+    conv = "" if factor in (None, 1.0) else f" × {factor:.9g} → m/s²"
+    gyro = units.get("gyro_from") or "none"
+    if units.get("gyro"):
+        gyro += f" in {units['gyro']}"
+    elif units.get("gyro_note"):
+        gyro += f" ({units['gyro_note']})"
+    name = (prov.get("source") or {}).get("name")
+    return (f"read {name} as {prov.get('format')}{f' (member {member})' if member else ''}: "
+            f"{', '.join(cols + [acc])} in {units.get('acc')}{conv}; gyro {gyro}")
+
+
 def _angles(values, unit: str | None) -> np.ndarray:
     arr = np.asarray(values, dtype=float)
     return np.deg2rad(arr) if unit == "deg" else arr
@@ -719,16 +745,30 @@ def _poses(log: ImuLog, raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
                             "held poses' angles: give them (--poses … or --label-angles …)")
         return replace(log, pose=pose, provenance=prov)
     rad = _angles(angles, options.angle_unit)
+    out_of_plane = np.flatnonzero(np.isnan(rad))  # --poses '-': a pose outside the tilt plane
     if options.theta_source == "gyro":
+        if out_of_plane.size:
+            raise DataError(f"{path}: --theta-source gyro anchors θ(t) to every held pose: "
+                            "give each an angle (no '-' in --poses)")
         return _theta_from_gyro(log, pose, rad, prov, options, path)
-    keep = pose >= 0
+    if np.sum(np.isfinite(rad)) < 2:
+        raise DataError(f"{path}: --poses gives fewer than two poses in the tilt plane; give "
+                        "the angles of at least two")
+    keep = (pose >= 0) & np.isin(pose, np.flatnonzero(np.isfinite(rad)))
+    # the poses in the plane keep their order, numbered 0, 1, … without the gaps
+    new_label = np.cumsum(np.isfinite(rad)) - 1
     theta = rad[pose[keep]]
     prov["samples"] = dict(prov["samples"], kept=int(keep.sum()))
+    aside = "" if not out_of_plane.size else (
+        f"; {out_of_plane.size} pose(s) marked '-' (outside the tilt plane: "
+        f"{', '.join(str(int(k)) for k in out_of_plane)}) set aside")
     prov["held_samples_only"] = ("θ comes from the poses' angles: only the held samples "
-                                 f"({int(keep.sum())} of {log.n}) are kept")
+                                 f"({int(keep.sum())} of {log.n}) are kept{aside}")
     prov["units"]["theta"] = options.angle_unit or "rad"
-    prov["pose_angles_rad"] = rad.tolist()
-    out = _sub(log, keep, theta, pose[keep], prov)
+    prov["pose_angles_rad"] = [None if np.isnan(r) else float(r) for r in rad]
+    if out_of_plane.size:
+        prov["poses_out_of_plane"] = [int(k) for k in out_of_plane]
+    out = _sub(log, keep, theta, new_label[pose[keep]], prov)
     if options.angle_unit is None:
         _degrees_check(out.theta, out.acc, path, "the pose angles")
     return out
@@ -815,4 +855,5 @@ def _labels(label: np.ndarray) -> tuple[np.ndarray, list[str]]:
 
 __all__ = ["FORMATS", "GAP_FACTOR", "LOG_FORMAT_VERSION", "SATURATION_RUN", "ImuLog",
            "LogOptions", "accel_factor", "assemble", "detect_format", "file_sha256",
+           "provenance_line",
            "read_log", "tilt_axis"]
