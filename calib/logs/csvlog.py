@@ -711,6 +711,9 @@ def _read(path: Path, columns: dict[str, str], fmt: str, options: dict[str, str 
     if "gyro" in values:
         gyro = {"tilt": values["gyro"]}
     acc_units = _acc_units(path, names, index, units, acc, options["units"])
+    content_note = None
+    if detected == "sensorlogger" and acc_units is None and options["units"] is None:
+        acc_units, content_note = _sensor_logger_units(path, acc)
     t, time_note = _time(path, names, index, units, values, options["time_unit"])
     g_unit = _gyro_units(path, index, units, options["gyro_unit"])
     return RawLog(
@@ -723,7 +726,8 @@ def _read(path: Path, columns: dict[str, str], fmt: str, options: dict[str, str 
         notes={"delimiter": {"\t": "tab", None: "spaces"}.get(delim, delim),
                "decimal": "," if decimal_comma and any("," in s for s in parser.firsts)
                else ".",
-               "gzip": notes_gzip, "time_unit": time_note})
+               "gzip": notes_gzip, "time_unit": time_note,
+               **({"units_from_content": content_note} if content_note else {})})
 
 
 def _roles(path: Path, names: list[str], columns: dict[str, str], fmt: str
@@ -777,6 +781,38 @@ def _roles(path: Path, names: list[str], columns: dict[str, str], fmt: str
     mapping = {("x" if r == "acc.x" else "y" if r == "acc.y" else "z" if r == "acc.z"
                 else r.replace("gyro.", "gyro_")): names[i] for r, i in index.items()}
     return index, units, detected, mapping
+
+
+SENSOR_LOGGER_G = 9.80665
+"""m/s²: what a still phone's Sensor Logger readings with gravity average to, in magnitude."""
+
+
+def _sensor_logger_units(path: Path, acc: dict[str, np.ndarray]) -> tuple[str | None, str]:
+    """The unit of a Sensor Logger file whose name does not say which export it is (renamed,
+    prefixed), from its content: its calibrated files are in m/s² (the app's UNITS.md), and
+    the median magnitude ``|a|`` over the log tells the exports apart — ≈ 9.8 (0.8–1.25 g):
+    acceleration with gravity (TotalAcceleration), read in m/s²; below 0.3 g: gravity removed
+    (Accelerometer.csv: user motion only), refused; ≈ 1 (0.8–1.25, checked first): readings in
+    g (iOS's AccelerometerUncalibrated), refused asking for ``--units g``. Else None: the unit stays
+    unstated and the reader asks for ``--units``."""
+    if not all(k in acc for k in "xyz"):
+        return None, ""
+    mag = float(np.median(np.sqrt(acc["x"] ** 2 + acc["y"] ** 2 + acc["z"] ** 2)))
+    g = SENSOR_LOGGER_G
+    if 0.8 * g <= mag <= 1.25 * g:
+        return "m/s2", (f"a Sensor Logger export with gravity: median |a| = {mag:.4g}, read in "
+                        "m/s² (the app's unit)")
+    if 0.8 <= mag <= 1.25:
+        raise DataError(f"{path}: a Sensor Logger export whose readings average |a| = "
+                        f"{mag:.3g}: in g, not m/s² (AccelerometerUncalibrated on iOS): give "
+                        "--units g — unless it is a gravity-removed export of a moving phone "
+                        "(then read TotalAcceleration.csv)")
+    if mag < 0.3 * g:
+        raise DataError(f"{path}: a Sensor Logger export whose readings average |a| = "
+                        f"{mag:.3g} m/s², far below g: gravity was removed (Accelerometer.csv "
+                        "holds user motion only), so the tilt signal is gone; read "
+                        "TotalAcceleration.csv")
+    return None, ""
 
 
 def _acc_units(path: Path, names: list[str], index: dict[str, int],
