@@ -8,7 +8,7 @@ import json
 
 import pytest
 
-from tests.cli import run, unwrap
+from tests.cli import one_line_error, run, unwrap
 from tests.reference.real_data import REAL_DIR
 
 YEI = (REAL_DIR / "yei-3space-z-flip.csv", "--units", "g", "--gyro-unit", "rad/s")  # 2 poses
@@ -80,3 +80,20 @@ def test_a_dropped_gyro_is_named_with_the_fix(capsys, tmp_path):
     assert rc == 0, err
     line = unwrap(out)
     assert "gyro none (gyro columns ignored: their unit is not stated (give --gyro-unit))" in line
+
+
+def test_rate_gives_a_log_without_times_its_clock(capsys, tmp_path):
+    """``import --rate``: a log without a time column (imucal's session: sample numbers, 102.4
+    Hz by its source) gets t = k / rate; a log with times refuses it."""
+    import scipy.io
+
+    log = REAL_DIR / "imucal-ferraris-session.csv.gz"
+    rc, out, err = run(capsys, "import", log, "--units", "m/s2", "--gyro-unit", "deg/s",
+                       "--rate", "102.4", "--out", tmp_path / "o", "--json")
+    assert rc == 0, err
+    prov = json.loads(out)["provenance"]
+    assert prov["units"]["t"] == "s, from --rate 102.4 Hz"
+    t = scipy.io.loadmat(tmp_path / "o" / "ensayo.mat")["t"].ravel()
+    assert abs(t[1] - t[0] - 1 / 102.4) < 1e-12 or abs(t[0] % (1 / 102.4)) < 1e-9
+    line = one_line_error(capsys, "import", *NGIMU, "--rate", "50", "--out", tmp_path / "n")
+    assert "has sample times" in line and "drop --rate" in line

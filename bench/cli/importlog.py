@@ -16,6 +16,7 @@ written and the provenance record.
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from pathlib import Path
 
 from bench.cli.logopts import add_log_options, log_options_from_args, reading_progress
@@ -40,7 +41,10 @@ def _cmd_import(args: argparse.Namespace) -> int:
     from calib.logs.reader import read_log
 
     check_positive(args.g, "--g")
-    log = read_log(args.log, log_options_from_args(args),  # what it found is printed below
+    if args.rate is not None:
+        check_positive(args.rate, "--rate")
+    options = replace(log_options_from_args(args), rate=args.rate)
+    log = read_log(args.log, options,  # what it found is printed below
                    **reading_progress(args, args.log))
     paths, prov = write_course_set(log, args.out, force=args.force, tool_version=__version__)
     if args.json:
@@ -86,5 +90,7 @@ def register(sub) -> None:
     add_log_options(p)
     add_gravity(p)
     add_option(p, "--out", required=True, type=Path)
+    add_option(p, "--rate", type=float, help="sample rate in Hz of a log without a time "
+               "column (its samples evenly spaced from t = 0); refused for a log with times")
     add_json(p)
     add_force(p, "existing files in --out")

@@ -107,6 +107,8 @@ class LogOptions:
     window, min_hold : pose detector's window and minimum hold, s (samples without times);
         None: :mod:`calib.logs.poses` defaults.
     detect : look for held poses when θ is unknown (False for a vehicle run).
+    rate : Hz, for a log without a time column: its samples are taken as evenly spaced at this
+        rate from t = 0 (``import --rate``); refused for a log that has times.
     theta_source : where θ comes from when the poses' angles are given: ``poses`` (the held
         samples only, each at its pose's angle) or ``gyro`` (every sample, θ(t) integrated
         from the gyro about the tilt axis and anchored to the poses' angles:
@@ -131,6 +133,7 @@ class LogOptions:
     min_hold: float | None = None
     detect: bool = True
     theta_source: str = "poses"
+    rate: float | None = None
 
 
 @dataclass(frozen=True)
@@ -603,7 +606,12 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         raise DataError(f"{path}: only {n} samples; at least 3 are needed")
     # time
     t, gaps = raw.t, []
-    if t is not None:
+    if t is not None and options.rate is not None:
+        raise DataError(f"{path}: the log has sample times (column "
+                        f"'{raw.mapping.get('t', 't')}'); drop --rate")
+    if t is None and options.rate is not None:  # evenly sampled at the stated rate, from 0
+        t = np.arange(acc.shape[0]) / float(options.rate)
+    elif t is not None:
         _check_finite(raw, t, f"time column '{raw.mapping.get('t', 't')}'", path)
         gaps = _check_time(raw, t, path, options.allow_gaps)
     # gyro about the tilt axis
@@ -657,7 +665,7 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
                   "gyro_from": gyro_from,
                   "gyro_note": gyro_note,
                   "theta": None if theta is None else (theta_unit or "rad (degrees check)"),
-                  "t": "s"},
+                  "t": "s" if options.rate is None else f"s, from --rate {options.rate:g} Hz"},
         "reader": dict(raw.notes),
         "samples": {"read": n},
         "gaps": gaps,
