@@ -72,7 +72,13 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     nv = noise_var_from_args(args)
     args.nv3 = nv3
     if args.method == "multiposition" or (args.method is None and log.theta is None):
-        return _multiposition(args, log, nv)
+        try:
+            return _multiposition(args, log, nv)
+        except ValueError as exc:  # too few holds found: say how the detector looked
+            hint = detector_hint(log, str(exc))
+            if hint is None:
+                raise
+            raise type(exc)(f"{exc}; {hint}") from None
     if nv3 is not None:
         raise OptionError("--noise-var: three variances are for the 3-axis multi-position fit; "
                           "the θ-based least squares fits the tilt plane: give σx²,σy²")
@@ -122,6 +128,21 @@ def _gravity_note(args: argparse.Namespace, log) -> None:
         print(f"note: g = {args.g:g} m/s² assumed (the course value); the scale factors "
               f"absorb g_true/{args.g:g} − 1 (−2.0e-3 … +3.3e-3 over the Earth): give "
               "--latitude DEG [--height M] or --g", file=sys.stderr)
+
+
+def detector_hint(log, message: str) -> str | None:
+    """The pose detector's window and minimum hold, and shorter ones to try, when a refusal
+    ``message`` is about too few held poses and the poses were detected (not labelled)."""
+    poses = log.provenance.get("poses") or {}
+    if poses.get("source") != "detected" or "pose" not in message or (
+            "held" not in message and "orientation" not in message):
+        return None
+    from calib.logs.poses import PoseDetection
+
+    rate = None
+    if log.t is not None and log.t.size > 1:
+        rate = (log.t.size - 1) / float(log.t[-1] - log.t[0])
+    return PoseDetection.from_dict(poses["detection"]).few_poses_hint(rate)
 
 
 def _multiposition(args: argparse.Namespace, log, nv) -> int:

@@ -190,6 +190,20 @@ class PoseDetection(ResultMixin):
                        f"median (below); holds shorter than {self.min_samples} samples "
                        "ignored")
 
+    def few_poses_hint(self, rate: float | None = None) -> str:
+        """What to try when the detector found too few holds: its window and minimum hold, and
+        shorter ones (a hand-held or high-rate log: tremor and taps fill long windows, and a
+        hand rarely holds still for a full second). ``rate``: Hz, to say them in seconds."""
+        if rate:
+            w, h = f"{self.window / rate:.3g} s", f"{self.min_samples / rate:.3g} s"
+            try_ = "--window 0.1 --min-hold 0.5 (seconds)"
+        else:
+            w, h = f"{self.window} samples", f"{self.min_samples} samples"
+            try_ = "--window 10 --min-hold 50 (samples: the log has no times)"
+        return (f"the pose detector found {self.count} hold(s) with a window of {w} and a "
+                f"minimum hold of {h}; on a hand-held or high-rate log shorter ones find more: "
+                f"try {try_}")
+
     def summary(self) -> str:
         held = int(np.sum(self.labels >= 0))
         lines = [f"{self.count} held pose(s) found; {held} of {self.labels.size} samples held",
