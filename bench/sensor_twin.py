@@ -12,9 +12,25 @@ bias_instability B         :class:`bench.terms.BiasInstability` ``b = B`` (Kasdi
                            ADEV floor 0.664·B, independent of fs)
 rate_random_walk K         :class:`bench.terms.BiasRandomWalk` ``q_per_sample = K/√fs``
                            (the same walk as ``q = K`` with Δt = 1/fs)
-quantization_step Δ        :class:`bench.terms.Quantization` ``lsb = Δ``
+quantization_step Δ        :class:`bench.terms.Quantization` ``lsb = Δ`` (left out when Δ is
+                           the step of the Δv counter of Q below: :func:`counter_lattice`)
+quantization_noise Q       :class:`QuantizationNoise` ``amplitude = Q·fs``: the rate of an
+                           integrated output quantized by Q, ``Q·fs·(w_k − w_{k−1})``
+                           (Allan variance ``3Q²/τ²``, IEEE Std 952 C.1)
+gauss_markov σ, T_c        :class:`GaussMarkov` ``sigma = σ``, ``correlation_samples =
+                           T_c·fs``: a stationary AR(1), ``x_k = φ x_{k−1} + σ√(1−φ²) w_k``,
+                           ``φ = e^{−1/(T_c·fs)}``, x_0 drawn from N(0, σ²)
 calibration bias, scale    ``AxisErrors.bias`` / ``scale`` (the profile's estimates)
 =========================  ===============================================================
+
+The last two are the processes of :mod:`calib.noise.allan_model` (what the fit assumes), so
+the twin of a profile has the Allan curve its fit describes. They are registered with
+:func:`bench.terms.register_term` here, where the twin needs them (``truth.json`` round-trips
+through ``AxisErrors.from_dict`` once this module is imported).
+
+:func:`simulate_axis` draws one axis of any kind (an accelerometer's x, y, z, a gyro's axis)
+from its profile block: ``tiltbench noise --twin`` compares it with the log
+(:mod:`calib.noise.closure`).
 
 A term the profile leaves null (not resolved by its log) is left out. The walk and the
 flicker are per sample, so a static run without sample times is simulated as consecutive
@@ -28,14 +44,78 @@ refused in one line (:class:`calib.input_rules.DataError`), never an IndexError.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
+from typing import ClassVar
 
 import numpy as np
+from scipy.signal import lfilter
 
 from bench.sensors import AxisErrors, SensorErrorModel
-from bench.terms import BiasInstability, BiasRandomWalk, Quantization
+from bench.terms import (
+    BiasInstability,
+    BiasRandomWalk,
+    Quantization,
+    SensorContext,
+    register_term,
+    require_finite,
+)
 from calib.conventions import AXES
 from calib.noise.sensor_profile import NoiseTerm, SensorProfile, check_profile
+
+
+@register_term("quantization_noise", "output", bound="nonnegative")
+@dataclass(frozen=True)
+class QuantizationNoise:
+    """The rate of an integrated output quantized by Q (module table): adds
+    ``amplitude·(w_k − w_{k−1})`` (N + 1 standard normals drawn), ``amplitude = Q·fs`` in the
+    reading's unit (m/s²; gyro rad/s). Allan variance ``3Q²/τ²`` at every τ = m/fs."""
+
+    amplitude: float
+    name: ClassVar[str]
+    stage: ClassVar[str]
+
+    def __post_init__(self) -> None:
+        if require_finite(self.amplitude, "quantization_noise amplitude") < 0:
+            raise ValueError(f"quantization_noise amplitude must be >= 0, got {self.amplitude}")
+
+    def apply(self, a: np.ndarray, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:
+        w = rng.standard_normal(a.shape[0] + 1)
+        return a + self.amplitude * np.diff(w)
+
+    def to_dict(self) -> dict:
+        return {k: float(v) for k, v in asdict(self).items()}
+
+
+@register_term("gauss_markov", "output", bound="nonnegative")
+@dataclass(frozen=True)
+class GaussMarkov:
+    """A first-order Gauss–Markov bias (module table): stationary AR(1) of std ``sigma`` (the
+    reading's unit) and correlation time ``correlation_samples`` (samples), x_0 ~ N(0, σ²),
+    then N − 1 innovations (N standard normals drawn)."""
+
+    sigma: float
+    correlation_samples: float
+    name: ClassVar[str]
+    stage: ClassVar[str]
+
+    def __post_init__(self) -> None:
+        if require_finite(self.sigma, "gauss_markov sigma") < 0:
+            raise ValueError(f"gauss_markov sigma must be >= 0, got {self.sigma}")
+        if not require_finite(self.correlation_samples, "gauss_markov correlation_samples") > 0:
+            raise ValueError("gauss_markov correlation_samples must be positive, got "
+                             f"{self.correlation_samples}")
+
+    def path(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        phi = float(np.exp(-1.0 / self.correlation_samples))
+        w = rng.standard_normal(n)
+        w[1:] *= np.sqrt(1.0 - phi * phi)
+        return self.sigma * lfilter([1.0], [1.0, -phi], w)
+
+    def apply(self, a: np.ndarray, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:
+        return a + self.path(a.shape[0], rng)
+
+    def to_dict(self) -> dict:
+        return {k: float(v) for k, v in asdict(self).items()}
 
 
 def _value(terms: tuple[NoiseTerm | None, ...] | None, k: int) -> float | None:
@@ -65,26 +145,68 @@ def calibration_pairs(profile: SensorProfile) -> tuple[tuple[float, float], tupl
             tuple(float(named[f"scale_{a}"]) for a in AXES))
 
 
-def twin_axis(profile: SensorProfile, k: int, rate: float, bias: float = 0.0,
+def twin_axis(profile: SensorProfile, k: int | str, rate: float, bias: float = 0.0,
               scale: float = 0.0) -> AxisErrors:
-    """The bench's :class:`AxisErrors` of axis ``k`` (0 = x, 1 = y) of ``profile`` at
-    ``rate`` Hz (table in the module docstring); bias m/s², scale 1."""
+    """The bench's :class:`AxisErrors` of axis ``k`` (0 = x, 1 = y, or any axis name of the
+    profile: ``z``, ``gyro_x``, …) of ``profile`` at ``rate`` Hz (table in the module
+    docstring); bias and scale in the axis's unit (m/s², 1)."""
     profile = check_profile(profile)
-    k = profile.axis_index(AXES[k])
+    k = profile.axis_index(AXES[k] if isinstance(k, int) else k)
     n_d = _value(profile.white_noise_density, k)
     b = _value(profile.bias_instability, k)
     q = _value(profile.rate_random_walk, k)
     lsb = None if profile.quantization_step is None else profile.quantization_step[k]
+    quant = _value(profile.quantization_noise, k)
+    gm = None if profile.gauss_markov is None else profile.gauss_markov[k]
     terms = []
     if b is not None and b > 0:
         terms.append(BiasInstability(b=b))
     if q is not None and q > 0:
         terms.append(BiasRandomWalk(q_per_sample=q / np.sqrt(rate)))
-    if lsb is not None:
+    if gm is not None and gm.value > 0:
+        terms.append(GaussMarkov(sigma=float(gm.value),
+                                 correlation_samples=float(gm.correlation_time) * rate))
+    if quant is not None and quant > 0:
+        terms.append(QuantizationNoise(amplitude=quant * rate))
+    if lsb is not None and not counter_lattice(lsb, quant, profile.sample_rate):
         terms.append(Quantization(lsb=float(lsb)))
     return AxisErrors(bias=float(bias), scale=float(scale),
                       noise_var=0.0 if n_d is None else (n_d * np.sqrt(rate)) ** 2,
                       terms=tuple(terms))
+
+
+COUNTER_LATTICE_TOLERANCE = 0.25
+"""A reading lattice is the Δv counter's own when its step is within 25 % of ``Δ·fs`` with
+Δ = √12·Q (the counter's step from the profile's quantization noise Q, at the profile's rate):
+the rate of a counted integral sits on that lattice by construction. The twin then does not
+round its readings again (rounding the Q process's output would add Δ²fs²/12 of white noise a
+second time)."""
+
+
+def counter_lattice(lsb: float | None, quant: float | None, rate: float) -> bool:
+    """Whether the reading lattice ``lsb`` is the Δv (Δθ) counter's of quantization noise
+    ``quant`` at ``rate`` Hz (:data:`COUNTER_LATTICE_TOLERANCE`)."""
+    if lsb is None or quant is None or quant <= 0:
+        return False
+    step = np.sqrt(12.0) * quant * rate
+    return abs(lsb / step - 1.0) <= COUNTER_LATTICE_TOLERANCE
+
+
+def simulate_axis(errors: AxisErrors, n: int, rate: float, rng: np.random.Generator,
+                  level: float = 0.0) -> np.ndarray:
+    """(n,) readings of one held axis with ``errors`` (:func:`twin_axis`) at ``rate`` Hz around
+    the true reading ``level``: the same steps as :meth:`bench.sensors.SensorErrorModel.apply`
+    for one axis (bias and scale, white noise, then the output terms in order), without the
+    MuJoCo pose (a held axis reads a constant)."""
+    a_true = np.full(n, float(level))
+    ctx = SensorContext(np.column_stack([a_true, a_true]), np.arange(n) / float(rate), 0)
+    a = errors.bias + (1.0 + errors.scale) * a_true
+    if errors.noise_var > 0:
+        a = a + np.sqrt(errors.noise_var) * rng.standard_normal(n)
+    for term in errors.terms:
+        if term.stage == "output":
+            a = term.apply(a, ctx, rng)
+    return a
 
 
 def twin_sensor(profile: SensorProfile, rate: float | None = None,
@@ -113,7 +235,7 @@ def twin_truth(profile: SensorProfile, rate: float, source: str | None = None) -
     cal = calibration_pairs(profile)
     idx = [profile.axis_index(a) for a in AXES]
     q = profile.quantization_step
-    return {
+    out = {
         "source": source, "sample_rate": float(profile.sample_rate), "run_rate": float(rate),
         "white_noise_density": [_value(profile.white_noise_density, k) for k in idx],
         "bias_instability": [_value(profile.bias_instability, k) for k in idx],
@@ -121,6 +243,16 @@ def twin_truth(profile: SensorProfile, rate: float, source: str | None = None) -
         "quantization_step": None if q is None else [q[k] for k in idx],
         "calibration": None if cal is None else {"bias": list(cal[0]), "scale": list(cal[1])},
     }
+    # the model's extra terms, only when the profile has them (the bytes of every other
+    # truth.json stay as they were)
+    if profile.quantization_noise is not None:
+        out["quantization_noise"] = [_value(profile.quantization_noise, k) for k in idx]
+    if profile.gauss_markov is not None:
+        out["gauss_markov"] = [
+            None if profile.gauss_markov[k] is None else
+            {"sigma": profile.gauss_markov[k].value,
+             "correlation_time": profile.gauss_markov[k].correlation_time} for k in idx]
+    return out
 
 
 @dataclass(frozen=True)
@@ -184,5 +316,7 @@ def write_static(run: StaticRun, out, force: bool = False) -> dict[str, str]:
     return {k: str(v) for k, v in paths.items()}
 
 
-__all__ = ["StaticRun", "calibration_pairs", "make_static_run", "static_samples",
-           "twin_axis", "twin_sensor", "twin_truth", "write_static"]
+__all__ = ["COUNTER_LATTICE_TOLERANCE", "GaussMarkov", "QuantizationNoise", "StaticRun",
+           "calibration_pairs", "counter_lattice",
+           "make_static_run", "simulate_axis", "static_samples", "twin_axis", "twin_sensor",
+           "twin_truth", "write_static"]

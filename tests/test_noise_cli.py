@@ -133,3 +133,109 @@ def test_refusals(course_dir, static_log, tmp_path, capsys):
     line = one_line_error(capsys, "generate", "static", "--duration", "-1", "--out",
                           tmp_path / "o")
     assert "--duration" in line
+
+
+# ------------------------------------------------------------------ every axis, the gyro, units
+HEADER = "t (s),ax (m/s^2),ay (m/s^2),az (m/s^2),gx (rad/s),gy (rad/s),gz (rad/s)"
+
+
+def _imu_csv(path, n: int = 6000, rate: float = 50.0, seed: int = 5):
+    """A still 3-axis accelerometer + 3-axis gyro log: white noise 0.02 m/s² and 0.002 rad/s
+    per sample, gravity on -z."""
+    rng = np.random.default_rng(seed)
+    acc = 0.02 * rng.standard_normal((n, 3)) + [0.0, 0.0, -9.8]
+    gyro = 0.002 * rng.standard_normal((n, 3))
+    rows = np.column_stack([np.arange(n) / rate, acc, gyro])
+    path.write_text(HEADER + "\n" + "".join(",".join(f"{v:.6f}" for v in r) + "\n"
+                                            for r in rows))
+    return path
+
+
+def test_every_accelerometer_axis_and_the_gyro_with_datasheet_units(tmp_path, capsys):
+    """x, y, z and the gyro's x, y, z, each with its kind, SI unit and datasheet unit
+    (white noise: (m/s^2)/sqrt(Hz) and µg/√Hz; (rad/s)/sqrt(Hz) and °/√h — the factor
+    checked by hand here: 1 µg = 9.80665e-6 m/s², 1 rad/√s = (180/π)·60 °/√h); the twin
+    closure for every axis; the figure one panel per kind; the profile holds all six."""
+    log = _imu_csv(tmp_path / "imu.csv")
+    save, plot = tmp_path / "sensor.json", tmp_path / "allan.png"
+    rc, out, err = run(capsys, "noise", log, "--json", "--twin", "--save", save, "--plot", plot)
+    assert rc == 0, err
+    doc = json.loads(out)
+    assert set(doc["axes"]) == {"x", "y", "z", "gyro_x", "gyro_y", "gyro_z"}  # keys sorted
+    for name, axis in doc["axes"].items():
+        gyro = name.startswith("gyro")
+        assert axis["kind"] == ("gyro" if gyro else "accelerometer")
+        assert axis["unit"] == ("rad/s" if gyro else "m/s^2") and axis["fit_ok"]
+        white = axis["terms"]["white_noise_density"]
+        assert white["unit"] == ("(rad/s)/sqrt(Hz)" if gyro else "(m/s^2)/sqrt(Hz)")
+        ds = white["datasheet"]
+        factor = 180 / np.pi * 60 if gyro else 1 / 9.80665e-6
+        assert ds["unit"] == ("°/√h" if gyro else "µg/√Hz")
+        assert ds["value"] == pytest.approx(white["value"] * factor, rel=1e-12)
+        sigma = 0.002 if gyro else 0.02
+        lo, hi = white["interval"]
+        assert lo / 1.2 < sigma / np.sqrt(50.0) < hi * 1.2  # per-sample σ = N·√fs
+        bi = axis["terms"]["bias_instability"]["datasheet"]["unit"]
+        assert bi == ("°/h" if gyro else "µg")
+        closure = doc["twin"][name]
+        assert closure["dof"] == len(axis["taus"]) and 0 <= closure["p"] <= 1
+    assert sum(c["reject"] for c in doc["twin"].values()) <= 2  # α = 0.05 on six white axes
+    assert doc["units"]["twin.*.p"] == "1" and doc["units"]["axes.*.taus"] == "s"
+    profile = load_profile(save)
+    assert profile.axes == ("x", "y", "z", "gyro_x", "gyro_y", "gyro_z")
+    assert all(profile.fit_ok(a) for a in profile.axes)
+    assert profile.fit_tau_range[0][0] == pytest.approx(0.02)
+    assert plot.read_bytes()[:4] == b"\x89PNG"
+    from bench.figures.allan import allan_figure
+    from calib.noise.allan import NoiseCharacterization
+
+    fig = allan_figure(NoiseCharacterization.from_dict(doc))
+    assert len(fig.axes) == 2  # accelerometer, gyro
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    # readable output: datasheet units beside SI, the closure per axis
+    rc, out, _ = run(capsys, "noise", log, "--twin")
+    assert rc == 0 and "µg/√Hz" in out and "°/√h" in out and "twin closure, axis gyro_z" in out
+
+
+def _sine_log(path, n: int = 512, rate: float = 100.0):
+    """White noise and a sine of period 16 samples: an Allan curve no model describes
+    (tests/test_allan_rules.py)."""
+    rng = np.random.default_rng(11)
+    t = np.arange(n) / rate
+    acc = np.column_stack([0.01 * rng.standard_normal(n) + 0.1 * np.sin(2 * np.pi * t / 0.16),
+                           -9.8 + 0.01 * rng.standard_normal(n)])
+    from scipy.io import savemat
+
+    savemat(path, {"t": t[:, None], "Aerr": acc})
+    return path
+
+
+def test_a_failed_fit_is_not_saved_without_saying_so(tmp_path, capsys, course_dir):
+    """``--save`` refuses in one line (nothing written, the figure neither); with
+    ``--save-failed-fit`` the profile says ``fit_ok: false``; ``generate --sensor`` and
+    ``gap --sensor`` refuse it, naming the field and the flag, unless ``--allow-failed-fit``."""
+    log = _sine_log(tmp_path / "sine.mat")
+    save, plot = tmp_path / "sensor.json", tmp_path / "allan.png"
+    line = one_line_error(capsys, "noise", log, "--save", save, "--plot", plot)
+    assert f"{save} not written" in line and "axis x" in line
+    assert "--save-failed-fit" in line and "--allow-failed-fit" in line
+    assert not save.exists() and not plot.exists()
+    assert "--save" in one_line_error(capsys, "noise", log, "--save-failed-fit")
+    rc, out, err = run(capsys, "noise", log, "--save", save, "--save-failed-fit")
+    assert rc == 0, err
+    assert "NO model of the rule describes this curve" in out and "fit_ok: false" in out
+    doc = json.loads(save.read_text())
+    assert doc["axes"]["x"]["fit_ok"] is False and doc["axes"]["y"]["fit_ok"] is True
+    for argv in (["generate", "static", "--sensor", save, "--duration", "10", "--out",
+                  tmp_path / "o"],
+                 ["gap", course_dir / "ensayo.mat", "--noise-var", "0.25,0.64", "--sensor",
+                  save, "--report", tmp_path / "r"]):
+        line = one_line_error(capsys, *argv)
+        assert str(save) in line and "field 'axes.x.fit_ok' is false" in line
+        assert "--allow-failed-fit" in line
+    assert not (tmp_path / "o").exists() and not (tmp_path / "r").exists()
+    rc, _, err = run(capsys, "generate", "static", "--sensor", save, "--duration", "10",
+                     "--out", tmp_path / "o", "--allow-failed-fit")
+    assert rc == 0, err

@@ -13,13 +13,19 @@ import allantools
 import numpy as np
 import pytest
 
-from bench.sensor_twin import calibration_pairs, make_static_run, twin_sensor, twin_truth
-from bench.sensors import SensorErrorModel
+from bench.sensor_twin import (
+    calibration_pairs,
+    make_static_run,
+    twin_axis,
+    twin_sensor,
+    twin_truth,
+)
+from bench.sensors import AxisErrors, SensorErrorModel
 from bench.terms import BiasInstability, BiasRandomWalk, Quantization
 from bench.tilt import static_readings
 from calib.conventions import G
 from calib.noise.allan import characterize_noise
-from calib.noise.allan_model import FLICKER_FLOOR, allan_moments, avar_covariance
+from calib.noise.allan_model import FLICKER_FLOOR, TERM_NAMES, allan_moments, avar_covariance
 from calib.noise.sensor_profile import NoiseTerm, SensorProfile
 
 
@@ -133,8 +139,9 @@ def test_closed_loop_recovers_the_twin():
     :func:`calib.noise.allan.characterize_noise` (``tiltbench noise``'s library call).
 
     Axis x (N = 2e-3, B = 1.5e-3, K = 5e-4): each term's 95 % interval covers the truth at
-    0.95 ± 4·sqrt(0.95·0.05/200) = ± 0.062, and B and K are resolved more often than chance
-    allows (α + 4·sqrt(α(1−α)/200) = 0.112), so the intervals are not vacuous.
+    0.95 ± 4·sqrt(0.95·0.05/200) = ± 0.062, and B is resolved more often than chance allows
+    (α + 4·sqrt(α(1−α)/200) = 0.112), so the intervals are not vacuous (K, whose rise spans
+    one octave step with ≥ 8 clusters here, is reported as an upper bound by the rise rule).
     Axis y (white N = 3e-3 with a 0.01 m/s² quantization step, no B, no K): the step is found in
     every run; N covers √(N² + Δ²/(12·fs)) (sample quantization is white, Δ²/12 per sample);
     bias instability and rate random walk are called resolved at most
@@ -147,14 +154,17 @@ def test_closed_loop_recovers_the_twin():
     resolved = np.zeros(3)
     false_pos = np.zeros(3)
     hits_y = 0
+    extra = 0
     for res in runs:
         x, y = res.axes
-        for a, t in enumerate(x.terms):
+        for a, name in enumerate(TERM_NAMES):
+            t = x.term(name)
             hits[a] += t.interval[0] <= truth_x[a] <= t.interval[1]
             resolved[a] += t.resolved
-        lo, hi = y.terms[0].interval
+        lo, hi = y.term("white_noise_density").interval
         hits_y += lo <= n_y <= hi
-        false_pos += [t.resolved for t in y.terms]
+        false_pos += [y.term(name).resolved for name in TERM_NAMES]
+        extra += x.rule != "three terms" or y.rule != "three terms"
         assert y.quantization_step == pytest.approx(0.01, rel=1e-6)
         assert x.quantization_step is None
     band = 4 * np.sqrt(level * (1 - level) / r)
@@ -162,4 +172,44 @@ def test_closed_loop_recovers_the_twin():
     assert abs(hits_y / r - level) <= band, hits_y / r
     assert np.all(false_pos[1:] / r <= alpha_fp_limit(r, alpha)), false_pos / r
     chance = alpha_fp_limit(r)
-    assert resolved[0] == r and np.all(resolved[1:] / r > chance), resolved / r
+    assert resolved[0] == r and resolved[1] / r > chance, resolved / r
+    # K's +½ rise shows over one octave step with ≥ 8 clusters only (10 → 20 s of 164 s):
+    # the rise rule (calib.noise.allan_fit) reports it "not resolved, < upper" — its interval
+    # still covers (above); measured resolved 0.01
+    # the model rule adds a term by its χ² drop at 0.01 (Šidák over T_c): rarely, here
+    assert extra / r <= 0.05, extra / r
+
+
+def test_the_twin_draws_the_model_s_quantization_and_gauss_markov_processes():
+    """``simulate_axis`` of a profile with Q (Δv quantization) and a Gauss–Markov term: the
+    mean octave Allan variance of R = 300 twins equals the exact expectation — white
+    ``N²/τ``, ``3Q²/τ²`` and the AR(1)'s closed form of the independent generator
+    (:func:`validation.noise_independent.generator.ar1_avar`) — within 4·sd/√R; the reading
+    lattice of the Δv counter is not applied a second time
+    (:func:`bench.sensor_twin.counter_lattice`); truth.json round-trips the new terms."""
+    from bench.sensor_twin import GaussMarkov, QuantizationNoise, counter_lattice, simulate_axis
+    from calib.noise.allan import octave_factors, overlapping_adev
+    from validation.noise_independent.generator import ar1_avar
+
+    n, r = 2048, 300
+    q, sigma, tc = 2e-4, 3e-3, 0.5
+    lsb = np.sqrt(12.0) * q * RATE  # the counter's lattice: left out of the twin
+    gm = NoiseTerm(value=sigma, interval=(0.9 * sigma, 1.1 * sigma), tau_range=(0.1, 10.0),
+                   correlation_time=tc)
+    prof = profile(quantization_noise=(term(q), None), gauss_markov=(gm, None),
+                   bias_instability=None, rate_random_walk=None,
+                   quantization_step=(lsb, 0.01))
+    errors = twin_axis(prof, "x", RATE)
+    assert counter_lattice(lsb, q, RATE) and not counter_lattice(0.01, q, RATE)
+    assert errors.terms == (GaussMarkov(sigma=sigma, correlation_samples=tc * RATE),
+                            QuantizationNoise(amplitude=q * RATE))
+    assert AxisErrors.from_dict(errors.to_dict()) == errors
+    ms = octave_factors(n, RATE)
+    rng = np.random.default_rng(SEED + 20)
+    s = np.array([overlapping_adev(simulate_axis(errors, n, RATE, rng), RATE, ms)[1] ** 2
+                  for _ in range(r)])
+    m = np.array(ms, float)
+    mean = ((2e-3 * np.sqrt(RATE)) ** 2 / m + 3.0 * q ** 2 / (m / RATE) ** 2
+            + ar1_avar(m, sigma ** 2, np.exp(-1.0 / (tc * RATE))))
+    sd = s.std(axis=0, ddof=1)
+    assert np.all(np.abs(s.mean(axis=0) - mean) <= 4 * sd / np.sqrt(r))

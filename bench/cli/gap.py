@@ -86,9 +86,10 @@ def _cmd_gap(args: argparse.Namespace) -> int:
               file=sys.stderr)
     sensor = None
     if args.sensor is not None:
-        from calib.noise.sensor_profile import load_profile
+        from calib.noise.sensor_profile import load_profile, require_fit_ok
 
         sensor = load_profile(args.sensor)
+        require_fit_ok(sensor, args.sensor, args.allow_failed_fit, axes=("x", "y"))
     report = run_gap(ensayo, nv, g=args.g, rate=None if ensayo.t is not None else args.rate,
                      report_dir=args.report, rrd=args.rrd, force=args.force, sensor=sensor,
                      progress=Progress("gap"))
@@ -119,5 +120,6 @@ def register(sub) -> None:
     add_option(p, "--sensor", help="sensor.json (tiltbench noise): the bias "
                "random walk's intensity q is taken from its rate_random_walk (within its "
                "interval, charged no parameter; no walk where it is null); needs sample times")
+    add_option(p, "--allow-failed-fit")  # with --sensor (calib.noise.sensor_profile)
     add_force(p)
     add_log_options(p)

@@ -62,9 +62,11 @@ def sensor_profile(args: argparse.Namespace):
     path = getattr(args, "sensor", None)
     if not path:
         return None
-    from calib.noise.sensor_profile import load_profile
+    from calib.noise.sensor_profile import load_profile, require_fit_ok
 
-    return load_profile(path)
+    profile = load_profile(path)
+    require_fit_ok(profile, path, getattr(args, "allow_failed_fit", False), axes=("x", "y", "z"))
+    return profile
 
 
 def twin_record(args: argparse.Namespace, rate: float):
@@ -760,6 +762,7 @@ def _register_calibration(kinds) -> None:
                   help="a tilt-table calibration run (ensayo.mat), or with --faces the "
                   "six-face test of a 3-axis sensor (log.csv)")
     add_sensor_options(p)
+    add_option(p, "--allow-failed-fit")  # with --sensor (calib.noise.sensor_profile)
     # --bias/--scale/--noise-var: the tilt table's pairs unless given (Deferred: --faces tells a
     # pair it was not given from one it was, and takes its own x,y,z defaults then)
     p.set_defaults(bias=Deferred(lambda: DEFAULT_BIAS), scale=Deferred(lambda: DEFAULT_SCALE),
@@ -821,6 +824,7 @@ def _add_six_face_options(p: argparse.ArgumentParser) -> None:
 def _register_vehicle(kinds) -> None:
     p = _add_kind(kinds, "vehicle", _cmd_vehicle, help="a planar vehicle run (acel.mat)")
     add_sensor_options(p)
+    add_option(p, "--allow-failed-fit")  # with --sensor (calib.noise.sensor_profile)
     _add_vehicle_run(p, "course", "run")
 
 
@@ -858,6 +862,7 @@ def _register_static(kinds) -> None:
                   "Hz: static.mat (t, Aerr: the course acel.mat layout) and truth.json. With "
                   "--sensor, the measured sensor's noise terms.")
     add_sensor_options(p)
+    add_option(p, "--allow-failed-fit")  # with --sensor (calib.noise.sensor_profile)
     add_option(p, "--duration", type=float, default=600.0, help="log length, s")
     add_option(p, "--rate", type=float, default=None,
                help="sample rate, Hz (default: the --sensor profile's, else 100)")

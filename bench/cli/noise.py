@@ -1,21 +1,30 @@
-"""``tiltbench noise STATIC_LOG``: Allan deviation and noise terms of a static log
-(:mod:`calib.noise.allan`), a log–log figure (``--plot``), the sensor profile (``--save
-sensor.json``, :func:`calib.noise.sensor_profile.save_profile`: the loader's checks, nothing
-written when they fail) with a calibration's bias/scale if given (``--calibration cal.json``).
-``--json`` prints one object: the :class:`calib.noise.allan.NoiseCharacterization` with its
-``units``, plus the files written.
+"""``tiltbench noise STATIC_LOG``: Allan deviation and noise terms of every axis of a static log
+(:mod:`calib.noise.allan`): the accelerometer's tilt-plane x, y (course signs after ``--axes``)
+and its third axis z, and the gyro's x, y, z when the log has them (IEEE Std 952 terms; SI units
+beside the datasheet units µg/√Hz, µg, °/√h, °/h). A log–log figure, one panel per sensor kind
+(``--plot``); the sensor profile (``--save sensor.json``,
+:func:`calib.noise.sensor_profile.save_profile`: the loader's checks, nothing written when they
+fail) with a calibration's bias/scale if given (``--calibration cal.json``); the twin closure
+(``--twin``: the profile simulated by the bench for the log's length and rate, its Allan
+deviation tested against the log's, :mod:`calib.noise.closure`). ``--json`` prints one object:
+the :class:`calib.noise.allan.NoiseCharacterization` with its ``units``, the closure per axis
+(``twin``), plus the files written.
 
 Refused before any fit, in one line naming the file, the axis and the fix
-(:func:`calib.logs.static_log.check_static`): θ varying or several poses, a stuck axis, a
-window shift or variance, a gyro rate, scatter beyond the sample-to-sample noise (a log that
-is not still).
+(:func:`calib.logs.static_log.check_static`): θ varying or several labelled poses, a stuck
+tilt-plane axis, a window shift or variance, a gyro rate, scatter beyond the sample-to-sample
+noise (a log that is not still). A stuck z or gyro axis (a phone that exports zeros) is left
+out with a note. ``--save`` refuses, in one line, a profile of an axis that no model of the
+rule describes (``fit_ok`` false), unless ``--save-failed-fit``, which writes it with
+``fit_ok: false`` (``generate --sensor`` and ``gap --sensor`` then refuse it unless
+``--allow-failed-fit``).
 """
 
 from __future__ import annotations
 
 import argparse
 
-from bench.cli.logopts import add_log_options, read_log_from_args
+from bench.cli.logopts import add_log_options, log_options_from_args, reading_progress
 from bench.cli.options import (
     OptionError,
     add_command,
@@ -28,9 +37,11 @@ from bench.cli.output import check_finite, print_files, print_json, refuse_overw
 from bench.cli.vocabulary import add_option
 
 DESCRIPTION = """\
-Overlapping Allan deviation per axis with χ² intervals from its equivalent degrees of freedom;
-white-noise density, bias instability and rate random walk fitted by GLS with score-type
-intervals, each with the τ range it was read from (docs/noise.md).
+Overlapping Allan deviation of every axis (accelerometer x, y, z; gyro x, y, z) with χ²
+intervals from its equivalent degrees of freedom; white-noise density (angle random walk),
+bias instability and rate random walk — and, when the curve needs them by the stated rule,
+quantization noise and a Gauss–Markov term — fitted by GLS with score-type intervals, each
+with the τ range it was read from, in SI and datasheet units (docs/noise.md).
 """
 """What ``--help`` says before the options (argparse reflows it)."""
 
@@ -49,15 +60,27 @@ def _calibration_entry(path: str) -> dict:
             "source": {"name": Path(path).name, "sha256": file_sha256(path)}}
 
 
+def read_static_log(args: argparse.Namespace):
+    """The log, read with the command's log options; no pose detection (the static check is
+    the stillness rule here, and a held log is one pose)."""
+    from dataclasses import replace
+
+    from calib.logs.reader import read_log
+
+    options = replace(log_options_from_args(args), detect=False)
+    return read_log(args.log, options, **reading_progress(args, args.log))
+
+
 def _static_reading(args: argparse.Namespace):
-    """(readings (N, 2) m/s², rate Hz, static-check numbers) of the log, refused when it is
-    not one held pose."""
+    """(log, rate Hz, static-check numbers, columns (N, k), axis names, kinds, notes) of the
+    log, refused when it is not one held pose."""
     import numpy as np
 
     from calib.input_rules import DataError
+    from calib.logs.static_log import stuck_axis
     from calib.noise.allan import check_static, sample_rate_of
 
-    log = read_log_from_args(args, args.log)
+    log = read_static_log(args)
     if args.rate is not None and not (np.isfinite(args.rate) and args.rate > 0):
         raise OptionError(f"--rate must be a positive number of Hz, got {args.rate}")
     if log.theta is not None and np.ptp(log.theta) > 1e-6:
@@ -68,10 +91,36 @@ def _static_reading(args: argparse.Namespace):
         raise DataError(f"{log.source}: the log holds {np.unique(log.pose[log.pose >= 0]).size}"
                         " held poses; `tiltbench noise` needs one (cut the log)")
     rate = sample_rate_of(log.t, args.rate, log.source)
+    labels = _axis_labels(log.provenance.get("axes"))
+    columns, names, kinds, notes = [log.acc[:, 0], log.acc[:, 1]], ["x", "y"], [
+        "accelerometer"] * 2, []
+    shown = list(labels)
+    extra = []
+    if log.acc_normal is not None:
+        src = log.provenance.get("normal_axis")
+        extra.append((log.acc_normal, "z", "accelerometer",
+                      "z" if src in (None, "z") else f"z (the log's {src})"))
+    if log.gyro_s is not None:
+        for k, a in enumerate("xyz"):
+            extra.append((log.gyro_s[:, k], f"gyro_{a}", "gyro", f"gyro_{a}"))
+    for y, name, kind, label in extra:
+        value = stuck_axis(y)
+        if value is not None:
+            notes.append(f"axis {label} reads {value:.6g} "
+                         f"{'rad/s' if kind == 'gyro' else 'm/s²'} in every sample: left out "
+                         "(a stuck, dead or absent channel)")
+            continue
+        columns.append(y)
+        names.append(name)
+        kinds.append(kind)
+        shown.append(label)
+    # the stillness rules read the tilt plane, as before the third axis was characterized
+    # (a held sensor that moves moves in x or y; z and the gyro are checked for a stuck
+    # channel above)
     checked = check_static(log.acc, rate, log.source, window=args.static_window,
                            shift=args.static_shift, var_ratio=args.static_var_ratio,
-                           gyro=log.gyro, axes=_axis_labels(log.provenance.get("axes")))
-    return log, rate, checked
+                           gyro=log.gyro, axes=labels)
+    return log, rate, checked, np.column_stack(columns), tuple(names), tuple(kinds), notes
 
 
 def _axis_labels(mapped: list[str] | None) -> tuple[str, str]:
@@ -83,8 +132,40 @@ def _axis_labels(mapped: list[str] | None) -> tuple[str, str]:
     return tuple(labels) if len(labels) == 2 else ("x", "y")
 
 
+def _failed_fit_line(result, save: str) -> str:
+    """The one-line refusal of ``--save`` for a fit no model describes."""
+    bad = [a for a in result.axes if not a.fit_ok]
+    worst = bad[0]
+    return (f"{save} not written: no model of the rule describes the Allan curve of axis "
+            f"{', '.join(a.axis for a in bad)} (axis {worst.axis}: best χ² = "
+            f"{worst.chi2:.1f} on {worst.dof} dof, p = {worst.p_fit:.2g}, on τ "
+            f"{worst.fit_range[0]:.3g}–{worst.fit_range[1]:.3g} s); read the figure (--plot), "
+            "restrict --tau-range, or write it anyway with --save-failed-fit (fit_ok: false; "
+            "generate/gap --sensor then refuse it unless --allow-failed-fit)")
+
+
+def _twin(result, profile, columns, rate: float, seed: int) -> dict:
+    """The closure test of every axis (:mod:`calib.noise.closure`): the profile's axis
+    simulated by the bench (:func:`bench.sensor_twin.simulate_axis`) for the log's length and
+    rate around the log's mean, seeded by ``seed`` (one stream per axis)."""
+    import numpy as np
+
+    from bench.sensor_twin import simulate_axis, twin_axis
+    from calib.noise.closure import closure_test, twin_adev
+
+    out = {}
+    seeds = np.random.SeedSequence(int(seed)).spawn(len(result.axes))
+    for k, fit in enumerate(result.axes):
+        errors = twin_axis(profile, fit.axis, rate)
+        y = simulate_axis(errors, columns.shape[0], rate, np.random.default_rng(seeds[k]),
+                          level=fit.mean)
+        out[fit.axis] = closure_test(fit, twin_adev(fit, y, rate))
+    return out
+
+
 def _cmd_noise(args: argparse.Namespace) -> int:
     from bench import __version__
+    from calib.input_rules import DataError
     from calib.noise.allan import characterize_noise
     from calib.noise.sensor_profile import save_profile
 
@@ -101,16 +182,33 @@ def _cmd_noise(args: argparse.Namespace) -> int:
     for name in ("static_window", "static_shift", "static_var_ratio"):
         if not getattr(args, name) > 0:
             raise OptionError(f"--{name.replace('_', '-')} must be positive")
+    if args.save_failed_fit and not args.save:
+        raise OptionError("--save-failed-fit writes the profile of a failed fit: give --save")
     refuse_overwrite([args.plot, args.save], args.force)
     cal = _calibration_entry(args.calibration) if args.calibration else None
-    log, rate, checked = _static_reading(args)
-    result = characterize_noise(log.acc, rate, level=level, alpha=alpha, tau_range=tau_range,
-                                source=log.provenance.get("source"), static_check=checked)
+    log, rate, checked, columns, names, kinds, notes = _static_reading(args)
+    result = characterize_noise(columns, rate, level=level, alpha=alpha, tau_range=tau_range,
+                                axes=names, kinds=kinds, source=log.provenance.get("source"),
+                                static_check=checked, notes=tuple(notes))
     out = result.to_dict()
     check_finite(out, "the result")
+    if args.save and not result.fit_ok and not args.save_failed_fit:
+        raise DataError(_failed_fit_line(result, args.save))
+    profile = None
+    if args.save or args.twin:
+        profile = result.to_profile(calibration=cal, tool_version=__version__)
+    closure = {}
+    if args.twin:
+        closure = _twin(result, profile, columns, rate, args.seed)
+        out["twin"] = {a: c.to_dict() for a, c in closure.items()}
+        out["twin_seed"] = int(args.seed)
+        out["units"] = {**out["units"], "twin.*.taus": "s",
+                        "twin.*.adev": "the axis's reading unit",
+                        "twin.*.twin_adev": "the axis's reading unit", "twin.*.z": "1",
+                        "twin.*.statistic": "1", "twin.*.dof": "count", "twin.*.p": "1",
+                        "twin.*.alpha": "1", "twin.*.parted": "index into twin.*.taus"}
     written = {}
     if args.save:  # the saver runs the loader's checks and writes nothing when they fail
-        profile = result.to_profile(calibration=cal, tool_version=__version__)
         written["profile"] = str(save_profile(args.save, profile, force=args.force))
     if args.plot:
         from bench.figures.allan import save_allan_plot
@@ -121,14 +219,18 @@ def _cmd_noise(args: argparse.Namespace) -> int:
         print_json({**out, "files": written})
         return 0
     print(result.summary())
+    for c in closure.values():
+        print(c.summary())
     c = checked
     excess = ", ".join(f"{a} {e:.3g} (limit {lim:.3g})" for a, e, lim in
-                       zip("xy", c["excess_std"], c["excess_limit"], strict=False))
+                       zip(names, c["excess_std"], c["excess_limit"], strict=False))
     print(f"static check: {c['window']:g} s windows, largest mean shift {c['max_shift']:.3g} "
           f"m/s² (limit {max([c['shift'], *c.get('shift_noise_floor', [])]):.3g} m/s²: "
           f"{c['shift']:g} or the noise floor), largest variance ratio {c['max_var_ratio']:.3g} "
           f"(limit {c['var_ratio']:g}); scatter beyond the sample-to-sample noise {excess} "
           "m/s²")
+    if args.save and not result.fit_ok:
+        print(f"warning: {args.save} written with fit_ok: false (--save-failed-fit)")
     print_files(written.values())
     return 0
 
@@ -157,5 +259,8 @@ def register(sub) -> None:
                "into --save")
     add_option(p, "--plot", help="write the Allan deviation figure (.png or .svg)")
     add_option(p, "--save", metavar="SENSOR_JSON", help="write the sensor profile")
+    add_option(p, "--save-failed-fit")
+    add_option(p, "--twin")
+    add_option(p, "--seed", type=int, default=0, help="seed of the twin's draws (--twin)")
     add_json(p)
     add_force(p, "an existing --plot / --save file")

@@ -1,4 +1,5 @@
-"""Allan deviation of a static log (``tiltbench noise --plot``): per axis, log–log."""
+"""Allan deviation of a static log (``tiltbench noise --plot``): one log–log panel per sensor
+kind (accelerometer axes in m/s², gyro axes in rad/s), every axis of that kind in it."""
 
 from __future__ import annotations
 
@@ -16,60 +17,82 @@ if TYPE_CHECKING:
 
     from calib.noise.allan import AxisNoise, NoiseCharacterization
 
-_TERM_STYLE = {  # name → (label, colour)
-    "white_noise_density": ("white noise N, slope −½", "tab:blue"),
-    "bias_instability": ("bias instability 0.664·B, slope 0", "tab:orange"),
-    "rate_random_walk": ("rate random walk K, slope +½", "tab:red"),
-}
+_COLOURS = ("tab:blue", "tab:orange", "tab:green")
+_SHORT = {"white_noise_density": "N", "bias_instability": "B", "rate_random_walk": "K",
+          "quantization_noise": "Q", "gauss_markov": "GM σ"}
 
 
 def _term_line(name: str, value: float, tau: np.ndarray) -> np.ndarray:
-    """ADEV asymptote of one term (IEEE Std 952): N/√τ, 0.664·B, K·√(τ/3)."""
+    """ADEV asymptote of one term (IEEE Std 952): N/√τ, 0.664·B, K·√(τ/3), √3·Q/τ."""
     if name == "white_noise_density":
         return value / np.sqrt(tau)
     if name == "bias_instability":
         return np.full_like(tau, FLICKER_FLOOR * value)
+    if name == "quantization_noise":
+        return np.sqrt(3.0) * value / tau
     return value * np.sqrt(tau / 3.0)
 
 
-def _axis_panel(ax, fit: AxisNoise, level: float) -> None:
+def _label(fit: AxisNoise) -> str:
+    """The axis's legend entry: its resolved terms in datasheet units, the model's p."""
+    parts = []
+    for t in fit.terms:
+        ds = t.datasheet()
+        if t.resolved:
+            parts.append(f"{_SHORT[t.name]} {ds['value']:.3g} {ds['unit']}")
+        elif t.name in _SHORT and t.name != "white_noise_density":
+            parts.append(f"{_SHORT[t.name]} < {ds['upper_bound']:.2g}")
+    ok = "" if fit.fit_ok else " — NO model describes it"
+    return f"{fit.axis}: " + ", ".join(parts) + f" (p = {fit.p_fit:.2g}{ok})"
+
+
+def _axis_curve(ax, fit: AxisNoise, colour: str, level: float) -> None:
     tau = fit.taus
     err = np.abs(fit.adev_ci - fit.adev[:, None]).T
-    ax.errorbar(tau, fit.adev, yerr=err, fmt="o", color="k", ms=4, capsize=2, lw=1,
-                label=f"overlapping ADEV, {level:.1%} interval (χ², EDF)")
-    ax.plot(tau, fit.model_adev, color="0.4", lw=1.5, label="fitted model (sum of terms)")
-    dense = np.geomspace(tau[0], tau[-1], 200)
+    ax.errorbar(tau, fit.adev, yerr=err, fmt="o", color=colour, ms=3.5, capsize=2, lw=0.9,
+                label=_label(fit))
+    lo, hi = fit.octaves
+    inside = np.zeros(tau.size, bool)
+    inside[lo:hi] = True
+    ax.plot(tau[inside], fit.model_adev[inside], color=colour, lw=1.6)
+    if not inside.all():  # the model is not claimed outside its range
+        ax.plot(tau, fit.model_adev, color=colour, lw=0.8, ls=":")
+    dense = np.geomspace(tau[lo], tau[hi - 1], 100)
     for t in fit.terms:
-        label, colour = _TERM_STYLE[t.name]
-        if t.resolved:
-            ax.plot(dense, _term_line(t.name, t.value, dense), color=colour, ls="--", lw=1.2,
-                    label=f"{label}: {t.value:.3g} {t.unit}")
-            t0, t1 = t.tau_range
-            ax.axvspan(t0, t1, color=colour, alpha=0.07)
-        else:
-            ax.plot(dense, _term_line(t.name, t.upper_bound, dense), color=colour, ls=":",
-                    lw=1.0, label=f"{label}: not resolved, < {t.upper_bound:.3g} {t.unit}")
+        if t.resolved and t.name in ("white_noise_density", "bias_instability",
+                                     "rate_random_walk", "quantization_noise"):
+            ax.plot(dense, _term_line(t.name, t.value, dense), color=colour, ls="--", lw=0.7,
+                    alpha=0.6)
+
+
+def _kind_panel(ax, fits: list[AxisNoise], level: float) -> None:
+    for k, fit in enumerate(fits):
+        _axis_curve(ax, fit, _COLOURS[k % len(_COLOURS)], level)
+    kind = fits[0].kind
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("averaging time τ (s)")
-    ax.set_ylabel(f"Allan deviation of a_{fit.axis} (m/s²)")
-    note = "" if not fit.lack_of_fit else " — lack of fit"
-    ax.set_title(f"axis {fit.axis}: χ² = {fit.chi2:.1f} on {fit.dof} dof, p = {fit.p_fit:.2g}"
-                 f"{note}", fontsize=9)
+    ax.set_ylabel(f"Allan deviation ({fits[0].unit})")
+    ax.set_title(f"{kind}: points with {level:.1%} χ² bars (EDF); solid: the fitted model on "
+                 "its τ range, dotted: outside it; dashed: resolved terms' asymptotes",
+                 fontsize=8)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="lower left")
+    ax.legend(fontsize=6.5, loc="lower left")
 
 
 def allan_figure(result: NoiseCharacterization, title: str | None = None) -> Figure:
-    """ADEV per axis with χ² error bars at the result's level, the fitted model, each term's
-    asymptote (dashed where resolved, its τ range shaded; dotted at the upper bound where
-    not) with its slope labelled."""
-    fig, axs = plt.subplots(1, len(result.axes), figsize=(6.5 * len(result.axes), 5.2),
+    """One panel per sensor kind: each axis's ADEV with χ² error bars at the result's level,
+    its fitted model (solid on the τ range the model describes, dotted outside), the resolved
+    terms' asymptotes (dashed), the terms in datasheet units in the legend."""
+    kinds: dict[str, list] = {}
+    for fit in result.axes:
+        kinds.setdefault(fit.kind, []).append(fit)
+    fig, axs = plt.subplots(1, len(kinds), figsize=(7.0 * len(kinds), 5.4),
                             constrained_layout=True, squeeze=False)
-    for ax, fit in zip(axs[0], result.axes, strict=True):
-        _axis_panel(ax, fit, result.level)
+    for ax, fits in zip(axs[0], kinds.values(), strict=True):
+        _kind_panel(ax, fits, result.level)
     fig.suptitle(title or f"Allan deviation: {result.n} samples at {result.sample_rate:g} Hz "
-                 f"({result.duration:.4g} s); shaded: τ range each term was read from")
+                 f"({result.duration:.4g} s)")
     return fig
 
 

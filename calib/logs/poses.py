@@ -240,28 +240,56 @@ class PoseDetection(ResultMixin):
                    axes_watched=int(d.get("axes_watched", 2)))
 
 
+def _window_sums(s: np.ndarray, n: int, w: int) -> tuple[np.ndarray, np.ndarray]:
+    """Sums over the centred window of ``w`` samples (truncated at the ends) of the data whose
+    cumulative sums (with a leading 0) are ``s`` (N + 1), and the window counts. The interior
+    is one difference of two views of ``s``: no index arrays the length of the log."""
+    h = w // 2
+    out = np.empty(n)
+    cnt = np.full(n, float(w))
+    inner = n - w + 1
+    if inner > 0:
+        np.subtract(s[w:], s[:inner], out=out[h:h + inner])
+    edge = np.concatenate([np.arange(min(h, n)), np.arange(max(h + max(inner, 0), h), n)])
+    edge = edge[(edge >= 0) & (edge < n)]
+    lo, hi = np.maximum(0, edge - h), np.minimum(n, edge + (w - h))
+    out[edge] = s[hi] - s[lo]
+    cnt[edge] = hi - lo
+    return out, cnt
+
+
 def window_variance(x: np.ndarray, w: int) -> np.ndarray:
     """Sample variance (ddof 1) of ``x`` in a centred window of ``w`` samples per sample,
     truncated at the ends; O(N) by cumulative sums of the centred data (centring keeps the
-    difference of sums accurate: the values are O(g) while the variances may be 10⁻⁸)."""
-    x = np.asarray(x, dtype=float) - np.mean(x)
-    n, h = x.size, w // 2
-    s1 = np.concatenate(([0.0], np.cumsum(x)))
-    s2 = np.concatenate(([0.0], np.cumsum(x * x)))
-    i = np.arange(n)
-    lo, hi = np.maximum(0, i - h), np.minimum(n, i + (w - h))
-    cnt = (hi - lo).astype(float)
-    mean = (s1[hi] - s1[lo]) / cnt
-    var = (s2[hi] - s2[lo]) / cnt - mean * mean
-    return np.maximum(var, 0.0) * cnt / np.maximum(cnt - 1.0, 1.0)
+    difference of sums accurate: the values are O(g) while the variances may be 10⁻⁸). A few
+    arrays the length of the log at a time: a long log's detection must not need ten."""
+    x = np.array(x, dtype=float)
+    x -= np.mean(x)
+    n = x.size
+    s = np.zeros(n + 1)
+    np.cumsum(x, out=s[1:])
+    s1, cnt = _window_sums(s, n, w)
+    np.square(x, out=x)
+    np.cumsum(x, out=s[1:])
+    del x
+    var, _ = _window_sums(s, n, w)
+    del s
+    # (Σx² − (Σx)²/c) / (c − 1): the window's sample variance, ddof 1
+    np.square(s1, out=s1)
+    s1 /= cnt
+    var -= s1
+    np.maximum(var, 0.0, out=var)
+    var /= np.maximum(cnt - 1.0, 1.0)
+    return var
 
 
 def _window_mean(x: np.ndarray, w: int) -> np.ndarray:
-    n, h = x.size, w // 2
-    s1 = np.concatenate(([0.0], np.cumsum(x)))
-    i = np.arange(n)
-    lo, hi = np.maximum(0, i - h), np.minimum(n, i + (w - h))
-    return (s1[hi] - s1[lo]) / (hi - lo)
+    n = x.size
+    s = np.zeros(n + 1)
+    np.cumsum(x, out=s[1:])
+    total, cnt = _window_sums(s, n, w)
+    total /= cnt
+    return total
 
 
 def _quant_step(x: np.ndarray) -> float:

@@ -1,59 +1,51 @@
-"""Noise characterization of a static accelerometer log: overlapping Allan deviation per axis,
-the fitted noise terms with intervals, the quantization step (``tiltbench noise``).
+"""Noise characterization of a static inertial log: overlapping Allan deviation per axis, the
+fitted noise terms with intervals and the τ range each was read from, whether the model
+describes the curve, the quantization step (``tiltbench noise``).
 
 **Allan deviation.** ``allantools.oadev`` (rate-like data, ``data_type="freq"``) on the octave
 grid τ = m/fs, m = 1, 2, 4, …, ≤ N/4. Each point gets a χ² confidence interval from its
-equivalent degrees of freedom (``allantools.edf_greenhall``, overlapping estimator), with the
-power-law noise type α ∈ {0 white, −1 flicker, −2 random walk} read from the local slope
-μ = d log ADEV / d log τ of the fitted model (α = −2μ − 1 rounded, IEEE Std 1139; the fitted
-model's slope, because the data's own slope between two noisy points is itself noisy).
+equivalent degrees of freedom ``ν_i = 2 (E s_i)²/Var s_i``, computed from the exact moments of
+the fitted model (:func:`calib.noise.allan_model.edf`; for a pure power-law noise this is
+Greenhall's EDF, ``allantools.edf_greenhall``, which the tests compare).
 
-**Noise terms** (IEEE Std 952-1997 Annex C and IEEE Std 1293-2018 Annex: the readings of the
-Allan deviation plot as a fit). The expected Allan variance is the sum of the three terms,
-``AVAR(τ) = N²/τ + (2 ln2/π)·B² + K²·τ/3`` for m ≫ 1 — exactly, at every τ,
-``E s(τ_i) = X_i·θ`` with θ = (N²·fs, B², K²/fs) and X from :mod:`calib.noise.allan_model`:
+**Noise terms** (IEEE Std 952-1997 Annex C, IEEE Std 1293-2018 Annex, El-Sheimy et al. 2008: the
+readings of the Allan deviation plot as a fit). The expected Allan variance is the sum of the
+terms, exactly ``E s(τ_i) = X_i·θ`` at every τ (:mod:`calib.noise.allan_model`):
 
-=====================  ===============  =======  ===========================================
-term                   unit             slope    IEEE reading it replaces
-=====================  ===============  =======  ===========================================
-white_noise_density N  (m/s²)/√Hz       −½       −½ line at τ = 1 s
-bias_instability B     m/s²             0        flat minimum / 0.664
-rate_random_walk K     m/s²/√s          +½       +½ line at τ = 3 s
-=====================  ===============  =======  ===========================================
+=====================  ======================  =======  ==================================
+term                   unit (accelerometer;    slope    IEEE reading it replaces
+                       gyro: rad for m/s)
+=====================  ======================  =======  ==================================
+white_noise_density N  (m/s²)/√Hz              −½       −½ line at τ = 1 s
+bias_instability B     m/s²                    0        flat minimum / 0.664
+rate_random_walk K     m/s²/√s                 +½       +½ line at τ = 3 s
+quantization_noise Q   m/s                     −1       −1 line at τ = √3 s (3Q²/τ²)
+gauss_markov σ, T_c    m/s², s                 +½ → −½  the bump near τ ≈ 1.89·T_c
+=====================  ======================  =======  ==================================
 
-θ is estimated by generalized least squares on the octave Allan variances with their full
-covariance ``V(θ)`` (adjacent octaves of the overlapping estimator correlate by 0.5–0.7;
-:func:`calib.noise.allan_model.allan_moments`), iterated so that V is evaluated at the fit
-(whitened by Cholesky, solved by QR; no normal matrix is inverted).
+The last two enter only when the rule of :mod:`calib.noise.allan_fit` asks for them (the three
+core terms do not describe the curve); that module states the estimator (GLS with the full
+covariance, IRLS), the adequacy checks (χ² p ≥ 0.01; B under every point's upper χ² bound:
+``B ≤ min σ_A/0.664``), the model rule (add Q, then a Gauss–Markov term, then narrow the τ
+range to the widest adequate one), the score-type intervals and the resolved rules (zero
+rejected at ``alpha``; for K also ≥ 2 octave steps of rise with ≥ 8 clusters each).
 
-**Intervals** (coverage claimed: ``level``, two-sided, per term; checked over ≥ 200 simulated
-logs in ``tests/test_allan.py``). A Wald interval θ̂ ± z·se(θ̂) undercovers the random-walk
-term (its information sits in the few longest τ, whose estimates are skewed χ² with 2–5
-degrees of freedom; measured 0.82 at 0.95). The interval is instead the set of values θ_0 that
-a score-type test accepts: with θ_a fixed at θ_0 the other two terms are refitted, the
-covariance is evaluated *under that hypothesis* V(θ_0, θ̂_rest), and θ_0 is kept while
-``|θ̂_a(V) − θ_0| / se_a(V) ≤ z_{(1+level)/2}`` (the construction of Wilson's interval for a
-proportion; it is wider upwards where the data would be noisier). A negative estimate is taken
-as 0 in this test, so the interval is then [0, upper] (it only accepts more values: the
-coverage cannot drop). Bounds are mapped to the term by the monotone ``√`` of the table; a
-term's interval always contains its estimate and never goes below 0.
-
-**Resolved or not.** A term other than white noise is *resolved* when the same test rejects
-θ_a = 0 one-sided at ``alpha`` (default 0.05): z_0 = θ̂_a(V_0)/se_a(V_0) > z_{1-α}, V_0 the
-covariance with that term absent. An unresolved term is reported as "not resolved" with the
-upper end of its interval (the upper bound at ``level``), not as a number: on a log with
-white noise only the rate of false "resolved" is α per term (tested).
-
-**Adequacy.** The GLS residual ``χ² = rᵀV⁻¹r`` with n_τ − 3 degrees of freedom tests whether
-the three-term model describes the curve (a low-pass filter at small τ, temperature drift or a
-periodic disturbance at large τ make it fail); p < 0.01 is reported as lack of fit, and the
-τ range can be restricted (``tau_range``).
+Each term reports the τ range it was read from: the octaves of the model's range where it is
+the largest term (the model's whole range when it is nowhere the largest). The model's own
+range is reported too (``fit_range``); outside it, the model is not claimed to describe the
+curve.
 
 **Long logs** (more than :data:`MAX_FIT_SAMPLES`) are averaged in blocks of 2^k samples before
-the fit, so its cost stays bounded; τ then starts at 2^k/fs.
+the fit, so its cost stays bounded; τ then starts at 2^k/fs (white, flicker, walk, the
+integrated-output quantization keep their Allan variance at every τ ≥ 2^k/fs).
 
-**Quantization.** Readings on a lattice (every distinct value a multiple of one step from the
-smallest) give the step; it is reported, and its white contribution Δ²/12 is part of N.
+**Quantization step.** Readings on a lattice (every distinct value a multiple of one step from
+the smallest) give the step; it is reported, and its white contribution Δ²/12 is part of N.
+
+**Axes and kinds.** Each column is an axis of a kind, ``accelerometer`` (m/s²) or ``gyro``
+(rad/s); the same model applies (IEEE Std 952 is the gyro standard: angle random walk, bias
+instability, rate random walk), only the units differ (:mod:`calib.noise.term_units`, which
+also gives the datasheet units: µg/√Hz, µg, °/√h, °/h).
 
 The checks of the log before (sample rate, the table did not move, quantization step):
 :mod:`calib.logs.static_log`, re-exported here.
@@ -63,7 +55,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -71,27 +62,65 @@ from scipy import stats
 
 from calib.input_rules import DataError
 from calib.logs.static_log import check_static, quantization_step, sample_rate_of
+from calib.noise.allan_fit import (
+    CORE,
+    FLICKER,
+    GM,
+    K_RISE_CLUSTERS,
+    K_RISE_STEPS,
+    LACK_OF_FIT_P,
+    LADDER,
+    LADDER_NAMES,
+    WALK,
+    WHITE,
+    Engine,
+    Model,
+    ModelFit,
+    rise_steps,
+)
 from calib.noise.allan_model import (
+    ALL_TERM_NAMES,
+    EXTRA_TERM_NAMES,
     FLICKER_FLOOR,
     TERM_NAMES,
-    allan_moments,
-    avar_covariance,
-    terms_from_theta,
+    edf,
+    moments,
+    term_value,
 )
+from calib.noise.term_units import KINDS, SI_UNITS, datasheet, si_unit
 from calib.results import ResultMixin, readonly
 
-TERM_UNITS = {"white_noise_density": "(m/s^2)/sqrt(Hz)", "bias_instability": "m/s^2",
-              "rate_random_walk": "m/s^2/sqrt(s)"}
+TERM_UNITS = {k: SI_UNITS["accelerometer"][k] for k in ALL_TERM_NAMES}
+"""SI unit of each term of an accelerometer axis (a gyro's: :data:`SI_UNITS`)."""
 UNITS = {
     "sample_rate": "Hz", "n": "count", "level": "1", "alpha": "1", "duration": "s",
-    "taus": "s", "adev": "m/s^2", "adev_ci": "m/s^2", "model_adev": "m/s^2", "edf": "1",
-    "noise_alpha": "1 (0 white, -1 flicker, -2 random walk; frequency data)",
     **{f"terms.{k}.{f}": u for k, u in TERM_UNITS.items()
        for f in ("value", "interval", "upper_bound")},
-    "terms.*.tau_range": "s", "terms.*.z": "1", "terms.*.p_value": "1",
-    "theta": "white (m/s^2)^2 per sample, flicker (m/s^2)^2, random walk (m/s^2)^2 per sample",
-    "chi2": "1", "dof": "count", "p_fit": "1", "quantization_step": "m/s^2",
-    "mean": "m/s^2", "std": "m/s^2", "block": "count", "static_check.window": "s",
+    **{f"gyro_terms.{k}.{f}": SI_UNITS["gyro"][k] for k in ALL_TERM_NAMES
+       for f in ("value", "interval", "upper_bound")},
+    "axes.*.taus": "s", "axes.*.fit_range": "s", "axes.*.terms.*.tau_range": "s",
+    "axes.*.terms.*.correlation_time": "s",
+    "axes.*.adev": "the axis's reading unit (axes.*.unit: m/s^2 or rad/s)",
+    "axes.*.adev_ci": "the axis's reading unit", "axes.*.model_adev": "the axis's reading unit",
+    "axes.*.mean": "the axis's reading unit", "axes.*.std": "the axis's reading unit",
+    "axes.*.quantization_step": "the axis's reading unit",
+    "axes.*.terms.*.value": "axes.*.terms.*.unit (SI; accelerometer: "
+    + ", ".join(f"{k} {v}" for k, v in SI_UNITS["accelerometer"].items() if k != "reading")
+    + "; gyro: " + ", ".join(f"{k} {v}" for k, v in SI_UNITS["gyro"].items() if k != "reading")
+    + ")",
+    "axes.*.terms.*.interval": "axes.*.terms.*.unit", "axes.*.terms.*.upper_bound":
+    "axes.*.terms.*.unit", "axes.*.terms.*.datasheet.*": "axes.*.terms.*.datasheet.unit "
+    "(µg = 9.80665e-6 m/s^2, ° = π/180 rad, h = 3600 s)",
+    "axes.*.b_bound": "axes.*.terms.bias_instability.unit",
+    "axes.*.b_bound_tau": "s",
+    "axes.*.edf": "1", "axes.*.noise_alpha": "1 (0 white, -1 flicker, -2 random walk)",
+    "axes.*.terms.*.z": "1", "axes.*.terms.*.p_value": "1",
+    "axes.*.theta": "white (unit)^2 per sample, flicker (unit)^2, random walk (unit)^2 per "
+    "sample, quantization (unit)^2 per sample^-2, Gauss-Markov (unit)^2",
+    "axes.*.chi2": "1", "axes.*.dof": "count", "axes.*.p_fit": "1",
+    "axes.*.k_rise_steps": "count", "axes.*.n": "count", "axes.*.tried.*.chi2": "1",
+    "axes.*.tried.*.dof": "count", "axes.*.tried.*.p": "1", "axes.*.tried.*.tau_range": "s",
+    "block": "count", "static_check.window": "s",
     "static_check.shift": "m/s^2", "static_check.var_ratio": "1",
     "static_check.max_shift": "m/s^2", "static_check.max_var_ratio": "1",
     "static_check.max_rate": "rad/s", "static_check.max_gyro_rate": "rad/s",
@@ -103,9 +132,7 @@ MIN_SAMPLES = 64
 MAX_FIT_SAMPLES = 2 ** 17
 """Longer logs are averaged in blocks of r = 2^k samples (τ from r/fs) before the fit: the
 covariance of the Allan variances costs an FFT of the record per pair of τ (seconds at 2^17
-samples); the white density, the flicker floor and the walk are unchanged by block means."""
-LACK_OF_FIT_P = 0.01
-"""p below which the three-term model is said not to describe the Allan curve."""
+samples, then cached); the terms' Allan variances are unchanged by block means at τ ≥ r/fs."""
 
 
 # --- the Allan deviation ------------------------------------------------------------------
@@ -124,8 +151,8 @@ def octave_factors(n: int, rate: float, tau_range: tuple[float, float] | None = 
 
 def overlapping_adev(y: np.ndarray, rate: float, ms: tuple[int, ...]
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``allantools.oadev`` of the rate-like readings ``y`` (m/s²) at τ = m/rate: (τ s, ADEV
-    m/s², number of overlapping differences)."""
+    """``allantools.oadev`` of the rate-like readings ``y`` at τ = m/rate: (τ s, ADEV in the
+    readings' unit, number of overlapping differences)."""
     import allantools
 
     taus, adev, _, n = allantools.oadev(np.asarray(y, dtype=float), rate=float(rate),
@@ -135,122 +162,33 @@ def overlapping_adev(y: np.ndarray, rate: float, ms: tuple[int, ...]
     return np.asarray(taus), np.asarray(adev), np.asarray(n)
 
 
-def adev_intervals(adev: np.ndarray, ms: tuple[int, ...], n: int, slopes: np.ndarray,
-                   level: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """χ² intervals of each ADEV point from its EDF (module docstring): (lo, hi, edf, α)."""
-    import allantools
-
-    alpha = np.clip(np.rint(-2.0 * slopes - 1.0), -2, 0).astype(int)
-    edf = np.array([_edf(int(a), int(m), int(n) + 1) for a, m in zip(alpha, ms, strict=True)],
-                   dtype=float)
-    lo, hi = np.empty_like(adev), np.empty_like(adev)
-    for i, (dev, e) in enumerate(zip(adev, edf, strict=True)):
-        lo[i], hi[i] = allantools.confidence_interval(float(dev), float(e), ci=level)
-    return lo, hi, edf, alpha
+def adev_intervals(adev: np.ndarray, nu: np.ndarray, level: float
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Two-sided χ² interval at ``level`` of each ADEV point with ``nu`` degrees of freedom:
+    ``σ·√(ν/χ²_ν((1 ± level)/2))`` (lo, hi)."""
+    lo = adev * np.sqrt(nu / stats.chi2.ppf(0.5 + level / 2.0, nu))
+    hi = adev * np.sqrt(nu / stats.chi2.ppf(0.5 - level / 2.0, nu))
+    return lo, hi
 
 
-@lru_cache(maxsize=4096)
-def _edf(alpha: int, m: int, n: int) -> float:
-    """Greenhall's EDF of the overlapping Allan variance (a pure function of its integers,
-    cached: its series costs ~2 ms per point and a Monte Carlo repeats the same ones)."""
-    import allantools
-
-    return float(allantools.edf_greenhall(alpha=alpha, d=2, m=m, N=n, overlapping=True,
-                                          modified=False))
-
-
-# --- the GLS fit and its score intervals --------------------------------------------------
-
-
-def _gls(s: np.ndarray, design: np.ndarray, cov: np.ndarray
-         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Batched GLS: s (n,) or (G, n), design (n, p), cov (G, n, n) → (θ (G, p),
-    Cov θ (G, p, p), χ² (G,)).
-
-    Whitened by Cholesky, columns equilibrated, solved by QR: ``R θ = Qᵀ s_w``,
-    ``Cov θ = R⁻¹R⁻ᵀ`` (R is p×p triangular; no normal matrix).
-    """
-    chol = np.linalg.cholesky(cov)
-    xw = np.linalg.solve(chol, np.broadcast_to(design, cov.shape[:1] + design.shape))
-    sw = np.linalg.solve(chol, np.broadcast_to(s, cov.shape[:2])[..., None])[..., 0]
-    scale = np.linalg.norm(xw, axis=1)
-    q, r = np.linalg.qr(xw / scale[:, None, :])
-    qs = np.einsum("gnp,gn->gp", q, sw)
-    theta = np.linalg.solve(r, qs[..., None])[..., 0] / scale
-    ri = np.linalg.inv(r)
-    cov_theta = ri @ np.swapaxes(ri, 1, 2) / (scale[:, :, None] * scale[:, None, :])
-    res = sw - np.einsum("gnp,gp->gn", xw, theta)
-    return theta, cov_theta, np.einsum("gn,gn->g", res, res)
-
-
-def _fit_theta(s, design, tensor, floor, iterations=6):
-    """IRLS: θ with V evaluated at the previous θ (clipped at 0; white at least ``floor``)."""
-    theta = np.array([s[0] / design[0, 0], 0.0, 0.0])
-    for _ in range(iterations):
-        v = avar_covariance(tensor, _valid(theta, floor))[None]
-        est, cov, chi2 = _gls(s, design, v)
-        theta = est[0]
-    return theta, cov[0], float(chi2[0])
-
-
-def _valid(theta: np.ndarray, floor: float) -> np.ndarray:
-    t = np.maximum(theta, 0.0)
-    t[..., 0] = np.maximum(t[..., 0], floor)
-    return t
-
-
-def _score_z(s, design, tensor, a: int, values: np.ndarray, start: np.ndarray, floor: float,
-             iterations: int = 3, clip: bool = False) -> np.ndarray:
-    """z(θ_0) = (θ̂_a(V) − θ_0)/se_a(V), V under the hypothesis θ_a = θ_0 with the other terms
-    refitted (module docstring), for every θ_0 in ``values`` at once. ``clip``: θ̂_a(V) taken
-    as max(θ̂_a(V), 0) (for the interval: a negative estimate then gives [0, upper] with
-    upper > 0, where the unclipped test would accept no θ_0 ≥ 0 at all; it only ever accepts
-    more values, so the coverage does not drop)."""
-    theta = np.tile(start, (values.size, 1))
-    theta[:, a] = values
-    free = [b for b in range(3) if b != a]
-    for _ in range(iterations):
-        v = np.einsum("ga,ijab,gb->gij", _valid(theta, floor), tensor, _valid(theta, floor))
-        sub = s[None, :] - design[:, a][None, :] * values[:, None]
-        theta[:, free] = _gls(sub, design[:, free], v)[0]
-    v = np.einsum("ga,ijab,gb->gij", _valid(theta, floor), tensor, _valid(theta, floor))
-    est, cov, _ = _gls(s, design, v)
-    top = np.maximum(est[:, a], 0.0) if clip else est[:, a]
-    return (top - values) / np.sqrt(cov[:, a, a])
-
-
-def _crossing(s, design, tensor, a, start, floor, target, lo, hi, rising_side):
-    """θ_0 in [lo, hi] where z(θ_0) = target, z decreasing in θ_0 (grid, then bisection)."""
-    for _ in range(40):
-        z_hi = _score_z(s, design, tensor, a, np.array([hi]), start, floor, clip=True)[0]
-        if z_hi < target or not rising_side:
-            break
-        lo, hi = hi, hi * 2.0 + 1e-300
-    grid = np.linspace(lo, hi, 9)
-    for _ in range(3):  # bracket / 8³: far finer than the interval's own sampling error
-        z = _score_z(s, design, tensor, a, grid, start, floor, clip=True)
-        above = np.nonzero(z >= target)[0]
-        if above.size == 0:
-            return float(grid[0])
-        k = int(above[-1])
-        if k == grid.size - 1:
-            return float(grid[-1])
-        grid = np.linspace(grid[k], grid[k + 1], 9)
-    return float(0.5 * (grid[0] + grid[-1]))
+# --- results ------------------------------------------------------------------------------
 
 
 @dataclass(frozen=True, eq=False)
 class TermFit(ResultMixin):
     """One fitted noise term of one axis (module docstring).
 
-    name : "white_noise_density", "bias_instability" or "rate_random_walk".
-    resolved : the log resolves the term (score test of zero rejected at ``alpha``).
-    value : estimate in the term's unit (:data:`TERM_UNITS`), or None when not resolved.
+    name : a name of :data:`calib.noise.allan_model.ALL_TERM_NAMES`.
+    resolved : the log resolves the term (score test of zero rejected at ``alpha``; for the
+        rate random walk also the rise rule of :mod:`calib.noise.allan_fit`).
+    value : estimate in the term's unit (:attr:`unit`), or None when not resolved.
     interval : (lo, hi) at ``level``, same unit; lo = 0 when zero is not excluded.
     upper_bound : hi — what an unresolved term is reported as.
-    tau_range : (τ_first, τ_last), s — the τ where this term is the largest of the three
-        (the fit's whole range when it is nowhere).
+    tau_range : (τ_first, τ_last), s — the τ where this term is the largest of the model
+        (the model's whole range when it is nowhere).
     z, p_value : score statistic of "term = 0" and its one-sided p.
+    kind : ``accelerometer`` or ``gyro`` (the unit).
+    correlation_time : s, the Gauss–Markov term's T_c (on the half-octave grid), else None.
     """
 
     name: str
@@ -262,23 +200,38 @@ class TermFit(ResultMixin):
     z: float
     p_value: float
     level: float
+    kind: str = "accelerometer"
+    correlation_time: float | None = None
 
     _TITLE = "Noise term"
-    _UNITS = "see TERM_UNITS"
+    _UNITS = "see calib.noise.term_units"
 
     @property
     def unit(self) -> str:
-        return TERM_UNITS[self.name]
+        return si_unit(self.name, self.kind)
+
+    def datasheet(self) -> dict:
+        """Value, interval and upper bound in the datasheet unit (µg/√Hz, µg, °/√h, °/h…)."""
+        v, unit = datasheet(self.name, self.kind, self.value)
+        lo, _ = datasheet(self.name, self.kind, self.interval[0])
+        hi, _ = datasheet(self.name, self.kind, self.interval[1])
+        ub, _ = datasheet(self.name, self.kind, self.upper_bound)
+        return {"value": v, "interval": [lo, hi], "upper_bound": ub, "unit": unit}
 
     def summary(self) -> str:
         lo, hi = self.interval
         t0, t1 = self.tau_range
         where = f"τ {t0:.3g}–{t1:.3g} s"
+        ds = self.datasheet()
+        tc = ("" if self.correlation_time is None
+              else f", T_c {self.correlation_time:.3g} s (half-octave grid)")
         if not self.resolved:
-            return (f"{self.name}: not resolved (< {self.upper_bound:.3g} {self.unit} at "
-                    f"{self.level:.1%}; z = {self.z:.2f}, p = {self.p_value:.2g}; {where})")
-        return (f"{self.name}: {self.value:.4g} {self.unit} [{lo:.4g}, {hi:.4g}] at "
-                f"{self.level:.1%} ({where}; z = {self.z:.1f})")
+            return (f"{self.name}: not resolved (< {self.upper_bound:.3g} {self.unit} = "
+                    f"{ds['upper_bound']:.3g} {ds['unit']} at {self.level:.1%}; "
+                    f"z = {self.z:.2f}, p = {self.p_value:.2g}; {where}{tc})")
+        return (f"{self.name}: {self.value:.4g} {self.unit} [{lo:.4g}, {hi:.4g}] = "
+                f"{ds['value']:.4g} {ds['unit']} [{ds['interval'][0]:.4g}, "
+                f"{ds['interval'][1]:.4g}] at {self.level:.1%} ({where}; z = {self.z:.1f}{tc})")
 
     def to_dict(self) -> dict:
         return {"name": self.name, "resolved": bool(self.resolved),
@@ -287,16 +240,22 @@ class TermFit(ResultMixin):
                 "upper_bound": float(self.upper_bound),
                 "tau_range": [float(v) for v in self.tau_range], "z": float(self.z),
                 "p_value": float(self.p_value), "level": float(self.level),
-                "unit": self.unit}
+                "unit": self.unit, "kind": self.kind,
+                "correlation_time": (None if self.correlation_time is None
+                                     else float(self.correlation_time)),
+                "datasheet": self.datasheet()}
 
     @classmethod
     def from_dict(cls, d: dict) -> TermFit:
+        tc = d.get("correlation_time")
         return cls(name=d["name"], resolved=bool(d["resolved"]),
                    value=None if d["value"] is None else float(d["value"]),
                    interval=tuple(float(v) for v in d["interval"]),
                    upper_bound=float(d["upper_bound"]),
                    tau_range=tuple(float(v) for v in d["tau_range"]), z=float(d["z"]),
-                   p_value=float(d["p_value"]), level=float(d["level"]))
+                   p_value=float(d["p_value"]), level=float(d["level"]),
+                   kind=d.get("kind", "accelerometer"),
+                   correlation_time=None if tc is None else float(tc))
 
     def to_noise_term(self):
         """The profile's :class:`calib.noise.sensor_profile.NoiseTerm`, or None when not
@@ -306,18 +265,26 @@ class TermFit(ResultMixin):
         if not self.resolved:
             return None
         return NoiseTerm(value=float(self.value), interval=tuple(self.interval),
-                         tau_range=tuple(self.tau_range), level=self.level)
+                         tau_range=tuple(self.tau_range), level=self.level,
+                         correlation_time=self.correlation_time)
 
 
 @dataclass(frozen=True, eq=False)
 class AxisNoise(ResultMixin):
     """Allan deviation and noise terms of one axis.
 
-    taus (k,) s; adev (k,) m/s²; adev_ci (k, 2) m/s² at ``level`` (EDF χ²); edf (k,);
-    noise_alpha (k,) power-law type used for the EDF; model_adev (k,) m/s² of the fit;
-    theta (3,) and cov (3, 3): the GLS estimate and covariance (units in :data:`UNITS`);
-    terms: the three :class:`TermFit`; chi2, dof, p_fit: the model's adequacy;
-    quantization_step m/s² or None; mean, std m/s² of the readings; n samples.
+    axis, kind : the axis name and ``accelerometer``/``gyro``.
+    taus (k,) s; adev (k,) in the reading unit; adev_ci (k, 2) at ``level`` (χ², EDF); edf
+    (k,) exact EDF of each point for the fitted model; noise_alpha (k,) the power-law type of
+    the model's local slope; model_adev (k,) of the fit; theta (5,) and cov (p, p): the GLS
+    estimate (every term of :data:`ALL_TERM_NAMES`, 0 outside the model) and the covariance of
+    the model's terms; terms: the three core :class:`TermFit` and the extra ones of the model;
+    chi2, dof, p_fit: the chosen model's adequacy on ``fit_range``; fit_ok: a model of the
+    rule describes the curve there; rule: which rung of the ladder; octaves: [lo, hi) indices
+    of ``fit_range`` in ``taus``; b_bound: the largest B the Allan minimum allows (same unit
+    as B) and b_bound_tau where; k_rise_steps: octave steps of the rise rule of K; tried: the
+    models the rule fitted (terms, τ range, χ², dof, p, bound); quantization_step or None;
+    mean, std of the readings; n samples; n_fit samples after block means; ms the octaves.
     """
 
     axis: str
@@ -329,7 +296,7 @@ class AxisNoise(ResultMixin):
     model_adev: np.ndarray
     theta: np.ndarray
     cov: np.ndarray
-    terms: tuple[TermFit, TermFit, TermFit]
+    terms: tuple[TermFit, ...]
     chi2: float
     dof: int
     p_fit: float
@@ -337,54 +304,96 @@ class AxisNoise(ResultMixin):
     mean: float
     std: float
     n: int
+    kind: str = "accelerometer"
+    fit_ok: bool = True
+    rule: str = "three terms"
+    octaves: tuple[int, int] = (0, 0)
+    b_bound: float = float("inf")
+    b_bound_tau: float = float("nan")
+    k_rise_steps: int = 0
+    n_fit: int = 0
+    ms: tuple[int, ...] = ()
+    tried: tuple[dict, ...] = ()
 
     _TITLE = "Allan deviation of one axis"
-    _UNITS = "τ s; ADEV m/s²; terms in TERM_UNITS"
+    _UNITS = "τ s; ADEV in the reading unit; terms in calib.noise.term_units"
 
     def __post_init__(self) -> None:
         for name in ("taus", "adev", "adev_ci", "edf", "model_adev", "theta", "cov"):
             object.__setattr__(self, name, readonly(getattr(self, name)))
         object.__setattr__(self, "noise_alpha", readonly(self.noise_alpha, int))
         object.__setattr__(self, "terms", tuple(self.terms))
+        object.__setattr__(self, "octaves", tuple(int(v) for v in self.octaves))
+        object.__setattr__(self, "ms", tuple(int(v) for v in self.ms))
+        object.__setattr__(self, "tried", tuple(self.tried))
 
-    def term(self, name: str) -> TermFit:
-        return self.terms[TERM_NAMES.index(name)]
+    def term(self, name: str) -> TermFit | None:
+        """The :class:`TermFit` ``name``; None for an extra term outside the model."""
+        for t in self.terms:
+            if t.name == name:
+                return t
+        if name in ALL_TERM_NAMES:
+            return None
+        raise KeyError(name)
+
+    @property
+    def unit(self) -> str:
+        return SI_UNITS[self.kind]["reading"]
 
     @property
     def lack_of_fit(self) -> bool:
-        return self.p_fit < LACK_OF_FIT_P
+        return not self.fit_ok
+
+    @property
+    def fit_range(self) -> tuple[float, float]:
+        lo, hi = self.octaves
+        return float(self.taus[lo]), float(self.taus[hi - 1])
 
     def summary(self) -> str:
-        lines = [f"axis {self.axis}: {self.n} samples, mean {self.mean:.5g} m/s², std "
-                 f"{self.std:.4g} m/s², τ {self.taus[0]:.3g}–{self.taus[-1]:.3g} s "
-                 f"({self.taus.size} octaves)"]
+        lines = [f"axis {self.axis} ({self.kind}): {self.n} samples, mean {self.mean:.5g} "
+                 f"{self.unit}, std {self.std:.4g} {self.unit}, τ {self.taus[0]:.3g}–"
+                 f"{self.taus[-1]:.3g} s ({self.taus.size} octaves)"]
         lines += ["  " + t.summary() for t in self.terms]
         q = self.quantization_step
         lines.append("  quantization step: " + ("none seen (readings not on a lattice)"
-                                                if q is None else f"{q:.4g} m/s²"))
+                                                if q is None else f"{q:.4g} {self.unit}"))
         if q is not None and self.std < q:
-            lines.append(f"  note: the readings' std ({self.std:.3g} m/s²) is below the "
+            lines.append(f"  note: the readings' std ({self.std:.3g} {self.unit}) is below the "
                          "quantization step: the Allan deviation measures the quantizer more "
                          "than the sensor")
-        fit = (f"  model fit: χ² = {self.chi2:.2f} on {self.dof} dof (p = {self.p_fit:.2g})")
-        if self.lack_of_fit:
-            fit += (" — the white + bias-instability + random-walk model misses something "
-                    "(a filter at small τ, drift or a periodic disturbance at large τ): read "
-                    "the figure, or restrict --tau-range")
+        t0, t1 = self.fit_range
+        fit = (f"  model ({self.rule}) on τ {t0:.3g}–{t1:.3g} s: χ² = {self.chi2:.2f} on "
+               f"{self.dof} dof (p = {self.p_fit:.2g}); bias instability ≤ {self.b_bound:.3g} "
+               f"{si_unit('bias_instability', self.kind)} by the Allan minimum's upper χ² "
+               f"bound (at τ = {self.b_bound_tau:.3g} s); the walk's rise: "
+               f"{self.k_rise_steps} octave step(s) with ≥ {K_RISE_CLUSTERS} clusters "
+               f"({K_RISE_STEPS} needed to resolve K)")
+        if not self.fit_ok:
+            fit += (f" — NO model of the rule describes this curve (p < {LACK_OF_FIT_P:g} or B "
+                    "above the Allan minimum on every τ range of ≥ 5 octaves): read the "
+                    "figure; `--save` refuses this profile unless --save-failed-fit")
+        elif self.octaves != (0, self.taus.size):
+            fit += (f" — the octaves outside τ {t0:.3g}–{t1:.3g} s are not described by the "
+                    "model (the widest τ range where one is adequate)")
         lines.append(fit)
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        return {"axis": self.axis, "taus": self.taus.tolist(), "adev": self.adev.tolist(),
+        return {"axis": self.axis, "kind": self.kind, "unit": self.unit,
+                "taus": self.taus.tolist(), "adev": self.adev.tolist(),
                 "adev_ci": self.adev_ci.tolist(), "edf": self.edf.tolist(),
                 "noise_alpha": self.noise_alpha.tolist(),
                 "model_adev": self.model_adev.tolist(), "theta": self.theta.tolist(),
                 "cov": self.cov.tolist(), "terms": {t.name: t.to_dict() for t in self.terms},
                 "chi2": float(self.chi2), "dof": int(self.dof), "p_fit": float(self.p_fit),
-                "lack_of_fit": bool(self.lack_of_fit),
+                "fit_ok": bool(self.fit_ok), "lack_of_fit": bool(self.lack_of_fit),
+                "rule": self.rule, "fit_range": list(self.fit_range),
+                "octaves": list(self.octaves), "b_bound": float(self.b_bound),
+                "b_bound_tau": float(self.b_bound_tau), "k_rise_steps": int(self.k_rise_steps),
                 "quantization_step": (None if self.quantization_step is None
                                       else float(self.quantization_step)),
-                "mean": float(self.mean), "std": float(self.std), "n": int(self.n)}
+                "mean": float(self.mean), "std": float(self.std), "n": int(self.n),
+                "n_fit": int(self.n_fit), "ms": list(self.ms), "tried": list(self.tried)}
 
     @classmethod
     def from_dict(cls, d: dict) -> AxisNoise:
@@ -392,16 +401,23 @@ class AxisNoise(ResultMixin):
         return cls(axis=d["axis"], taus=d["taus"], adev=d["adev"], adev_ci=d["adev_ci"],
                    edf=d["edf"], noise_alpha=d["noise_alpha"], model_adev=d["model_adev"],
                    theta=d["theta"], cov=d["cov"],
-                   terms=tuple(TermFit.from_dict(d["terms"][k]) for k in TERM_NAMES),
+                   terms=tuple(TermFit.from_dict(d["terms"][k]) for k in ALL_TERM_NAMES
+                               if k in d["terms"]),  # θ's order, whatever the JSON's
                    chi2=float(d["chi2"]), dof=int(d["dof"]), p_fit=float(d["p_fit"]),
                    quantization_step=None if q is None else float(q), mean=float(d["mean"]),
-                   std=float(d["std"]), n=int(d["n"]))
+                   std=float(d["std"]), n=int(d["n"]), kind=d.get("kind", "accelerometer"),
+                   fit_ok=bool(d.get("fit_ok", True)), rule=d.get("rule", "three terms"),
+                   octaves=tuple(d.get("octaves", (0, len(d["taus"])))),
+                   b_bound=float(d.get("b_bound", float("inf"))),
+                   b_bound_tau=float(d.get("b_bound_tau", float("nan"))),
+                   k_rise_steps=int(d.get("k_rise_steps", 0)), n_fit=int(d.get("n_fit", 0)),
+                   ms=tuple(d.get("ms", ())), tried=tuple(d.get("tried", ())))
 
 
 @dataclass(frozen=True, eq=False)
 class NoiseCharacterization(ResultMixin):
     """The result of :func:`characterize_noise`: per-axis :class:`AxisNoise`, the settings,
-    the static check and the source."""
+    the static check and the source; ``notes``: axes left out and why."""
 
     sample_rate: float
     n: int
@@ -411,16 +427,22 @@ class NoiseCharacterization(ResultMixin):
     static_check: dict[str, Any] = field(default_factory=dict)
     source: dict[str, str] | None = None
     block: int = 1
+    notes: tuple[str, ...] = ()
 
     _TITLE = "Noise characterization (Allan deviation)"
-    _UNITS = "Hz, s, m/s²; terms in (m/s²)/√Hz, m/s², m/s²/√s"
+    _UNITS = "Hz, s; readings m/s² (accelerometer) or rad/s (gyro); terms: calib.noise.term_units"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "axes", tuple(self.axes))
+        object.__setattr__(self, "notes", tuple(self.notes))
 
     @property
     def duration(self) -> float:
         return self.n / self.sample_rate
+
+    @property
+    def fit_ok(self) -> bool:
+        return all(a.fit_ok for a in self.axes)
 
     def axis(self, name: str) -> AxisNoise:
         for a in self.axes:
@@ -431,18 +453,22 @@ class NoiseCharacterization(ResultMixin):
     def summary(self) -> str:
         head = (f"noise: {self.n} samples at {self.sample_rate:g} Hz ({self.duration:.4g} s); "
                 f"intervals at {self.level:.1%} (score-type, GLS on the octave Allan "
-                f"variances); a term is resolved when zero is rejected at α = {self.alpha:g}")
+                f"variances); a term is resolved when zero is rejected at α = {self.alpha:g} "
+                f"(the walk K also needs {K_RISE_STEPS} octave steps of rise with ≥ 8 "
+                "clusters each)")
         if self.block > 1:
             head += (f"\nlong log: averaged in blocks of {self.block} samples before the fit "
                      f"(τ from {self.block / self.sample_rate:g} s)")
-        return "\n".join([head] + [a.summary() for a in self.axes])
+        return "\n".join([head] + [a.summary() for a in self.axes]
+                         + [f"note: {n}" for n in self.notes])
 
     def to_dict(self) -> dict:
         return {"sample_rate": float(self.sample_rate), "n": int(self.n),
                 "duration": float(self.duration), "level": float(self.level),
-                "alpha": float(self.alpha), "axes": {a.axis: a.to_dict() for a in self.axes},
+                "alpha": float(self.alpha), "fit_ok": bool(self.fit_ok),
+                "axes": {a.axis: a.to_dict() for a in self.axes},
                 "static_check": self.static_check, "source": self.source,
-                "block": int(self.block), "units": UNITS}
+                "block": int(self.block), "notes": list(self.notes), "units": UNITS}
 
     @classmethod
     def from_dict(cls, d: dict) -> NoiseCharacterization:
@@ -450,20 +476,23 @@ class NoiseCharacterization(ResultMixin):
                    alpha=float(d["alpha"]),
                    axes=tuple(AxisNoise.from_dict(a) for a in d["axes"].values()),
                    static_check=d.get("static_check", {}), source=d.get("source"),
-                   block=int(d.get("block", 1)))
+                   block=int(d.get("block", 1)), notes=tuple(d.get("notes", ())))
 
     def to_profile(self, calibration: dict | None = None, tool_version: str = "unknown"):
         """The :class:`calib.noise.sensor_profile.SensorProfile` of this log: resolved terms as
-        NoiseTerms, unresolved ones null (their upper bounds in ``extra``), the quantization
-        step, the sample rate and ``calibration`` if given."""
+        NoiseTerms, unresolved ones null (their upper bounds in ``extra``), the extra terms of
+        each axis's model, the quantization step, whether the model describes each axis's
+        curve (``fit_ok``) and on which τ range, the sample rate and ``calibration`` if
+        given."""
         from calib.noise.sensor_profile import SensorProfile
 
         def per_axis(name):
-            terms = tuple(a.term(name).to_noise_term() for a in self.axes)
+            terms = tuple(None if a.term(name) is None else a.term(name).to_noise_term()
+                          for a in self.axes)
             return None if all(t is None for t in terms) else terms
 
-        bounds = {a.axis: {t.name: t.upper_bound for t in a.terms if not t.resolved}
-                  for a in self.axes}
+        bounds = {a.axis: {t.name: t.upper_bound for t in a.terms
+                           if not t.resolved and t.name in TERM_NAMES} for a in self.axes}
         qs = tuple(a.quantization_step for a in self.axes)
         return SensorProfile(
             sample_rate=self.sample_rate,
@@ -472,6 +501,9 @@ class NoiseCharacterization(ResultMixin):
             bias_instability=per_axis("bias_instability"),
             rate_random_walk=per_axis("rate_random_walk"),
             quantization_step=None if all(q is None for q in qs) else qs,
+            quantization_noise=per_axis("quantization_noise"),
+            gauss_markov=per_axis("gauss_markov"),
+            fit_tau_range=tuple(a.fit_range for a in self.axes),
             calibration=calibration, source=self.source, tool_version=tool_version,
             axes=tuple(a.axis for a in self.axes),
             extra={"unresolved_upper_bounds": bounds, "level": self.level,
@@ -479,31 +511,50 @@ class NoiseCharacterization(ResultMixin):
                    "lack_of_fit": {a.axis: bool(a.lack_of_fit) for a in self.axes}})
 
 
-def _term_ranges(taus: np.ndarray, design: np.ndarray, theta: np.ndarray):
-    parts = design * np.maximum(theta, 0.0)
+# --- the fit of one axis ------------------------------------------------------------------
+
+
+def _term_ranges(taus: np.ndarray, design: np.ndarray, theta: np.ndarray,
+                 lo: int, hi: int) -> dict[int, tuple[float, float]]:
+    parts = design[lo:hi] * np.maximum(theta, 0.0)
     top = np.argmax(parts, axis=1)
-    out = []
-    for a in range(3):
-        idx = np.nonzero(top == a)[0]
-        out.append((float(taus[0]), float(taus[-1])) if idx.size == 0
-                   else (float(taus[idx[0]]), float(taus[idx[-1]])))
+    out = {}
+    for a in range(theta.size):
+        idx = np.nonzero(top == a)[0] + lo
+        out[a] = ((float(taus[lo]), float(taus[hi - 1])) if idx.size == 0
+                  else (float(taus[idx[0]]), float(taus[idx[-1]])))
     return out
 
 
-def fit_axis_noise(y: np.ndarray, rate: float, *, axis: str = "x", level: float = 0.683,
-                   alpha: float = 0.05, tau_range: tuple[float, float] | None = None,
-                   block: int = 1) -> AxisNoise:
-    """Allan deviation and the three noise terms of one axis (module docstring).
+def _tried(f: ModelFit, taus: np.ndarray) -> dict:
+    m = f.model
+    return {"terms": list(m.names), "tau_range": [float(taus[m.lo]), float(taus[m.hi - 1])],
+            "chi2": float(f.chi2), "dof": int(f.dof), "p": float(f.p),
+            "b_bound_ok": bool(f.bound_ok)}
+
+
+def fit_axis_noise(y: np.ndarray, rate: float, *, axis: str = "x", kind: str = "accelerometer",
+                   level: float = 0.683, alpha: float = 0.05,
+                   tau_range: tuple[float, float] | None = None, block: int = 1,
+                   select: bool = False) -> AxisNoise:
+    """Allan deviation and the noise terms of one axis (module docstring).
 
     Parameters
     ----------
-    y : (N,) readings of a static log, m/s², evenly spaced at ``rate`` Hz.
+    y : (N,) readings of a static log (m/s² or rad/s by ``kind``), evenly spaced at ``rate``
+        Hz.
+    kind : ``accelerometer`` or ``gyro``: the units only.
     level : two-sided level of the intervals (ADEV points and terms).
     alpha : one-sided significance for "resolved".
     tau_range : (τ_min, τ_max) s to restrict the octave grid, or None (all of it).
     block : average the readings in blocks of this many samples first (:data:`MAX_FIT_SAMPLES`);
         the quantization step, mean and std are those of the raw readings.
+    select : apply the model rule of :mod:`calib.noise.allan_fit` (``tiltbench noise``); False:
+        the three core terms on the whole range, whatever their adequacy (the gap workflow's
+        flicker test, :mod:`calib.gap.walk`, whose false-alarm rates were measured so).
     """
+    if kind not in KINDS:
+        raise DataError(f"axis {axis}: kind must be one of {', '.join(KINDS)}, got {kind!r}")
     raw = np.asarray(y, dtype=float)
     n_raw = raw.size
     y = raw if block == 1 else raw[:n_raw // block * block].reshape(-1, block).mean(axis=1)
@@ -522,57 +573,89 @@ def fit_axis_noise(y: np.ndarray, rate: float, *, axis: str = "x", level: float 
         raise DataError(f"axis {axis}: the readings do not change from sample to sample (a "
                         "dead or saturated axis, or a quantization step far above the noise): "
                         "there is no noise to characterize")
-    design, tensor = allan_moments(n, ms)
+    mom = moments(n, ms)
     # a white floor keeps V positive definite whatever the fit does (a trillionth of the
     # smallest-τ variance: far below anything the data can tell)
-    floor = 1e-12 * s[0] / design[0, 0]
-    theta, cov, chi2 = _fit_theta(s, design, tensor, floor)
-    dof = len(ms) - 3
-    z_two = stats.norm.ppf(0.5 + level / 2.0)
-    z_one = stats.norm.ppf(1.0 - alpha)
-    se = np.sqrt(np.diag(cov))
-    ranges = _term_ranges(taus, design, theta)
+    floor = 1e-12 * s[0] / mom.design[0, 0]
+    engine = Engine(s, mom, floor, nonnegative=select)
+    k = len(ms)
+    if select:
+        chosen, ok, tried = engine.select()
+    else:
+        chosen = engine.fit(Model(CORE, None, 0, k))
+        ok, tried = chosen.adequate, [chosen]
+    return _axis_result(engine, chosen, ok, tried, raw=raw, taus=taus, adev=adev, ms=ms,
+                        n=n, rate=rate, axis=axis, kind=kind, level=level, alpha=alpha)
+
+
+def _caps(kind: str, rate: float) -> np.ndarray:
+    """The largest θ of each term (θ units at ``rate``): the upper end of its physical range
+    (:data:`calib.noise.sensor_profile.TERM_RANGES`, gyro :data:`GYRO_TERM_RANGES`)."""
+    from calib.noise.allan_model import theta_from_terms
+    from calib.noise.sensor_profile import GYRO_TERM_RANGES, TERM_RANGES
+
+    top = {n: r[1] for n, r in (GYRO_TERM_RANGES if kind == "gyro" else TERM_RANGES).items()}
+    return theta_from_terms(top["white_noise_density"], top["bias_instability"],
+                            top["rate_random_walk"], rate, q=top["quantization_noise"],
+                            gm_sigma=top["gauss_markov"])
+
+
+def _axis_result(engine: Engine, chosen: ModelFit, ok: bool, tried: list[ModelFit], *,
+                 raw, taus, adev, ms, n, rate, axis, kind, level, alpha) -> AxisNoise:
+    model = chosen.model
+    theta = chosen.theta
+    z_one = float(stats.norm.ppf(1.0 - alpha))
+    ends = engine.intervals(chosen, level, caps=_caps(kind, rate))
+    design_all, tensor_all = engine.mom.full(model.g)
+    ranges = _term_ranges(taus, design_all, theta, model.lo, model.hi)
+    rise = rise_steps(chosen, design_all, ms, n)
     terms = []
-    for a, name in enumerate(TERM_NAMES):
-        est = max(theta[a], 0.0)
-        zero = floor if a == 0 else 0.0
-        z0 = float(_score_z(s, design, tensor, a, np.array([zero]), theta, floor)[0])
-        hi = _crossing(s, design, tensor, a, theta, floor, -z_two, est, est + 4 * se[a] + floor,
-                       True)
-        lo = zero if z0 <= z_two else _crossing(s, design, tensor, a, theta, floor, z_two,
-                                                zero, max(est, zero), False)
-        resolved = z0 > z_one
-        conv = np.zeros(3)
-        bounds = []
-        for v in (lo, hi, est):
-            conv[:] = 0.0
-            conv[a] = v
-            bounds.append(float(terms_from_theta(conv, rate)[a]))
-        lo_t, hi_t, est_t = bounds
+    tc_seconds = (None if model.g is None else float(engine.mom.gm_tc[model.g]) / rate)
+    for a in model.active:
+        name = ALL_TERM_NAMES[a]
+        lo, hi, z0 = ends[a]
+        # resolved: zero rejected, a positive estimate, and (the walk) the rise rule
+        resolved = z0 > z_one and theta[a] > 0 and (a != WALK or rise >= K_RISE_STEPS)
+        est = term_value(name, max(theta[a], 0.0), rate)
+        lo_t, hi_t = term_value(name, lo, rate), term_value(name, hi, rate)
         terms.append(TermFit(name=name, resolved=bool(resolved),
-                             value=est_t if resolved else None,
-                             interval=(min(lo_t, est_t), max(hi_t, est_t)),
-                             upper_bound=max(hi_t, est_t), tau_range=ranges[a], z=z0,
-                             p_value=float(stats.norm.sf(z0)), level=level))
-    model = design @ np.maximum(theta, 0.0)
-    model_adev = np.sqrt(np.maximum(model, 0.0))
-    lmt = np.log(taus)
-    slopes = np.gradient(np.log(np.maximum(model_adev, 1e-300)), lmt)
-    lo_ci, hi_ci, edf, noise_alpha = adev_intervals(adev, ms, n, slopes, level)
+                             value=est if resolved else None,
+                             interval=(min(lo_t, est), max(hi_t, est)),
+                             upper_bound=max(hi_t, est), tau_range=ranges[a], z=z0,
+                             p_value=float(stats.norm.sf(z0)), level=level, kind=kind,
+                             correlation_time=tc_seconds if a == GM else None))
+    th = np.maximum(theta, 0.0)
+    th[WHITE] = max(th[WHITE], engine.floor)
+    model_avar = design_all @ th
+    model_adev = np.sqrt(model_avar)
+    nu = edf(design_all, tensor_all, th)
+    lo_ci, hi_ci = adev_intervals(adev, nu, level)
+    slopes = np.gradient(np.log(np.maximum(model_adev, 1e-300)), np.log(taus))
+    noise_alpha = np.clip(np.rint(-2.0 * slopes - 1.0), -2, 0).astype(int)
+    b_bound = term_value("bias_instability", chosen.b_bound, rate)
+    rule = LADDER_NAMES[LADDER.index(model.active)]
     return AxisNoise(axis=axis, taus=taus, adev=adev, adev_ci=np.column_stack([lo_ci, hi_ci]),
-                     edf=edf, noise_alpha=noise_alpha, model_adev=model_adev, theta=theta,
-                     cov=cov, terms=tuple(terms), chi2=chi2, dof=dof,
-                     p_fit=float(stats.chi2.sf(chi2, dof)),
-                     quantization_step=quantization_step(raw), mean=float(raw.mean()),
-                     std=float(raw.std(ddof=1)), n=n_raw)
+                     edf=nu, noise_alpha=noise_alpha, model_adev=model_adev, theta=theta,
+                     cov=chosen.cov, terms=tuple(terms), chi2=chosen.chi2, dof=chosen.dof,
+                     p_fit=chosen.p, quantization_step=quantization_step(raw),
+                     mean=float(raw.mean()), std=float(raw.std(ddof=1)), n=raw.size,
+                     kind=kind, fit_ok=bool(ok), rule=rule, octaves=(model.lo, model.hi),
+                     b_bound=b_bound, b_bound_tau=float(taus[chosen.b_bound_index]),
+                     k_rise_steps=rise, n_fit=n, ms=ms,
+                     tried=tuple(_tried(f, taus) for f in tried))
 
 
 def characterize_noise(acc: np.ndarray, rate: float, *, level: float = 0.683,
                        alpha: float = 0.05, tau_range: tuple[float, float] | None = None,
-                       axes: tuple[str, ...] = ("x", "y"), source: dict | None = None,
-                       static_check: dict | None = None) -> NoiseCharacterization:
-    """Allan deviation and noise terms of every column of ``acc`` ((N, k) m/s², a static log
-    at ``rate`` Hz; see the module docstring). Check the log first with :func:`check_static`."""
+                       axes: tuple[str, ...] = ("x", "y", "z"),
+                       kinds: tuple[str, ...] | None = None, source: dict | None = None,
+                       static_check: dict | None = None, select: bool = True,
+                       notes: tuple[str, ...] = ()) -> NoiseCharacterization:
+    """Allan deviation and noise terms of every column of ``acc`` ((N, k) readings of a static
+    log at ``rate`` Hz: m/s² for an accelerometer axis, rad/s for a gyro axis; see the module
+    docstring), named by ``axes`` and of the sensor kinds ``kinds`` (default: every column an
+    accelerometer). Check the log first with :func:`check_static`. ``select``: the model rule
+    (:func:`fit_axis_noise`)."""
     acc = np.asarray(acc, dtype=float)
     if acc.ndim == 1:
         acc = acc[:, None]
@@ -585,16 +668,21 @@ def characterize_noise(acc: np.ndarray, rate: float, *, level: float = 0.683,
                         f"{MIN_SAMPLES} (record a longer static log)")
     if not np.isfinite(acc).all():
         raise DataError("the readings hold NaN or Inf")
+    if len(axes) < acc.shape[1]:
+        raise DataError(f"{acc.shape[1]} columns but {len(axes)} axis names")
+    kinds = kinds or ("accelerometer",) * acc.shape[1]
     n = acc.shape[0]
     block = 1 if n <= MAX_FIT_SAMPLES else 2 ** math.ceil(math.log2(n / MAX_FIT_SAMPLES))
-    fits = tuple(fit_axis_noise(acc[:, k], rate, axis=axes[k], level=level, alpha=alpha,
-                                tau_range=tau_range, block=block) for k in range(acc.shape[1]))
+    fits = tuple(fit_axis_noise(acc[:, k], rate, axis=axes[k], kind=kinds[k], level=level,
+                                alpha=alpha, tau_range=tau_range, block=block, select=select)
+                 for k in range(acc.shape[1]))
     return NoiseCharacterization(sample_rate=float(rate), n=int(n), level=level,
                                  alpha=alpha, axes=fits, static_check=static_check or {},
-                                 source=source, block=block)
+                                 source=source, block=block, notes=notes)
 
 
-__all__ = ["FLICKER_FLOOR", "LACK_OF_FIT_P", "MIN_SAMPLES", "TERM_NAMES", "TERM_UNITS",
-           "UNITS", "AxisNoise", "NoiseCharacterization", "TermFit", "adev_intervals",
-           "characterize_noise", "check_static", "fit_axis_noise", "octave_factors",
-           "overlapping_adev", "quantization_step", "sample_rate_of"]
+__all__ = ["EXTRA_TERM_NAMES", "FLICKER", "FLICKER_FLOOR", "LACK_OF_FIT_P", "MAX_FIT_SAMPLES",
+           "MIN_SAMPLES", "TERM_NAMES", "TERM_UNITS", "UNITS", "AxisNoise",
+           "NoiseCharacterization", "TermFit", "adev_intervals", "characterize_noise",
+           "check_static", "fit_axis_noise", "octave_factors", "overlapping_adev",
+           "quantization_step", "sample_rate_of"]

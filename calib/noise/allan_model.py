@@ -1,62 +1,104 @@
-"""The Allan variance of the accelerometer noise model and the covariance of its estimates.
+"""The Allan variance of the inertial-sensor noise model and the covariance of its estimates.
 
-The noise model (IEEE Std 952-1997 Annex C, IEEE Std 1293-2018 Annex; rate-like output ``y`` in
-m/s², sampled every τ0 = 1/fs s) is a sum of three independent processes, each a unit process
-scaled by one parameter ``θ``:
+The noise model (IEEE Std 952-1997 Annex C; IEEE Std 1293-2018 Annex; El-Sheimy, Hou & Niu,
+IEEE Trans. Instrum. Meas. 57(1), 2008, "Analysis and modeling of inertial sensors using Allan
+variance") of a rate-like output ``y`` (an accelerometer in m/s², a gyro in rad/s), sampled every
+τ0 = 1/fs s, is a sum of independent processes, each a unit process scaled by one parameter θ:
 
-=================  ==================================  ===============  =====================
-term               unit process (per sample k)         θ                Allan variance, m ≫ 1
-=================  ==================================  ===============  =====================
-white noise N      ``w_k``, var 1                      ``N²·fs``        ``N²/τ``
-bias instability B flicker: ``Σ_j f_j w_{k-j}`` (Kasdin ``B²``             ``(2 ln2/π)·B²``
-                   fractional integration, α = 1)
-rate random walk K ``Σ_{j≤k} w_j`` (a random walk)     ``K²/fs``        ``K²·τ/3``
-=================  ==================================  ===============  =====================
+==================  =====================================  ===============  =======================
+process             unit process (per sample k)            θ                Allan variance, m ≫ 1
+==================  =====================================  ===============  =======================
+white noise N       ``w_k``, var 1                         ``N²·fs``        ``N²/τ``
+bias instability B  flicker ``Σ_j f_j w_{k-j}`` (Kasdin's  ``B²``           ``(2 ln2/π)·B²``
+                    fractional integration, α = 1)
+rate random walk K  ``Σ_{j≤k} w_j`` (a random walk)        ``K²/fs``        ``K²·τ/3``
+quantization Q      ``w_k − w_{k−1}`` (the rate of an      ``Q²·fs²``       ``3·Q²/τ²``
+                    integrated output quantized by Q)
+Gauss–Markov        AR(1) ``x_k = φ x_{k−1} + √(1−φ²) w_k``  ``σ²``         ``(σ²T_c/τ)·[2 − (T_c/τ)
+(σ, T_c)            unit variance, ``φ = exp(−τ0/T_c)``                       (3 − 4e^{−τ/T_c} +
+                                                                              e^{−2τ/T_c})]``
+==================  =====================================  ===============  =======================
 
-with N in (m/s²)/√Hz, B in m/s², K in m/s²/√s and τ = m·τ0. Flicker: Kasdin's filter
-``f_0 = 1, f_j = f_{j-1}·(j - 1/2)/j`` (N. J. Kasdin, Proc. IEEE 83(5), 1995) turns white
-noise of variance B² into a process with one-sided spectrum ``S(f) ≈ B²/(π f)`` for
-f ≪ fs, i.e. IEEE Std 952's ``h_{-1} = B²/π`` whose Allan deviation floor is
-``√(2 ln2/π)·B = 0.664·B``; its memory is truncated at one record length (the record cannot
-tell a longer memory from a mean). The bench simulates exactly these processes
-(:class:`bench.terms.BiasInstability`), so a fit and a simulation share one definition.
+with τ = m·τ0 and, for an accelerometer, N in (m/s²)/√Hz, B in m/s², K in m/s²/√s, Q in m/s
+(the velocity step of a Δv-integrating output), σ in m/s², T_c in s; for a gyro the same with
+rad in place of m/s (ARW rad/√s, B rad/s, RRW rad/s/√s, Q rad). The Gauss–Markov (first-order
+Markov, "correlated noise") curve rises as σ·√(τ/T_c)… like a random walk for τ ≪ T_c, peaks
+near τ ≈ 1.89·T_c at 0.62·σ·…, and falls as ``σ·√(2T_c/τ)`` like white noise for τ ≫ T_c
+(El-Sheimy et al. 2008 eq. 14; the column above is its exact continuous form, the fit uses the
+exact discrete one). Flicker: Kasdin's filter ``f_0 = 1, f_j = f_{j-1}·(j - 1/2)/j`` (N. J.
+Kasdin, Proc. IEEE 83(5), 1995) turns white noise of variance B² into a process with one-sided
+spectrum ``S(f) ≈ B²/(π f)`` for f ≪ fs, i.e. IEEE Std 952's ``h_{-1} = B²/π`` whose Allan
+deviation floor is ``√(2 ln2/π)·B = 0.664·B``; its memory is truncated at one record length
+(the record cannot tell a longer memory from a mean). The bench simulates exactly these
+processes (:class:`bench.terms.BiasInstability`, :mod:`bench.sensor_twin`), so a fit and a
+simulation share one definition.
 
-Sample quantization of a rate-like output (each reading rounded to a step Δ) adds white noise
-of variance Δ²/12 to ``y`` (slope −½, absorbed in N); the ``3Q²/τ²`` term of IEEE Std 952
-belongs to the quantization of an *integrated* output (angle, velocity), which an
-accelerometer's readings are not, so it is not part of the model.
+Sample quantization of a rate-like output (each *reading* rounded to a step Δ) is white noise
+of variance Δ²/12 (slope −½, part of N). The ``3Q²/τ²`` process above is the quantization of an
+*integrated* output (a Δv or Δθ counter differenced to a rate: slope −1); it enters the model
+only when the fit's rule asks for it (:mod:`calib.noise.allan`).
 
 **Estimator and its covariance.** The overlapping Allan variance at ``m`` samples is
 ``s(m) = (1/2M) Σ_k d_k²``, ``M = N_s - 2m + 1``, with ``d_k = ȳ_{k+m..k+2m-1} - ȳ_{k..k+m-1}``
-a linear filter ``h_m`` (``-1/m`` m times, ``+1/m`` m times) of the data. Each unit process
-is a linear filter ``a`` of white noise, so ``d_k = Σ_s a(s - k)·w_s`` and for Gaussian data
+a linear filter ``h_m`` (``-1/m`` m times, ``+1/m`` m times) of the data. Each unit process is
+a linear filter ``a`` of white noise, so ``d_k = Σ_s a(s - k)·w_s`` and for Gaussian data
 (Isserlis)::
 
-    E s(m)             = Σ_a θ_a · c_a(0)/2
+    E s(m)              = Σ_a θ_a · c_a(0)/2
     Cov(s(m_i), s(m_j)) = Σ_{a,b} θ_a θ_b · Σ_D n_ij(D) c_a(D) c_b(D) / (2 M_i M_j)
 
 ``c_a(D) = Σ_p a_i(p)·a_j(p - D)`` the cross-correlation of the two filters of process ``a``
-and ``n_ij(D)`` the number of index pairs (k, l) with l - k = D. Both are exact for the
-discrete processes (white and random walk: finite filters ``h_m`` and its tail sums; flicker:
-``h_m`` convolved with Kasdin's filter), so the fit in :mod:`calib.noise.allan` uses the exact
-expected Allan variance at every τ (not only the m ≫ 1 asymptotes of the table) and the full
-covariance between the octave points (adjacent octaves of the overlapping estimator are
-correlated; treating them as independent would make the intervals too narrow).
+and ``n_ij(D)`` the number of index pairs (k, l) with l - k = D. All are exact for the discrete
+processes: white, quantization and random walk have finite filters (``h_m``, its first
+difference, its tail sums); flicker is ``h_m`` convolved with Kasdin's filter (one FFT per τ,
+one inverse FFT per pair of τ); Gauss–Markov is the white correlation convolved with the AR(1)
+autocovariance ``φ^|k|`` (two first-order recursions over the lags, cut where ``φ^|k|`` <
+e^-40). The diagonal ``Var s(m_i)`` gives the exact equivalent degrees of freedom of each point
+for the fitted mixture, ``ν_i = 2 (E s_i)² / Var s_i`` (:func:`edf`), which for a pure power-law
+noise is Greenhall's EDF (``allantools.edf_greenhall``; ``tests/test_allan.py`` compares them).
+
+**Cost and cache.** Only the record length ``n`` and the octave grid enter these moments, never
+the data, so they are computed once per (n, grid) and kept: in memory, and on disk as one
+``.npz`` per key under the user's cache folder (:func:`cache_dir`), written atomically (a
+temporary file in the same folder, then ``os.replace``), read back after checking its key,
+shapes and finiteness (a damaged file is recomputed and replaced). The Gauss–Markov columns
+(one per correlation time of :func:`gm_grid`) are computed only when a fit asks for them and
+are cached the same way.
 """
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
+import math
+import os
+import tempfile
+from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 from scipy import fft as sfft
 from scipy import signal
 
 TERM_NAMES: tuple[str, ...] = ("white_noise_density", "bias_instability", "rate_random_walk")
-"""The three terms, in the order of ``θ``."""
+"""The three core terms, in the order of ``θ`` (every fit holds them)."""
+EXTRA_TERM_NAMES: tuple[str, ...] = ("quantization_noise", "gauss_markov")
+"""The terms a fit adds by its rule (:mod:`calib.noise.allan`), after the core ones in ``θ``."""
+ALL_TERM_NAMES: tuple[str, ...] = TERM_NAMES + EXTRA_TERM_NAMES
+"""θ = (N²·fs, B², K²/fs, Q²·fs², σ²_GM): the order of every design column and tensor axis."""
+N_PROCESSES = len(ALL_TERM_NAMES)
 
 FLICKER_FLOOR = float(np.sqrt(2.0 * np.log(2.0) / np.pi))
 """ADEV floor of bias instability B: ``σ_floor = 0.664·B`` (IEEE Std 952 C.3)."""
+
+GM_CUT = 40.0
+"""The Gauss–Markov correlation ``φ^|k| = e^{-|k|/T_c}`` is taken as 0 beyond |k| = 40·T_c
+(e^-40 ≈ 4e-18 of its peak: below float64 resolution of the sums)."""
+MOMENTS_VERSION = 4
+"""Bumped whenever these formulas change: cache files of another version are not read."""
+CACHE_ENV = "TILTBENCH_CACHE_DIR"
+"""Environment variable naming the cache folder; ``off`` disables the disk cache."""
 
 
 def flicker_coefficients(n: int) -> np.ndarray:
@@ -66,22 +108,56 @@ def flicker_coefficients(n: int) -> np.ndarray:
     return np.concatenate([[1.0], np.cumprod((j - 0.5) / j)])
 
 
-def theta_from_terms(n_density: float, b: float, k: float, rate: float) -> np.ndarray:
-    """``θ = (N²·fs, B², K²/fs)`` from the terms (module table)."""
-    return np.array([n_density ** 2 * rate, b ** 2, k ** 2 / rate])
+_SCALES = {"white_noise_density": (1, -1), "bias_instability": (0, 0),
+           "rate_random_walk": (-1, 1), "quantization_noise": (2, -2), "gauss_markov": (0, 0)}
+"""θ_a = value² · fs^e (first exponent); value = √(θ_a · fs^-e)."""
+
+
+def theta_from_terms(n_density: float, b: float, k: float, rate: float,
+                     q: float = 0.0, gm_sigma: float = 0.0) -> np.ndarray:
+    """``θ = (N²·fs, B², K²/fs[, Q²·fs², σ²])`` from the terms (module table); the two extra
+    entries only when ``q`` or ``gm_sigma`` is given."""
+    core = np.array([n_density ** 2 * rate, b ** 2, k ** 2 / rate])
+    if q == 0.0 and gm_sigma == 0.0:
+        return core
+    return np.concatenate([core, [q ** 2 * rate ** 2, gm_sigma ** 2]])
 
 
 def terms_from_theta(theta: np.ndarray, rate: float) -> np.ndarray:
-    """Inverse of :func:`theta_from_terms` for θ ≥ 0 (negative θ map to 0)."""
+    """Inverse of :func:`theta_from_terms` for θ ≥ 0 (negative θ map to 0); 3 or 5 entries."""
     t = np.maximum(np.asarray(theta, dtype=float), 0.0)
-    return np.sqrt(t * np.array([1.0 / rate, 1.0, rate]))
+    factor = np.array([1.0 / rate, 1.0, rate, 1.0 / rate ** 2, 1.0])[:t.shape[-1]]
+    return np.sqrt(t * factor)
 
 
-def _box_filters(m: int) -> tuple[np.ndarray, np.ndarray]:
-    """The white-noise filter ``h_m`` and the random walk's (its tail sums Σ_{t≥u} h_t,
-    finite because Σ h = 0), both on the window's own origin."""
-    h = np.concatenate([-np.ones(m), np.ones(m)]) / m
-    return h, np.cumsum(h[::-1])[::-1]
+def term_value(name: str, theta_a: float, rate: float) -> float:
+    """One term's value in its unit from its θ entry (``max(θ, 0)``; module table)."""
+    e = _SCALES[name][0]
+    return float(math.sqrt(max(float(theta_a), 0.0) * rate ** (-e)))
+
+
+def gm_avar(tau: np.ndarray, sigma: float, tc: float) -> np.ndarray:
+    """Continuous-time Allan variance of a Gauss–Markov process of std σ and correlation
+    time T_c (El-Sheimy et al. 2008 eq. 14, with q_c² = 2σ²/T_c)::
+
+        σ²_A(τ) = (σ² T_c/τ)·[2 − (T_c/τ)(3 − 4e^{−τ/T_c} + e^{−2τ/T_c})]
+
+    (its square-root peaks at τ ≈ 1.89·T_c at ≈ 0.62·σ)."""
+    tau = np.asarray(tau, dtype=float)
+    x = tau / tc
+    return sigma ** 2 / x * (2.0 - (3.0 - 4.0 * np.exp(-x) + np.exp(-2.0 * x)) / x)
+
+
+# ------------------------------------------------------------------ filters and pairs
+def _box(m: int) -> np.ndarray:
+    return np.concatenate([-np.ones(m), np.ones(m)]) / m
+
+
+def _finite_filters(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """White ``h_m``, random walk (its tail sums Σ_{t≥u} h_t, finite because Σ h = 0) and
+    quantization (``h_m`` convolved with [1, −1]), each on its process's own origin."""
+    h = _box(m)
+    return h, np.cumsum(h[::-1])[::-1], np.convolve(h, [1.0, -1.0])
 
 
 def _pair_counts(m_i: int, m_j: int, lags: np.ndarray, n: int) -> np.ndarray:
@@ -99,56 +175,259 @@ def _on_lags(c: np.ndarray, first: int, lo: int, hi: int) -> np.ndarray:
     return out
 
 
-@lru_cache(maxsize=8)
+def _gm_correlation(cw: np.ndarray, phi: float, pad: int) -> np.ndarray:
+    """``(cw ∗ R)(D)`` with ``R(k) = φ^|k|`` on the lags of ``cw`` widened by ``pad`` on each
+    side: a causal and an anticausal first-order recursion (scipy.signal.lfilter)."""
+    x = np.concatenate([np.zeros(pad), cw, np.zeros(pad)])
+    fwd = signal.lfilter([1.0], [1.0, -phi], x)
+    bwd = signal.lfilter([0.0, phi], [1.0, -phi], x[::-1])[::-1]
+    return fwd + bwd
+
+
+@dataclass(frozen=True)
+class AllanMoments:
+    """Exact moments of the overlapping Allan variance for ``n`` samples at octaves ``ms``
+    (module docstring), per unit process.
+
+    design : (k, 4) — ``E s(m_i)`` per unit θ of white, flicker, random walk, quantization.
+    tensor : (k, k, 4, 4) — ``Cov(s_i, s_j) = θ @ tensor[i, j] @ θ`` (the same four).
+    gm_tc : (G,) correlation times of :func:`gm_grid`, in samples.
+    gm_design : (G, k) — ``E s(m_i)`` per unit σ² of the Gauss–Markov process of each T_c
+        (cheap: the lag-0 values only); its covariance columns come from :func:`gm_columns`
+        when a fit asks for one T_c (:meth:`full`).
+    """
+
+    n: int
+    ms: tuple[int, ...]
+    design: np.ndarray
+    tensor: np.ndarray
+    gm_tc: np.ndarray
+    gm_design: np.ndarray
+
+    def full(self, g: int | None) -> tuple[np.ndarray, np.ndarray]:
+        """(design (k, 5), tensor (k, k, 5, 5)) with the Gauss–Markov process of T_c
+        ``gm_tc[g]`` in the last place (zeros when ``g`` is None)."""
+        k = len(self.ms)
+        design = np.zeros((k, N_PROCESSES))
+        tensor = np.zeros((k, k, N_PROCESSES, N_PROCESSES))
+        design[:, :4] = self.design
+        tensor[:, :, :4, :4] = self.tensor
+        if g is not None:
+            cols = gm_columns(self.n, self.ms, float(self.gm_tc[g]))
+            design[:, 4] = self.gm_design[g]
+            tensor[:, :, 4, :] = cols
+            tensor[:, :, :, 4] = cols
+        return design, tensor
+
+
+GM_STEPS_PER_OCTAVE = 8
+"""Correlation times tried per octave: a T_c off by half a step (2^{1/8}, 9 %) moves the
+bump's Allan variance by at most ≈ 4 % (measured on the design), within the scatter of a few
+hundred degrees of freedom."""
+
+
+def gm_grid(ms: tuple[int, ...]) -> np.ndarray:
+    """Gauss–Markov correlation times tried by the fit, in samples: every quarter octave
+    (:data:`GM_STEPS_PER_OCTAVE`) from 2 to the last octave's m (``2^{j/4}``): the bump of a
+    GM term lies near τ ≈ 1.89·T_c, so these place it anywhere inside the octave grid."""
+    top = max(ms[-1], 2)
+    steps = GM_STEPS_PER_OCTAVE
+    j = np.arange(steps, int(math.floor(steps * math.log2(top))) + 1)
+    return 2.0 ** (j / steps)
+
+
+def _pair_lags(n: int, ms: tuple[int, ...], i: int, j: int):
+    """Lags where index pairs exist, D = l - k in [-(M_i - 1), M_j - 1], and their weights
+    ``n_ij(D) / (2 M_i M_j)``."""
+    lo, hi = -(n - 2 * ms[i]), n - 2 * ms[j]
+    lags = np.arange(lo, hi + 1)
+    w = _pair_counts(ms[i], ms[j], lags, n) / (2.0 * (n - 2 * ms[i] + 1) * (n - 2 * ms[j] + 1))
+    return lo, hi, w
+
+
+def _compute(n: int, ms: tuple[int, ...]) -> dict[str, np.ndarray]:
+    """The four processes' moments and the GM design of every T_c of :func:`gm_grid`."""
+    memory = int(n)
+    k = len(ms)
+    kern = flicker_coefficients(memory)[::-1]
+    flick_len = [2 * m + memory - 1 for m in ms]
+    nfft = sfft.next_fast_len(2 * max(flick_len))  # room for a full correlation: no wrap
+    kernel_fft = sfft.rfft(kern, nfft)
+    flick_fft = [sfft.rfft(_box(m), nfft) * kernel_fft for m in ms]
+    filters = [_finite_filters(m) for m in ms]
+    tc = gm_grid(ms)
+    design = np.empty((k, 4))
+    tensor = np.empty((k, k, 4, 4))
+    gm_design = np.empty((tc.size, k))
+    for i in range(k):
+        h, g, q = filters[i]
+        design[i, 0], design[i, 2], design[i, 3] = h @ h / 2.0, g @ g / 2.0, q @ q / 2.0
+        cw0 = signal.correlate(h, h, mode="full")  # lags -(2m-1) … 2m-1
+        lag = np.arange(-(2 * ms[i] - 1), 2 * ms[i])
+        gm_design[:, i] = (np.exp(-np.abs(lag)[None, :] / tc[:, None]) @ cw0) / 2.0
+        for j in range(i, k):
+            lo, hi, w = _pair_lags(n, ms, i, j)
+            full = _four_correlations(filters[i], filters[j], flick_fft[i], flick_fft[j],
+                                      flick_len[i], flick_len[j], nfft, ms[j], lo, hi)
+            if j == i:
+                design[i, 1] = full[1, -lo] / 2.0
+            t = np.einsum("d,ad,bd->ab", w, full, full)
+            tensor[i, j] = tensor[j, i] = t
+    return {"design": design, "tensor": tensor, "gm_tc": tc, "gm_design": gm_design}
+
+
+def _four_correlations(fi, fj, ffi, ffj, fli, flj, nfft, mj, lo, hi) -> np.ndarray:
+    """(4, hi - lo + 1): the cross-correlations c_a(D) of white, flicker, random walk and
+    quantization between two octaves, on the lags lo … hi."""
+    first = -(2 * mj - 1)  # scipy: index 0 is lag -(len(b) - 1)
+    cw = signal.correlate(fi[0], fj[0], mode="full")
+    cr = signal.correlate(fi[1], fj[1], mode="full")
+    cq = signal.correlate(fi[2], fj[2], mode="full")
+    circ = sfft.irfft(ffi * np.conj(ffj), nfft)  # flicker c(D) at D mod nfft
+    cf_first = max(lo, -(flj - 1))
+    cf = np.concatenate([circ[nfft + cf_first:], circ[:min(hi, fli - 1) + 1]])
+    return np.stack([_on_lags(cw, first, lo, hi), _on_lags(cf, cf_first, lo, hi),
+                     _on_lags(cr, first, lo, hi), _on_lags(cq, first - 1, lo, hi)])
+
+
+def _compute_gm(n: int, ms: tuple[int, ...], tc: float) -> np.ndarray:
+    """(k, k, 5): covariance products of the Gauss–Markov process of correlation time ``tc``
+    samples with white, flicker, random walk, quantization and itself (module docstring)."""
+    memory = int(n)
+    k = len(ms)
+    kern = flicker_coefficients(memory)[::-1]
+    flick_len = [2 * m + memory - 1 for m in ms]
+    nfft = sfft.next_fast_len(2 * max(flick_len))
+    kernel_fft = sfft.rfft(kern, nfft)
+    flick_fft = [sfft.rfft(_box(m), nfft) * kernel_fft for m in ms]
+    filters = [_finite_filters(m) for m in ms]
+    phi = math.exp(-1.0 / tc)
+    pad = int(min(n, math.ceil(GM_CUT * tc)))
+    out = np.empty((k, k, 5))
+    for i in range(k):
+        for j in range(i, k):
+            lo, hi, w = _pair_lags(n, ms, i, j)
+            first = -(2 * ms[j] - 1)
+            c_first = first - pad  # the lag of cg[0]
+            cw = signal.correlate(filters[i][0], filters[j][0], mode="full")
+            cg = _gm_correlation(cw, phi, pad)
+            # only the lags where the GM correlation is not (yet) below e^-40
+            a, b = max(lo, c_first), min(hi, c_first + cg.size - 1)
+            full = _four_correlations(filters[i], filters[j], flick_fft[i], flick_fft[j],
+                                      flick_len[i], flick_len[j], nfft, ms[j], a, b)
+            seg = cg[a - c_first:b - c_first + 1]
+            wg = w[a - lo:b - lo + 1] * seg
+            out[i, j] = out[j, i] = np.concatenate([full @ wg, [seg @ wg]])
+    return out
+
+
+# ------------------------------------------------------------------ the cache
+def cache_dir() -> Path | None:
+    """The moments' disk cache: ``$TILTBENCH_CACHE_DIR`` (``off``: no disk cache), else
+    ``$XDG_CACHE_HOME/tiltbench/allan``, else ``~/.cache/tiltbench/allan`` (the XDG base
+    directory convention, used on every system)."""
+    env = os.environ.get(CACHE_ENV)
+    if env is not None:
+        return None if env.strip().lower() in ("", "off", "0", "none") else Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "tiltbench" / "allan"
+
+
+def _key(n: int, ms: tuple[int, ...], part: str) -> str:
+    text = f"v{MOMENTS_VERSION}|{part}|n={n}|ms={','.join(map(str, ms))}"
+    return f"{part}-n{n}-k{len(ms)}-{hashlib.sha256(text.encode()).hexdigest()[:16]}"
+
+
+def _load(path: Path, key: str, shapes: dict[str, tuple[int, ...]]) -> dict | None:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if str(z["key"]) != key:
+                return None
+            out = {name: np.array(z[name]) for name in shapes}
+    except (OSError, KeyError, ValueError, EOFError):
+        return None
+    for name, shape in shapes.items():
+        if out[name].shape != shape or not np.all(np.isfinite(out[name])):
+            return None
+    return out
+
+
+def _store(path: Path, key: str, arrays: dict[str, np.ndarray]) -> None:
+    """Write atomically (temporary file beside it, then ``os.replace``); a cache that cannot
+    be written is only a cache: the error is dropped and the next run computes again."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                np.savez(f, key=np.array(key), **arrays)
+            os.replace(tmp, path)
+        except BaseException:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+            raise
+    except OSError:
+        return
+
+
+@lru_cache(maxsize=16)
+def moments(n: int, ms: tuple[int, ...]) -> AllanMoments:
+    """:class:`AllanMoments` for ``n`` samples at octaves ``ms`` — from memory, the disk cache
+    (module docstring) or computed. Cost of a computation: the flicker filters are a record
+    long; their correlations share one FFT per τ and one inverse FFT per pair of τ (1.4 s at
+    2^15 samples, 8 s at 2^17 on one core); a cached copy loads in milliseconds."""
+    ms = tuple(int(m) for m in ms)
+    k = len(ms)
+    tc = gm_grid(ms)
+    folder = cache_dir()
+    key = _key(n, ms, "base")
+    shapes = {"design": (k, 4), "tensor": (k, k, 4, 4), "gm_tc": (tc.size,),
+              "gm_design": (tc.size, k)}
+    got = None if folder is None else _load(folder / f"{key}.npz", key, shapes)
+    if got is not None and not np.array_equal(got["gm_tc"], tc):
+        got = None
+    if got is None:
+        got = _compute(n, ms)
+        if folder is not None:
+            _store(folder / f"{key}.npz", key, got)
+    out = AllanMoments(n=int(n), ms=ms, **got)
+    for a in (out.design, out.tensor, out.gm_tc, out.gm_design):
+        a.setflags(write=False)
+    return out
+
+
+@lru_cache(maxsize=64)
+def gm_columns(n: int, ms: tuple[int, ...], tc: float) -> np.ndarray:
+    """(k, k, 5): the covariance products of the Gauss–Markov process of correlation time
+    ``tc`` samples with white, flicker, random walk, quantization and itself — from memory,
+    the disk cache or computed (about 1 s at 2^15 samples, 3 s at 2^17: one T_c at a time,
+    when a fit asks for it)."""
+    ms = tuple(int(m) for m in ms)
+    k = len(ms)
+    folder = cache_dir()
+    key = _key(n, ms, f"gm{float(tc)!r}")
+    got = None if folder is None else _load(folder / f"{key}.npz", key, {"cols": (k, k, 5)})
+    if got is None:
+        got = {"cols": _compute_gm(n, ms, float(tc))}
+        if folder is not None:
+            _store(folder / f"{key}.npz", key, got)
+    cols = got["cols"]
+    cols.setflags(write=False)
+    return cols
+
+
 def allan_moments(n: int, ms: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
     """Design and covariance tensor of the overlapping Allan variance for ``n`` samples at the
-    averaging factors ``ms`` (module docstring), for unit processes.
+    averaging factors ``ms``, for the three core unit processes (white, flicker, random walk;
+    :func:`moments` has all five).
 
     Returns
     -------
     design : (n_tau, 3) — ``E s(m_i) = design[i] @ θ`` (units of θ: y², per unit process).
     tensor : (n_tau, n_tau, 3, 3) — ``Cov(s_i, s_j) = θ @ tensor[i, j] @ θ``.
-
-    Cost: the flicker filters are a record long; their correlations share one FFT per τ and
-    one inverse FFT per pair of τ (about 1 s for 2^17 samples here). Cached, so many logs of
-    one length (a Monte Carlo, both axes of a log) pay it once.
     """
-    memory = int(n)
-    kern = flicker_coefficients(memory)[::-1]
-    flick_len = [2 * m + memory - 1 for m in ms]
-    nfft = sfft.next_fast_len(2 * max(flick_len))  # room for a full correlation: no wrap
-    kernel_fft = sfft.rfft(kern, nfft)
-    # flicker: a(u') = Σ_u h_u f_{u-u'} = conv(h, reversed f); origin shared by every τ
-    flick_fft = [sfft.rfft(_box_filters(m)[0], nfft) * kernel_fft for m in ms]
-    boxes = [_box_filters(m) for m in ms]
-    k = len(ms)
-    design = np.empty((k, 3))
-    tensor = np.empty((k, k, 3, 3))
-    for i in range(k):
-        h, g = boxes[i]
-        design[i, 0], design[i, 2] = h @ h / 2.0, g @ g / 2.0
-        for j in range(i, k):
-            # only lags where index pairs exist: D = l - k in [-(M_i - 1), M_j - 1]
-            lo, hi = -(n - 2 * ms[i]), n - 2 * ms[j]
-            lags = np.arange(lo, hi + 1)
-            cw = signal.correlate(h, boxes[j][0], mode="full")
-            cr = signal.correlate(g, boxes[j][1], mode="full")
-            first = -(2 * ms[j] - 1)  # scipy: index 0 is lag -(len(b) - 1)
-            circ = sfft.irfft(flick_fft[i] * np.conj(flick_fft[j]), nfft)  # c(D) at D mod nfft
-            if j == i:
-                design[i, 1] = circ[0] / 2.0
-            cf = np.concatenate([circ[nfft + max(lo, -(flick_len[j] - 1)):],
-                                 circ[:min(hi, flick_len[i] - 1) + 1]])
-            full = np.stack([_on_lags(cw, first, lo, hi),
-                             _on_lags(cf, max(lo, -(flick_len[j] - 1)), lo, hi),
-                             _on_lags(cr, first, lo, hi)])
-            w = _pair_counts(ms[i], ms[j], lags, n) / (2.0 * (n - 2 * ms[i] + 1)
-                                                        * (n - 2 * ms[j] + 1))
-            t = np.einsum("d,ad,bd->ab", w, full, full)
-            tensor[i, j] = tensor[j, i] = t
-    design.setflags(write=False)
-    tensor.setflags(write=False)
-    return design, tensor
+    mom = moments(int(n), tuple(int(m) for m in ms))
+    return mom.design[:, :3], mom.tensor[:, :, :3, :3]
 
 
 def avar_covariance(tensor: np.ndarray, theta: np.ndarray) -> np.ndarray:
@@ -156,5 +435,17 @@ def avar_covariance(tensor: np.ndarray, theta: np.ndarray) -> np.ndarray:
     return np.einsum("a,ijab,b->ij", theta, tensor, theta)
 
 
-__all__ = ["FLICKER_FLOOR", "TERM_NAMES", "allan_moments", "avar_covariance",
-           "flicker_coefficients", "terms_from_theta", "theta_from_terms"]
+def edf(design: np.ndarray, tensor: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Equivalent degrees of freedom of each octave's Allan variance for the mixture θ:
+    ``ν_i = 2 (E s_i)² / Var s_i`` (the χ²_ν whose mean and variance match; module
+    docstring)."""
+    mean = design @ theta
+    var = np.einsum("a,iiab,b->i", theta, tensor, theta)
+    return 2.0 * mean ** 2 / var
+
+
+__all__ = ["ALL_TERM_NAMES", "CACHE_ENV", "EXTRA_TERM_NAMES", "FLICKER_FLOOR", "GM_CUT",
+           "GM_STEPS_PER_OCTAVE",
+           "MOMENTS_VERSION", "N_PROCESSES", "TERM_NAMES", "AllanMoments", "allan_moments",
+           "avar_covariance", "cache_dir", "edf", "flicker_coefficients", "gm_avar", "gm_columns",
+           "gm_grid", "moments", "term_value", "terms_from_theta", "theta_from_terms"]

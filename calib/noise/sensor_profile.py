@@ -14,15 +14,21 @@ Format ``tiltbench-sensor``, version 2 (:data:`FORMAT_VERSION`), one JSON object
     sample_rate             Hz, in SAMPLE_RATE_RANGE                           defining
     axes                    {axis name: axis block}, names from AXIS_NAMES,    defining
                             every name of REQUIRED_AXES present ("x", "y": the tilt plane,
-                            course signs); an axis block holds
+                            course signs; "z" the third accelerometer axis; "gyro_x/y/z"
+                            the gyro's, rad units); an axis block holds
         white_noise_density   NoiseTerm or null, (m/s²)/√Hz (Allan −½ line at τ = 1 s)
         bias_instability      NoiseTerm or null, m/s²      (flat minimum / 0.664)
         rate_random_walk      NoiseTerm or null, m/s²/√s   (Allan +½ line at τ = 3 s); the
                               q of the bias random walk b_k = b_{k-1} + q·√Δt·w_k
         quantization_step     m/s², or null (readings not on a lattice)
         unresolved_upper_bounds  {term: upper end of its interval} of the null terms
-        fit_ok                true / false: the three-term model describes this axis's Allan
-                              curve (p ≥ 0.01) or not; null: not recorded
+        fit_ok                true / false: a model of the rule of calib.noise.allan_fit
+                              describes this axis's Allan curve on fit_tau_range or not
+                              (false only with `noise --save-failed-fit`); null: not recorded
+        quantization_noise    optional: NoiseTerm or null, m/s (Δv quantization, 3Q²/τ²)
+        gauss_markov          optional: NoiseTerm + "correlation_time" (s), or null, m/s²
+        fit_tau_range         optional: [τ0, τ1] s the model describes, or null
+        (gyro axes: rad/s for m/s², rad for m/s; GYRO_TERM_UNITS)
     fit                     {"level", "alpha", "n"} of the fit, or null          defining
     calibration             null, a cal.json's {"param_names", "params", "cov",  defining
                             "method", "g", "source"}, or {"bias": {axis: m/s²},
@@ -32,24 +38,33 @@ Format ``tiltbench-sensor``, version 2 (:data:`FORMAT_VERSION`), one JSON object
     checksum                {"algorithm": "sha256", "covers": CHECKSUM_FIELDS, "value": hex}
 
 A ``NoiseTerm`` is ``{"value", "interval": [lo, hi], "tau_range": [τ0, τ1] s, "level"}`` with
-0 ≤ lo ≤ value ≤ hi. A term the log cannot resolve (no flat minimum, no +½ slope in the τ
-range) is null for that axis and a simulator leaves it out; its upper bound is kept in the
-axis block (:meth:`SensorProfile.upper_bound`).
+0 ≤ lo ≤ value ≤ hi (the Gauss–Markov one also ``"correlation_time"``, s). A term the log
+cannot resolve (no flat minimum, no +½ slope in the τ range) is null for that axis and a
+simulator leaves it out; its upper bound is kept in the axis block
+(:meth:`SensorProfile.upper_bound`).
 
 **Checks** (each failure one line, :class:`DataError` ``{file}: field '{dotted.path}' …``):
 types and shapes, finite numbers, every value in the physical range stated below as a
 module constant (with its reason), every axis of :data:`REQUIRED_AXES`, no unknown field, an
 upper bound only for a null term, each term's level equal to ``fit.level``, a calibration's
-parameters covering the profile's axes with a symmetric positive-definite covariance, ``units``
-equal to :data:`UNITS`, and the SHA-256 of the canonical JSON of the defining fields
-(:func:`defining_checksum`): a hand edit that keeps every range is refused too.
+parameters covering the tilt plane x, y with a symmetric positive-definite covariance,
+``units`` equal to :data:`UNITS` (or :data:`UNITS_V2_0`, below), and the SHA-256 of the
+canonical JSON of the defining fields (:func:`defining_checksum`): a hand edit that keeps
+every range is refused too.
 
 **Versions.** Version 1 files (written by ``tiltbench noise --save`` before the checksum; axes
 as positional pairs) are refused with a one-line "re-run ``tiltbench noise … --save``": a
 hand edit of a file without a checksum cannot be told from the original, as for ``cal.json``.
-Room for the next version: axes are named keys, so further axes (the accelerometer's ``z``,
-gyro axes with their own units) are new keys of :data:`AXIS_NAMES` and new blocks, not longer
-lists; ``fit_ok`` already records per axis whether the model describes the curve.
+Version 2 grew without a new number, by a stated rule: the axes ``z`` and ``gyro_*`` are new
+keys of :data:`AXIS_NAMES` (optional, like every axis but x and y), the axis keys of
+:data:`OPTIONAL_AXIS_FIELDS` are optional (absent = null), and ``units`` is :data:`UNITS` or,
+in a file that has none of these, the first version-2 object :data:`UNITS_V2_0`. So every
+version-2 file ever written loads; a file with the new keys is refused by an older tiltbench
+("not part of format version 2").
+
+**A failed fit.** ``fit_ok: false`` is written only on request (``noise
+--save-failed-fit``); :func:`require_fit_ok` is the refusal every consumer runs
+(``generate --sensor``, ``gap --sensor``; ``--allow-failed-fit`` accepts it).
 """
 
 from __future__ import annotations
@@ -67,6 +82,7 @@ import numpy as np
 from calib.files.atomic import write_text
 from calib.input_rules import DataError, check_file
 from calib.noise.allan_model import TERM_NAMES
+from calib.noise.term_units import kind_of
 
 FORMAT = "tiltbench-sensor"
 """The ``format`` value of every sensor profile."""
@@ -74,9 +90,14 @@ FORMAT_VERSION = 2
 """The only ``format_version`` this reader knows (version 1, before the checksum: re-run
 ``tiltbench noise --save``)."""
 
-AXIS_NAMES: tuple[str, ...] = ("x", "y")
-"""Axis names a profile may hold, in their canonical order (the order of the per-axis tuples
-of :class:`SensorProfile`). The next version adds ``z`` and gyro axes here."""
+AXIS_NAMES: tuple[str, ...] = ("x", "y", "z", "gyro_x", "gyro_y", "gyro_z")
+"""Axis names a profile may hold, in their canonical order: the accelerometer's tilt-plane
+``x``, ``y`` (course signs after ``--axes``) and its third axis ``z`` (the one not in
+``--axes``: the tilt axis), then the gyro's axes in the log's own frame (rad/s). Names starting
+with ``gyro`` are gyro axes (:func:`calib.noise.term_units.kind_of`): their terms are in rad
+units and ranges (:data:`GYRO_TERM_RANGES`)."""
+CALIBRATION_AXES: tuple[str, ...] = ("x", "y")
+"""The axes a profile's calibration covers: the tilt plane of ``cal.json``."""
 REQUIRED_AXES: tuple[str, ...] = ("x", "y")
 """Axes every profile must hold: the tilt plane that ``generate --sensor`` simulates and
 ``gap --sensor`` reads (course signs)."""
@@ -101,15 +122,46 @@ QUANTIZATION_STEP_RANGE = (1e-9, 2.0)
 """Quantization step Δ, m/s²: from below a 24-bit converter over ±2 g (2.3e-6 m/s²) to the
 coarsest common mode (LIS3DH 8-bit at ±16 g: 0.188 g = 1.84 m/s²); a step of 5 m/s² cannot
 resolve a tilt and is a unit mistake."""
+QUANTIZATION_NOISE_RANGE = (1e-12, 1.0)
+"""Quantization noise Q of an integrated output (``3Q²/τ²``), m/s (gyro: rad): Q = Δ/√12 of
+the Δv (Δθ) step Δ; from far below a 32-bit counter's step to 1 m/s (a Δv step of 3.5 m/s per
+sample is not an inertial sensor)."""
+CORRELATION_TIME_RANGE = (1e-6, 1e9)
+"""Gauss–Markov correlation time T_c, s: any τ of an Allan point (:data:`TAU_RANGE`)."""
 TERM_RANGES: dict[str, tuple[float, float]] = {
     "white_noise_density": WHITE_NOISE_DENSITY_RANGE,
     "bias_instability": BIAS_INSTABILITY_RANGE,
     "rate_random_walk": RATE_RANDOM_WALK_RANGE,
+    "quantization_noise": QUANTIZATION_NOISE_RANGE,
+    "gauss_markov": BIAS_INSTABILITY_RANGE,
 }
-"""Range of each term's value, in its unit (:data:`TERM_UNITS`)."""
+"""Range of each term's value of an accelerometer axis, in its unit (:data:`TERM_UNITS`); the
+Gauss–Markov σ is a bias excursion like B and has its range."""
+GYRO_TERM_RANGES: dict[str, tuple[float, float]] = {
+    "white_noise_density": (1e-10, 1.0),
+    "bias_instability": (1e-12, 1.0),
+    "rate_random_walk": (1e-14, 1.0),
+    "quantization_noise": QUANTIZATION_NOISE_RANGE,
+    "gauss_markov": (1e-12, 1.0),
+}
+"""Range of each term's value of a gyro axis (rad units): angle random walk 1e-10 … 1
+(rad/s)/√Hz (navigation grade ≈ 3e-7, 0.001 °/√h; 1 rad/s/√Hz ≈ 57 °/s/√Hz is no gyro); bias
+instability and the GM σ 1e-12 … 1 rad/s (2e-7 °/h, below any gyro, to a bias wandering by
+57 °/s, a broken part); rate random walk 1e-14 … 1 rad/s/√s; the quantization step of the
+readings, :data:`GYRO_QUANTIZATION_STEP_RANGE`."""
+GYRO_QUANTIZATION_STEP_RANGE = (1e-9, 1.0)
+"""Quantization step of gyro readings, rad/s: a 16-bit converter at ±2000 °/s steps by
+1.1e-3 rad/s, an 8-bit one by 0.27 rad/s; 1 rad/s cannot resolve a turn."""
 TERM_UNITS: dict[str, str] = {"white_noise_density": "(m/s²)/√Hz",
-                              "bias_instability": "m/s²", "rate_random_walk": "m/s²/√s"}
-"""Unit of each term (value, interval and upper bound), as messages print it."""
+                              "bias_instability": "m/s²", "rate_random_walk": "m/s²/√s",
+                              "quantization_noise": "m/s", "gauss_markov": "m/s²"}
+"""Unit of each term of an accelerometer axis (value, interval and upper bound), as messages
+print it."""
+GYRO_TERM_UNITS: dict[str, str] = {"white_noise_density": "(rad/s)/√Hz",
+                                   "bias_instability": "rad/s",
+                                   "rate_random_walk": "rad/s/√s", "quantization_noise": "rad",
+                                   "gauss_markov": "rad/s"}
+"""Unit of each term of a gyro axis, as messages print it."""
 TAU_RANGE = (1e-6, 1e9)
 """τ of an Allan point, s: from one sample at 1 MHz to ~32 years, longer than any log."""
 N_RANGE = (64, 10 ** 12)
@@ -142,8 +194,18 @@ CHECKSUM_FIELDS = DEFINING_FIELDS
 """The ``checksum.covers`` list of every version-2 file."""
 COSMETIC_FIELDS = ("tool",)
 """Fields never checked nor used."""
-AXIS_FIELDS = (*TERM_NAMES, "quantization_step", "unresolved_upper_bounds", "fit_ok")
-"""The keys of an axis block, all required (a null where there is nothing)."""
+REQUIRED_AXIS_FIELDS = (*TERM_NAMES, "quantization_step", "unresolved_upper_bounds", "fit_ok")
+"""The keys every axis block holds (a null where there is nothing)."""
+OPTIONAL_AXIS_FIELDS = ("quantization_noise", "gauss_markov", "fit_tau_range")
+"""Keys added to version 2 after its first files were written: the extra terms of the model
+(a NoiseTerm, the Gauss–Markov one with its ``correlation_time``) and the τ range the model
+describes. **Rule:** absent means null (a profile written before them has no such term and no
+stated range); the writer always writes them (null where there is nothing), in this order
+after the required ones, and the checksum covers them like every key of ``axes``. An older
+tiltbench refuses a file that has them ("is not part of format version 2"): re-run its
+``noise --save`` to make one it reads."""
+AXIS_FIELDS = REQUIRED_AXIS_FIELDS + OPTIONAL_AXIS_FIELDS
+"""The keys of an axis block, in the order the writer writes them."""
 EXTRA_KEYS = ("unresolved_upper_bounds", "level", "alpha", "n", "lack_of_fit")
 """What :attr:`SensorProfile.extra` may hold (the file's axis blocks and ``fit``)."""
 
@@ -161,8 +223,24 @@ UNITS = {
     "calibration.g": "m/s^2",
     "calibration.bias": "m/s^2", "calibration.scale": "1",
 }
-"""The ``units`` object of every version-2 file: a term's unit applies to its value,
-interval and upper bound."""
+"""The ``units`` object of the first version-2 files (before :data:`OPTIONAL_AXIS_FIELDS`
+and the ``z`` and gyro axes): still accepted from a file that holds none of them."""
+UNITS_V2_0 = dict(UNITS)
+UNITS = {
+    **UNITS_V2_0,
+    "quantization_noise": "m/s",
+    "gauss_markov": "m/s^2",
+    "correlation_time": "s",
+    "fit_tau_range": "s",
+    "gyro_*.white_noise_density": "(rad/s)/sqrt(Hz)",
+    "gyro_*.bias_instability": "rad/s",
+    "gyro_*.rate_random_walk": "rad/s/sqrt(s)",
+    "gyro_*.quantization_step": "rad/s",
+    "gyro_*.quantization_noise": "rad",
+    "gyro_*.gauss_markov": "rad/s",
+}
+"""The ``units`` object of every version-2 file this tiltbench writes: a term's unit applies
+to its value, interval and upper bound; the ``gyro_*`` keys are the units of the gyro axes."""
 
 _REQUIRED = ("format", "format_version", "sample_rate", "axes", "fit", "calibration",
              "source", "units", "checksum")
@@ -175,22 +253,29 @@ _RERUN = "re-run `tiltbench noise STATIC_LOG --save sensor.json`"
 @dataclass(frozen=True)
 class NoiseTerm:
     """One noise coefficient of one axis: estimate, interval at ``level`` and the τ range
-    (s) of the Allan deviation it was read from (units: :data:`TERM_UNITS`)."""
+    (s) of the Allan deviation it was read from (units: :data:`TERM_UNITS`, gyro axes
+    :data:`GYRO_TERM_UNITS`); ``correlation_time`` (s) for the Gauss–Markov term only."""
 
     value: float
     interval: tuple[float, float]
     tau_range: tuple[float, float]
     level: float = 0.683
+    correlation_time: float | None = None
 
     def to_dict(self) -> dict:
-        return {"value": float(self.value), "interval": [float(v) for v in self.interval],
-                "tau_range": [float(v) for v in self.tau_range], "level": float(self.level)}
+        d = {"value": float(self.value), "interval": [float(v) for v in self.interval],
+             "tau_range": [float(v) for v in self.tau_range], "level": float(self.level)}
+        if self.correlation_time is not None:
+            d["correlation_time"] = float(self.correlation_time)
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> NoiseTerm:
+        tc = d.get("correlation_time")
         return cls(value=float(d["value"]), interval=tuple(float(v) for v in d["interval"]),
                    tau_range=tuple(float(v) for v in d["tau_range"]),
-                   level=float(d.get("level", 0.683)))
+                   level=float(d.get("level", 0.683)),
+                   correlation_time=None if tc is None else float(tc))
 
 
 @dataclass(frozen=True)
@@ -203,9 +288,12 @@ class SensorProfile:
     sample_rate : Hz.
     white_noise_density, bias_instability, rate_random_walk : per axis a :class:`NoiseTerm`
         or None (not resolved); the whole tuple may be None for the last two.
-    quantization_step : per axis m/s² or None; or None.
+    quantization_step : per axis m/s² (gyro: rad/s) or None; or None.
+    quantization_noise, gauss_markov : per axis a :class:`NoiseTerm` (the GM one with its
+        ``correlation_time``) or None (not in the model, or not resolved); or None.
+    fit_tau_range : per axis (τ0, τ1) s, the τ range the model describes, or None; or None.
     calibration : a cal.json's ``{"param_names", "params", "cov", …}`` or
-        ``{"bias", "scale"}`` (per axis: a list in the order of ``axes`` or an object keyed by
+        ``{"bias", "scale"}`` of the tilt plane x, y (a list [x, y] or an object keyed by
         axis name), or None.
     source : ``{"name", "sha256"}`` of the static log, or None.
     axes : axis names (:data:`AXIS_NAMES`).
@@ -224,6 +312,16 @@ class SensorProfile:
     tool_version: str = "unknown"
     axes: tuple[str, ...] = ("x", "y")
     extra: dict[str, Any] = field(default_factory=dict)
+    quantization_noise: tuple[NoiseTerm | None, ...] | None = None
+    gauss_markov: tuple[NoiseTerm | None, ...] | None = None
+    fit_tau_range: tuple[tuple[float, float] | None, ...] | None = None
+
+    def fit_ok(self, axis: int | str) -> bool | None:
+        """Whether the model described ``axis``'s Allan curve when the profile was written
+        (None: not recorded)."""
+        lof = self.extra.get("lack_of_fit") or {}
+        bad = lof.get(self.axes[self.axis_index(axis)])
+        return None if bad is None else not bad
 
     def axis_index(self, axis: int | str) -> int:
         """Position of ``axis`` (an index or a name of :attr:`axes`) in the per-axis tuples."""
@@ -235,8 +333,9 @@ class SensorProfile:
         return float("nan") if term is None else float(term.value * np.sqrt(self.sample_rate))
 
     def term(self, name: str, axis: int | str) -> NoiseTerm | None:
-        """The :class:`NoiseTerm` ``name`` (:data:`TERM_NAMES`) of ``axis`` (index or name),
-        or None when the log did not resolve it."""
+        """The :class:`NoiseTerm` ``name`` (:data:`TERM_NAMES` or an optional term:
+        ``quantization_noise``, ``gauss_markov``) of ``axis`` (index or name), or None when
+        the log did not resolve it."""
         terms = getattr(self, name)
         return None if terms is None else terms[self.axis_index(axis)]
 
@@ -305,8 +404,11 @@ def _term_out(t: Any) -> Any:
     def seq(v: Any) -> Any:
         return [_num(x) for x in v] if isinstance(v, (tuple, list, np.ndarray)) else v
 
-    return {"value": _num(t.value), "interval": seq(t.interval),
-            "tau_range": seq(t.tau_range), "level": _num(t.level)}
+    out = {"value": _num(t.value), "interval": seq(t.interval),
+           "tau_range": seq(t.tau_range), "level": _num(t.level)}
+    if t.correlation_time is not None:
+        out["correlation_time"] = _num(t.correlation_time)
+    return out
 
 
 def _calibration_out(cal: Any, axes: tuple[str, ...]) -> Any:
@@ -345,6 +447,11 @@ def profile_document(profile: SensorProfile, where: Any = "<memory>") -> dict:
                                             if isinstance(own, dict) else own)
         ok = lof.get(a) if isinstance(lof, dict) else lof
         block["fit_ok"] = None if ok is None else (not ok if isinstance(ok, bool) else ok)
+        for name in ("quantization_noise", "gauss_markov"):
+            block[name] = _term_out(_per_axis(profile, name, k, where))
+        rng = _per_axis(profile, "fit_tau_range", k, where)
+        block["fit_tau_range"] = ([_num(v) for v in rng]
+                                  if isinstance(rng, (tuple, list, np.ndarray)) else rng)
         blocks[a] = block
     fit = ({k: (extra[k] if k == "n" else _num(extra[k])) for k in _FIT_KEYS if k in extra}
            or None)
@@ -352,7 +459,7 @@ def profile_document(profile: SensorProfile, where: Any = "<memory>") -> dict:
         "format": FORMAT, "format_version": FORMAT_VERSION,
         "tool": {"name": "tiltbench", "version": str(profile.tool_version)},
         "sample_rate": _num(profile.sample_rate), "axes": blocks, "fit": fit,
-        "calibration": _calibration_out(profile.calibration, axes),
+        "calibration": _calibration_out(profile.calibration, CALIBRATION_AXES),
         "source": profile.source, "units": dict(UNITS), "checksum": None,
     }
     try:  # plain JSON: what a reader will see
@@ -469,11 +576,21 @@ def _level(v: Any, name: str, where: Any) -> float:
     return x
 
 
-def _term_from(d: Any, term: str, name: str, where: Any, level: float | None) -> NoiseTerm:
+def _ranges(kind: str) -> tuple[dict[str, tuple[float, float]], dict[str, str]]:
+    """(term ranges, term units) of an axis of ``kind``."""
+    if kind == "gyro":
+        return GYRO_TERM_RANGES, GYRO_TERM_UNITS
+    return TERM_RANGES, TERM_UNITS
+
+
+def _term_from(d: Any, term: str, name: str, where: Any, level: float | None,
+               kind: str = "accelerometer") -> NoiseTerm:
     """One :class:`NoiseTerm` of the file, every number checked."""
-    _keys(d, name, where, _TERM_KEYS)
-    unit = TERM_UNITS[term]
-    value = _number(d["value"], f"{name}.value", where, unit, TERM_RANGES[term],
+    gm = term == "gauss_markov"
+    _keys(d, name, where, _TERM_KEYS + (("correlation_time",) if gm else ()))
+    ranges, units = _ranges(kind)
+    unit = units[term]
+    value = _number(d["value"], f"{name}.value", where, unit, ranges[term],
                     "the " + term.replace("_", " "))
     lo, hi = _pair(d["interval"], f"{name}.interval", where, unit)
     if not 0.0 <= lo <= value <= hi:
@@ -487,21 +604,31 @@ def _term_from(d: Any, term: str, name: str, where: Any, level: float | None) ->
     if level is not None and lev != level:
         raise _fail(where, f"{name}.level", f"is {lev:g} but fit.level is {level:g} (every "
                     f"interval is at the fit's level); {_RERUN}")
-    return NoiseTerm(value=value, interval=(lo, hi), tau_range=(t0, t1), level=lev)
+    tc = None
+    if gm:
+        tc = _number(d["correlation_time"], f"{name}.correlation_time", where, "s",
+                     CORRELATION_TIME_RANGE, "a correlation time")
+    return NoiseTerm(value=value, interval=(lo, hi), tau_range=(t0, t1), level=lev,
+                     correlation_time=tc)
 
 
 def _axis_from(d: Any, axis: str, where: Any, level: float | None) -> dict:
-    """The checked contents of one axis block."""
+    """The checked contents of one axis block (optional keys absent: null,
+    :data:`OPTIONAL_AXIS_FIELDS`)."""
     name = f"axes.{axis}"
-    _keys(d, name, where, AXIS_FIELDS)
+    kind = kind_of(axis)
+    ranges, units = _ranges(kind)
+    _keys(d, name, where, REQUIRED_AXIS_FIELDS, OPTIONAL_AXIS_FIELDS)
     out: dict[str, Any] = {}
-    for term in TERM_NAMES:
-        v = d[term]
-        out[term] = None if v is None else _term_from(v, term, f"{name}.{term}", where, level)
+    for term in (*TERM_NAMES, "quantization_noise", "gauss_markov"):
+        v = d.get(term)
+        out[term] = None if v is None else _term_from(v, term, f"{name}.{term}", where, level,
+                                                      kind)
     q = d["quantization_step"]
+    step_range = GYRO_QUANTIZATION_STEP_RANGE if kind == "gyro" else QUANTIZATION_STEP_RANGE
     out["quantization_step"] = None if q is None else _number(
-        q, f"{name}.quantization_step", where, "m/s²", QUANTIZATION_STEP_RANGE,
-        "a quantization step")
+        q, f"{name}.quantization_step", where, "rad/s" if kind == "gyro" else "m/s²",
+        step_range, "a quantization step")
     bounds = d["unresolved_upper_bounds"]
     if not isinstance(bounds, dict):
         raise _fail(where, f"{name}.unresolved_upper_bounds", "must be an object {term: upper "
@@ -514,13 +641,21 @@ def _axis_from(d: Any, axis: str, where: Any, level: float | None) -> dict:
         if out[term] is not None:
             raise _fail(where, where_b, f"is given but {name}.{term} is resolved (a bound is "
                         f"kept only for a null term); {_RERUN}")
-        checked[term] = _number(v, where_b, where, TERM_UNITS[term],
-                                (0.0, TERM_RANGES[term][1]), "an upper bound")
+        checked[term] = _number(v, where_b, where, units[term],
+                                (0.0, ranges[term][1]), "an upper bound")
     out["unresolved_upper_bounds"] = checked
     ok = d["fit_ok"]
     if ok is not None and not isinstance(ok, bool):
         raise _fail(where, f"{name}.fit_ok", f"must be true, false or null, got {_short(ok)}")
     out["fit_ok"] = ok
+    rng = d.get("fit_tau_range")
+    if rng is not None:
+        t0, t1 = _pair(rng, f"{name}.fit_tau_range", where, "s")
+        if not TAU_RANGE[0] <= t0 <= t1 <= TAU_RANGE[1]:
+            raise _fail(where, f"{name}.fit_tau_range", f"is [{t0:g}, {t1:g}] s: expected "
+                        f"{TAU_RANGE[0]:g} ≤ τ0 ≤ τ1 ≤ {TAU_RANGE[1]:g} s")
+        rng = (t0, t1)
+    out["fit_tau_range"] = rng
     return out
 
 
@@ -709,10 +844,12 @@ def profile_from_document(doc: Any, where: Any = "<memory>") -> SensorProfile:
     axes = tuple(a for a in AXIS_NAMES if a in blocks)
     level = None if fit is None else fit["level"]
     checked = {a: _axis_from(blocks[a], a, where, level) for a in axes}
-    calibration = _calibration_from(doc["calibration"], axes, where)
+    calibration = _calibration_from(doc["calibration"], CALIBRATION_AXES, where)
     source = _ref(doc["source"], "source", where)
     tool = doc.get("tool")
-    if doc["units"] != UNITS:
+    first = (set(axes) <= {"x", "y"}
+             and not any(k in blocks[a] for a in axes for k in OPTIONAL_AXIS_FIELDS))
+    if doc["units"] != UNITS and not (first and doc["units"] == UNITS_V2_0):
         raise DataError(f"{where}: checksum/consistency failed: field 'units' differs from "
                         f"this format's units (the file was edited); {_RERUN}")
     stored = doc["checksum"]
@@ -742,7 +879,48 @@ def profile_from_document(doc: Any, where: Any = "<memory>") -> SensorProfile:
         rate_random_walk=per_axis("rate_random_walk"),
         quantization_step=per_axis("quantization_step"), calibration=calibration,
         source=source, tool_version=str(version) if version is not None else "unknown",
-        axes=axes, extra=extra)
+        axes=axes, extra=extra, quantization_noise=per_axis("quantization_noise"),
+        gauss_markov=per_axis("gauss_markov"), fit_tau_range=per_axis("fit_tau_range"))
+
+
+FAILED_FIT_FLAG = "--allow-failed-fit"
+"""The option of ``generate`` and ``gap`` that accepts a profile saved from a failed fit."""
+
+
+def require_fit_ok(profile: SensorProfile, where: Any, allow: bool = False,
+                   axes: tuple[str, ...] | None = None) -> list[str]:
+    """Refuse a profile written from a fit that did not describe the curve.
+
+    ``tiltbench noise --save`` refuses such a profile unless ``--save-failed-fit``, which
+    writes ``fit_ok: false`` on the axes no model of the rule described; a consumer of the
+    profile (``generate --sensor``, ``gap --sensor``) refuses it too unless told
+    (:data:`FAILED_FIT_FLAG`): a twin of terms that do not describe the sensor would be
+    another sensor.
+
+    Parameters
+    ----------
+    profile : the loaded profile.
+    where : its file name, for the message.
+    allow : accept it (the consumer's ``--allow-failed-fit``): the axes are returned.
+    axes : the axes the consumer uses (default every axis of the profile).
+
+    Returns
+    -------
+    list[str] : the used axes saved with ``fit_ok: false`` (empty when none, or refused).
+
+    Raises
+    ------
+    DataError : one line naming the file, the axes and the flag.
+    """
+    names = [a for a in (axes or profile.axes) if a in profile.axes]
+    bad = [a for a in names if profile.fit_ok(a) is False]
+    if bad and not allow:
+        raise DataError(f"{where}: field 'axes.{bad[0]}.fit_ok' is false: the profile was saved "
+                        f"from a fit that does not describe the Allan curve of axis "
+                        f"{', '.join(bad)} (`noise --save-failed-fit`); a twin of it is not "
+                        f"that sensor — re-run `tiltbench noise` on a better log or τ range, "
+                        f"or give {FAILED_FIT_FLAG} to use it anyway")
+    return bad
 
 
 def load_profile(path: str | os.PathLike) -> SensorProfile:
@@ -780,12 +958,15 @@ def load_profile(path: str | os.PathLike) -> SensorProfile:
     return profile_from_document(doc, path)
 
 
-__all__ = ["AXIS_FIELDS", "AXIS_NAMES", "BIAS_INSTABILITY_RANGE", "CALIBRATION_METHODS",
-           "CHECKSUM_FIELDS", "CORRELATION_EIG_MIN", "COSMETIC_FIELDS", "DEFINING_FIELDS",
-           "EXTRA_KEYS", "FORMAT", "FORMAT_VERSION", "GAIN_RANGE", "G_RANGE",
-           "MAX_ABS_CALIBRATION_BIAS", "N_RANGE", "QUANTIZATION_STEP_RANGE",
-           "RATE_RANDOM_WALK_RANGE", "REQUIRED_AXES", "SAMPLE_RATE_RANGE", "SIGMA2_RANGE",
-           "TAU_RANGE", "TERM_NAMES", "TERM_RANGES", "TERM_UNITS", "UNITS",
-           "WHITE_NOISE_DENSITY_RANGE", "NoiseTerm", "SensorProfile", "check_profile",
-           "defining_checksum", "load_profile", "profile_document", "profile_from_document",
+__all__ = ["AXIS_FIELDS", "AXIS_NAMES", "BIAS_INSTABILITY_RANGE", "CALIBRATION_AXES",
+           "CALIBRATION_METHODS", "CHECKSUM_FIELDS", "CORRELATION_EIG_MIN",
+           "CORRELATION_TIME_RANGE", "COSMETIC_FIELDS", "DEFINING_FIELDS", "EXTRA_KEYS",
+           "FAILED_FIT_FLAG", "FORMAT", "FORMAT_VERSION", "GAIN_RANGE",
+           "GYRO_QUANTIZATION_STEP_RANGE", "GYRO_TERM_RANGES", "GYRO_TERM_UNITS", "G_RANGE",
+           "MAX_ABS_CALIBRATION_BIAS", "N_RANGE", "NoiseTerm", "OPTIONAL_AXIS_FIELDS",
+           "QUANTIZATION_NOISE_RANGE", "QUANTIZATION_STEP_RANGE", "RATE_RANDOM_WALK_RANGE",
+           "REQUIRED_AXES", "REQUIRED_AXIS_FIELDS", "SAMPLE_RATE_RANGE", "SIGMA2_RANGE",
+           "SensorProfile", "TAU_RANGE", "TERM_NAMES", "TERM_RANGES", "TERM_UNITS", "UNITS",
+           "UNITS_V2_0", "WHITE_NOISE_DENSITY_RANGE", "check_profile", "defining_checksum",
+           "load_profile", "profile_document", "profile_from_document", "require_fit_ok",
            "save_profile"]

@@ -1,0 +1,204 @@
+"""Twin closure: does a simulated twin of the fitted profile have the Allan deviation of the
+log it was fitted to? (``tiltbench noise LOG --twin``.)
+
+The log's octave Allan variances ``s_i`` and the twin's ``t_i`` (the profile simulated for the
+log's length and rate by the bench's generator, :func:`bench.sensor_twin.simulate_axis`, and
+averaged in the same blocks) are two independent curves. One joint test compares them over
+every octave of the grid, inside the model's τ range and outside it:
+
+    u_i = log s_i − log t_i − [b(ν_i) − b(ν'_i)],   b(ν) = ψ(ν/2) − log(ν/2)
+
+(``E log(χ²_ν/ν) = b(ν)``, ψ the digamma function; ν_i, ν'_i the exact EDF of each point for
+the log's fitted model and for the twin's, :func:`calib.noise.allan_model.edf`), and
+
+    T = uᵀ Σ_u⁻¹ u  ~  χ²_k  under "the twin is the sensor",   reject when p < α (family α).
+
+**Both curves' variances and the correlation between octaves.** ``Var log s_i = ψ'(ν_i/2)``
+(trigamma: exact for a scaled χ²_ν, where the delta method's 2/ν is 40 % low at ν = 2) and the
+correlations of the octaves are those of the exact covariance ``V(θ)`` of the Allan variances
+(:mod:`calib.noise.allan_model`): ``Σ = D R D``. The twin's parameters were fitted to this very
+log, which pulls the log's curve towards the model: to first order
+``log s − log μ(θ̂) = (I − H) e`` with the GLS hat of the model in relative units
+``H = diag(1/μ) X_kept G_kept diag(μ_f) S_f``, ``G = Cov(θ̂) X_fᵀ V_ff⁻¹`` (only the terms the
+twin keeps: an unresolved term is left out of the profile, so its estimate does not move the
+twin), so
+
+    Σ_u = (I − H) Σ (I − H)ᵀ + Σ'      (Σ' the twin's own, at its θ)
+
+Leaving H out would make the test conservative (its size about half of α on 12 octaves).
+
+**Where they part.** Per octave ``z_i = u_i / √Σ_u,ii``; octaves with ``|z_i|`` above the
+Šidák bound of the family, ``Φ⁻¹(1 − (1 − (1 − α)^{1/k})/2)``, are named (the twin's ADEV
+against the log's, and which is higher); when the joint test rejects but no single octave
+crosses that bound, the octave of largest |z| is named.
+
+Size and power are measured in ``tests/test_twin_closure.py`` on logs made by a generator
+written apart from the bench (``validation/noise_independent``): rejection of a true twin at
+≈ α (binomial band), of a twin 1.5× noisier in nearly every log.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import special, stats
+
+from calib.noise.allan import overlapping_adev
+from calib.noise.allan_fit import LADDER, Engine, Model
+from calib.noise.allan_model import ALL_TERM_NAMES, edf, moments
+from calib.results import ResultMixin, readonly
+
+CLOSURE_ALPHA = 0.05
+"""Family α of the twin-closure test: the probability that a true twin is rejected."""
+
+
+@dataclass(frozen=True, eq=False)
+class Closure(ResultMixin):
+    """The twin-closure test of one axis (module docstring).
+
+    axis : the axis name.
+    taus (k,) s; adev, twin_adev (k,) in the reading's unit; z (k,) per-octave standardized
+    differences (positive: the log above the twin); statistic T, dof k, p; alpha; reject;
+    parted : indices of the octaves named as where the twin and the log part.
+    """
+
+    axis: str
+    taus: np.ndarray
+    adev: np.ndarray
+    twin_adev: np.ndarray
+    z: np.ndarray
+    statistic: float
+    dof: int
+    p: float
+    alpha: float
+    reject: bool
+    parted: tuple[int, ...]
+
+    _TITLE = "Twin closure"
+    _UNITS = "τ s; ADEV in the reading unit"
+
+    def __post_init__(self) -> None:
+        for name in ("taus", "adev", "twin_adev", "z"):
+            object.__setattr__(self, name, readonly(getattr(self, name)))
+        object.__setattr__(self, "parted", tuple(int(i) for i in self.parted))
+
+    def summary(self) -> str:
+        head = (f"twin closure, axis {self.axis}: T = {self.statistic:.1f} on {self.dof} "
+                f"octaves, p = {self.p:.2g} at family α = {self.alpha:g}: ")
+        if not self.reject:
+            return head + "the twin's Allan deviation matches the log's (not rejected)"
+        parts = []
+        for i in self.parted:
+            side = "above" if self.z[i] < 0 else "below"
+            parts.append(f"τ = {self.taus[i]:.3g} s (twin {self.twin_adev[i]:.3g} {side} the "
+                         f"log's {self.adev[i]:.3g}, z = {self.z[i]:+.1f})")
+        return head + "REJECTED — the twin parts from the log at " + "; ".join(parts)
+
+    def to_dict(self) -> dict:
+        return {"axis": self.axis, "taus": self.taus.tolist(), "adev": self.adev.tolist(),
+                "twin_adev": self.twin_adev.tolist(), "z": self.z.tolist(),
+                "statistic": float(self.statistic), "dof": int(self.dof), "p": float(self.p),
+                "alpha": float(self.alpha), "reject": bool(self.reject),
+                "parted": list(self.parted)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Closure:
+        return cls(axis=d["axis"], taus=d["taus"], adev=d["adev"], twin_adev=d["twin_adev"],
+                   z=d["z"], statistic=float(d["statistic"]), dof=int(d["dof"]),
+                   p=float(d["p"]), alpha=float(d["alpha"]), reject=bool(d["reject"]),
+                   parted=tuple(d["parted"]))
+
+
+def _model_of(fit) -> tuple[Model, np.ndarray]:
+    """The fit's :class:`Model` (terms, GM grid index, octaves) and the θ the twin keeps (the
+    resolved terms; white always)."""
+    names = [t.name for t in fit.terms]
+    active = tuple(sorted(ALL_TERM_NAMES.index(n) for n in names))
+    active = next(a for a in LADDER if set(a) == set(active))
+    g = None
+    mom = moments(fit.n_fit, fit.ms)
+    gm = fit.term("gauss_markov")
+    if gm is not None:
+        rate = fit.ms[0] / fit.taus[0]
+        g = int(np.argmin(np.abs(mom.gm_tc - gm.correlation_time * rate)))
+    keep = np.zeros(len(ALL_TERM_NAMES), bool)
+    for t in fit.terms:
+        keep[ALL_TERM_NAMES.index(t.name)] = t.resolved or t.name == "white_noise_density"
+    theta_twin = np.where(keep, np.maximum(np.asarray(fit.theta, float), 0.0), 0.0)
+    return Model(active, g, fit.octaves[0], fit.octaves[1]), theta_twin
+
+
+def closure_test(fit, twin_adev: np.ndarray, alpha: float = CLOSURE_ALPHA) -> Closure:
+    """The joint test of the module docstring.
+
+    Parameters
+    ----------
+    fit : the log's :class:`calib.noise.allan.AxisNoise`.
+    twin_adev : (k,) the twin's overlapping ADEV at the same τ (same block means), reading unit.
+    alpha : family α.
+    """
+    model, theta_twin = _model_of(fit)
+    mom = moments(fit.n_fit, fit.ms)
+    design, tensor = mom.full(model.g)
+    s = np.asarray(fit.adev, float) ** 2
+    t = np.asarray(twin_adev, float) ** 2
+    k = s.size
+    theta = np.asarray(fit.theta, float)
+    floor = 1e-12 * s[0] / design[0, 0]
+    engine = Engine(s, mom, floor)
+    th = engine.valid(theta)
+    tht = engine.valid(theta_twin)
+    mu = design @ th
+    v = np.einsum("a,ijab,b->ij", th, tensor, th)
+    v_t = np.einsum("a,ijab,b->ij", tht, tensor, tht)
+    nu, nu_t = edf(design, tensor, th), edf(design, tensor, tht)
+
+    def log_cov(cov, nus):
+        sd = np.sqrt(np.diag(cov))
+        corr = cov / np.outer(sd, sd)
+        d = np.sqrt(special.polygamma(1, nus / 2.0))
+        return corr * np.outer(d, d)
+
+    sig, sig_t = log_cov(v, nu), log_cov(v_t, nu_t)
+    # the GLS hat of the kept terms, in relative units (module docstring)
+    lo, hi = model.lo, model.hi
+    act = list(model.active)
+    xf = design[lo:hi][:, act]
+    vff = v[lo:hi, lo:hi]
+    cov_theta = np.asarray(fit.cov, float)
+    gain = cov_theta @ xf.T @ np.linalg.inv(vff)  # (p, k_f)
+    kept = [i for i, a in enumerate(act) if theta_twin[a] > 0 or a == 0]
+    h = np.zeros((k, k))
+    h[:, lo:hi] = (design[:, [act[i] for i in kept]] @ gain[kept]) * mu[lo:hi][None, :]
+    h /= mu[:, None]
+    a = np.eye(k) - h
+    cov_u = a @ sig @ a.T + sig_t
+
+    def bias(x):
+        return special.digamma(x / 2.0) - np.log(x / 2.0)
+
+    u = np.log(s) - np.log(t) - (bias(nu) - bias(nu_t))
+    stat = float(u @ np.linalg.solve(cov_u, u))
+    p = float(stats.chi2.sf(stat, k))
+    z = u / np.sqrt(np.diag(cov_u))
+    reject = p < alpha
+    crit = stats.norm.ppf(1.0 - (1.0 - (1.0 - alpha) ** (1.0 / k)) / 2.0)
+    parted = tuple(int(i) for i in np.nonzero(np.abs(z) > crit)[0])
+    if reject and not parted:
+        parted = (int(np.argmax(np.abs(z))),)
+    return Closure(axis=fit.axis, taus=fit.taus, adev=fit.adev, twin_adev=twin_adev, z=z,
+                   statistic=stat, dof=k, p=p, alpha=alpha, reject=bool(reject),
+                   parted=parted if reject else ())
+
+
+def twin_adev(fit, y: np.ndarray, rate: float) -> np.ndarray:
+    """(k,) the overlapping ADEV of a twin's readings ``y`` ((N,) at ``rate`` Hz, as many as
+    the log's) on the log's grid: the same block means (N/n_fit samples each) and octaves."""
+    y = np.asarray(y, dtype=float)
+    block = max(1, y.size // fit.n_fit)
+    yb = y if block == 1 else y[:fit.n_fit * block].reshape(-1, block).mean(axis=1)
+    return overlapping_adev(yb, rate / block, fit.ms)[1]
+
+
+__all__ = ["CLOSURE_ALPHA", "Closure", "closure_test", "twin_adev"]
