@@ -18,10 +18,13 @@ Each is the best of ``--repeat`` runs. The table gives both, the ratio command /
 the growth from N = 20001 to 60001 (three times the samples: ≈ 3 when linear in N). The
 command's own step lines (``[gap] … in x s``, stderr) of its best run are shown below it.
 
-Targets (issue 20, item 6): the command at N = 60001 within 5 s on two cores, and its growth
-20001 → 60001 at most 3.3×; printed PASS / FAIL. The machine may be shared: the load
-average is printed with the results (absolute times move with it, the ratios less so; CPU
-seconds are the better guide on a loaded machine).
+Targets (issue 33, item 5): the whole command at N = 60001 within 2 s on an idle 2-core
+machine, and its growth 20001 → 60001 at most 3× (linear in N); printed PASS / FAIL beside
+the ratio to the analysis alone, for wall and for CPU seconds. The machine may be shared:
+the load average is printed with the results (absolute wall times move with it, the ratios
+less so; CPU seconds — user + system of the process, both threads — are the better guide on
+a loaded machine, and on an idle 2-core machine the wall time of the two-threaded command is
+at most its CPU time).
 """
 
 from __future__ import annotations
@@ -41,8 +44,8 @@ SIZES = (20001, 60001)
 RATE = 100.0
 EFFECT = "misalignment:x:delta=0.01"
 NOISE_VAR = "0.25,0.64"
-TARGET_S = 5.0
-TARGET_GROWTH = 3.3
+TARGET_S = 2.0
+TARGET_GROWTH = 3.0
 
 
 def _env() -> dict[str, str]:
@@ -125,22 +128,28 @@ def main(argv: list[str] | None = None) -> int:
           f"calib.gap.analyze_gap alone;\nbest of {args.repeat} fresh processes; load "
           f"average {load0[0]:.1f} before, {load1[0]:.1f} after ({os.cpu_count()} cores)")
     print(f"{'N':>7}{'command s':>11}{'CPU s':>8}{'analysis s':>12}{'CPU s':>8}"
-          f"{'cmd/analysis':>14}  named, sysid")
+          f"{'cmd/analysis':>14}{'target':>16}  named, sysid")
     for n, r in rows.items():
         c, a = r["command"], r["analysis"]
         how = "readout" if all("readout" in m for m in c["sysid"]) else "re-simulation"
+        mark = ""
+        if n == 60001:
+            mark = (f"wall {'PASS' if c['wall'] <= TARGET_S else 'FAIL'}, "
+                    f"CPU {'PASS' if c['cpu'] <= TARGET_S else 'FAIL'}")
         print(f"{n:>7}{c['wall']:>11.2f}{c['cpu']:>8.2f}{a['wall']:>12.2f}{a['cpu']:>8.2f}"
-              f"{c['wall'] / a['wall']:>13.1f}×  {','.join(c['effects']) or '-'}, {how}")
+              f"{c['wall'] / a['wall']:>13.1f}×{mark:>16}  "
+              f"{','.join(c['effects']) or '-'}, {how}")
     last = rows[max(rows)]["command"]
     print(f"steps of the command at N = {max(rows)}:")
     for line in last["steps"]:
         print(f"    {line}")
     ok = True
     if 60001 in rows:
-        t = rows[60001]["command"]["wall"]
+        t, cpu = rows[60001]["command"]["wall"], rows[60001]["command"]["cpu"]
         ok &= t <= TARGET_S
-        print(f"command at N = 60001: {t:.2f} s (target ≤ {TARGET_S:g} s): "
-              f"{'PASS' if t <= TARGET_S else 'FAIL'}")
+        print(f"command at N = 60001: {t:.2f} s wall, {cpu:.2f} s CPU (target ≤ {TARGET_S:g} s "
+              f"on an idle 2-core machine): wall {'PASS' if t <= TARGET_S else 'FAIL'}, "
+              f"CPU {'PASS' if cpu <= TARGET_S else 'FAIL'}")
     if 20001 in rows and 60001 in rows:
         g = {w: rows[60001][w]["wall"] / rows[20001][w]["wall"] for w in ("command", "analysis")}
         gc = {w: rows[60001][w]["cpu"] / rows[20001][w]["cpu"] for w in ("command", "analysis")}

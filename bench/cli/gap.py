@@ -38,9 +38,11 @@ from bench.cli.vocabulary import add_option
 EPILOG = """\
 the report starts with the verdict: explained | UNEXPLAINED (each signature that remains:
 axis, description, size, statistic, p) | nothing detected at α; then per axis whether the
-gap shrank and, if not, why (docs/gap.md). A timed run whose θ moves is replayed dynamically
-(stops included); static poses only without timing, when θ never moves or only jumps
-between held positions.
+gap shrank and, if not, why (docs/gap.md). An effect that changes the fit by less than 1 % of
+σ (e.g. the lattice of a log in raw counts) is reported, not named; an addition that makes
+the gap worse, or a replay off its tracking limit, is not an explanation. A timed run whose
+θ moves is replayed dynamically (stops included); static poses only without timing, when θ
+never moves or only jumps between held positions.
 
 effects and their timing needs (docs/effects.md):
   needs timing (t in the file or --rate): lowpass_lag, lever_arm

@@ -220,6 +220,25 @@ def servo_command(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
     return (tau - b0 - b1 * theta - b2 * omega) / gain
 
 
+def sample_torque(replay: Replay) -> np.ndarray | None:
+    """The drive's joint torque at the samples of a servo replay, N·m (None for a static
+    replay): inverse dynamics (:func:`inverse_dynamics`) of the replayed profile — θ, ω, α
+    of :func:`profile` at the sample times of each moving piece, (θ, 0, 0) on a static pose.
+    What the drive must deliver to move the table as measured; the analysis tests a level and
+    a gain that follow it (:mod:`calib.gap.drive_state`)."""
+    if replay.mode != "sweep" or replay.t is None or not replay.pieces:
+        return None
+    model, _ = tilt_table()
+    tita, t = replay.tita, replay.t
+    theta, omega, alpha = tita.copy(), np.zeros(replay.n), np.zeros(replay.n)
+    for p in replay.pieces:
+        if p.static:
+            continue
+        sl = slice(p.first, p.stop)
+        theta[sl], omega[sl], alpha[sl] = profile(t[sl], tita[sl], t[sl])
+    return inverse_dynamics(model, theta, omega, alpha)
+
+
 def find_jumps(tita: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Indices k whose step θ_k → θ_{k+1} no table can make (a move that was not sampled).
 

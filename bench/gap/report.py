@@ -20,6 +20,7 @@ from bench.model import TableEdits
 from bench.sensors import SensorErrorModel
 from calib.conventions import AXES
 from calib.gap.confusions import design_hint
+from calib.gap.practical import gap_worse, worse_signature
 from calib.gap.results import gap_units
 from calib.units import effect_units, format_estimate, format_p, format_stat, nest, with_units
 
@@ -34,6 +35,12 @@ MOTION_EFFECTS = ("lever_arm",)
 
 NOISE_EFFECTS = ("noise_level",)
 """Effects that change the noise model, never the simulated readings."""
+
+TABLE_EFFECTS = ("misalignment", "tilt_offset", "lever_arm", "saturation")
+"""Effects the bench adds as edits of the MuJoCo table (MjSpec: the sites, the sensor cutoff)
+and reads along the replayed motion — the first three refined by re-simulating it with
+``mujoco.sysid``: a replay that does not follow θ cannot confirm them. (The sensor terms act
+on the replay's specific force before and after alike.)"""
 
 
 @dataclass(frozen=True)
@@ -95,31 +102,101 @@ class GapReport:
     def verdict(self) -> str:
         """"explained", "unexplained" or "nothing_detected": the analysis' verdict, except
         that a verdict other than "unexplained" is never stated beside a re-simulated gap
-        after that is not consistent with noise (:meth:`gap_problems`): the report then says
-        "unexplained" and lists that gap as the signature (one verdict, never contradicting
-        the per-axis ``consistent``)."""
+        after that is not consistent with noise (:meth:`gap_problems`), nor beside an
+        addition the re-simulation does not confirm (:meth:`addition_problems`: the gap after
+        worse than before, or a replay that left its tracking limit): the report then says
+        "unexplained" and lists what failed as the signature (one verdict, never
+        contradicting its own numbers)."""
         verdict = str(getattr(self.analysis, "verdict", "nothing_detected"))
-        if verdict != "unexplained" and any(self.gap_problems(a) for a in AXES):
+        if verdict != "unexplained" and (any(self.gap_problems(a) for a in AXES)
+                                         or self.addition_problems()):
             return "unexplained"
         return verdict
+
+    def named_on(self, ax: str) -> list[str]:
+        """Names of the effects added to the model on ``ax`` (``gravity_mismatch`` aside)."""
+        return sorted({e.name for e in self.effects
+                       if ax in e.axes and e.name != "gravity_mismatch"})
+
+    def tracking_failed(self) -> bool:
+        """A servo replay whose encoder left the measured one by more than its limit
+        (:data:`bench.gap.replay.TRACKING_LIMIT`)."""
+        return self.replay.mode == "sweep" and self.tracking_error > TRACKING_LIMIT
+
+    def worse_on(self, ax: str) -> list[str]:
+        """Why the re-simulated gap after on ``ax`` is worse than before where effects were
+        added there (:func:`calib.gap.practical.gap_worse`); empty when it is not, or when
+        nothing was added on ``ax``."""
+        if not self.named_on(ax):
+            return []
+        return gap_worse(self.gap_before[ax], self.gap_after[ax], self.chi2_after(ax))
+
+    def addition_problems(self) -> list[dict]:
+        """Why the addition of the named effects is not an explanation as re-simulated, one
+        ``unexplained`` entry each (empty: nothing failed; nothing named: nothing to check):
+
+        * ``gap_worse`` — on an axis with effects added, the re-simulated gap after is worse
+          than before beyond the spread of each measure under noise alone
+          (:func:`calib.gap.practical.gap_worse`: χ²/dof against the stated σ², largest
+          signature |z|);
+        * ``replay_tracking`` — the servo replay did not follow the measured θ (tracking
+          error above :data:`bench.gap.replay.TRACKING_LIMIT`) and an effect of the table is
+          named (:data:`TABLE_EFFECTS`): the re-simulation that fits and confirms it is not a
+          replay of the measured motion. A sensor term (a walk, a noise level, K2, …) acts
+          on the replay's specific force before and after alike, and the gap before/after
+          consistency tests (:meth:`gap_problems`) judge its numbers."""
+        out: list[dict] = []
+        if not self.effects:
+            return out
+        for ax in AXES:
+            problems = self.worse_on(ax)
+            if problems:
+                out.append(worse_signature(ax, self.named_on(ax), problems,
+                                           self.chi2_after(ax) - self.gap_before[ax].chi2_dof))
+        named = sorted({e.name for e in self.effects if e.name in TABLE_EFFECTS})
+        if self.tracking_failed() and named:
+            out.append({"axis": "both", "signature": "replay_tracking",
+                        "size": float(self.tracking_error), "unit": "rad",
+                        "statistic": float(self.tracking_error / TRACKING_LIMIT),
+                        "p_value": None,
+                        "description": f"the replay did not follow the measured θ (tracking "
+                                       f"error {self.tracking_error:.2g} rad, above its limit "
+                                       f"{TRACKING_LIMIT:g} rad): the re-simulation cannot "
+                                       "show that the named effects "
+                                       f"({', '.join(named)}) explain the gap"})
+        return out
 
     @property
     def unexplained(self) -> list[dict]:
         """The signatures that remain unexplained (verdict "unexplained"), one dict each:
-        the analysis' ones, and, when the re-simulated gap after is what fails, one per axis
-        (``signature`` "gap_after")."""
+        the analysis' ones, what the re-simulation does not confirm
+        (:meth:`addition_problems`), and, when the re-simulated gap after is what fails, one
+        per axis (``signature`` "gap_after")."""
         out = [dict(u) for u in getattr(self.analysis, "unexplained", ())]
-        if str(getattr(self.analysis, "verdict", "")) == "unexplained":
+        have = {(u.get("axis"), u.get("signature")) for u in out}
+        analysis_said = str(getattr(self.analysis, "verdict", "")) == "unexplained"
+        # a gap after that is not consistent is said once, as "gap_after" (with "worse than
+        # before" in its words when it is); a consistent one that is worse, as "gap_worse"
+        out += [u for u in self.addition_problems()
+                if (u["axis"], u["signature"]) not in have
+                and not (u["signature"] == "gap_worse" and not analysis_said
+                         and self.gap_problems(u["axis"]))]
+        if analysis_said:
             return out
         for ax in AXES:
             problems = self.gap_problems(ax)
             if problems:
                 gm = self.gap_after[ax]
+                worse = self.worse_on(ax)
                 out.append({"axis": ax, "signature": "gap_after", "size": self.chi2_after(ax),
                             "unit": "1", "statistic": float(gm.max_signature_z),
                             "p_value": None,
                             "description": f"the re-simulated gap after on {ax} is not "
-                                           "consistent with noise: " + "; ".join(problems)})
+                                           "consistent with noise: " + "; ".join(problems)
+                                           + ("" if not worse else
+                                              f"; and adding {', '.join(self.named_on(ax))} "
+                                              "made it worse than before: "
+                                              + "; ".join(worse))})
         return out
 
     @property
@@ -188,6 +265,8 @@ class GapReport:
         if str(getattr(self.analysis, "verdict", "")) == "unexplained" and mine:
             out.append(f"unexplained structure remains on {ax}: " + "; ".join(mine)
                        + " (see verdict)")
+        out += [u["description"] for u in self.addition_problems()
+                if u["axis"] in (ax, "both")]
         return out + self.gap_problems(ax, mine)
 
     def gap_problems(self, ax: str, mine: list[str] | None = None) -> list[str]:
@@ -235,8 +314,7 @@ class GapReport:
     def _shrink_axis(self, ax: str) -> dict:
         b, a = self.gap_before[ax], self.gap_after[ax]
         before, after = float(b.chi2_dof), self.chi2_after(ax)
-        names = sorted({e.name for e in self.effects
-                        if ax in e.axes and e.name != "gravity_mismatch"})
+        names = self.named_on(ax)
         change = self.readings_change.get(ax, {"max_abs": 0.0, "norm_over_sigma": 0.0})
         out = {"shrunk": bool(names) and after < before, "chi2_dof_before": before,
                "chi2_dof_after": after, "max_signature_z_before": float(b.max_signature_z),
@@ -260,7 +338,7 @@ class GapReport:
                 " (its gap is consistent with noise before and after)" if both
                 else "; not consistent with noise: " + "; ".join(
                     problems or ["see the gap before"]))
-        if self.replay.mode == "sweep" and self.tracking_error > TRACKING_LIMIT:
+        if self.tracking_failed():
             return (f"the replay could not follow θ: tracking error {self.tracking_error:.2g} "
                     f"rad (limit {TRACKING_LIMIT:g} rad)")
         moving = sorted(set(names) & set(MOTION_EFFECTS))
@@ -337,6 +415,7 @@ class GapReport:
             "unexplained": self.unexplained,
             "adequacy": self.adequacy,
             "effects": effects,
+            "reported": [dict(r) for r in getattr(self.analysis, "reported", ())],
             "not_identifiable": a.get("not_identifiable", []),
             "gap_before": before,
             "gap_after": after,
@@ -362,7 +441,7 @@ class GapReport:
             },
             "analysis": {k: v for k, v in a.items()
                          if k not in ("effects", "not_identifiable", "verdict", "unexplained",
-                                      "adequacy", "units")},
+                                      "adequacy", "reported", "units")},
             "files": dict(self.files),
         }, report_units())
 
@@ -395,6 +474,8 @@ class GapReport:
                 sp = ", ".join(f"{k} = " + format_estimate(v, s["std"][k], units.get(k, ""))
                                for k, v in s["params"].items())
                 out.append(f"      mujoco.sysid re-simulation: {sp}")
+        for r in d["reported"]:
+            out.append(f"  reported, not named: {r['description']}")
         for item in d["not_identifiable"]:
             hint = f" — {design_hint(item['names'])}" if len(item["names"]) == 2 else ""
             out.append(f"not identifiable: {', '.join(item['names'])} — {item['reason']}{hint}")

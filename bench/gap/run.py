@@ -32,6 +32,7 @@ from bench.gap.replay import (
     Replay,
     make_replay,
     record_motion,
+    sample_torque,
     simulate,
     timing,
 )
@@ -44,8 +45,9 @@ from calib.conventions import AXES, G
 from calib.effects import stated_variances
 from calib.files.course import Ensayo
 from calib.gap import GapAnalysis, analyze_gap
+from calib.gap.practical import lattice_matters
 from calib.noise.sensor_profile import SensorProfile
-from calib.stats.diagnostics import gap_measure
+from calib.stats.diagnostics import detect_lattice, gap_measure
 
 PathLike = str | os.PathLike
 Progress = Callable[[str], None] | None
@@ -85,25 +87,30 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
 
     base = TableEdits(g=g)
     # The nominal re-simulation does not depend on the analysis: it runs alongside it on a
-    # second thread (mujoco.rollout and numpy's large operations release the GIL).
+    # second thread (mujoco.rollout and numpy's large operations release the GIL). The
+    # replay and its drive torque come first; the analysis asks for the torque when its
+    # drive-state checks need it.
     with ThreadPoolExecutor(max_workers=1) as pool:
         if progress is not None:
             progress("simulating the nominal bench alongside the analysis…")
-        job = pool.submit(_nominal_run, tita, t, base, datos, noise_var)
+        first = pool.submit(_replay_and_torque, tita, t)
+        job = pool.submit(_nominal_run, first, base, datos, noise_var)
         with _step(progress, f"analysing {ensayo.n} samples (calib.gap)…", "analysis done"):
             analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate,
-                                   family_alpha=family_alpha, sensor=sensor)
+                                   family_alpha=family_alpha, sensor=sensor,
+                                   drive_torque=lambda: first.result()[1])
         replay, nominal, seconds = job.result()
     if progress is not None:
         progress(f"nominal re-simulation ({replay.mode}) done in {seconds:.1f} s")
 
     effects, table_after, sensor_after, sysid_out = _extension(
         analysis, replay, datos, noise_var, base, nominal.accel, progress)
+    reported = [_effect_spec(r) for r in getattr(analysis, "reported", ())]
 
     with _step(progress, "reading the extended table (MuJoCo)…",
                "extended re-simulation") as note:
-        after = _extended_gap(replay, effects, table_after, sensor_after, nominal, datos,
-                              noise_var)
+        after = _extended_gap(replay, [*effects, *reported], table_after, sensor_after,
+                              nominal, datos, noise_var, base)
         note(f" ({after.how})")
 
     report = GapReport(analysis=analysis, effects=tuple(effects), sysid=sysid_out,
@@ -133,15 +140,25 @@ def _step(progress: Progress, start: str | None, done: str
         progress(f"{done}{''.join(detail)} in {time.perf_counter() - clock:.1f} s")
 
 
-def _nominal_run(tita: np.ndarray, t: np.ndarray | None, base: TableEdits, datos: np.ndarray,
-                 noise_var: np.ndarray) -> tuple[Replay, _Nominal, float]:
-    """The replay of the measured run, its nominal gap (:func:`_nominal_gap`) and the
-    seconds they took; then ``mujoco.sysid`` is imported, in case the analysis names a
-    physical effect."""
+def _replay_and_torque(tita: np.ndarray, t: np.ndarray | None
+                       ) -> tuple[Replay, np.ndarray | None, float]:
+    """The replay of the measured run (:func:`bench.gap.replay.make_replay`), the drive
+    torque at its samples (:func:`bench.gap.replay.sample_torque`, N·m; None for a static
+    replay) and the seconds they took."""
     clock = time.perf_counter()
     replay = make_replay(tita, t)
+    return replay, sample_torque(replay), time.perf_counter() - clock
+
+
+def _nominal_run(first, base: TableEdits, datos: np.ndarray, noise_var: np.ndarray
+                 ) -> tuple[Replay, _Nominal, float]:
+    """The nominal gap of the replay (:func:`_nominal_gap`; ``first`` the future of
+    :func:`_replay_and_torque`) and the seconds replay and gap took; then ``mujoco.sysid``
+    is imported, in case the analysis names a physical effect."""
+    replay, _, seconds = first.result()
+    clock = time.perf_counter()
     nominal = _nominal_gap(replay, base, datos, noise_var)
-    seconds = time.perf_counter() - clock
+    seconds += time.perf_counter() - clock
     preload_sysid()
     return replay, nominal, seconds
 
@@ -192,12 +209,27 @@ def _nominal_gap(replay: Replay, base: TableEdits, datos: np.ndarray, noise_var:
         residual[:, k] = r
         gap[ax] = gap_measure(r, tita, float(noise_var[k]), t,
                               other_ref=a_nom[:, 1 - k], own_ref=a_nom[:, k],
-                              readings=datos[:, k], n_params=2)
+                              readings=datos[:, k], n_params=2,
+                              model_lsb=_known_lattice(datos[:, k], float(noise_var[k])))
     return _Nominal(a_nom, enc, tracking, params, residual, gap, accel)
 
 
+def _known_lattice(y: np.ndarray, sigma2: float) -> float | None:
+    """The step of a lattice of the readings too fine to matter (reported, not named:
+    :func:`calib.gap.practical.lattice_matters`), m/s², which the nominal gap is told about;
+    None when there is none or when it matters (then it is a gap the model must close)."""
+    lat = detect_lattice(y)
+    if lat.found and not lattice_matters(lat.lsb, sigma2):
+        return float(lat.lsb)
+    return None
+
+
 def _effect_spec(est: Any) -> EffectSpec:
-    """Catalog :class:`EffectSpec` of a ``calib.gap`` effect estimate (name, axis, params)."""
+    """Catalog :class:`EffectSpec` of a ``calib.gap`` effect estimate (name, axis, params),
+    or of a reported effect's dict (``GapAnalysis.reported``)."""
+    if isinstance(est, dict):
+        return EffectSpec(str(est["name"]), str(est["axis"]),
+                          {k: float(v) for k, v in est["params"].items()})
     return EffectSpec(str(est.name), str(est.axis), {k: float(v) for k, v in
                                                      dict(est.params).items()})
 
@@ -224,10 +256,13 @@ def _extension(analysis: GapAnalysis, replay: Replay, datos: np.ndarray,
 
     A refinement replaces the ``calib`` estimate when it lowered the cost and has finite
     intervals (:func:`bench.gap.sysid.sysid_usable`); when sysid fails, the reason is kept in
-    its entry and the estimate stays.
+    its entry and the estimate stays. Effects the analysis reported but did not name (below
+    the practical threshold, :mod:`calib.gap.practical`) are in the model too, as
+    estimated (not refined, not listed among the named ones).
     """
     effects = [_effect_spec(e) for e in analysis.effects]
-    table_after, sensor_after = _bench_model(effects, base)
+    reported = [_effect_spec(r) for r in getattr(analysis, "reported", ())]
+    table_after, sensor_after = _bench_model([*effects, *reported], base)
     if not any(e.name in SYSID_EFFECTS for e in effects):
         return effects, table_after, sensor_after, {}
     with _step(progress, "refining physical effects (mujoco.sysid)…", "sysid done"):
@@ -243,7 +278,7 @@ def _extension(analysis: GapAnalysis, replay: Replay, datos: np.ndarray,
         for i, s in sysid_out.items():
             if "params" in s and sysid_usable(s):
                 used[i] = EffectSpec(effects[i].name, effects[i].axis, s["params"])
-        table_after, sensor_after = _bench_model(used, base)
+        table_after, sensor_after = _bench_model([*used, *reported], base)
     return used, table_after, sensor_after, sysid_out
 
 
@@ -282,7 +317,7 @@ def _extended_readings(replay: Replay, table_after: TableEdits, nominal: _Nomina
 
 def _extended_gap(replay: Replay, effects: Sequence[EffectSpec], table_after: TableEdits,
                   sensor_after: SensorErrorModel, nominal: _Nominal, datos: np.ndarray,
-                  noise_var: np.ndarray) -> _Extended:
+                  noise_var: np.ndarray, base: TableEdits | None = None) -> _Extended:
     """Simulate the extended bench, predict each axis and measure the gap after.
 
     The structure (signatures, and ``gap`` itself) is measured with the extended model's
@@ -293,8 +328,12 @@ def _extended_gap(replay: Replay, effects: Sequence[EffectSpec], table_after: Ta
     Δ = extended − nominal simulated mean reading.
     """
     tita, t, a_nom = replay.tita, replay.t, nominal.a
-    a_ext, how = (_extended_readings(replay, table_after, nominal) if effects
-                  else (a_nom, "nominal: nothing added"))
+    if not effects:
+        a_ext, how = a_nom, "nominal: nothing added"
+    elif base is not None and table_after == base:  # sensor terms only: the table's readings
+        a_ext, how = a_nom, "nominal table, sensor terms added"
+    else:
+        a_ext, how = _extended_readings(replay, table_after, nominal)
     preds, residual, gap, axes, chi2_stated, change = {}, np.empty_like(datos), {}, {}, {}, {}
     for k, ax in enumerate(AXES):
         stated = float(noise_var[k])

@@ -87,6 +87,11 @@ def gap_markdown(report: GapReport) -> str:
             p = format_p(e["p_value"]).removeprefix("p = ").removeprefix("p ")
             lines.append(f"| {name} | {e['axis']} | {est} | {sy} | "
                          f"{format_stat(e['statistic'])} | {p} | {e['timing']} |")
+    if d["reported"]:
+        lines += ["", "## Seen, not named", "",
+                  "Effects that change the fit by less than the practical threshold "
+                  "(`calib.gap.practical`): in the model, not named as missing.", ""]
+        lines += [f"- `{r['name']}` ({r['axis']}): {r['description']}" for r in d["reported"]]
     if d["not_identifiable"]:
         lines += ["", "## Not identifiable", ""]
         lines += [f"- {', '.join(i['names'])}: {i['reason']}"

@@ -18,6 +18,13 @@ One job per module:
 * :mod:`~calib.gap.random_walk` — the REML profile interval and curvature std of q.
 * :mod:`~calib.gap.prediction`  — :func:`predict`, the mean reading of the extended model.
 * :mod:`~calib.gap.quantization` — :func:`quantized_moments` of a rounded Gaussian reading.
+* :mod:`~calib.gap.practical`   — when an effect may be named (a change of the fit of at least
+  1 % of σ; below: reported, not named) and "never worse" (the gap after may not exceed the
+  gap before beyond its spread under noise alone).
+* :mod:`~calib.gap.drive_state` — the battery's checks conditioned on the drive: the residual
+  while moving against while held (level, gain, variance, spectrum).
+* :mod:`~calib.gap.steps`       — step-like bias changes (one step, a staircase, two-level
+  switching) found and said in words.
 
 Effects that need timing are skipped without ``t`` or ``rate`` and listed in ``needs_timing``.
 """

@@ -48,6 +48,9 @@ check                     statistic and reference distribution under the model
                           two-sided (not where a noise level is named: its σ² is the model's)
 ``gap_signatures``        the gap after's largest signature z, Bonferroni over its
                           signatures (``GapMeasure.max_signature_p``)
+``drive_level``, …        (runs that move and hold) the residual while moving against while
+                          held: level, gain, variance, spectrum (:mod:`calib.gap.drive_state`,
+                          passed in ``extra``)
 ========================  ==================================================================
 
 The last two make the verdict and the per-axis consistency one judgement: an axis is
@@ -83,6 +86,7 @@ from calib.gap.space import (
     legendre_in_time,
     spectral_peak,
 )
+from calib.gap.steps import describe, find_steps
 from calib.stats.diagnostics import GapMeasure, Lattice, chi2_two_sided_logp, ljung_box_logp
 
 ADEQUACY_ALPHA = 0.005
@@ -108,6 +112,11 @@ by a walk with its Allan floor at p ≈ 1e-3–1e-4, just above the plain per-ch
 (≈ 1.3e-4 over ≈ 37 checks), while a true walk fails it at p < 1e-3 in 0.13 % of runs
 (:func:`calib.gap.walk.flicker_test`): the walk's own spectrum gets ≈ 9e-4, the other
 checks ≈ 1.1e-4. It runs only where a walk is named, so clean runs are unaffected."""
+
+STEP_WORDS_LOGP = float(np.log(1e-3))
+"""Below this log p the ``step`` check says the steps' shape (:mod:`calib.gap.steps`: one
+step, a staircase, two levels) instead of "a step or slow wander"; the segmentation is only
+for the words (a failure needs the battery's level anyway)."""
 
 SHAPE_FAMILIES = 4.0
 """Shape families of ``rival_shapes`` (polynomial, sinusoid, step, sign asymmetry): the
@@ -225,9 +234,12 @@ def _step(z: np.ndarray, scale: float, run, axis: str) -> Check | None:
     before, after = z[:i + 1].mean(), z[i + 1:].mean() if i + 1 < n else 0.0
     size = float((after - before) * scale)
     where = (f"t = {run.tcol[i]:.4g} s" if run.time_unit == "s" else f"sample {i}")
+    words = f"a step or slow wander of the bias on {axis}: {size:+.3g} m/s² after {where}"
+    if logp < STEP_WORDS_LOGP:  # a clear one: say its shape (one step, a staircase, two levels)
+        shape = describe(find_steps(z * scale, scale * scale), run.tcol, run.time_unit, axis)
+        words = shape or words
     return Check("step", axis, stat, logp, "sup |Brownian bridge| (Kolmogorov)", abs(size),
-                 "m/s²", f"a step or slow wander of the bias on {axis}: {size:+.3g} m/s² "
-                 f"after {where}")
+                 "m/s²", words)
 
 
 def _trend(space: AxisSpace, run, axis: str) -> Check | None:
@@ -524,7 +536,8 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
                 lattice: list[Lattice], innovations: dict[int, np.ndarray],
                 family_alpha: float = ADEQUACY_ALPHA,
                 gaps: dict[str, GapMeasure] | None = None,
-                extra: list[Check] | None = None) -> Battery:
+                extra: list[Check] | None = None,
+                spaces: list[AxisSpace] | None = None) -> Battery:
     """Run every applicable check on both axes of the final model (module docstring).
 
     Parameters
@@ -538,8 +551,9 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
     gaps : axis → the gap after (``gap_measure`` of ``residuals`` against the stated noise):
         adds ``gap_noise`` and ``gap_signatures``.
     extra : checks made elsewhere with their own p-values (the walk's own battery,
-        :mod:`calib.gap.walk`; the mechanisms, :mod:`calib.gap.mechanisms`), judged at the
-        same Bonferroni level.
+        :mod:`calib.gap.walk`; the mechanisms, :mod:`calib.gap.mechanisms`; the drive
+        state, :mod:`calib.gap.drive_state`), judged at the same Bonferroni level.
+    spaces : the two axes' :class:`AxisSpace` of ``state``, when already built.
     """
     run = ext.run
     checks: list[Check] = []
@@ -550,7 +564,7 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
         # rounding coarser than the noise makes the residual's distribution discrete and
         # peaked (mostly 0, sometimes ± lsb): the Gaussian tail checks do not apply
         coarse = st.lsb > np.sqrt(st.sigma2)
-        space = AxisSpace(ext, state, k)
+        space = AxisSpace(ext, state, k) if spaces is None else spaces[k]
         found = [
             _harmonics(space, run.tita, axis),
             _periodic(space, run, axis),

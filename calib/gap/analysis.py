@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -13,10 +14,22 @@ from calib.effects.catalog import REFINED
 from calib.files.course import Ensayo
 from calib.gap.adequacy import ADEQUACY_ALPHA, Battery, run_battery
 from calib.gap.confusions import merge_tilt, not_identifiable, prefer_less_assuming
+from calib.gap.drive_state import drive_checks
 from calib.gap.estimates import Reporter
-from calib.gap.mechanisms import mechanism_checks
+from calib.gap.mechanisms import drive_scans, mechanism_checks
+from calib.gap.practical import (
+    PRACTICAL_FRACTION,
+    below_words,
+    gap_worse,
+    mean_change,
+    noise_change,
+    quantization_change,
+    walk_change,
+    worse_signature,
+)
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
 from calib.gap.selection import candidate_list, initial_state, select, try_test
+from calib.gap.space import AxisSpace
 from calib.gap.sponges import review_sponges
 from calib.gap.walk import WALK_CHECKS, WalkReview, review_walk
 from calib.noise.sensor_profile import SensorProfile
@@ -25,7 +38,9 @@ from calib.stats.diagnostics import GapMeasure, Lattice, detect_lattice, gap_mea
 
 def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = None,
                 family_alpha: float = 0.005, adequacy_alpha: float = ADEQUACY_ALPHA,
-                sensor: SensorProfile | None = None) -> GapAnalysis:
+                sensor: SensorProfile | None = None,
+                drive_torque: np.ndarray | Callable[[], np.ndarray | None] | None = None
+                ) -> GapAnalysis:
     """Find where the nominal model and a measured calibration run disagree, name the effect.
 
     Parameters
@@ -44,6 +59,11 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         q): the walk's q is searched only inside the term's interval and it is charged no
         parameter; an axis whose term is null has no walk candidate. Needs sample times.
         Which terms came from the profile: ``criterion["profile"]``.
+    drive_torque : (N,) the drive's joint torque at the samples, N·m, when the caller has it
+        (the bench's inverse dynamics of the replayed θ(t), ``bench.gap.replay``), or a
+        callable that returns it (or None) when asked (computed alongside): the
+        drive-state checks (:mod:`calib.gap.drive_state`) then test a level and a gain that
+        follow it. A quantity derived from the measured encoder, never from a truth.
 
     Returns
     -------
@@ -64,6 +84,8 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
             raise ValueError(f"{label} must be in (0, 1), got {a}")
     stated = stated_variances(noise_var)
     run = RunData.build(ensayo.tita, ensayo.datos, g, ensayo.t, rate)
+    if drive_torque is not None and not callable(drive_torque):
+        drive_torque = _torque(drive_torque, run.n)
     nominal = calibrate(ensayo, stated, "ols", g)
     gains = 1.0 + nominal.scale
     for k, a in enumerate(AXES):  # the extensions act through the sensor's gain
@@ -87,16 +109,26 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     state, sponges = review_sponges(ext, state, lattice, float(np.log(sel.alpha_step)))
 
     rep = Reporter(ext, state, lattice)
-    effects = _named_effects(ext, rep, state, lattice)
+    effects, reported = _practical(ext, rep, state, _named_effects(ext, rep, state, lattice))
     before, after, resid_before, resid_after, fitted = _gaps(ext, rep, state, nominal)
     final = _final_model(ext, rep, state, gains)
     reviews = {k: review_walk(ext, state, k, rep.walk_input(k), rep.innov[k])
                for k in range(2) if state.axes[k].q > 0}
+    if callable(drive_torque):  # computed alongside (the bench's replay): asked for now
+        drive_torque = _torque(drive_torque(), run.n)
+    spaces = [AxisSpace(ext, state, k) for k in range(2)]  # shared by the checks below
+    drive = drive_scans(spaces, run)
     battery = run_battery(ext, state, resid_after, lattice, rep.innov, adequacy_alpha,
                           gaps=_battery_gaps(ext, state, after, resid_after),
                           extra=[c for r in reviews.values() for c in r.checks]
                           + [c for k in range(2) for c in mechanism_checks(
-                              ext, state, k, lattice[k].lsb if lattice[k].found else 0.0)])
+                              ext, state, k, lattice[k].lsb if lattice[k].found else 0.0,
+                              space=spaces[k], drive_gains=None if drive is None else drive[k])]
+                          + [c for k in range(2) for c in drive_checks(
+                              ext, state, k, resid_after[:, k], drive_torque,
+                              coarse=state.axes[k].lsb > np.sqrt(state.axes[k].sigma2),
+                              space=spaces[k])],
+                          spaces=spaces)
     reviews = {k: r.with_failed(tuple(c.name for c in battery.failed
                                       if c.axis == r.axis and c.name in WALK_CHECKS))
                for k, r in reviews.items()}
@@ -104,7 +136,14 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     # a walk that did not earn its place is not named (it stays in the model meanwhile)
     effects = [e for e in effects if not (e.name == "bias_random_walk"
                                           and any(r.axis == e.axis for r in drifting))]
-    unexplained = [r.signature() for r in drifting] + [c.signature() for c in battery.failed]
+    # a step-like drift is said by its steps: the walk's failed path checks (a jump, a
+    # flicker floor, …) are about the walk that is not named and are not repeated (a rival
+    # shape that adds beyond the walk, walk_rivals, still is)
+    stepped = {r.axis for r in drifting if r.step_shaped}
+    unexplained = [r.signature() for r in drifting] + [
+        c.signature() for c in battery.failed
+        if not (c.axis in stepped and c.name in WALK_CHECKS and c.name != "walk_rivals")]
+    unexplained += _never_worse(effects, before, after)
     verdict = ("unexplained" if unexplained else "explained" if effects
                else "nothing_detected")
     if verdict == "unexplained":
@@ -124,8 +163,64 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         residuals_before=resid_before, residuals_after=resid_after, fitted=fitted,
         needs_timing=tuple(needs_timing), criterion=criterion, steps=tuple(steps), g=float(g),
         noise_var=(float(stated[0]), float(stated[1])), verdict=verdict,
-        unexplained=tuple(unexplained),
+        unexplained=tuple(unexplained), reported=tuple(reported),
         adequacy={**_adequacy(battery, drifting, reviews), "sponges": sponges})
+
+
+def _practical(ext: Extensions, rep: Reporter, state: ModelState,
+               effects: list[EffectEstimate]) -> tuple[list[EffectEstimate], list[dict]]:
+    """Split the effects of the final model into those named and those reported, not named:
+    below :data:`calib.gap.practical.PRACTICAL_FRACTION` of σ in their change of the fit
+    (:mod:`calib.gap.practical`). Reported effects stay in the model."""
+    run = ext.run
+    named, reported = [], []
+    for e in effects:
+        k = AXES.index(e.axis) if e.axis in AXES else 0
+        st = state.axes[k]
+        if e.name == "quantization":
+            change = quantization_change(st.lsb, st.sigma2_stated)
+        elif e.name == "noise_level":
+            change = noise_change(st.sigma2, st.sigma2_stated)
+        elif e.name == "bias_random_walk":
+            change = walk_change(rep.walk_input(k), st.sigma2_eff, st.q, run.dt_walk)
+        else:
+            change = mean_change(e.statistic, run.n * (2 if e.axis == "both" else 1))
+        if change >= PRACTICAL_FRACTION:
+            named.append(e)
+            continue
+        reported.append({"name": e.name, "axis": e.axis,
+                         "params": {key: float(v) for key, v in e.params.items()},
+                         "std": {key: float(v) for key, v in e.std.items()},
+                         "change": float(change), "unit": "σ",
+                         "description": below_words(e.name, e.axis, change, e.params,
+                                                    float(np.sqrt(st.sigma2_stated)))})
+    return named, reported
+
+
+def _never_worse(effects: list[EffectEstimate], before: dict[str, GapMeasure],
+                 after: dict[str, GapMeasure]) -> list[dict]:
+    """A ``gap_worse`` signature per axis where the named effects make the gap after worse
+    than before beyond the null spread (:func:`calib.gap.practical.gap_worse`)."""
+    out = []
+    for a in AXES:
+        names = sorted({e.name for e in effects if e.axis in (a, "both")})
+        if not names:
+            continue
+        problems = gap_worse(before[a], after[a])
+        if problems:
+            out.append(worse_signature(a, names, problems,
+                                       after[a].chi2_dof - before[a].chi2_dof))
+    return out
+
+
+def _torque(torque, n: int) -> np.ndarray | None:
+    """The drive torque as a checked (n,) array of finite N·m, or None."""
+    if torque is None:
+        return None
+    torque = np.asarray(torque, dtype=float)
+    if torque.shape != (n,) or not np.all(np.isfinite(torque)):
+        raise ValueError(f"drive_torque must be ({n},) finite N·m, got shape {torque.shape}")
+    return torque
 
 
 def _walk_or_cycle(reviews: dict[int, WalkReview]) -> list[dict]:

@@ -48,11 +48,18 @@ stops of a measured encoder or a frozen output against a rounded Gaussian's repe
 from __future__ import annotations
 
 import numpy as np
-from scipy import signal, stats
+from scipy import stats
 
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap.space import AxisSpace, Check, order_columns
+
+
+def _signal():
+    """``scipy.signal``, imported where it is used (a heavy module: ≈ 0.5 s)."""
+    from scipy import signal
+
+    return signal
 
 RING_FREQS = np.geomspace(0.5, 25.0, 24)
 """Frequencies (Hz) of the ringing grid (those below the Nyquist frequency / 2 are used)."""
@@ -114,21 +121,13 @@ def resolved_order(tita: np.ndarray) -> float:
 def stops(run) -> list[tuple[int, int, float]]:
     """(first held sample, end of the hold, sign of the move that stopped) of each stop:
     θ moving, then held (equal consecutive θ) for at least :data:`MIN_HOLD` samples."""
-    d = np.diff(run.tita)
-    held = np.concatenate([[False], d == 0.0])
+    th = run.tita
+    held = np.concatenate([[False], np.diff(th) == 0.0])  # held[i]: θ_i == θ_{i-1}
+    edges = np.diff(np.concatenate([[0], held.astype(np.int8), [0]]))  # runs [start, stop)
     out = []
-    i = 1
-    n = run.n
-    while i < n:
-        if held[i] and not held[i - 1] and i >= 2:
-            j = i
-            while j < n and held[j]:
-                j += 1
-            if j - i >= MIN_HOLD:
-                out.append((i, j, float(np.sign(run.tita[i] - run.tita[i - 2]) or 1.0)))
-            i = j
-        else:
-            i += 1
+    for i, j in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+        if i >= 2 and j - i >= MIN_HOLD:
+            out.append((int(i), int(j), float(np.sign(th[i] - th[i - 2]) or 1.0)))
     return out
 
 
@@ -144,7 +143,7 @@ def _ring_columns(run, hold: list[tuple[int, int, float]], f: float, zeta: float
         for i, _, s in hold:
             kicks[0, i - 1] += s
             kicks[1, i - 1] += 1.0
-        rings = signal.lfilter([1.0], [1.0, -pole], kicks, axis=1)
+        rings = _signal().lfilter([1.0], [1.0, -pole], kicks, axis=1)
         return np.column_stack([rings[0].real, rings[0].imag, rings[1].real, rings[1].imag])
     z = np.zeros((run.n, 4))
     # the mode rings on through the next moves until it has decayed (to RING_FLOOR)
@@ -227,8 +226,9 @@ def settling(space: AxisSpace, run, axis: str) -> Check | None:
                  f"{coef[1]:+.3g} m/s²) — the mount or the sensor relaxing after a move")
 
 
-def drive_angle(space: AxisSpace, run, axis: str) -> Check | None:
-    """A vibration at a non-integer order of the drive angle (module docstring)."""
+def drive_grid(run) -> tuple[list, object] | None:
+    """The drive-angle search of a run: its grid of (order, words, speed weight) and the
+    column maker ``cols(g)`` (None when no order applies); shared by both axes."""
     th = run.tita
     turns = float(np.ptp(th)) / (2.0 * np.pi)
     top = resolved_order(th)
@@ -245,14 +245,37 @@ def drive_angle(space: AxisSpace, run, axis: str) -> Check | None:
     variants = [("", 1.0)] + ([] if speed is None else
                               [(" growing with the drive speed", speed[:, None])])
     grid = [(v, label, w) for label, w in variants for v in orders]
-    tests = len(grid)
-
     at = order_columns(th)
 
     def cols(g):
-        return at(g[0]) * g[2]
+        c = at(g[0])
+        return c if isinstance(g[2], float) else c * g[2]
 
-    g = grid[int(np.argmax(space.scan(cols, grid)))]
+    return grid, cols
+
+
+def drive_scans(spaces: list[AxisSpace], run) -> list[np.ndarray] | None:
+    """ΔRSS of the drive-angle grid on each space (the two axes), the columns built once
+    (:meth:`AxisSpace.scan_many`); None when no order applies."""
+    made = drive_grid(run)
+    if made is None:
+        return None
+    grid, cols = made
+    return AxisSpace.scan_many(spaces, cols, grid)
+
+
+def drive_angle(space: AxisSpace, run, axis: str, gains: np.ndarray | None = None
+                ) -> Check | None:
+    """A vibration at a non-integer order of the drive angle (module docstring); ``gains``
+    the grid's ΔRSS already scanned on this space (:func:`drive_scans`)."""
+    made = drive_grid(run)
+    if made is None:
+        return None
+    grid, cols = made
+    tests = len(grid)
+    if gains is None:
+        gains = space.scan(cols, grid)
+    g = grid[int(np.argmax(gains))]
     fit = space.test(cols(g))
     if fit is None:
         return None
@@ -299,15 +322,18 @@ def frozen(readings: np.ndarray, sigma2: float, lsb: float, run, axis: str) -> C
                  "output or dropped updates")
 
 
-def mechanism_checks(ext: Extensions, state: ModelState, k: int, lattice_lsb: float = 0.0
+def mechanism_checks(ext: Extensions, state: ModelState, k: int, lattice_lsb: float = 0.0,
+                     space: AxisSpace | None = None, drive_gains: np.ndarray | None = None
                      ) -> list[Check]:
     """The four checks on axis k of the final model (those that apply to this run);
-    ``lattice_lsb`` the step of the lattice found on the readings (0: none)."""
+    ``lattice_lsb`` the step of the lattice found on the readings (0: none); ``space`` the
+    axis' :class:`AxisSpace` and ``drive_gains`` its drive-angle scan
+    (:func:`drive_scans`), when already made."""
     axis = AXES[k]
     st = state.axes[k]
     run = ext.run
-    space = AxisSpace(ext, state, k)
+    space = AxisSpace(ext, state, k) if space is None else space
     found = [ringing(space, run, axis), settling(space, run, axis),
-             drive_angle(space, run, axis),
+             drive_angle(space, run, axis, drive_gains),
              frozen(run.datos[:, k], st.sigma2, max(st.lsb, lattice_lsb), run, axis)]
     return [c for c in found if c is not None]

@@ -93,7 +93,11 @@ def gap_units() -> dict[str, str]:
         "adequacy.walk.cycle.gain": "1", "adequacy.walk.cycle.share": "1",
         "adequacy.walk.cycle.walk_beyond_lr": "1", "adequacy.walk.cycle.walk_beyond_p": "1",
         "adequacy.walk.cycle.size": "m/s²",
+        "adequacy.walk.steps.gain": "1", "adequacy.walk.steps.share": "1",
+        "adequacy.walk.steps.walk_beyond_lr": "1", "adequacy.walk.steps.walk_beyond_p": "1",
+        "adequacy.walk.steps.size": "m/s²", "adequacy.walk.steps.count": "count",
         "adequacy.sponges.statistic": "1", "adequacy.sponges.p_value": "1",
+        "reported.change": "σ", **{f"reported.*.{k}": u for k, u in effect_units().items()},
         "criterion.profile.rate_random_walk.*.value": "m/s²/√s",
         "criterion.profile.rate_random_walk.*.interval": "m/s²/√s",
         "criterion.profile.rate_random_walk.*.level": "1",
@@ -210,6 +214,11 @@ class GapAnalysis:
     verdict: str = "nothing_detected"
     unexplained: tuple[dict, ...] = ()
     adequacy: dict = field(default_factory=dict)
+    reported: tuple[dict, ...] = ()
+    """Effects seen but not named: they change the fit by less than
+    :data:`calib.gap.practical.PRACTICAL_FRACTION` of σ (they stay in the model). One dict
+    each: ``{"name", "axis", "params", "std", "change" (fraction of σ), "unit",
+    "description"}`` ("quantized at q = … m/s² (… σ), no effect on the fit")."""
 
     def __post_init__(self) -> None:
         for name in ("residuals_before", "residuals_after", "fitted"):
@@ -243,7 +252,19 @@ class GapAnalysis:
             "verdict": self.verdict,
             "unexplained": [dict(u) for u in self.unexplained],
             "adequacy": dict(self.adequacy),
+            "reported": [dict(r) for r in self.reported],
         }, gap_units())
+
+    def model_lsb(self, axis: str) -> float | None:
+        """The quantization step in the model of ``axis`` (named or only reported), m/s², or
+        None: what the gap measures are told explains a lattice of the readings."""
+        for e in (*self.effects, *self.reported):
+            name = e.name if isinstance(e, EffectEstimate) else e["name"]
+            ax = e.axis if isinstance(e, EffectEstimate) else e["axis"]
+            params = e.params if isinstance(e, EffectEstimate) else e["params"]
+            if name == "quantization" and ax == axis:
+                return float(params["lsb"])
+        return None
 
     def verdict_line(self) -> str:
         """The verdict in one sentence (first line of every report)."""
@@ -279,6 +300,8 @@ class GapAnalysis:
             out += [f"  {e}" + (" (tentative)" if e.tentative else "") for e in self.effects]
         else:
             out.append("named effects: none")
+        for r in self.reported:
+            out.append(f"  reported, not named: {r['description']}")
         if self.unexplained:
             out.append("unexplained structure remains:")
             for u in self.unexplained:

@@ -120,12 +120,54 @@ class AxisSpace:
         qh, rw = self._scan_system()
         chunk = max(1, int(3e6 // (rw.size * 4)))
         for a in range(0, len(grid), chunk):
-            blocks = [np.asarray(make(g), dtype=float) for g in grid[a:a + chunk]]
-            blocks = [b.reshape(b.shape[0], -1) for b in blocks]
-            c = blocks[0].shape[1]
-            zw = self.ext.white(self.st, np.concatenate(blocks, axis=1))
-            out[a:a + len(blocks)] = _blocks_drss(zw, qh, rw, c)
+            part = grid[a:a + chunk]
+            first = np.asarray(make(part[0]), dtype=float)
+            first = first.reshape(first.shape[0], -1)
+            n, c = first.shape
+            z = np.empty((n, c * len(part)), order="F")
+            z[:, :c] = first
+            for j, g in enumerate(part[1:], start=1):
+                z[:, j * c:(j + 1) * c] = np.asarray(make(g), dtype=float).reshape(n, c)
+            if self.st.q == 0:
+                # the centred image without the 1/σ: ΔRSS and the collinearity test are
+                # invariant to a common scale of the columns (one pass, no copies)
+                z -= z.mean(axis=0)
+                zw = z
+            else:
+                zw = self.ext.white(self.st, z)
+            out[a:a + len(part)] = _blocks_drss(zw, qh, rw, c)
         return out
+
+    @staticmethod
+    def scan_many(spaces: list[AxisSpace], make, grid) -> list[np.ndarray]:
+        """:meth:`scan` of one grid on several spaces of the same run (the two axes): each
+        chunk of columns is built once and, where q = 0, centred once (the same numbers as
+        one :meth:`scan` per space)."""
+        grid = list(grid)
+        outs = [np.zeros(len(grid)) for _ in spaces]
+        if not grid or not spaces:
+            return outs
+        systems = [sp._scan_system() for sp in spaces]
+        chunk = max(1, int(3e6 // (systems[0][1].size * 4)))
+        for a in range(0, len(grid), chunk):
+            part = grid[a:a + chunk]
+            first = np.asarray(make(part[0]), dtype=float)
+            first = first.reshape(first.shape[0], -1)
+            n, c = first.shape
+            z = np.empty((n, c * len(part)), order="F")
+            z[:, :c] = first
+            for j, g in enumerate(part[1:], start=1):
+                z[:, j * c:(j + 1) * c] = np.asarray(make(g), dtype=float).reshape(n, c)
+            centred = None
+            for sp, (qh, rw), out in zip(spaces, systems, outs, strict=True):
+                if sp.st.q == 0:
+                    if centred is None:
+                        centred = z - z.mean(axis=0)
+                    zw = centred
+                else:
+                    zw = sp.ext.white(sp.st, z)
+                out[a:a + len(part)] = _blocks_drss(zw, qh, rw, c)
+        return outs
 
     def test(self, z: np.ndarray) -> tuple[float, int, np.ndarray] | None:
         """(ΔRSS, rank, coefficients of the columns of z in their own units) or None."""
@@ -273,10 +315,8 @@ def spectral_peak(space: AxisSpace, run, min_cycles: float = 0.5,
     # j cycles over the N-1 differenced samples: the same frequency in the readings
     span = float(run.tcol[-1] - run.tcol[0]) * (n / max(n - 1, 1))
     tc = run.tcol - run.tcol[0]
-
-    def columns(f: float) -> np.ndarray:
-        phase = 2.0 * np.pi * f * tc / span
-        return np.column_stack([np.cos(phase), np.sin(phase)])
+    # cos, sin of 2πf·t/span on an evenly spaced grid of f: one complex product per point
+    columns = order_columns(2.0 * np.pi * tc / span)
 
     freqs = np.linspace(max(j - 1.0, min_cycles), j + 1.0, 21)
     best_f = float(freqs[int(np.argmax(space.scan(columns, freqs)))])

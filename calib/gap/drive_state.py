@@ -1,0 +1,284 @@
+"""Motion-conditioned checks: is the residual different while the table moves?
+
+A disturbance or a gain change tied to the drive — the motor's field or current picked up by
+the sensor, a vibration of the drive, a cable that pulls while the table turns, a gain that
+changes with the speed, the acceleration or the drive torque — is present while the table
+moves and gone while it holds. The catalog has none of these; the selection never looks at
+the drive state. So the final model's residuals are compared between the **moving** and the
+**held** stretches of a run, by four checks of the adequacy battery (:mod:`calib.gap.adequacy`,
+each at the battery's Bonferroni level; a failure makes the verdict "unexplained" with the
+words "present while moving …", where — the moving stretches and their share of the run — and
+how big, in m/s²).
+
+Held samples are those in a run of at least :data:`calib.gap.mechanisms.MIN_HOLD` equal
+consecutive encoder angles; the rest move (:func:`drive_state`). The checks run when both
+states have at least :data:`MIN_STATE` samples (a stop-and-go run, dwells between moves; not
+a constant sweep, nor poses joined by jumps, where one state is missing).
+
+With ``z`` the final model's standardised residuals (unit variance under the model; the
+random-walk filter's innovations on a walk axis), ``m`` the moving indicator (1 moving,
+0 held), ``A_r`` the axis' reference (m/s²), and with sample times ω, α (rad/s, rad/s²) and
+the drive torque τ (N·m, the bench's inverse dynamics of the replayed θ(t), when given),
+each normalised by its largest magnitude (``|ω|ₙ = |ω|/max|ω|``):
+
+========================  ==================================================================
+check                     statistic and reference distribution under the model
+========================  ==================================================================
+``drive_level``           columns ``m`` (and ``τₙ``, ``|τ|ₙ``) added to the model in its
+                          whitened space (:class:`calib.gap.space.AxisSpace`, GLS):
+                          ``ΔRSS ~ χ²(k)``. A level while moving (or one that follows the
+                          drive torque).
+``drive_gain``            columns ``A_r·m``, and with timing ``A_r·|ω|ₙ``, ``A_r·αₙ``,
+                          ``A_r·τₙ``: ``ΔRSS ~ χ²(k)``. A gain (scale factor) that changes
+                          while moving, with the speed, the acceleration or the torque.
+``drive_variance``        ``F = s²_moving / s²_held`` of z (each about its own mean):
+                          ``F(n_m − 1, n_h − 1)``, two-sided. Noise that changes while
+                          moving.
+``drive_spectrum``        autocorrelations ``r_j`` (j = 1 … h) of z within the moving
+                          stretches against those within the held ones (pairs never cross a
+                          stretch): ``Σ_j (r_j^m − r_j^h)² / (1/P_j^m + 1/P_j^h) ~ χ²(h)``,
+                          ``P_j`` the pairs at lag j (each r_j ≈ N(0, 1/P_j) for white noise,
+                          independent across lags). A vibration while moving.
+========================  ==================================================================
+
+Why by hand: these are tests of this bench's drive states; no library conditions a
+regression, a variance ratio or an autocorrelation on the held stretches of an encoder.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import special
+
+from calib.conventions import AXES
+from calib.effects import Extensions, ModelState
+from calib.gap.mechanisms import MIN_HOLD
+from calib.gap.space import AxisSpace, Check
+
+MIN_STATE = 50
+"""Fewest samples in each drive state (moving, held) for the checks to run."""
+
+SPECTRUM_LAGS = 10
+"""Lags h of ``drive_spectrum`` (each needs at least :data:`MIN_PAIRS` pairs per state)."""
+
+MIN_PAIRS = 30
+"""Fewest lagged pairs within the stretches of a state for a lag to be used."""
+
+NORM_FLOOR = 1e-9
+"""A drive column whose largest magnitude is below this is left out (no such state)."""
+
+
+def drive_state(tita: np.ndarray) -> np.ndarray | None:
+    """(N,) True where the table moves: not in a run of at least ``MIN_HOLD`` equal
+    consecutive angles; None when either state has fewer than :data:`MIN_STATE` samples."""
+    th = np.asarray(tita, dtype=float)
+    n = th.size
+    if n < 2 * MIN_STATE:
+        return None
+    same = np.diff(th) == 0.0
+    edges = np.diff(np.concatenate([[0], same.astype(np.int8), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    held = np.zeros(n, dtype=bool)
+    for a, b in zip(starts, ends, strict=True):  # same[a:b] true: samples a … b equal
+        if b - a + 1 >= MIN_HOLD:
+            held[a:b + 1] = True
+    moving = ~held
+    if min(int(moving.sum()), int(held.sum())) < MIN_STATE:
+        return None
+    return moving
+
+
+def stretches(mask: np.ndarray) -> list[tuple[int, int]]:
+    """(first, stop) of each maximal run of True in ``mask``."""
+    edges = np.diff(np.concatenate([[0], np.asarray(mask, dtype=np.int8), [0]]))
+    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist(),
+                    strict=True))
+
+
+def where_moving(run, moving: np.ndarray) -> str:
+    """Where the moving stretches are, in words: how many, their share of the run, the first
+    few spans (s, or samples without timing)."""
+    parts = stretches(moving)
+    tc = run.tcol
+    if run.time_unit == "s":
+        span = float(tc[-1] - tc[0]) or 1.0
+        dt = np.diff(tc, append=tc[-1])
+        share = float(np.sum(dt[moving]) / span)
+        spans = [f"{tc[a]:.3g}–{tc[min(b, run.n - 1)]:.3g} s" for a, b in parts[:3]]
+    else:
+        share = float(np.mean(moving))
+        spans = [f"samples {a}–{b - 1}" for a, b in parts[:3]]
+    more = ", …" if len(parts) > 3 else ""
+    return (f"during the {len(parts)} moving stretches ({100 * share:.0f} % of the run: "
+            f"{', '.join(spans)}{more})")
+
+
+def _normalised(x: np.ndarray | None) -> np.ndarray | None:
+    if x is None:
+        return None
+    x = np.asarray(x, dtype=float)
+    top = float(np.max(np.abs(x))) if x.size else 0.0
+    return None if not top > NORM_FLOOR else x / top
+
+
+def _chi2_logsf(stat: float, dof: int) -> float:
+    """log P(χ²(dof) > stat) (the regularised upper incomplete gamma)."""
+    return float(np.log(max(special.gammaincc(0.5 * dof, 0.5 * max(stat, 0.0)), 1e-300)))
+
+
+def _level(space: AxisSpace, run, moving: np.ndarray, torque: np.ndarray | None,
+           axis: str, where: str) -> Check | None:
+    cols = [moving.astype(float)]
+    names = ["moving"]
+    tn = _normalised(torque)
+    if tn is not None:
+        cols += [tn, np.abs(tn)]
+        names += ["torque", "|torque|"]
+    z = np.column_stack(cols)
+    fit = space.test(z)
+    if fit is None:
+        return None
+    stat, dof, coef = fit
+    shift = z @ coef
+    size = float(np.max(np.abs(shift[moving])) if np.any(moving) else 0.0)
+    mean_m = float(np.mean(shift[moving]) - np.mean(shift[~moving]))
+    follows = (" (it follows the drive torque)" if tn is not None
+               and abs(coef[1]) + abs(coef[2]) > abs(coef[0]) else "")
+    return Check("drive_level", axis, stat, _chi2_logsf(stat, dof), f"chi2({dof})", size,
+                 "m/s²",
+                 f"present while moving on {axis}: a disturbance of the reading {where}, "
+                 f"{mean_m:+.3g} m/s² on average against the held stretches, up to "
+                 f"{size:.3g} m/s²{follows} — the drive's field or current, a cable or a "
+                 "mount that pulls while the table turns")
+
+
+def _gain(space: AxisSpace, run, k: int, moving: np.ndarray, torque: np.ndarray | None,
+          axis: str, where: str) -> Check | None:
+    a = run.a_ref[:, k]
+    cols = [a * moving]
+    if run.omega is not None:
+        for x in (_normalised(np.abs(run.omega)), _normalised(run.alpha),
+                  _normalised(torque)):
+            if x is not None:
+                cols.append(a * x)
+    z = np.column_stack(cols)
+    fit = space.test(z)
+    if fit is None:
+        return None
+    stat, dof, coef = fit
+    change = z @ coef
+    size = float(np.max(np.abs(change)))
+    gain = float(coef[0])
+    top = float(np.max(np.abs(a))) or 1.0
+    return Check("drive_gain", axis, stat, _chi2_logsf(stat, dof), f"chi2({dof})", size,
+                 "m/s²",
+                 f"present while moving on {axis}: the gain changes {where} — by "
+                 f"{100 * gain:+.3g} % while moving ({gain * top:+.3g} m/s² at "
+                 f"{top:.3g} m/s²), up to {size:.3g} m/s² with the speed, the acceleration "
+                 "or the drive torque")
+
+
+def _variance(z: np.ndarray, moving: np.ndarray, scale: float, axis: str, where: str
+              ) -> Check | None:
+    zm, zh = z[moving], z[~moving]
+    if zm.size < MIN_STATE or zh.size < MIN_STATE:
+        return None
+    vm, vh = float(np.var(zm, ddof=1)), float(np.var(zh, ddof=1))
+    if not (vm > 0 and vh > 0):
+        return None
+    f = vm / vh
+    d1, d2 = zm.size - 1, zh.size - 1
+    # P(F ≤ f) = I_x(d1/2, d2/2), x = d1·f/(d1·f + d2)
+    x = d1 * f / (d1 * f + d2)
+    lower = float(special.betainc(0.5 * d1, 0.5 * d2, x))
+    upper = float(special.betainc(0.5 * d2, 0.5 * d1, 1.0 - x))
+    logp = float(min(0.0, np.log(2.0) + np.log(max(min(lower, upper), 1e-300))))
+    sm, sh = np.sqrt(vm) * scale, np.sqrt(vh) * scale
+    return Check("drive_variance", axis, f, logp, f"F({d1}, {d2}), two-sided",
+                 float(abs(sm - sh)), "m/s²",
+                 f"present while moving on {axis}: the noise changes {where} — std "
+                 f"{sm:.3g} m/s² while moving against {sh:.3g} m/s² held (a vibration or "
+                 "electrical noise of the drive)")
+
+
+def _lagged(z: np.ndarray, parts: list[tuple[int, int]], lags: int
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Autocorrelations r_j (j = 1 … lags) of z within the stretches ``parts`` (each about
+    the state's mean, over the state's variance) and the pairs P_j behind each."""
+    idx = np.concatenate([np.arange(a, b) for a, b in parts])
+    mu = float(np.mean(z[idx]))
+    var = float(np.var(z[idx]))
+    num = np.zeros(lags)
+    pairs = np.zeros(lags)
+    for a, b in parts:
+        x = z[a:b] - mu
+        for j in range(1, min(lags, b - a - 1) + 1):
+            num[j - 1] += float(x[j:] @ x[:-j])
+            pairs[j - 1] += b - a - j
+    r = np.where(pairs > 0, num / np.maximum(pairs, 1.0) / max(var, 1e-300), 0.0)
+    return r, pairs
+
+
+def _spectrum(z: np.ndarray, run, moving: np.ndarray, scale: float, axis: str, where: str
+              ) -> Check | None:
+    mov, held = stretches(moving), stretches(~moving)
+    rm, pm = _lagged(z, mov, SPECTRUM_LAGS)
+    rh, ph = _lagged(z, held, SPECTRUM_LAGS)
+    use = (pm >= MIN_PAIRS) & (ph >= MIN_PAIRS)
+    if not np.any(use):
+        return None
+    d = (rm - rh)[use]
+    stat = float(np.sum(d * d / (1.0 / pm[use] + 1.0 / ph[use])))
+    dof = int(np.sum(use))
+    lags = np.arange(1, SPECTRUM_LAGS + 1)[use]
+    # the moving stretches' spectrum from their autocorrelations: S(f) = 1 + 2 Σ r_j cos(2πfj)
+    f = np.linspace(0.0, 0.5, 201)
+    spec = 1.0 + 2.0 * np.cos(2.0 * np.pi * f[:, None] * lags[None, :]) @ rm[use]
+    peak = float(f[int(np.argmax(spec))])
+    # a tone of amplitude A in the moving stretches' noise s_m: |r_j| ≤ (A²/2)/s_m²
+    s_m = float(np.std(z[moving])) * scale
+    amp = float(np.sqrt(2.0 * float(np.max(np.abs(rm[use]))))) * s_m
+    if run.time_unit == "s":
+        h = float(np.median(np.diff(run.tcol)))
+        at = f"{peak / h:.3g} Hz" if peak > 0 else "the lowest frequencies"
+    else:
+        at = f"{peak:.3g} cycles per sample" if peak > 0 else "the lowest frequencies"
+    return Check("drive_spectrum", axis, stat, _chi2_logsf(stat, dof),
+                 f"chi2({dof}) of the lag-1…{int(lags[-1])} autocorrelation differences",
+                 amp, "m/s²",
+                 f"present while moving on {axis}: the residual's spectrum changes {where} — "
+                 f"lag-1 autocorrelation {rm[0]:+.2f} while moving against {rh[0]:+.2f} held, "
+                 f"the moving spectrum peaking at {at}, about {amp:.2g} m/s² (a vibration of "
+                 "the drive)")
+
+
+def drive_checks(ext: Extensions, state: ModelState, k: int, residual: np.ndarray,
+                 torque: np.ndarray | None = None, coarse: bool = False,
+                 space: AxisSpace | None = None) -> list[Check]:
+    """The four drive-state checks on axis k of the final model (those that apply).
+
+    residual : (N,) the final model's residuals of axis k, m/s², white with the model's
+        variance σ²_eff under the model (:func:`calib.gap.adequacy.run_battery`'s input).
+    torque : (N,) the drive's joint torque at the samples, N·m (the bench's inverse
+        dynamics of the replayed θ(t)), or None.
+    coarse : the rounding is coarser than the noise: the variance and spectrum checks (which
+        assume a continuous Gaussian residual) are left out, as the battery's tail checks are.
+    space : the axis' :class:`AxisSpace` of ``state``, when already built.
+    """
+    run = ext.run
+    moving = drive_state(run.tita)
+    if moving is None:
+        return []
+    axis = AXES[k]
+    st = state.axes[k]
+    scale = float(np.sqrt(st.sigma2_eff))
+    z = np.asarray(residual, dtype=float) / scale
+    where = where_moving(run, moving)
+    space = AxisSpace(ext, state, k) if space is None else space
+    tq = None if torque is None or run.t is None else np.asarray(torque, dtype=float)
+    found = [_level(space, run, moving, tq, axis, where),
+             _gain(space, run, k, moving, tq, axis, where)]
+    if not coarse:
+        found += [_variance(z, moving, scale, axis, where),
+                  _spectrum(z, run, moving, scale, axis, where)]
+    return [c for c in found if c is not None]

@@ -1,0 +1,171 @@
+"""Motion-conditioned checks (issue 33, item 1): is the residual different while the table
+moves? (:mod:`calib.gap.drive_state`).
+
+The logs are made here with numpy from the course signs ``A_rx = −g sin θ``,
+``A_ry = −g cos θ`` on a stop-and-go θ(t) (:func:`stop_and_go`: moves of a raised-cosine
+profile between holds of exactly equal θ), never through the bench's effect code. A
+disturbance, a gain change, extra noise or a vibration present only while the table moves
+must be reported "unexplained: present while moving …" with where (the moving stretches and
+their share of the run) and how big (m/s²); clean stop-and-go runs name nothing, and the
+checks' p-values are uniform under noise alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from calib.conventions import G
+from calib.effects import Extensions, ModelState, RunData
+from calib.files.course import validate_ensayo
+from calib.gap import analyze_gap
+from calib.gap.drive_state import drive_checks, drive_state
+
+STATED = (0.25, 0.64)
+"""Stated noise variances, (m/s²)² (the course's)."""
+
+
+def stop_and_go(n: int = 4001, rate: float = 100.0, moves: int = 16, turns: float = 2.0,
+                seed: int = 0, moving_share: float = 0.5
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A table that moves and stops: ``moves`` equal moves of ``turns·2π/moves`` each, a
+    raised-cosine profile over a random share (about ``moving_share``) of each of ``moves``
+    equal slots, then held (θ exactly equal) to the end of the slot.
+
+    Returns t (s), θ (rad) and the moving mask (True while θ changes)."""
+    rng = np.random.default_rng([seed, 11])
+    t = np.arange(n) / rate
+    theta = np.zeros(n)
+    moving = np.zeros(n, dtype=bool)
+    edges = np.linspace(0, n, moves + 1).astype(int)
+    step = 2.0 * np.pi * turns / moves
+    th0 = 0.0
+    for j in range(moves):
+        a, b = edges[j], edges[j + 1]
+        m = int(np.clip((b - a) * moving_share * rng.uniform(0.6, 1.4), 3, b - a - 6))
+        u = np.arange(1, m + 1) / m
+        theta[a:a + m] = th0 + step * 0.5 * (1.0 - np.cos(np.pi * u))
+        moving[a:a + m - 1] = True
+        th0 += step
+        theta[a + m:b] = th0
+    return t, theta, moving
+
+
+def course_readings(theta: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """(A_r (N, 2), readings (N, 2)): ``bias + (1 + scale)·A_r + v``, course signs, the
+    stated noise."""
+    rng = np.random.default_rng([seed, 13])
+    a = np.column_stack([-G * np.sin(theta), -G * np.cos(theta)])
+    y = (np.array([0.05, -0.03]) + (1.0 + np.array([0.01, -0.02])) * a
+         + rng.standard_normal(a.shape) * np.sqrt(STATED))
+    return a, y
+
+
+def _analyse(t, theta, y, torque=None):
+    return analyze_gap(validate_ensayo(theta, y, t), STATED, drive_torque=torque)
+
+
+def test_drive_state_finds_the_moving_stretches_and_skips_runs_without_both():
+    t, th, moving = stop_and_go(seed=1)
+    found = drive_state(th)
+    assert found is not None
+    assert np.mean(found == moving) > 0.99  # the last sample of a move equals the hold
+    assert drive_state(np.linspace(0.0, 6.0, 2000)) is None  # a constant sweep: all moving
+    assert drive_state(np.repeat(np.arange(8.0), 250)) is None  # poses joined by jumps
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_clean_stop_and_go_names_nothing(seed):
+    t, th, _ = stop_and_go(seed=seed)
+    _, y = course_readings(th, seed)
+    res = _analyse(t, th, y)
+    assert res.verdict == "nothing_detected", res.summary()
+    names = {c["name"] for c in res.adequacy["checks"]}
+    assert {"drive_level", "drive_gain", "drive_variance", "drive_spectrum"} <= names
+
+
+def test_the_checks_p_values_are_uniform_under_noise_alone():
+    """200 clean stop-and-go runs (N = 2001), the checks on the nominal model: the share of
+    p < 0.05 stays near 5 % for each check (binomial 99.9 % band 1.5–10 %)."""
+    below: dict[str, list[bool]] = {}
+    for seed in range(200):
+        t, th, _ = stop_and_go(n=2001, seed=seed, moves=10)
+        _, y = course_readings(th, seed)
+        run = RunData.build(th, y, G, t)
+        ext = Extensions(run, np.array([1.01, 0.98]))
+        state = ModelState.nominal(STATED)
+        for k in range(2):
+            design = np.column_stack([np.ones(th.size), run.a_ref[:, k]])
+            coef, *_ = np.linalg.lstsq(design, y[:, k], rcond=None)
+            resid = y[:, k] - design @ coef  # the nominal model's residual
+            for c in drive_checks(ext, state, k, resid):
+                below.setdefault(c.name, []).append(c.p_value < 0.05)
+    assert set(below) == {"drive_level", "drive_gain", "drive_variance", "drive_spectrum"}
+    for name, hits in below.items():
+        share = float(np.mean(hits))
+        assert 0.015 <= share <= 0.10, (name, share, len(hits))
+
+
+def _words(res) -> str:
+    return " | ".join(u["description"] for u in res.unexplained)
+
+
+def test_a_disturbance_while_moving_is_unexplained_where_and_how_big():
+    t, th, moving = stop_and_go(seed=0)
+    _, y = course_readings(th, 0)
+    y[moving, 0] += 0.15  # m/s², 0.3 σ while the table moves
+    res = _analyse(t, th, y)
+    assert res.verdict == "unexplained", res.summary()
+    drive = [u for u in res.unexplained if u["signature"] == "drive_level"]
+    assert drive and drive[0]["axis"] == "x" and drive[0]["unit"] == "m/s²"
+    words = drive[0]["description"]
+    assert words.startswith("present while moving on x")
+    assert "16 moving stretches" in words and "% of the run" in words and "m/s²" in words
+    assert 0.1 < drive[0]["size"] < 0.25
+
+
+def test_a_gain_change_while_moving_is_unexplained():
+    t, th, moving = stop_and_go(seed=3)
+    a, y = course_readings(th, 3)
+    y[moving, 1] += 0.02 * a[moving, 1]  # the gain of y is 2 % higher while moving
+    res = _analyse(t, th, y)
+    assert res.verdict == "unexplained", res.summary()
+    gain = [u for u in res.unexplained if u["signature"] == "drive_gain"]
+    assert gain and gain[0]["axis"] == "y", _words(res)
+    assert "present while moving on y: the gain changes" in gain[0]["description"]
+
+
+def test_more_noise_while_moving_is_unexplained():
+    t, th, moving = stop_and_go(seed=4)
+    _, y = course_readings(th, 4)
+    rng = np.random.default_rng(4)
+    y[moving, 0] += 0.35 * rng.standard_normal(int(moving.sum()))
+    res = _analyse(t, th, y)
+    var = [u for u in res.unexplained if u["signature"] == "drive_variance"]
+    assert res.verdict == "unexplained" and var, _words(res)
+    assert "std" in var[0]["description"] and "while moving" in var[0]["description"]
+
+
+def test_a_vibration_while_moving_is_unexplained_with_its_frequency():
+    t, th, moving = stop_and_go(seed=5)
+    _, y = course_readings(th, 5)
+    y[:, 0] += moving * 0.25 * np.sin(2.0 * np.pi * 12.0 * t)  # 12 Hz only while moving
+    res = _analyse(t, th, y)
+    spec = [u for u in res.unexplained if u["signature"] == "drive_spectrum"]
+    assert res.verdict == "unexplained" and spec, _words(res)
+    assert "Hz" in spec[0]["description"]
+
+
+def test_a_disturbance_that_follows_the_drive_torque():
+    """With the drive torque given (the bench's inverse dynamics; here I·α + D·ω of the
+    profile), a disturbance ∝ |τ| is tested against it too."""
+    t, th, _ = stop_and_go(seed=6)
+    omega = np.gradient(th, t)
+    torque = 0.09 * np.gradient(omega, t) + 0.05 * omega
+    _, y = course_readings(th, 6)
+    y[:, 0] += 0.4 * np.abs(torque) / np.max(np.abs(torque))
+    res = _analyse(t, th, y, torque)
+    assert res.verdict == "unexplained", res.summary()
+    assert any(u["signature"] == "drive_level" for u in res.unexplained), _words(res)
+    with pytest.raises(ValueError, match="drive_torque"):
+        _analyse(t, th, y, torque[:-1])

@@ -1,0 +1,106 @@
+"""Step-like bias changes are said by their shape (issue 33, item 4): two-level switching
+(random telegraph noise), a single step and a staircase — "the bias switches between two
+levels …", "a step of … at t = …", "a staircase of …" —, never "1/f-like drift"
+(:mod:`calib.gap.steps`, :func:`calib.gap.walk.step_drift`).
+
+The logs are made here with numpy (course signs ``A_rx = −g sin θ``, ``A_ry = −g cos θ``) on
+a stop-and-go θ(t) over three turns (:func:`tests.test_gap_drive_state.stop_and_go`), the
+bias change added to x.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from calib.files.course import validate_ensayo
+from calib.gap import analyze_gap
+from calib.gap.steps import describe, find_steps, step_threshold, two_level
+from tests.test_gap_drive_state import STATED, course_readings, stop_and_go
+
+SIGMA_X = float(np.sqrt(STATED[0]))
+
+
+def _run(kind: str, seed: int):
+    n = 4001
+    t, th, _ = stop_and_go(n, seed=seed, moves=24, turns=3.0)
+    _, y = course_readings(th, seed)
+    rng = np.random.default_rng([seed, 17])
+    if kind == "telegraph":  # two levels 1 σ apart, exponential dwells of 5 s on average
+        level, b, i = 0, np.zeros(n), 0
+        while i < n:
+            d = int(rng.exponential(500)) + 1
+            b[i:i + d] = level
+            level, i = 1 - level, i + d
+        y[:, 0] += SIGMA_X * b
+    elif kind == "step":
+        y[int(0.43 * n):, 0] += SIGMA_X
+    elif kind == "staircase":
+        for c in (0.3, 0.55, 0.8):
+            y[int(c * n):, 0] += SIGMA_X
+    return analyze_gap(validate_ensayo(th, y, t), STATED)
+
+
+def _said(res) -> str:
+    return " | ".join(u["description"] for u in res.unexplained)
+
+
+@pytest.mark.parametrize("seed", [2, 3])
+def test_telegraph_noise_switches_between_two_levels_not_1_over_f(seed):
+    res = _run("telegraph", seed)
+    said = _said(res)
+    assert res.verdict == "unexplained", res.summary()
+    assert ("bias_random_walk", "x") not in res.named
+    assert "the bias on x switches between two levels" in said, said
+    assert "1/f" not in said
+    walk = [w for w in res.adequacy["walk"] if w["axis"] == "x"][0]
+    assert walk["steps"]["two_level"] and walk["steps"]["decision"] == "steps"
+
+
+def test_a_single_step_is_a_step_at_its_time():
+    res = _run("step", 0)
+    said = _said(res)
+    assert res.verdict == "unexplained", res.summary()
+    assert "a step of +0.5" in said and "at t = 17" in said, said  # 0.43·4001 samples
+    assert "two steps" not in said.split("(")[0] and "1/f" not in said
+
+
+def test_a_staircase_is_a_staircase():
+    res = _run("staircase", 1)
+    said = _said(res)
+    assert res.verdict == "unexplained", res.summary()
+    assert ("bias_random_walk", "x") not in res.named
+    assert "a staircase of 3 steps of about +0.5" in said or \
+        "a staircase of 3 steps of about +0.49" in said, said
+
+
+def test_find_steps_on_white_noise_rarely_finds_one():
+    """The change-point search at its family level ``STEP_ALPHA`` = 0.01: on 40 white-noise
+    paths of 4001 samples at most 2 show a step."""
+    found = sum(find_steps(np.random.default_rng(s).standard_normal(4001), 1.0).count > 0
+                for s in range(40))
+    assert found <= 2
+    assert 20 < step_threshold(4001) < 30
+
+
+def test_find_steps_places_and_sizes_and_the_words():
+    n = 3000
+    e = np.zeros(n)
+    e[1000:] += 1.0
+    e[2000:] -= 1.0
+    e[2500:] += 1.0
+    noisy = e + 0.3 * np.random.default_rng(1).standard_normal(n)
+    fit = find_steps(noisy, 0.09)
+    assert fit.count == 3 and np.all(np.abs(fit.places - [1000, 2000, 2500]) <= 3)
+    assert np.allclose(fit.sizes, [1, -1, 1], atol=0.1)
+    assert two_level(fit)
+    tcol = np.arange(n) / 100.0
+    assert describe(fit, tcol, "s", "x").startswith("the bias on x switches between two")
+    stair = find_steps(np.cumsum(np.isin(np.arange(n), [600, 1500, 2400])) * 1.0
+                       + 0.3 * np.random.default_rng(2).standard_normal(n), 0.09)
+    words = describe(stair, np.arange(n, dtype=float), "sample", "y")
+    assert words.startswith("a staircase of 3 steps of about +1") and "samples 600" in words
+    one = find_steps(np.r_[np.zeros(500), np.ones(500)]
+                     + 0.3 * np.random.default_rng(3).standard_normal(1000), 0.09)
+    words = describe(one, np.arange(1000) / 10.0, "s", "x")
+    assert words.startswith("a step of +0.99 m/s² (+3.3 σ) in the bias on x at t = 50 s")
