@@ -31,6 +31,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/gap_command.py
 	$(BIN)/python benchmarks/mc_speed.py
 	$(BIN)/python benchmarks/csv_reader.py
+	$(BIN)/python benchmarks/noise_speed.py
 
 octave-check: $(STAMP)
 	BIN=$(BIN) tools/octave_check.sh
