@@ -578,9 +578,20 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         _check_finite(raw, raw.acc[axis], what, path)
         if not options.allow_saturation:
             _check_saturation(raw, raw.acc[axis], what, path, factor, g)
-    acc = _scaled_columns([raw.acc[a] for _, a in acc_cols],
-                          [(-1.0 if spec.startswith("-") else 1.0) * factor
-                           for spec, _ in acc_cols])
+    # the sensor frame first: for the default axes the tilt-plane view and the normal axis
+    # are views of it (no second copy of a long log, not even a temporary one)
+    acc_s = None
+    if all(k in raw.acc for k in "xyz"):
+        for k in "xyz":
+            _check_finite(raw, raw.acc[k], f"column '{raw.mapping.get(k, k)}'", path)
+        acc_s = _scaled_columns([raw.acc[k] for k in "xyz"], [factor] * 3)
+    shared = acc_s is not None and tuple(options.axes) == ("x", "y")
+    if shared:
+        acc = acc_s[:, :2]
+    else:
+        acc = _scaled_columns([raw.acc[a] for _, a in acc_cols],
+                              [(-1.0 if spec.startswith("-") else 1.0) * factor
+                               for spec, _ in acc_cols])
     # the third axis, signed as the tilt axis â × b̂: (x, y, normal) right-handed
     normal_spec = tilt_axis(tuple(options.axes))
     normal_axis = normal_spec.lstrip("-")
@@ -592,15 +603,9 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         # z sits still at +g); the 3-axis fit's lack-of-fit test shows a clipped pose
         _check_finite(raw, raw.acc[normal_axis], what, path)
         sign = -1.0 if normal_spec.startswith("-") else 1.0
-        acc_normal = np.multiply(raw.acc[normal_axis], sign * factor, dtype=float)
+        acc_normal = (acc_s[:, 2] if shared else
+                      np.multiply(raw.acc[normal_axis], sign * factor, dtype=float))
         normal_from = f"{'-' if sign < 0 else ''}{raw.mapping.get(normal_axis, normal_axis)}"
-    acc_s = None
-    if all(k in raw.acc for k in "xyz"):
-        for k in "xyz":
-            _check_finite(raw, raw.acc[k], f"column '{raw.mapping.get(k, k)}'", path)
-        acc_s = _scaled_columns([raw.acc[k] for k in "xyz"], [factor] * 3)
-        if tuple(options.axes) == ("x", "y"):  # the tilt plane is the sensor's own x, y, z:
-            acc, acc_normal = acc_s[:, :2], acc_s[:, 2]  # views, not a second copy
     n = acc.shape[0]
     if n < 3:
         raise DataError(f"{path}: only {n} samples; at least 3 are needed")
