@@ -240,13 +240,15 @@ class PoseDetection(ResultMixin):
                    axes_watched=int(d.get("axes_watched", 2)))
 
 
-def _window_sums(s: np.ndarray, n: int, w: int) -> tuple[np.ndarray, np.ndarray]:
+def _window_sums(s: np.ndarray, n: int, w: int
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Sums over the centred window of ``w`` samples (truncated at the ends) of the data whose
-    cumulative sums (with a leading 0) are ``s`` (N + 1), and the window counts. The interior
-    is one difference of two views of ``s``: no index arrays the length of the log."""
+    cumulative sums (with a leading 0) are ``s`` (N + 1): ``(sums, edge, edge_count)`` — every
+    window holds ``w`` samples except those at the indices ``edge`` (the first and last half
+    windows), which hold ``edge_count``. The interior is one difference of two views of ``s``:
+    no index or count arrays the length of the log."""
     h = w // 2
     out = np.empty(n)
-    cnt = np.full(n, float(w))
     inner = n - w + 1
     if inner > 0:
         np.subtract(s[w:], s[:inner], out=out[h:h + inner])
@@ -254,32 +256,35 @@ def _window_sums(s: np.ndarray, n: int, w: int) -> tuple[np.ndarray, np.ndarray]
     edge = edge[(edge >= 0) & (edge < n)]
     lo, hi = np.maximum(0, edge - h), np.minimum(n, edge + (w - h))
     out[edge] = s[hi] - s[lo]
-    cnt[edge] = hi - lo
-    return out, cnt
+    return out, edge, (hi - lo).astype(float)
 
 
 def window_variance(x: np.ndarray, w: int) -> np.ndarray:
     """Sample variance (ddof 1) of ``x`` in a centred window of ``w`` samples per sample,
     truncated at the ends; O(N) by cumulative sums of the centred data (centring keeps the
     difference of sums accurate: the values are O(g) while the variances may be 10⁻⁸). A few
-    arrays the length of the log at a time: a long log's detection must not need ten."""
+    arrays the length of the log at a time: a long log's detection must not need ten.
+
+    Per window of c samples: ``(Σx² − (Σx)²/c) / (c − 1)``."""
     x = np.array(x, dtype=float)
     x -= np.mean(x)
     n = x.size
     s = np.zeros(n + 1)
     np.cumsum(x, out=s[1:])
-    s1, cnt = _window_sums(s, n, w)
+    s1, edge, cnt = _window_sums(s, n, w)
     np.square(x, out=x)
     np.cumsum(x, out=s[1:])
     del x
-    var, _ = _window_sums(s, n, w)
+    var, _, _ = _window_sums(s, n, w)
     del s
-    # (Σx² − (Σx)²/c) / (c − 1): the window's sample variance, ddof 1
+    e1, e2 = s1[edge], var[edge]  # the truncated windows, done apart with their own counts
     np.square(s1, out=s1)
-    s1 /= cnt
+    s1 /= w
     var -= s1
+    del s1
+    var /= max(w - 1.0, 1.0)
+    var[edge] = (e2 - e1 * e1 / cnt) / np.maximum(cnt - 1.0, 1.0)
     np.maximum(var, 0.0, out=var)
-    var /= np.maximum(cnt - 1.0, 1.0)
     return var
 
 
@@ -287,8 +292,10 @@ def _window_mean(x: np.ndarray, w: int) -> np.ndarray:
     n = x.size
     s = np.zeros(n + 1)
     np.cumsum(x, out=s[1:])
-    total, cnt = _window_sums(s, n, w)
-    total /= cnt
+    total, edge, cnt = _window_sums(s, n, w)
+    e = total[edge]
+    total /= w
+    total[edge] = e / cnt
     return total
 
 
@@ -354,12 +361,15 @@ def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray 
         hold = int(DEFAULT_HOLD_N if min_hold is None else min_hold)
     w = max(w, 5)
     hold = max(hold, w)
-    watch = acc[:, :2] if more_acc is None else np.column_stack(
-        [acc[:, :2], np.asarray(more_acc, dtype=float).reshape(n, -1)])
-    k_acc = watch.shape[1]
+    # the watched axes as a list of columns (views): no (N, k) copy of a long log
+    extra = [] if more_acc is None else list(np.asarray(more_acc, dtype=float).reshape(n, -1).T)
+    watch = [acc[:, 0], acc[:, 1], *extra]
+    k_acc = len(watch)
     nu_v = k_acc * (w - 1.0)
-    v = sum(window_variance(watch[:, k], w) for k in range(k_acc))
-    floor = sum(_quant_step(watch[:, k]) ** 2 / 12.0 for k in range(k_acc))
+    v = window_variance(watch[0], w)
+    for col in watch[1:]:  # summed in place: one accumulator, not a new array per axis
+        v += window_variance(col, w)
+    floor = sum(_quant_step(col) ** 2 / 12.0 for col in watch)
     q = max(float(np.quantile(v, QUIET_QUANTILE)), floor, 1e-18)
     thr = LOOSE * MARGIN * q * _ratio(nu_v, QUIET_QUANTILE)
     coarse = v <= thr
@@ -394,8 +404,9 @@ def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray 
     taus: list[tuple[float, float | None]] = []
     for (a, b), tau in zip(runs, own, strict=True):
         if groups and a - groups[-1][-1][1] < hold:
-            prev = np.concatenate([watch[x:y] for x, y in groups[-1]])
-            here = watch[a:b]
+            prev = np.concatenate([np.column_stack([c[x:y] for c in watch])
+                                   for x, y in groups[-1]])
+            here = np.column_stack([c[a:b] for c in watch])
             limit = MERGE_STDS * np.maximum(prev.std(0, ddof=1), here.std(0, ddof=1))
             if np.all(np.abs(prev.mean(0) - here.mean(0)) <= limit):
                 groups[-1].append((a, b))
