@@ -9,6 +9,8 @@ circle.
 
 from __future__ import annotations
 
+from typing import Any
+
 
 class DataError(ValueError):
     """Input data that cannot be used as given (message names file, variable and fix)."""
@@ -50,3 +52,66 @@ a units or file error)."""
 
 MAX_ABS_VELOCITY = 1e9
 """Largest |initial velocity| accepted in ``datos.txt``, m/s."""
+
+
+# --- value rules of result files (cal.json, sensor.json): one home for both readers ---
+
+G_RANGE = (1e-3, 1e4)
+"""Gravity of the reference, m/s²: positive, not below a milli-m/s² (the Moon is 1.62) and not
+above the ``--g`` option's limit (10⁴ m/s²)."""
+SIGMA2_RANGE = (1e-100, 1e100)
+"""Noise variances and parameter variances, (m/s²)² or their units: positive, not subnormal,
+and small enough that sums of residual²/σ² and products of two of them stay finite (the
+bound of the ``--noise-var`` option, ``bench.cli.options.VARIANCE_RANGE``)."""
+GAIN_RANGE = (1e-3, 1e3)
+"""The gain ``1 + scale`` of each axis: a sensor reading a thousandth or a thousand times the
+acceleration is broken, not calibrated; commands divide by the gain, which must stay away
+from 0 (the Moon-gravity case of the reader tests has a gain of 0.17)."""
+CORRELATION_EIG_MIN = 1e-12
+"""Smallest eigenvalue of a correlation matrix: below it the covariance is not numerically
+positive definite (|ρ| ≈ 1 to 12 digits: bias and scale confounded); a strongly correlated
+but real fit (θ over 0.01 rad) is at 1e-5."""
+
+def field_error(path: Any, field: str, what: str) -> DataError:
+    """``{path}: field '<field>' <what>``: a field that is missing, malformed or implausible."""
+    return DataError(f"{path}: field '{field}' {what}")
+
+
+def check_covariance(cov: Any, names: tuple[str, ...], field: str, path: Any,
+                     rounding: float = 0.0) -> None:
+    """Symmetric, variances in :data:`SIGMA2_RANGE`, |ρ| ≤ 1 for every pair (the pair is
+    named), positive definite (Cholesky of the correlation matrix and its smallest eigenvalue
+    ≥ :data:`CORRELATION_EIG_MIN`).
+
+    ``rounding``: 0 (a least-squares covariance ``R⁻¹R⁻ᵀ`` is symmetric exactly, as written),
+    or the relative asymmetry a product ``J C Jᵀ`` (the delta method) may carry from
+    rounding, in units of ``√(C_ii C_jj)``."""
+    import numpy as np  # here: this module is imported by the command line at start-up
+
+    cov = np.asarray(cov, dtype=float)
+    var = np.abs(np.diag(cov))
+    off = np.abs(cov - cov.T)
+    if np.any(off > rounding * np.sqrt(np.outer(var, var))) or not np.all(np.isfinite(off)):
+        i, j = np.unravel_index(np.argmax(off), cov.shape)
+        raise field_error(path, field, f"is not symmetric (entry [{i}][{j}] = "
+                          f"{float(cov[i, j])!r}, [{j}][{i}] = {float(cov[j, i])!r})")
+    var = np.diag(cov)
+    for k, v in enumerate(var.tolist()):
+        if not SIGMA2_RANGE[0] <= v <= SIGMA2_RANGE[1]:
+            raise field_error(path, field, f"has variance {v!r} of {names[k]} (must be in "
+                              f"[{SIGMA2_RANGE[0]:g}, {SIGMA2_RANGE[1]:g}])")
+    sd = np.sqrt(var)
+    rho = cov / np.outer(sd, sd)
+    np.fill_diagonal(rho, 1.0)  # v/(√v·√v) may round to 1 ± ε; only the off-diagonal tells
+    i, j = np.unravel_index(np.argmax(np.abs(rho - np.eye(len(sd)))), rho.shape)
+    if abs(rho[i, j]) > 1:
+        raise field_error(path, field, f"has correlation {rho[i, j]:.6g} between {names[i]} "
+                          f"and {names[j]} (|ρ| > 1: not a covariance)")
+    try:
+        np.linalg.cholesky(rho)
+        smallest = float(np.linalg.eigvalsh(rho)[0])
+    except np.linalg.LinAlgError:
+        smallest = -1.0
+    if smallest < CORRELATION_EIG_MIN:
+        raise field_error(path, field, f"is not positive definite (smallest eigenvalue of "
+                          f"the correlation matrix {smallest:.3g})")

@@ -155,6 +155,7 @@ def test_old_mac_line_ends(tmp_path, blocks):
     values = _values(100)
     lines = ["# from an old logger", ",".join(HEADER)] + [",".join(r) for r in _cells(values)]
     raw = read_csv(_write(tmp_path / "cr.csv", lines, newline="\r"))
+    assert raw.n == 100  # the comment line and the header are not samples
     _same(raw, values, range(3, 103))
 
 

@@ -21,7 +21,16 @@ from typing import Any
 
 import numpy as np
 
-from calib.input_rules import MAX_ABS_ACCEL, DataError
+from calib.input_rules import (  # the value rules shared with sensor.json: one home
+    CORRELATION_EIG_MIN,
+    G_RANGE,
+    GAIN_RANGE,
+    MAX_ABS_ACCEL,
+    SIGMA2_RANGE,
+    DataError,
+)
+from calib.input_rules import check_covariance as check_cov
+from calib.input_rules import field_error as fail
 
 FORMAT = "tiltbench-calibration"
 """The ``format`` value of every calibration file."""
@@ -36,24 +45,9 @@ RERUN = "re-run `tiltbench calibrate … --save`"
 N_RANGE = (3, 10_000_000)
 """Samples of a calibration run: at least 3 (two parameters per axis and one dof for σ²), at
 most 10⁷ (the residuals alone would make a 600 MB file; no course or bench run is near)."""
-G_RANGE = (1e-3, 1e4)
-"""Gravity of the reference, m/s²: positive, not below a milli-m/s² (the Moon is 1.62) and not
-above the ``--g`` option's limit (10⁴ m/s²)."""
-SIGMA2_RANGE = (1e-100, 1e100)
-"""Noise variances and parameter variances, (m/s²)² or their units: positive, not subnormal,
-and small enough that sums of residual²/σ² and products of two of them stay finite (the
-bound of the ``--noise-var`` option, ``bench.cli.options.VARIANCE_RANGE``)."""
 MAX_ABS_BIAS = MAX_ABS_ACCEL
 """Largest |bias|, m/s²: the largest reading any file may hold (:data:`calib.input_rules.
 MAX_ABS_ACCEL`); a bias above it is not a calibration of a sensor."""
-GAIN_RANGE = (1e-3, 1e3)
-"""The gain ``1 + scale`` of each axis: a sensor reading a thousandth or a thousand times the
-acceleration is broken, not calibrated; commands divide by the gain, which must stay away
-from 0 (the Moon-gravity case of the reader tests has a gain of 0.17)."""
-CORRELATION_EIG_MIN = 1e-12
-"""Smallest eigenvalue of a correlation matrix: below it the covariance is not numerically
-positive definite (|ρ| ≈ 1 to 12 digits: bias and scale confounded); a strongly correlated
-but real fit (θ over 0.01 rad) is at 1e-5."""
 RELATIVE_TOLERANCE = 1e-9
 """Relative tolerance of the recomputed sums (χ², σ² from the residuals): a sum of N terms
 recomputed in another order differs by ~N·ε ≈ 1e-12 for N = 20001; an edit differs by more."""
@@ -114,11 +108,6 @@ def document_json(doc: dict) -> str:
 
 
 # ------------------------------------------------------------------ one-line refusals
-def fail(path: Any, field: str, what: str) -> DataError:
-    """``{path}: field '<field>' <what>``: a field that is missing, malformed or implausible."""
-    return DataError(f"{path}: field '{field}' {what}")
-
-
 def inconsistent(path: Any, field: str, what: str) -> DataError:
     """Two parts of the file disagree: it was edited (or damaged) after calibrate wrote it."""
     return DataError(f"{path}: checksum/consistency failed: '{field}' {what}; {RERUN}")
@@ -175,43 +164,6 @@ def check_ref(doc: dict, key: str, path: Any) -> None:
             or len(v["sha256"]) != 64 or any(c not in "0123456789abcdef" for c in v["sha256"])):
         raise fail(path, key, "must be null or {\"name\": file name, \"sha256\": 64 hex "
                    f"digits}}, got {short(v)}")
-
-
-def check_cov(cov: np.ndarray, names: tuple[str, ...], field: str, path: Any,
-              rounding: float = 0.0) -> None:
-    """Symmetric, variances in :data:`SIGMA2_RANGE`, |ρ| ≤ 1 for every pair (the pair is
-    named), positive definite (Cholesky of the correlation matrix and its smallest eigenvalue
-    ≥ :data:`CORRELATION_EIG_MIN`).
-
-    ``rounding``: 0 (a least-squares covariance ``R⁻¹R⁻ᵀ`` is symmetric exactly, as written),
-    or the relative asymmetry a product ``J C Jᵀ`` (the delta method) may carry from
-    rounding, in units of ``√(C_ii C_jj)``."""
-    var = np.abs(np.diag(cov))
-    off = np.abs(cov - cov.T)
-    if np.any(off > rounding * np.sqrt(np.outer(var, var))) or not np.all(np.isfinite(off)):
-        i, j = np.unravel_index(np.argmax(off), cov.shape)
-        raise fail(path, field, f"is not symmetric (entry [{i}][{j}] = {float(cov[i, j])!r}, "
-                   f"[{j}][{i}] = {float(cov[j, i])!r})")
-    var = np.diag(cov)
-    for k, v in enumerate(var.tolist()):
-        if not SIGMA2_RANGE[0] <= v <= SIGMA2_RANGE[1]:
-            raise fail(path, field, f"has variance {v!r} of {names[k]} (must be in "
-                       f"[{SIGMA2_RANGE[0]:g}, {SIGMA2_RANGE[1]:g}])")
-    sd = np.sqrt(var)
-    rho = cov / np.outer(sd, sd)
-    np.fill_diagonal(rho, 1.0)  # v/(√v·√v) may round to 1 ± ε; only the off-diagonal tells
-    i, j = np.unravel_index(np.argmax(np.abs(rho - np.eye(len(sd)))), rho.shape)
-    if abs(rho[i, j]) > 1:
-        raise fail(path, field, f"has correlation {rho[i, j]:.6g} between {names[i]} and "
-                   f"{names[j]} (|ρ| > 1: not a covariance)")
-    try:
-        np.linalg.cholesky(rho)
-        smallest = float(np.linalg.eigvalsh(rho)[0])
-    except np.linalg.LinAlgError:
-        smallest = -1.0
-    if smallest < CORRELATION_EIG_MIN:
-        raise fail(path, field, f"is not positive definite (smallest eigenvalue of the "
-                   f"correlation matrix {smallest:.3g})")
 
 
 def close(a: float, b: float) -> bool:

@@ -80,7 +80,16 @@ from typing import Any
 import numpy as np
 
 from calib.files.atomic import write_text
-from calib.input_rules import DataError, check_file
+from calib.input_rules import (  # the value rules shared with cal.json: one home
+    CORRELATION_EIG_MIN,
+    G_RANGE,
+    GAIN_RANGE,
+    SIGMA2_RANGE,
+    DataError,
+    check_covariance,
+    check_file,
+)
+from calib.input_rules import field_error as _fail
 from calib.noise.allan_model import TERM_NAMES
 from calib.noise.term_units import kind_of
 
@@ -173,16 +182,6 @@ accelerometer one would tilt on a table (±400 g is the widest common part), so 
 "bias" is a unit mistake (counts, mg), not a sensor; the twin adds it to ±1 g readings. This
 is tighter than ``cal.json``'s reading limit (10⁹ m/s², any number a file may hold): the
 profile describes a sensor to simulate."""
-GAIN_RANGE = (1e-3, 1e3)
-"""The gain ``1 + scale`` of each axis (= ``calib.calibration.calfile.GAIN_RANGE``; the
-noise wing may not import the calibration wing, a test keeps the two equal)."""
-G_RANGE = (1e-3, 1e4)
-"""Gravity of the calibration's reference, m/s² (= ``calib.calibration.calfile.G_RANGE``)."""
-SIGMA2_RANGE = (1e-100, 1e100)
-"""Variances of the calibration's covariance (= ``calib.calibration.calfile.SIGMA2_RANGE``)."""
-CORRELATION_EIG_MIN = 1e-12
-"""Smallest eigenvalue of the calibration's correlation matrix (=
-``calib.calibration.calfile.CORRELATION_EIG_MIN``): below it, not positive definite."""
 CALIBRATION_METHODS: tuple[str, ...] = ("ols", "wls", "multiposition")
 """``method`` of a calibration from a ``cal.json`` (=
 ``calib.calibration.tilt_plane.METHODS``)."""
@@ -516,10 +515,6 @@ def check_profile(profile: SensorProfile, where: Any = "<memory>") -> SensorProf
 
 
 # ------------------------------------------------------------------ reading
-def _fail(where: Any, field_name: str, what: str) -> DataError:
-    return DataError(f"{where}: field '{field_name}' {what}")
-
-
 def _short(v: Any) -> str:
     text = json.dumps(v, default=repr) if not isinstance(v, float) else repr(v)
     return text if len(text) <= 40 else text[:37] + "..."
@@ -701,31 +696,6 @@ def _check_gain_and_bias(kind: str, axis: str, v: float, name: str, where: Any) 
                     f"[{GAIN_RANGE[0]:g}, {GAIN_RANGE[1]:g}]")
 
 
-def _check_cov(cov: np.ndarray, names: list[str], where: Any) -> None:
-    """Exactly symmetric (as ``cal.json`` stores it), variances in :data:`SIGMA2_RANGE`,
-    positive definite (smallest eigenvalue of the correlation ≥ :data:`CORRELATION_EIG_MIN`)."""
-    name = "calibration.cov"
-    if not np.array_equal(cov, cov.T):
-        i, j = np.unravel_index(np.argmax(np.abs(cov - cov.T)), cov.shape)
-        raise _fail(where, name, f"is not symmetric (entry [{i}][{j}] = {cov[i, j]:g}, "
-                    f"[{j}][{i}] = {cov[j, i]:g})")
-    var = np.diag(cov)
-    for k, v in enumerate(var.tolist()):
-        if not SIGMA2_RANGE[0] <= v <= SIGMA2_RANGE[1]:
-            raise _fail(where, name, f"has variance {v:g} of {names[k]} (must be in "
-                        f"[{SIGMA2_RANGE[0]:g}, {SIGMA2_RANGE[1]:g}])")
-    sd = np.sqrt(var)
-    rho = cov / np.outer(sd, sd)
-    np.fill_diagonal(rho, 1.0)
-    try:
-        smallest = float(np.linalg.eigvalsh(rho)[0])
-    except np.linalg.LinAlgError:
-        smallest = -1.0
-    if not smallest >= CORRELATION_EIG_MIN:
-        raise _fail(where, name, f"is not positive definite (smallest eigenvalue of the "
-                    f"correlation matrix {smallest:.3g})")
-
-
 def _calibration_from(d: Any, axes: tuple[str, ...], where: Any) -> dict | None:
     """null, the cal.json form or the bias/scale form (module docstring), checked."""
     if d is None:
@@ -769,7 +739,7 @@ def _calibration_from(d: Any, axes: tuple[str, ...], where: Any) -> dict | None:
     for i, row in enumerate(cov):
         for j, v in enumerate(row):
             _number(v, f"calibration.cov[{i}][{j}]", where, "products of the params' units")
-    _check_cov(np.asarray(cov, dtype=float), names, where)
+    check_covariance(np.asarray(cov, dtype=float), tuple(names), "calibration.cov", where)
     out = {"param_names": list(names), "params": values,
            "cov": [[float(v) for v in row] for row in cov]}
     if "method" in d:
