@@ -91,7 +91,9 @@ def check_covariance(cov: Any, names: tuple[str, ...], field: str, path: Any,
     cov = np.asarray(cov, dtype=float)
     var = np.abs(np.diag(cov))
     off = np.abs(cov - cov.T)
-    if np.any(off > rounding * np.sqrt(np.outer(var, var))) or not np.all(np.isfinite(off)):
+    with np.errstate(over="ignore", invalid="ignore"):  # absurd entries: refused below
+        allowed = rounding * np.sqrt(np.outer(var, var))
+    if np.any(off > allowed) or not np.all(np.isfinite(off)):
         i, j = np.unravel_index(np.argmax(off), cov.shape)
         raise field_error(path, field, f"is not symmetric (entry [{i}][{j}] = "
                           f"{float(cov[i, j])!r}, [{j}][{i}] = {float(cov[j, i])!r})")
