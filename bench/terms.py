@@ -32,7 +32,6 @@ from dataclasses import dataclass, fields
 from typing import ClassVar, Literal, Protocol
 
 import numpy as np
-from scipy.signal import fftconvolve
 
 from calib.filters import lowpass, uniform_step
 from calib.noise.allan_model import flicker_coefficients
@@ -256,6 +255,9 @@ class BiasInstability(CoefficientTerm):
         """The (N,) flicker bias path, m/s² (draws 2N − 1 standard normals)."""
         if n <= 0:
             return np.zeros(0)
+        # scipy.signal costs ≈ 0.7 s to import; only flicker terms need it (gap, startup)
+        from scipy.signal import fftconvolve
+
         w = rng.standard_normal(2 * n - 1)
         return self.b * fftconvolve(w, flicker_coefficients(n), mode="valid")
 

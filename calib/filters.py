@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import signal
 
 
 def uniform_step(t: np.ndarray) -> float | None:
@@ -49,6 +48,8 @@ def lowpass(u: np.ndarray, t: np.ndarray, tau: float, h_uniform: float | None = 
         a = float(np.exp(-h_uniform / tau))
         y = u.copy()
         y[0] += 0.0
+        from scipy import signal  # ≈ 0.7 s to import: only when this filter runs
+
         y[1:] += signal.lfilter([1.0], [1.0, -a], -tau * (1.0 - a) * c, axis=0)
         return y
     e = np.zeros_like(u)

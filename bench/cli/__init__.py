@@ -48,7 +48,7 @@ from bench.cli import (  # noqa: E402
     validate,
 )
 from bench.cli.options import Parser, refuse_numbers, resolve_deferred  # noqa: E402
-from bench.cli.output import command_outputs, fit_columns  # noqa: E402
+from bench.cli.output import command_outputs, fit_columns, forget_logs_read  # noqa: E402
 
 COMMANDS = (generate, calibrate, apply, trajectory, nmin, design, fuse, fusion_study, record,
             validate, gap, importlog, noise, demo, examples)
@@ -104,6 +104,7 @@ def _run(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:
         parser.print_help()
         return 0
     resolve_deferred(args)
+    forget_logs_read()  # the provenance in --json is this command's logs' only
     warnings.showwarning = _warning_to_stderr
     try:
         # readable stdout fits 100 columns too (--json is machine text, left whole)

@@ -24,12 +24,9 @@ from bench.cli.vocabulary import add_option
 
 def _cmd_apply(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
-    from dataclasses import replace
-
-    from bench.cli.logopts import log_options_from_args
+    from bench.cli.logopts import read_log_from_args
     from calib.calibration.calfile import load_calibration_file
     from calib.calibration.corrected_log import correct_log, save_corrected_log
-    from calib.logs.reader import read_log
 
     if Path(args.out).suffix.lower() != ".csv":
         raise OptionError(f"--out {args.out}: the corrected log is a CSV file; give a name "
@@ -38,8 +35,7 @@ def _cmd_apply(args: argparse.Namespace) -> int:
     calfile = load_calibration_file(args.calibration)
     # every sample as read (no pose detection); the log's physics check (a still sensor
     # reads about 1 g) with the calibration's g
-    options = replace(log_options_from_args(args), g=calfile.calibration.g, detect=False)
-    log = read_log(args.log, options)
+    log = read_log_from_args(args, args.log, g=calfile.calibration.g, detect=False)
     corrected = correct_log(calfile, log)
     save_corrected_log(args.out, corrected, force=args.force)
     if args.json:

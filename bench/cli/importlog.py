@@ -24,21 +24,12 @@ from bench.cli.options import add_command, add_force, add_gravity, add_json, che
 from bench.cli.output import print_files, print_json
 from bench.cli.vocabulary import add_option
 
-UNITS = {"provenance.units.g": "m/s²", "provenance.units.acc_to_m_s2": "m/s² per log unit",
-         "provenance.units.sensitivity_counts_per_g": "counts/g",
-         "provenance.gaps[].t": "s", "provenance.gaps[].length_s": "s",
-         "provenance.gaps[].median_step_s": "s", "provenance.pose_angles_rad": "rad",
-         "provenance.resampled.step_s": "s",
-         "provenance.resampled.max_deviation_from_grid_s": "s",
-         "provenance.poses.detection": "its own units map (poses.detection.units)"}
-"""Units of the numbers in ``--json`` (the detector's result carries its own map)."""
-
 
 def _cmd_import(args: argparse.Namespace) -> int:
     # domain imports here, not at module level: start-up time of `tiltbench --help`
     from bench.version import __version__
     from calib.logs.export import write_course_set
-    from calib.logs.reader import read_log
+    from calib.logs.reader import provenance_units, read_log
 
     check_positive(args.g, "--g")
     if args.rate is not None:
@@ -48,7 +39,8 @@ def _cmd_import(args: argparse.Namespace) -> int:
                    **reading_progress(args, args.log))
     paths, prov = write_course_set(log, args.out, force=args.force, tool_version=__version__)
     if args.json:
-        print_json({"files": [str(p) for p in paths], "provenance": prov, "units": UNITS})
+        print_json({"files": [str(p) for p in paths], "provenance": prov,
+                    "units": provenance_units(prov)})
         return 0
     print(f"{args.log}: {prov['format']}, {prov.get('samples', {}).get('read', log.n)} samples")
     mapping = prov.get("mapping") or {}

@@ -22,6 +22,7 @@ bar on a terminal, lines for a log of 64 MiB or more otherwise), never on stdout
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from bench.cli.options import OptionError, parse_floats
 from bench.cli.vocabulary import add_option
@@ -167,17 +168,29 @@ def reading_progress(args: argparse.Namespace, path: str) -> dict:
     return {} if progress is None else {"progress": progress}
 
 
-def read_log_from_args(args: argparse.Namespace, path: str, expect: str | None = None):
-    """:func:`calib.logs.reader.read_log` of ``path`` with the command's log options; ``expect``
-    (``"ensayo"``/``"acel"``) keeps a course ``.mat`` input on its course reader. When the
-    log's held poses were detected, a note on stderr says how many and the thresholds used
-    (stdout stays the command's own: one JSON object with ``--json``)."""
-    import sys
+def read_log_from_args(args: argparse.Namespace, path: str, expect: str | None = None,
+                       **option_changes: Any):
+    """:func:`calib.logs.reader.read_log` of ``path`` with the command's log options (with
+    ``option_changes``, e.g. ``detect=False``, replacing fields of
+    :class:`calib.logs.reader.LogOptions`); ``expect`` (``"ensayo"``/``"acel"``) keeps a course
+    ``.mat`` input on its course reader.
 
+    How the log was read goes to stderr in one line (:func:`calib.logs.reader.provenance_line`)
+    and into the command's ``--json`` output under ``provenance``
+    (:func:`bench.cli.output.note_log_read`). When the log's held poses were detected, a note
+    on stderr says how many and the thresholds used (stdout stays the command's own: one JSON
+    object with ``--json``)."""
+    import sys
+    from dataclasses import replace
+
+    from bench.cli.output import note_log_read
     from calib.logs.reader import provenance_line, read_log
 
-    log = read_log(path, log_options_from_args(args), expect=expect,
-                   **reading_progress(args, path))
+    options = log_options_from_args(args)
+    if option_changes:
+        options = replace(options, **option_changes)
+    log = read_log(path, options, expect=expect, **reading_progress(args, path))
+    note_log_read(expect or "log", log.provenance)
     line = provenance_line(log.provenance)
     if line:  # how the log was read: which column became what, units, factors
         print(f"note: {line}", file=sys.stderr)

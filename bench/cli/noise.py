@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import argparse
 
-from bench.cli.logopts import add_log_options, log_options_from_args, reading_progress
+from bench.cli.logopts import add_log_options, read_log_from_args
 from bench.cli.options import (
     OptionError,
     add_command,
@@ -63,12 +63,7 @@ def _calibration_entry(path: str) -> dict:
 def read_static_log(args: argparse.Namespace):
     """The log, read with the command's log options; no pose detection (the static check is
     the stillness rule here, and a held log is one pose)."""
-    from dataclasses import replace
-
-    from calib.logs.reader import read_log
-
-    options = replace(log_options_from_args(args), detect=False)
-    return read_log(args.log, options, **reading_progress(args, args.log))
+    return read_log_from_args(args, args.log, detect=False)
 
 
 def _static_reading(args: argparse.Namespace):

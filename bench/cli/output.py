@@ -87,9 +87,52 @@ def json_text(obj: Any, what: str = "the JSON output") -> str:
     return text
 
 
+_LOGS_READ: dict[str, dict] = {}
+"""Provenance records of the logs the running command read, by role (``log``, ``ensayo``,
+``acel``): :func:`note_log_read` fills it, :func:`print_json` writes it, ``main`` empties it
+before each command."""
+
+
+def note_log_read(role: str, provenance: dict) -> None:
+    """Remember how a log was read (``role``: ``log``, ``ensayo`` or ``acel``) for the
+    command's ``--json`` output (:func:`print_json`)."""
+    _LOGS_READ[role] = provenance
+
+
+def forget_logs_read() -> None:
+    """Start a command with no log read (``main``: one process may run several commands)."""
+    _LOGS_READ.clear()
+
+
+def logs_read_provenance() -> dict | None:
+    """What the ``provenance`` key of a command's JSON holds: the record of its one log, or
+    ``{role: record}`` when it read two (``ensayo`` and ``acel``); None when it read none."""
+    if not _LOGS_READ:
+        return None
+    if len(_LOGS_READ) == 1:
+        return next(iter(_LOGS_READ.values()))
+    return dict(_LOGS_READ)
+
+
 def print_json(obj: Any) -> None:
     """``obj`` as stable JSON (:func:`calib.files.course.dumps`) on stdout; NaN or ±Infinity
-    anywhere is an error naming the field (:func:`check_finite`), and nothing is printed."""
+    anywhere is an error naming the field (:func:`check_finite`), and nothing is printed.
+
+    A command that read a measured log (through :func:`bench.cli.logopts.read_log_from_args`)
+    gets its provenance — source and sha256, which column became what, units and factors —
+    under ``provenance`` (:func:`logs_read_provenance`), unless ``obj`` has its own, and the
+    units of its numbers in ``units`` (:func:`calib.logs.reader.provenance_units`).
+    """
+    provenance = logs_read_provenance()
+    if isinstance(obj, dict) and provenance is not None and "provenance" not in obj:
+        from calib.logs.reader import provenance_units
+
+        units = dict(obj.get("units") or {})
+        for role, record in _LOGS_READ.items():
+            units.update(provenance_units(record, "provenance" if len(_LOGS_READ) == 1
+                                          else f"provenance.{role}"))
+        obj = {**{k: v for k, v in obj.items() if k != "units"}, "provenance": provenance,
+               "units": units}
     print(json_text(obj), end="")
 
 

@@ -226,7 +226,14 @@ class PoseDetection(ResultMixin):
                 "gyro_threshold": self.gyro_threshold, "axes_watched": self.axes_watched,
                 "units": dict(self._UNITS, **{"segments.mean": "m/s²", "segments.std": "m/s²",
                                              "segments.t_start": "s",
-                                             "segments.t_stop": "s"})}
+                                             "segments.t_stop": "s",
+                                             "segments.start": "sample index",
+                                             "segments.stop": "sample index",
+                                             "segments.n": "samples",
+                                             "segments.threshold": "(m/s²)²",
+                                             "segments.gyro_threshold": "(rad/s)²",
+                                             "labels_rle": "pose label, samples",
+                                             "axes_watched": "count"})}
 
     @classmethod
     def from_dict(cls, d: dict) -> PoseDetection:

@@ -64,6 +64,19 @@ from calib.results import readonly
 
 LOG_FORMAT_VERSION = 1
 """Version of the provenance record (``provenance.json``)."""
+PROVENANCE_UNITS: dict[str, str] = {
+    "format_version": "—", "samples.*": "samples", "reader.messages": "count",
+    "units.g": "m/s²", "units.acc_to_m_s2": "m/s² per log unit",
+    "units.sensitivity_counts_per_g": "counts/g",
+    "gaps.t": "s", "gaps.length_s": "s", "gaps.median_step_s": "s", "gaps.after": "—",
+    "pose_angles_rad": "rad", "poses_out_of_plane": "—",
+    "plane_faces.hold": "—", "plane_faces.theta_rad": "rad",
+    "resampled.step_s": "s", "resampled.max_deviation_from_grid_s": "s",
+    "resampled.samples_in": "samples", "resampled.samples_out": "samples",
+    "written.*.*.*": "count (rows, columns of each variable of FILE.mat)"}
+"""Unit of every number a provenance record can hold (key paths as :mod:`calib.units` writes
+them; list items share their list's path). The detected poses and the gyro angle carry their
+own maps (:func:`provenance_units`)."""
 GAP_FACTOR = 5.0
 """A step longer than this many median steps is a gap."""
 SATURATION_RUN = 10
@@ -515,6 +528,22 @@ def _scaled_columns(columns: list[np.ndarray], factors: list[float]) -> np.ndarr
     for j, (col, f) in enumerate(zip(columns, factors, strict=True)):
         np.multiply(col, f, out=out[:, j])
     return out
+
+
+def provenance_units(prov: dict[str, Any], prefix: str = "provenance") -> dict[str, str]:
+    """The units of the numbers of the provenance record ``prov`` embedded in a JSON output
+    under ``prefix``: :data:`PROVENANCE_UNITS` plus the detected poses' and the gyro angle's
+    own maps."""
+    from calib.units import nest
+
+    units = dict(PROVENANCE_UNITS)
+    detection = (prov.get("poses") or {}).get("detection") or {}
+    if isinstance(detection.get("units"), dict):
+        units.update(nest("poses.detection", detection["units"]))
+    gyro = prov.get("theta_from_gyro") or {}
+    if isinstance(gyro.get("units"), dict):
+        units.update(nest("theta_from_gyro", gyro["units"]))
+    return nest(prefix, units)
 
 
 def provenance_line(prov: dict[str, Any]) -> str | None:

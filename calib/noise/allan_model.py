@@ -79,7 +79,9 @@ from pathlib import Path
 
 import numpy as np
 from scipy import fft as sfft
-from scipy import signal
+
+# scipy.signal is imported inside the functions that use it: it costs ≈ 0.7 s at start-up and
+# most commands that import this module (the bench's flicker term) never call them.
 
 TERM_NAMES: tuple[str, ...] = ("white_noise_density", "bias_instability", "rate_random_walk")
 """The three core terms, in the order of ``θ`` (every fit holds them)."""
@@ -178,6 +180,8 @@ def _on_lags(c: np.ndarray, first: int, lo: int, hi: int) -> np.ndarray:
 def _gm_correlation(cw: np.ndarray, phi: float, pad: int) -> np.ndarray:
     """``(cw ∗ R)(D)`` with ``R(k) = φ^|k|`` on the lags of ``cw`` widened by ``pad`` on each
     side: a causal and an anticausal first-order recursion (scipy.signal.lfilter)."""
+    from scipy import signal
+
     x = np.concatenate([np.zeros(pad), cw, np.zeros(pad)])
     fwd = signal.lfilter([1.0], [1.0, -phi], x)
     bwd = signal.lfilter([0.0, phi], [1.0, -phi], x[::-1])[::-1]
@@ -247,6 +251,8 @@ def _pair_lags(n: int, ms: tuple[int, ...], i: int, j: int):
 
 def _compute(n: int, ms: tuple[int, ...]) -> dict[str, np.ndarray]:
     """The four processes' moments and the GM design of every T_c of :func:`gm_grid`."""
+    from scipy import signal
+
     memory = int(n)
     k = len(ms)
     kern = flicker_coefficients(memory)[::-1]
@@ -279,6 +285,8 @@ def _compute(n: int, ms: tuple[int, ...]) -> dict[str, np.ndarray]:
 def _four_correlations(fi, fj, ffi, ffj, fli, flj, nfft, mj, lo, hi) -> np.ndarray:
     """(4, hi - lo + 1): the cross-correlations c_a(D) of white, flicker, random walk and
     quantization between two octaves, on the lags lo … hi."""
+    from scipy import signal
+
     first = -(2 * mj - 1)  # scipy: index 0 is lag -(len(b) - 1)
     cw = signal.correlate(fi[0], fj[0], mode="full")
     cr = signal.correlate(fi[1], fj[1], mode="full")
@@ -293,6 +301,8 @@ def _four_correlations(fi, fj, ffi, ffj, fli, flj, nfft, mj, lo, hi) -> np.ndarr
 def _compute_gm(n: int, ms: tuple[int, ...], tc: float) -> np.ndarray:
     """(k, k, 5): covariance products of the Gauss–Markov process of correlation time ``tc``
     samples with white, flicker, random walk, quantization and itself (module docstring)."""
+    from scipy import signal
+
     memory = int(n)
     k = len(ms)
     kern = flicker_coefficients(memory)[::-1]
