@@ -10,6 +10,13 @@ deviation tested against the log's, :mod:`calib.noise.closure`). ``--json`` prin
 the :class:`calib.noise.allan.NoiseCharacterization` with its ``units``, the closure per axis
 (``twin``), plus the files written.
 
+``--datasheet SPEC|FILE`` (repeatable; :mod:`calib.noise.datasheet`) compares each datasheet
+value — ``N=60ug/rtHz,B=20ug,ARW=0.2deg/rth,BI=5deg/h`` (``x.N=…`` for one axis) or a JSON
+file — with the measured term's interval on every axis it applies to: meets, exceeds by …×,
+inconclusive, or not measured, one line each in the datasheet's units (``--json``:
+``datasheet``, in SI and in the datasheet's units). A spec it cannot read is refused in one
+line before the log is read.
+
 Refused before any fit, in one line naming the file, the axis and the fix
 (:func:`calib.logs.static_log.check_static`): θ varying or several labelled poses, a stuck
 tilt-plane axis, a window shift or variance, a gyro rate, scatter beyond the sample-to-sample
@@ -158,6 +165,17 @@ def _twin(result, profile, columns, rate: float, seed: int) -> dict:
     return out
 
 
+def _datasheet(texts: list[str]):
+    """The :class:`calib.noise.datasheet.Datasheet` of the ``--datasheet`` values, merged in
+    order; a spec or file it cannot read is an :class:`OptionError` naming the option."""
+    from calib.noise.datasheet import read_datasheets
+
+    try:
+        return read_datasheets(texts)
+    except ValueError as exc:  # DataError (the file) included
+        raise OptionError(f"--datasheet: {exc}") from None
+
+
 def _cmd_noise(args: argparse.Namespace) -> int:
     from bench import __version__
     from calib.input_rules import DataError
@@ -180,6 +198,7 @@ def _cmd_noise(args: argparse.Namespace) -> int:
     if args.save_failed_fit and not args.save:
         raise OptionError("--save-failed-fit writes the profile of a failed fit: give --save")
     refuse_overwrite([args.plot, args.save], args.force)
+    sheet = _datasheet(args.datasheet) if args.datasheet else None
     cal = _calibration_entry(args.calibration) if args.calibration else None
     log, rate, checked, columns, names, kinds, notes = _static_reading(args)
     result = characterize_noise(columns, rate, level=level, alpha=alpha, tau_range=tau_range,
@@ -202,6 +221,13 @@ def _cmd_noise(args: argparse.Namespace) -> int:
                         "twin.*.twin_adev": "the axis's reading unit", "twin.*.z": "1",
                         "twin.*.statistic": "1", "twin.*.dof": "count", "twin.*.p": "1",
                         "twin.*.alpha": "1", "twin.*.parted": "index into twin.*.taus"}
+    check = None
+    if sheet is not None:
+        from calib.noise.datasheet import check_datasheet, json_units
+
+        check = check_datasheet(result, sheet)
+        out["datasheet"] = check.to_dict()
+        out["units"] = {**out["units"], **json_units("datasheet.")}
     written = {}
     if args.save:  # the saver runs the loader's checks and writes nothing when they fail
         written["profile"] = str(save_profile(args.save, profile, force=args.force))
@@ -224,6 +250,8 @@ def _cmd_noise(args: argparse.Namespace) -> int:
           f"{c['shift']:g} or the noise floor), largest variance ratio {c['max_var_ratio']:.3g} "
           f"(limit {c['var_ratio']:g}); scatter beyond the sample-to-sample noise {excess} "
           "m/s²")
+    if check is not None:
+        print(check.summary())
     if args.save and not result.fit_ok:
         print(f"warning: {args.save} written with fit_ok: false (--save-failed-fit)")
     print_files(written.values())
@@ -257,5 +285,18 @@ def register(sub) -> None:
     add_option(p, "--save-failed-fit")
     add_option(p, "--twin")
     add_option(p, "--seed", type=int, default=0, help="seed of the twin's draws (--twin)")
+    add_option(p, "--datasheet", action="append",
+               help="the sensor's datasheet, each value with its unit as the datasheet prints "
+                    "it (converted to SI): comma-separated [SCOPE.]TERM=VALUE UNIT items, TERM "
+                    "N (noise density; ARW: a gyro's, VRW: an accelerometer's), B or BI (bias "
+                    "instability), K or RRW (rate random walk); SCOPE acc, gyro or an axis (x, "
+                    "y, z, gyro_x, …) — without one, the unit tells the kind and the value "
+                    "applies to every axis of that kind; e.g. "
+                    "'N=60ug/rtHz,B=20ug,ARW=0.2deg/rth,BI=5deg/h,x.N=45ug/rtHz'. Or a JSON "
+                    "file {\"accelerometer\": {\"white_noise_density\": {\"value\": 60, "
+                    "\"unit\": \"µg/√Hz\"}, …}, \"gyro\": {…}}. Repeatable: a later value "
+                    "replaces an earlier one. Each value D is a maximum, checked against the "
+                    "term's interval at --level: meets (interval ≤ D), exceeds (interval > D), "
+                    "inconclusive (it holds D) or not measured (docs/noise.md)")
     add_json(p)
     add_force(p, "an existing --plot / --save file")

@@ -219,6 +219,9 @@ VOCABULARY: tuple[Term, ...] = (
          "—", flag=True),
     Term("--twin", "simulate the fitted profile for the log's length and rate and test its "
          "Allan deviation against the log's (twin closure, docs/noise.md)", "—", flag=True),
+    Term("--datasheet", "a sensor's datasheet values, each with its own unit (µg/√Hz, °/h, …), "
+         "to check the measured noise terms against: [SCOPE.]TERM=VALUE UNIT items or a JSON "
+         "file (docs/noise.md)", "—", metavar="SPEC|FILE"),
     # ---------------------------------------------------------------- Monte Carlo and sweeps
     Term("--seed", "seed of every random draw", "—"),
     Term("--runs", "Monte Carlo runs per case", "count",

@@ -11,7 +11,10 @@ One job per module:
   result objects (``tiltbench noise``).
 * :mod:`calib.noise.closure`        — the twin closure: a twin's Allan deviation against the
   log's, one joint test over every octave (``noise --twin``).
-* :mod:`calib.noise.term_units`     — the terms' SI and datasheet units per sensor kind.
+* :mod:`calib.noise.term_units`     — the terms' SI and datasheet units per sensor kind, and
+  the reader of a unit as people type it (``ug/rtHz``, ``deg/sqrt(h)``).
+* :mod:`calib.noise.datasheet`      — datasheet values with their units against the measured
+  terms' intervals: meets / exceeds / inconclusive (``noise --datasheet``).
 * :mod:`calib.noise.sensor_profile` — ``sensor.json``: the measured sensor's terms, validated.
 
 The checks a still log must pass first (sample rate, quantization step, stillness) live with
