@@ -67,3 +67,17 @@ def assert_frozen_and_serialisable(result, field: str, array: np.ndarray) -> dic
     with pytest.raises(ValueError):
         array[(0,) * array.ndim] = 0.0
     return json.loads(json.dumps(result.to_dict()))
+
+
+def result_only(doc: dict | str) -> dict:
+    """A command's ``--json`` (a dict or its text) without how its logs were read
+    (``provenance`` and the units of its numbers): two routes to one result read different
+    files."""
+    import json
+
+    doc = dict(json.loads(doc) if isinstance(doc, str) else doc)
+    doc.pop("provenance", None)
+    if "units" in doc:
+        doc["units"] = {k: v for k, v in doc["units"].items()
+                        if not k.startswith("provenance.")}
+    return doc

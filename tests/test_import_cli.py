@@ -19,7 +19,7 @@ import scipy.io
 from calib.files.course import read_acel
 from calib.logs.reader import read_log
 from tests import logfixtures as fx
-from tests.checks import assert_same_tree
+from tests.checks import assert_same_tree, result_only
 from tests.cli import one_line_error, run, unwrap
 
 POSES = ["--poses", ",".join(str(a) for a in fx.ANGLES_DEG), "--angle-unit", "deg"]
@@ -243,17 +243,7 @@ def test_course_files_as_csv_logs_give_the_course_trajectory(capsys, tmp_path, c
     assert rc == 0, err
     # the CSV's arrays equal the .mat's by value but not in memory layout: BLAS may round
     # the last bits differently
-    assert_same_tree(_result_only(got), _result_only(want))
-
-
-def _result_only(text: str) -> dict:
-    """A command's --json without how its logs were read (``provenance`` and its units):
-    two routes to one result read different files."""
-    doc = json.loads(text)
-    doc.pop("provenance", None)
-    doc["units"] = {k: v for k, v in doc.get("units", {}).items()
-                    if not k.startswith("provenance.")}
-    return doc
+    assert_same_tree(result_only(got), result_only(want))
 
 
 def test_gap_reads_a_log_as_it_reads_its_import(capsys, tmp_path, files):
@@ -265,7 +255,7 @@ def test_gap_reads_a_log_as_it_reads_its_import(capsys, tmp_path, files):
     assert rc == 0, err
     rc, imported, err = run(capsys, "gap", out / "ensayo.mat", *nv)
     assert rc == 0, err
-    assert _result_only(direct) == _result_only(imported)
+    assert result_only(direct) == result_only(imported)
 
 
 def test_label_column_with_poses_in_order_of_appearance(tmp_path):

@@ -32,7 +32,6 @@ unknown); ``calibrate``/``gap`` need θ and say so.
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
@@ -45,41 +44,47 @@ FILES = ("ensayo.mat", "acel.mat", "provenance.json")
 """Names ``tiltbench import`` may write (the overwrite check covers all of them)."""
 
 
-def mat_bytes(variables: dict[str, np.ndarray], note: str = "") -> bytes:
-    """MATLAB v5 bytes, 1-D arrays as N×1 columns; ``pose`` stored as int32 labels, the rest
-    float64; a fixed header so that the same data give the same bytes."""
+def write_mat(path: Path, variables: dict[str, np.ndarray], note: str = "") -> None:
+    """Write MATLAB v5 ``path``: 1-D arrays as N×1 columns; ``pose`` stored as int32 labels, the
+    rest float64; a fixed header so that the same data give the same bytes. Streamed to the
+    file (scipy.io.savemat on the open file, then the header's text replaced): a long log is
+    not held a second time as bytes."""
     import scipy.io
 
     clean = {}
     for k, v in variables.items():
         arr = np.asarray(v, dtype=np.int32 if k == "pose" else float)
         clean[k] = arr.reshape(-1, 1) if arr.ndim == 1 else arr
-    buf = io.BytesIO()
-    scipy.io.savemat(buf, clean, format="5", oned_as="column")
-    data = bytearray(buf.getvalue())
     text = f"MATLAB 5.0 MAT-file, written by tiltbench import {note}".strip()
-    data[:MAT_HEADER_LEN] = text.encode("ascii", "replace")[:MAT_HEADER_LEN].ljust(
-        MAT_HEADER_LEN, b" ")
-    return bytes(data)
+    with open(path, "wb") as f:
+        scipy.io.savemat(f, clean, format="5", oned_as="column")
+        f.seek(0)  # savemat's header text carries the time of writing
+        f.write(text.encode("ascii", "replace")[:MAT_HEADER_LEN].ljust(MAT_HEADER_LEN, b" "))
 
 
-def uniform(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict | None]:
-    """``(t, x)`` on a uniform grid: unchanged when already uniform (the ``read_acel``
-    tolerance), else linearly interpolated onto ``t0 + k·median(dt)``; the record of it."""
+def uniform(t: np.ndarray, columns: list[np.ndarray]
+            ) -> tuple[np.ndarray, list[np.ndarray], dict | None]:
+    """``t`` and each array of ``columns`` (N or N×k) on a uniform grid: unchanged (the same
+    arrays, no copy) when already uniform (the ``read_acel`` tolerance), else linearly
+    interpolated onto ``t0 + k·dt``; the record of it (None when unchanged)."""
     d = np.diff(t)
-    if np.max(np.abs(d - d.mean())) <= 1e-6 * max(d.mean(), 1e-12) + 1e-9:
-        return t, x, None
+    d -= d.mean()
+    np.abs(d, out=d)
+    if d.max() <= 1e-6 * max(float((t[-1] - t[0]) / (t.size - 1)), 1e-12) + 1e-9:
+        return t, list(columns), None
+    del d
     # the mean step over the log keeps the sample count and lets the grid not drift from the
     # log's clock (a median step would, by its bias times N)
     count = int(t.size)
     step = float((t[-1] - t[0]) / (count - 1))
     grid = t[0] + step * np.arange(count)
-    cols = np.atleast_2d(x.T).T if x.ndim == 1 else x
-    out = np.column_stack([np.interp(grid, t, cols[:, k]) for k in range(cols.shape[1])])
+    out = [np.interp(grid, t, x) if x.ndim == 1 else
+           np.column_stack([np.interp(grid, t, x[:, k]) for k in range(x.shape[1])])
+           for x in columns]
     # each sample i goes to grid point i: its time moves by |t_i − grid_i| (not to the
     # nearest grid point, which would hide a drift of the log's clock)
     dev = float(np.max(np.abs(t - grid)))
-    return grid, out if x.ndim > 1 else out[:, 0], {
+    return grid, out, {
         "method": "linear interpolation onto a uniform grid", "step_s": step,
         "samples_in": int(t.size), "samples_out": int(count),
         "max_deviation_from_grid_s": dev}
@@ -115,11 +120,11 @@ def course_variables(log) -> tuple[str, dict[str, np.ndarray], dict | None]:
                         "(acel.mat) is one uniformly sampled stretch and import never writes "
                         "readings the log does not have: cut the log at the gap and import "
                         "each stretch on its own")
-    cols = log.acc if log.gyro is None else np.column_stack([log.acc, log.gyro])
-    t, x, record = uniform(log.t, cols)
-    out = {"t": t, "Aerr": x[:, :2]}
-    if log.gyro is not None:
-        out["gyro"] = x[:, 2]
+    t, (aerr, *gyro), record = uniform(log.t, [log.acc, *([log.gyro] if log.gyro is not None
+                                                          else [])])
+    out = {"t": t, "Aerr": aerr}
+    if gyro:
+        out["gyro"] = gyro[0]
     return "acel.mat", out, record
 
 
@@ -144,9 +149,9 @@ def write_course_set(log, out: str | Path, force: bool = False, tool_version: st
     # the set's files are exclusive: an earlier import's ensayo.mat does not survive beside a
     # new acel.mat (nor the reverse), so the folder always holds one set and its provenance
     with atomic_dir(out, force=force, owned=FILES, exclusive=FILES) as tmp:
-        (tmp / name).write_bytes(mat_bytes(variables, prov["source"]["name"]))
+        write_mat(tmp / name, variables, prov["source"]["name"])
         (tmp / "provenance.json").write_text(dumps(prov), encoding="utf-8")
     return [Path(out) / name, Path(out) / "provenance.json"], prov
 
 
-__all__ = ["FILES", "course_variables", "mat_bytes", "uniform", "write_course_set"]
+__all__ = ["FILES", "course_variables", "uniform", "write_course_set", "write_mat"]

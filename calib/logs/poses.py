@@ -213,12 +213,10 @@ class PoseDetection(ResultMixin):
 
     def to_dict(self) -> dict:
         """JSON-able; ``labels`` run-length encoded as ``[label, count]`` pairs."""
-        runs = []
-        for v in self.labels.tolist():
-            if runs and runs[-1][0] == v:
-                runs[-1][1] += 1
-            else:
-                runs.append([v, 1])
+        lab = self.labels
+        starts = np.r_[0, np.flatnonzero(lab[1:] != lab[:-1]) + 1] if lab.size else []
+        stops = np.r_[starts[1:], lab.size] if lab.size else []
+        runs = [[int(lab[a]), int(b - a)] for a, b in zip(starts, stops, strict=True)]
         return {"segments": [s.to_dict() for s in self.segments], "labels_rle": runs,
                 "window": self.window, "min_samples": self.min_samples,
                 "quiet_level": self.quiet_level, "threshold": self.threshold,
@@ -306,10 +304,33 @@ def _window_mean(x: np.ndarray, w: int) -> np.ndarray:
     return total
 
 
+_BLOCK = 1 << 20
+"""Samples per block where a long log's column is walked in pieces (bounded temporaries)."""
+
+
 def _quant_step(x: np.ndarray) -> float:
-    u = np.unique(x)
-    d = np.diff(u)
-    return float(d.min()) if d.size else 0.0
+    """The smallest step between distinct values of ``x`` (0 when all are equal): one sorted
+    copy, its differences taken in blocks (``np.unique`` + ``np.diff`` would hold three
+    arrays the length of a long log)."""
+    s = np.sort(x)
+    best = np.inf
+    for a in range(0, s.size - 1, _BLOCK):
+        d = np.diff(s[a:a + _BLOCK + 1])
+        d = d[d > 0]
+        if d.size:
+            best = min(best, float(d.min()))
+    return best if np.isfinite(best) else 0.0
+
+
+def _range_stats(x: np.ndarray, ranges: list[tuple[int, int]]
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and sample std (ddof 1) per column of the rows of ``x`` in ``ranges`` ([a, b)),
+    two passes over slices in blocks: no copy of the rows (a 24-hour hold is one range)."""
+    blocks = [(a0, min(a0 + _BLOCK, b)) for a, b in ranges for a0 in range(a, b, _BLOCK)]
+    count = sum(b - a for a, b in ranges)
+    mean = sum(x[a:b].sum(0) for a, b in blocks) / count
+    ss = sum(np.square(x[a:b] - mean).sum(0) for a, b in blocks)
+    return mean, np.sqrt(ss / (count - 1)) if count > 1 else np.full(x.shape[1], np.nan)
 
 
 def _ratio(nu: float, level: float) -> float:
@@ -425,14 +446,14 @@ def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray 
     for k, grp in enumerate(groups):
         for a, b in grp:
             labels[a:b] = k
-        idx = np.flatnonzero(labels == k)
-        sel = acc[idx]
+        mean, std = _range_stats(acc, grp)  # the group's runs are disjoint and in order
+        first, last = grp[0][0], grp[-1][1] - 1
         segments.append(Segment(
-            start=int(grp[0][0]), stop=int(grp[-1][1]), n=int(idx.size),
-            t_start=None if t is None else float(t[idx[0]]),
-            t_stop=None if t is None else float(t[idx[-1]]),
-            mean=sel.mean(0), std=sel.std(0, ddof=1), threshold=taus[k][0],
-            gyro_threshold=taus[k][1]))
+            start=int(grp[0][0]), stop=int(grp[-1][1]), n=sum(b - a for a, b in grp),
+            t_start=None if t is None else float(t[first]),
+            t_stop=None if t is None else float(t[last]),
+            mean=mean, std=std, threshold=taus[k][0], gyro_threshold=taus[k][1]))
+    labels.setflags(write=False)  # the record shares it (calib.results.readonly)
     return PoseDetection(segments=tuple(segments), labels=labels, window=w, min_samples=hold,
                          quiet_level=q, threshold=thr, gyro_quiet_level=gq,
                          gyro_threshold=gthr, axes_watched=k_acc)

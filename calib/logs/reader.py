@@ -635,6 +635,9 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         acc_normal = (acc_s[:, 2] if shared else
                       np.multiply(raw.acc[normal_axis], sign * factor, dtype=float))
         normal_from = f"{'-' if sign < 0 else ''}{raw.mapping.get(normal_axis, normal_axis)}"
+    # the acceleration columns are in acc / acc_s / acc_normal now (scaled): a long log's
+    # originals go before the gyro's arrays are built
+    raw.acc.clear()
     n = acc.shape[0]
     if n < 3:
         raise DataError(f"{path}: only {n} samples; at least 3 are needed")
@@ -659,6 +662,11 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         gyro_note = "gyro columns ignored: their unit is not stated (give --gyro-unit)"
     elif raw.gyro:
         gfac = np.pi / 180.0 if g_unit == "deg/s" else 1.0
+        if all(k in raw.gyro for k in "xyz"):
+            for k in "xyz":
+                _check_finite(raw, raw.gyro[k], f"gyro '{raw.mapping.get('gyro_' + k, k)}'",
+                              path)
+            gyro_s = _scaled_columns([raw.gyro[k] for k in "xyz"], [gfac] * 3)
         if "tilt" in raw.gyro:
             gyro, gyro_from = raw.gyro["tilt"] * gfac, raw.mapping.get("gyro", "gyro")
         else:
@@ -666,15 +674,14 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
             k = n_axis.lstrip("-")
             if k in raw.gyro:
                 sign = -1.0 if n_axis.startswith("-") else 1.0
-                gyro = sign * raw.gyro[k] * gfac
+                if gyro_s is not None and sign > 0:  # a view: no copy of a long log
+                    gyro = gyro_s[:, "xyz".index(k)]
+                else:
+                    gyro = np.multiply(raw.gyro[k], sign * gfac, dtype=float)
                 gyro_from = f"{'-' if sign < 0 else ''}{raw.mapping.get('gyro_' + k, k)}"
         if gyro is not None:
             _check_finite(raw, gyro, f"gyro '{gyro_from}'", path)
-        if all(k in raw.gyro for k in "xyz"):
-            for k in "xyz":
-                _check_finite(raw, raw.gyro[k], f"gyro '{raw.mapping.get('gyro_' + k, k)}'",
-                              path)
-            gyro_s = _scaled_columns([raw.gyro[k] for k in "xyz"], [gfac] * 3)
+        raw.gyro.clear()
     # θ
     theta = None
     theta_unit = None
