@@ -67,7 +67,14 @@ def check_one_g(acc: np.ndarray, acc_normal: np.ndarray | None, pose: np.ndarray
         held = np.ones(len(acc), dtype=bool)
     lo, hi = ONE_G_BAND
     if acc_normal is not None:
-        mag = float(np.median(np.sqrt(np.sum(acc[held] ** 2, axis=1) + acc_normal[held] ** 2)))
+        # |a|² summed in one new array (no copies of the held rows when every row is held: a
+        # static log read by `noise`), the median taken in place
+        every = bool(held.all())
+        a2, an = (acc, acc_normal) if every else (acc[held], acc_normal[held])
+        sq = np.einsum("ij,ij->i", a2, a2)
+        sq += np.square(an)
+        np.sqrt(sq, out=sq)
+        mag = float(np.median(sq, overwrite_input=True))
         low_checked = True
     else:
         labels = pose[held] if pose is not None and np.any(np.asarray(pose) >= 0) else None

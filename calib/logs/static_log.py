@@ -65,9 +65,12 @@ def quantization_step(y: np.ndarray, rel_tol: float = 1e-3) -> float | None:
     smallest gap between sorted distinct values (gaps below 1e-9 of the range are float
     noise of one value and merged)."""
     y = np.asarray(y, dtype=float)
-    u = np.unique(y)
-    if u.size < 2 or u.size > y.size // 2:
+    u = np.sort(y)
+    distinct = u[1:] != u[:-1]
+    count = int(np.count_nonzero(distinct)) + 1
+    if count < 2 or count > y.size // 2:  # continuous readings end here, after one sort
         return None
+    u = np.concatenate([u[:1], u[1:][distinct]])
     span = float(u[-1] - u[0])
     gaps = np.diff(u)
     gaps = gaps[gaps > 1e-9 * span]
@@ -202,7 +205,9 @@ def _check_windows(acc: np.ndarray, rate: float, where: str, w: int, shift: floa
     # the spread of the window means (largest minus smallest): a pose change anywhere,
     # also halfway through, shows in full (a distance to the median would halve it)
     dev = means - means.min(axis=0)
-    var = blocks.var(axis=1, ddof=1)
+    centred = blocks - means[:, None, :]  # one temporary; np.var would take the means again
+    var = np.einsum("ijk,ijk->ik", centred, centred) / (w - 1)
+    del centred
     med_var = np.median(var, axis=0)
     ratio = var / np.where(med_var > 0, med_var, np.inf)
     if gyro is not None:
