@@ -241,17 +241,30 @@ def flat_top_score(resid_w: np.ndarray, design_w: np.ndarray | None,
     the design already spans (‖h̃‖ < 1e-8 ‖h‖: e.g. two levels of |A_r| only) are skipped.
     """
     h = np.asarray(hinges_w, dtype=float)
+    resid_w = np.asarray(resid_w, dtype=float)
+    raw2 = np.einsum("ij,ij->j", h, h)  # ‖h_L‖², no (n, G) temporary
+    num = resid_w @ h
+    norm2 = raw2.copy()
     if design_w is not None and design_w.size:
         q, r = np.linalg.qr(design_w)
         if equilibrated_cond(r) * max(q.shape) * np.finfo(float).eps >= 1.0:
             q = _range_basis(np.asarray(design_w, dtype=float))
-        h = h - q @ (q.T @ h)
-    norms = np.linalg.norm(h, axis=0)
-    raw = np.linalg.norm(hinges_w, axis=0)
-    ok = norms > 1e-8 * np.maximum(raw, 1e-300)
+        # h̃ = h − Q(Qᵀh) is never formed (a long run's (n, G) copies cost more than the
+        # products): ⟨r, h̃⟩ = ⟨r, h⟩ − (Qᵀr)·(Qᵀh) and ‖h̃‖² = ‖h‖² − ‖Qᵀh‖² (Q orthonormal).
+        # Where the design spans most of a column the difference loses digits (relative
+        # error eps·‖h‖²/‖h̃‖²): those columns are projected out exactly.
+        c = q.T @ h
+        num -= (q.T @ resid_w) @ c
+        norm2 -= np.einsum("ij,ij->j", c, c)
+        for j in np.flatnonzero(norm2 < 1e-6 * raw2):
+            col = h[:, j] - q @ c[:, j]
+            norm2[j] = col @ col
+            num[j] = resid_w @ col
+    norms = np.sqrt(np.maximum(norm2, 0.0))
+    ok = norms > 1e-8 * np.maximum(np.sqrt(raw2), 1e-300)
     if not np.any(ok):
         return 0.0, 0.0
-    z = (resid_w @ h[:, ok]) / norms[ok]
+    z = num[ok] / norms[ok]
     m, _, logp = davies_logp(z)
     return m, logp
 
