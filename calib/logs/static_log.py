@@ -1,7 +1,17 @@
 """The checks of a static log before its noise is characterized (``tiltbench noise``): its
-sample rate and even spacing (:func:`sample_rate_of`), that every axis reads something and the
-table did not move (:func:`check_static`), and the quantization step of its readings
-(:func:`quantization_step`).
+sample rate, even spacing and the segments between its gaps (:func:`log_segments`,
+:func:`sample_rate_of`), that every axis reads something and the table did not move
+(:func:`check_static`), and the quantization step of its readings (:func:`quantization_step`).
+
+**Gaps and segments.** A gap is what the reader calls one (:data:`calib.logs.reader.GAP_FACTOR`:
+a step longer than 5 median steps — one rule, one constant, here and in every reader). A gap is
+never filled: :func:`log_segments` splits the log into the stretches between its gaps, each
+evenly sampled at the log's one rate (its median step within :data:`SEGMENT_STEP_TOLERANCE`
+of the log's), and the noise characterization pools their Allan variances as independent
+records (:mod:`calib.noise.allan`). Inside a segment every step is a step (≤ 5 median steps,
+as for the reader): a step that spans two or more sample times (a dropped reading) is counted
+(``missing``) and said in a note, the readings on either side taken as consecutive.
+:func:`sample_rate_of` is the one-record form: the same rule, refused at the first gap.
 
 The static check (:func:`check_static`) refuses, each in one line naming the file, the axis
 and the fix:
@@ -35,11 +45,13 @@ The noise characterization itself: :mod:`calib.noise.allan`.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from calib.input_rules import DataError
+from calib.logs.reader import GAP_FACTOR
 
 STUCK_SPAN = 1e-9
 """An axis is stuck when all its readings lie within ``STUCK_SPAN·max(1 m/s², max|y|)`` of each
@@ -55,6 +67,16 @@ EXCESS_Z = 6.0
 """The sampling error of ``e²`` allowed on top, in its standard deviations ``σ_d²/√n``: six
 of them are exceeded by chance with probability ≈ 1e-9, so a noisy short log of white noise
 is never refused (64 samples of σ = 0.8 m/s² allow e = 0.75 m/s²)."""
+SEGMENT_STEP_TOLERANCE = 0.25
+"""A segment's median step may differ from the log's by this fraction: a logger that changed
+its rate changed it by a factor (50 → 100 Hz), while time-stamp rounding moves a median far
+less (7 or 8 ms stamps of a 128 Hz log: 12.5 %). Segments at different rates are refused: the
+octave m would mean a different τ in each."""
+
+
+LATTICE_PREFIX = 1 << 14
+"""Samples of a long log looked at first by :func:`quantization_step`: more than half of them
+distinct means readings off any lattice (a log in counts repeats its few values at once)."""
 
 
 def quantization_step(y: np.ndarray, rel_tol: float = 1e-3) -> float | None:
@@ -63,8 +85,13 @@ def quantization_step(y: np.ndarray, rel_tol: float = 1e-3) -> float | None:
     The readings are on a lattice when they take few distinct values (at most half the
     samples) and every distinct value is ``u_0 + k·Δ`` (k integer, to ``rel_tol``·Δ), Δ the
     smallest gap between sorted distinct values (gaps below 1e-9 of the range are float
-    noise of one value and merged)."""
+    noise of one value and merged). A long log whose first :data:`LATTICE_PREFIX` samples are
+    already mostly distinct values is not on a lattice: its whole sort is skipped."""
     y = np.asarray(y, dtype=float)
+    if y.size > 2 * LATTICE_PREFIX:
+        head = np.sort(y[:LATTICE_PREFIX])
+        if np.count_nonzero(head[1:] != head[:-1]) + 1 > LATTICE_PREFIX // 2:
+            return None
     u = np.sort(y)
     distinct = u[1:] != u[:-1]
     count = int(np.count_nonzero(distinct)) + 1
@@ -83,28 +110,115 @@ def quantization_step(y: np.ndarray, rel_tol: float = 1e-3) -> float | None:
     return step
 
 
-def sample_rate_of(t: np.ndarray | None, rate: float | None, where: str) -> float:
-    """The log's sample rate (Hz): ``rate`` if given, else 1 / median Δt of ``t``. Refuses a
-    log with gaps (a Δt above 1.5 × the median): the Allan deviation needs even spacing."""
+@dataclass(frozen=True)
+class LogSegments:
+    """The stretches of a log between its gaps (module docstring; :func:`log_segments`).
+
+    rate : the common sample rate, Hz (``--rate`` if given, else the mean rate inside the
+        segments, ``Σ(n_s − 1)/Σ(t_last − t_first)`` to 12 digits).
+    bounds : ((start, stop), …) row indices of each segment, stop exclusive, in order.
+    gaps : ((row, t, length), …) each gap: the row before it, its time s, its length s.
+    step : the log's median step, s (None when the log has no sample times).
+    missing : sample times inside the segments without a reading (a step spanning k sample
+        times counts k − 1; steps ≤ :data:`calib.logs.reader.GAP_FACTOR` median steps).
+    """
+
+    rate: float
+    bounds: tuple[tuple[int, int], ...]
+    gaps: tuple[tuple[int, float, float], ...] = ()
+    step: float | None = None
+    missing: int = 0
+
+    @property
+    def count(self) -> int:
+        return len(self.bounds)
+
+    @property
+    def lengths(self) -> tuple[int, ...]:
+        return tuple(b - a for a, b in self.bounds)
+
+    def line(self, where: str) -> str | None:
+        """The one-line note of a split log (None for one segment): how many segments and
+        gaps, the first gap, and how they are used."""
+        if self.count < 2:
+            return None
+        _, t0, length = self.gaps[0]
+        return (f"{where}: {self.count} segments between {len(self.gaps)} gap(s) (the first "
+                f"{length:.4g} s after t = {t0:.6g} s); the Allan variance pooled over them, "
+                "segments as independent records")
+
+    def missing_note(self) -> str | None:
+        """The note of readings missing inside the segments (None when none are)."""
+        if not self.missing:
+            return None
+        return (f"{self.missing} sample time(s) inside the segments have no reading (steps of 2 "
+                f"to {GAP_FACTOR:g} median steps, not gaps by the reader's rule): the readings "
+                "on either side are taken as consecutive")
+
+
+def log_segments(t: np.ndarray | None, rate: float | None, where: str) -> LogSegments:
+    """Split a log at its gaps (module docstring): the segments, the common rate, the gaps.
+
+    Parameters
+    ----------
+    t : (N,) sample times, s, strictly increasing (as the reader leaves them), or None.
+    rate : the stated rate, Hz (``--rate``), or None (then from ``t``).
+    where : the file, for the messages.
+
+    Raises
+    ------
+    DataError : no times and no rate; times that do not increase; a segment at another rate
+        (its median step off the log's by more than :data:`SEGMENT_STEP_TOLERANCE`).
+    """
     if t is None:
         if rate is None:
             raise DataError(f"{where}: the log has no sample times; give its rate with --rate HZ")
-        return float(rate)
+        return LogSegments(rate=float(rate), bounds=())
     t = np.asarray(t, dtype=float)
     dt = np.diff(t)
-    med = float(np.median(dt))
+    med = float(np.median(dt)) if dt.size else float("nan")
     if not med > 0:
         raise DataError(f"{where}: sample times do not increase")
-    gaps = np.nonzero(dt > 1.5 * med)[0]
-    if gaps.size:
-        k = int(gaps[0])
-        raise DataError(f"{where}: gap of {dt[k]:.4g} s after t = {t[k]:.6g} s (median step "
-                        f"{med:.4g} s; {gaps.size} gap(s)); the Allan deviation needs evenly "
-                        "spaced samples: cut the log at the gap")
-    if rate is not None:
-        return float(rate)
-    # the mean rate over the log, to 12 digits (time stamps in float carry ~1e-13 noise)
-    return float(f"{(t.size - 1) / (t[-1] - t[0]):.12g}")
+    cut = np.flatnonzero(dt > GAP_FACTOR * med)  # the reader's rule (calib.logs.reader)
+    starts = np.concatenate([[0], cut + 1])
+    stops = np.concatenate([cut + 1, [t.size]])
+    bounds = tuple((int(a), int(b)) for a, b in zip(starts, stops, strict=True))
+    gaps = tuple((int(k), float(t[k]), float(dt[k])) for k in cut)
+    inside = np.delete(dt, cut)
+    missing = int(np.sum(np.maximum(np.rint(inside / med) - 1.0, 0.0)))
+    for k, (a, b) in enumerate(bounds):
+        if b - a < 3:
+            continue  # a step or none: contributes nothing (too short for one octave)
+        own = float(np.median(dt[a:b - 1]))
+        if abs(own - med) > SEGMENT_STEP_TOLERANCE * med:
+            raise DataError(
+                f"{where}: segment {k + 1} of {len(bounds)} (t = {t[a]:.6g} to {t[b - 1]:.6g} s) "
+                f"is sampled every {own:.4g} s, the log every {med:.4g} s (median steps): the "
+                "Allan variance pools segments of one rate only; cut the log where the rate "
+                "changes and characterize each part")
+    if rate is None:
+        spans = float(sum(t[b - 1] - t[a] for a, b in bounds))
+        steps = sum(b - a - 1 for a, b in bounds)
+        # the mean rate inside the segments, to 12 digits (time stamps in float carry ~1e-13
+        # noise); one segment: (N − 1)/(t_N − t_1)
+        rate = float(f"{steps / spans:.12g}")
+    return LogSegments(rate=float(rate), bounds=bounds, gaps=gaps, step=med, missing=missing)
+
+
+def sample_rate_of(t: np.ndarray | None, rate: float | None, where: str) -> float:
+    """The log's sample rate (Hz): ``rate`` if given, else 1 / mean step of ``t``. Refuses a
+    log with gaps (the reader's rule, :data:`calib.logs.reader.GAP_FACTOR`): the Allan
+    deviation of one record needs even spacing — :func:`log_segments` splits such a log
+    instead (``tiltbench noise`` does)."""
+    split = log_segments(t, rate, where)
+    if split.gaps:
+        k, t0, length = split.gaps[0]
+        raise DataError(f"{where}: gap of {length:.4g} s after t = {t0:.6g} s (median step "
+                        f"{split.step:.4g} s; {len(split.gaps)} gap(s), steps > "
+                        f"{GAP_FACTOR:g} median steps); the Allan deviation of one record "
+                        "needs evenly spaced samples: split the log at its gaps "
+                        "(`tiltbench noise` does) or cut it at the gap")
+    return split.rate
 
 
 def stuck_axis(y: np.ndarray) -> float | None:
@@ -118,23 +232,32 @@ def stuck_axis(y: np.ndarray) -> float | None:
     return float(np.median(y)) if span <= STUCK_SPAN * max(1.0, top) else None
 
 
-def excess_scatter(y: np.ndarray) -> tuple[float, float]:
+def excess_scatter(y: np.ndarray, bounds: tuple[tuple[int, int], ...] | None = None
+                   ) -> tuple[float, float]:
     """(e², allowed e²) of one axis, (m/s²)²: the variance the sample-to-sample noise does not
     explain, ``var(y) − var(Δy)/2``, and its limit ``MAX_EXCESS_STD² + EXCESS_Z·σ_d²/√n``
-    (module docstring)."""
+    (module docstring). ``bounds``: the segments of a log with gaps ((start, stop) rows): the
+    differences Δy then stay inside the segments (none across a gap), var(y) is over all of
+    their readings."""
     y = np.asarray(y, dtype=float)
+    if bounds is None:
+        diffs = np.diff(y)
+    else:
+        diffs = np.concatenate([np.diff(y[a:b]) for a, b in bounds] or [np.empty(0)])
+        y = np.concatenate([y[a:b] for a, b in bounds] or [np.empty(0)])
     n = y.size
-    if n < 3:
+    if n < 3 or diffs.size < 2:
         return 0.0, MAX_EXCESS_STD ** 2
-    white = float(np.var(np.diff(y), ddof=1)) / 2.0
+    white = float(np.var(diffs, ddof=1)) / 2.0
     excess = float(np.var(y, ddof=1)) - white
     return excess, MAX_EXCESS_STD ** 2 + EXCESS_Z * white / np.sqrt(n)
 
 
 def check_static(acc: np.ndarray, rate: float, where: str, *, window: float = 1.0,
                  shift: float = 0.3, var_ratio: float = 9.0, gyro: np.ndarray | None = None,
-                 max_rate: float = 0.05, axes: tuple[str, ...] | None = None
-                 ) -> dict[str, Any]:
+                 max_rate: float = 0.05, axes: tuple[str, ...] | None = None,
+                 segments: tuple[tuple[int, int], ...] | None = None,
+                 t: np.ndarray | None = None) -> dict[str, Any]:
     """Refuse a static log that cannot be characterized (module docstring's table: a stuck
     axis, a window shift or variance, a gyro rate above ``max_rate`` rad/s ≈ 3°/s, scatter
     that is not noise); return the check's numbers for the report.
@@ -150,6 +273,14 @@ def check_static(acc: np.ndarray, rate: float, where: str, *, window: float = 1.
     gyro : (N,) rate about the tilt axis, rad/s, or None.
     max_rate : largest window mean gyro rate, rad/s.
     axes : the name of each column for the messages (default x, y, …).
+    segments : ((start, stop), …) rows of the stretches between the log's gaps
+        (:func:`log_segments`), or None (one record). No window and no difference straddles a
+        gap: the windows are laid from each segment's start (a segment's tail shorter than a
+        window is left out), and all windows of all segments are compared with each other —
+        the log must still be one held pose (a pose changed during a gap is refused like one
+        changed within a segment).
+    t : (N,) sample times, s: the messages then give a window's time in the log's clock
+        (across a gap the row count no longer tells it); without it, rows / ``rate``.
 
     Returns
     -------
@@ -174,12 +305,15 @@ def check_static(acc: np.ndarray, rate: float, where: str, *, window: float = 1.
                 "stuck, dead or saturated axis has no noise to characterize; check the logger "
                 "and its columns (--columns, --axes)")
     w = max(2, int(round(window * rate)))
-    nwin = acc.shape[0] // w
+    spans = ((0, acc.shape[0]),) if segments is None else tuple(segments)
+    nwin = sum((b - a) // w for a, b in spans)
     out: dict[str, Any] = {"window": w / rate, "shift": shift, "var_ratio": var_ratio,
                            "max_shift": 0.0, "max_var_ratio": 1.0}
     if nwin >= 2:
-        _check_windows(acc, rate, where, w, shift, var_ratio, gyro, max_rate, names, out)
-    excess = [excess_scatter(acc[:, k]) for k in range(acc.shape[1])]
+        _check_windows(acc, rate, where, w, shift, var_ratio, gyro, max_rate, names, out,
+                       spans, t)
+    excess = [excess_scatter(acc[:, k], None if segments is None else spans)
+              for k in range(acc.shape[1])]
     out["excess_std"] = [float(np.sqrt(max(e2, 0.0))) for e2, _ in excess]
     out["excess_limit"] = [float(np.sqrt(lim2)) for _, lim2 in excess]
     for k, (e2, lim2) in enumerate(excess):
@@ -194,29 +328,48 @@ def check_static(acc: np.ndarray, rate: float, where: str, *, window: float = 1.
     return out
 
 
+def _window_stats(acc: np.ndarray, a: int, w: int, nwin: int
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """(means (nwin, k), variances (nwin, k)) of ``nwin`` windows of ``w`` rows from row
+    ``a`` (a view of the readings: no copy of a long log)."""
+    blocks = acc[a:a + nwin * w].reshape(nwin, w, -1)
+    means = blocks.mean(axis=1)
+    centred = blocks - means[:, None, :]  # one temporary; np.var would take the means again
+    var = np.einsum("ijk,ijk->ik", centred, centred) / (w - 1)
+    return means, var
+
+
 def _check_windows(acc: np.ndarray, rate: float, where: str, w: int, shift: float,
                    var_ratio: float, gyro: np.ndarray | None, max_rate: float,
-                   names: tuple[str, ...], out: dict[str, Any]) -> None:
-    """The window tests of :func:`check_static` (windows of ``w`` samples); their numbers go
-    into ``out``."""
-    nwin = acc.shape[0] // w
-    blocks = acc[:nwin * w].reshape(nwin, w, -1)
-    means = blocks.mean(axis=1)
+                   names: tuple[str, ...], out: dict[str, Any],
+                   spans: tuple[tuple[int, int], ...], t: np.ndarray | None) -> None:
+    """The window tests of :func:`check_static` (windows of ``w`` samples laid from the start
+    of each span of rows); their numbers go into ``out``."""
+    parts = [(a, (b - a) // w) for a, b in spans if (b - a) // w > 0]
+    stats = [_window_stats(acc, a, w, count) for a, count in parts]
+    means = np.concatenate([m for m, _ in stats])
+    var = np.concatenate([v for _, v in stats])
+    del stats
+    starts = np.concatenate([a + w * np.arange(count) for a, count in parts])
+    nwin = means.shape[0]
+
+    def when(k: int) -> float:  # the window's time: the log's clock, else rows / rate
+        return float(t[starts[k]]) if t is not None else starts[k] / rate
+
     # the spread of the window means (largest minus smallest): a pose change anywhere,
     # also halfway through, shows in full (a distance to the median would halve it)
     dev = means - means.min(axis=0)
-    centred = blocks - means[:, None, :]  # one temporary; np.var would take the means again
-    var = np.einsum("ijk,ijk->ik", centred, centred) / (w - 1)
-    del centred
     med_var = np.median(var, axis=0)
     ratio = var / np.where(med_var > 0, med_var, np.inf)
     if gyro is not None:
-        spin = np.abs(np.asarray(gyro, dtype=float)[:nwin * w].reshape(nwin, w).mean(axis=1))
+        g = np.asarray(gyro, dtype=float)
+        spin = np.abs(np.concatenate([g[a:a + count * w].reshape(count, w).mean(axis=1)
+                                      for a, count in parts]))
         out["max_rate"], out["max_gyro_rate"] = max_rate, float(spin.max())
         if spin.max() > max_rate:
             k = int(np.argmax(spin))
             raise DataError(f"{where}: not a static log: in the {w / rate:g} s window at "
-                            f"t = {k * w / rate:.4g} s the gyro reads {spin[k]:.3g} rad/s "
+                            f"t = {when(k):.4g} s the gyro reads {spin[k]:.3g} rad/s "
                             f"(limit {max_rate:g} rad/s); `tiltbench noise` needs one held "
                             "pose: cut the log to a still stretch")
     out["max_shift"] = float(dev.max())
@@ -238,9 +391,10 @@ def _check_windows(acc: np.ndarray, rate: float, where: str, w: int, shift: floa
             v = (dev if "mean" in what else ratio)[k, ax]
             raise DataError(
                 f"{where}: not a static log: in the {w / rate:g} s window at "
-                f"t = {k * w / rate:.4g} s, axis {names[ax]}'s "
+                f"t = {when(int(k)):.4g} s, axis {names[ax]}'s "
                 + what.format(v=v) + f" (limit {limit}); `tiltbench noise` needs one held "
                 "pose: cut the log to a still stretch")
 
-__all__ = ["EXCESS_Z", "MAX_EXCESS_STD", "STUCK_SPAN", "check_static", "excess_scatter",
-           "quantization_step", "sample_rate_of", "stuck_axis"]
+__all__ = ["EXCESS_Z", "MAX_EXCESS_STD", "SEGMENT_STEP_TOLERANCE", "STUCK_SPAN", "LogSegments",
+           "check_static", "excess_scatter", "log_segments", "quantization_step",
+           "sample_rate_of", "stuck_axis"]
