@@ -117,3 +117,18 @@ def check_covariance(cov: Any, names: tuple[str, ...], field: str, path: Any,
     if smallest < CORRELATION_EIG_MIN:
         raise field_error(path, field, f"is not positive definite (smallest eigenvalue of "
                           f"the correlation matrix {smallest:.3g})")
+
+
+def stated_variances(noise_var: Any) -> Any:
+    """The stated white-noise variances ``[σx², σy²]``, (m/s²)², as a (2,) array: the one
+    check of the statement (two finite positive values; a 2×2 covariance gives its
+    diagonal). ValueError otherwise. (numpy is imported here: this module imports nothing at
+    its top that a reader would not need.)"""
+    import numpy as np
+
+    s2 = np.asarray(noise_var, dtype=float)
+    if s2.shape == (2, 2):
+        s2 = np.diag(s2)
+    if s2.shape != (2,) or np.any(~np.isfinite(s2)) or np.any(s2 <= 0):
+        raise ValueError(f"noise_var must be two positive variances, got {noise_var!r}")
+    return s2

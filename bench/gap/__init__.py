@@ -44,42 +44,85 @@ The equations are the estimation side's: the linear fit of bias and scale is
 :func:`calib.filters.lowpass` (through :class:`bench.terms.LowpassLag`).
 """
 
-from bench.gap.figure import gap_figure
-from bench.gap.prediction import (
-    AxisPrediction,
-    additive_output,
-    fit_bias_scale,
-    predict_axis,
-    response,
-    walk_innovations,
-)
-from bench.gap.readout import READOUT_TOL, AccelField, accel_field, readout
-from bench.gap.recording import write_recording
-from bench.gap.replay import (
-    MAX_REPLAY_STEPS,
-    MAX_TABLE_ACCEL,
-    MAX_TABLE_RATE,
-    MOTION_TOL,
-    TRACKING_LIMIT,
-    Motion,
-    Piece,
-    Replay,
-    ReplayMode,
-    find_jumps,
-    initial_state,
-    make_replay,
-    motion_sensordata,
-    profile,
-    record_motion,
-    replay_sensordata,
-    sample_rows,
-    simulate,
-    timing,
-)
-from bench.gap.report import GapReport
-from bench.gap.run import run_gap
-from bench.gap.sysid import FD_STEP, SYSID_EFFECTS, sysid_refine
-from bench.gap.writers import REPORT_FILES, gap_markdown, write_model_after, write_report
+# The names below are loaded on first use (PEP 562): `import bench.gap.run` must not import the
+# report, figure and analysis modules before the re-simulation starts (bench.gap.run).
+_HOMES = {
+    "AccelField": "bench.gap.readout",
+    "AxisPrediction": "bench.gap.prediction",
+    "FD_STEP": "bench.gap.sysid",
+    "GapReport": "bench.gap.report",
+    "MAX_REPLAY_STEPS": "bench.gap.replay",
+    "MAX_TABLE_ACCEL": "bench.gap.replay",
+    "MAX_TABLE_RATE": "bench.gap.replay",
+    "MOTION_TOL": "bench.gap.replay",
+    "Motion": "bench.gap.replay",
+    "Piece": "bench.gap.replay",
+    "READOUT_TOL": "bench.gap.readout",
+    "REPORT_FILES": "bench.gap.writers",
+    "Replay": "bench.gap.replay",
+    "ReplayMode": "bench.gap.replay",
+    "SYSID_EFFECTS": "bench.gap.sysid",
+    "TRACKING_LIMIT": "bench.gap.replay",
+    "accel_field": "bench.gap.readout",
+    "additive_output": "bench.gap.prediction",
+    "find_jumps": "bench.gap.replay",
+    "fit_bias_scale": "bench.gap.prediction",
+    "gap_figure": "bench.gap.figure",
+    "gap_markdown": "bench.gap.writers",
+    "initial_state": "bench.gap.replay",
+    "make_replay": "bench.gap.replay",
+    "motion_sensordata": "bench.gap.replay",
+    "predict_axis": "bench.gap.prediction",
+    "profile": "bench.gap.replay",
+    "readout": "bench.gap.readout",
+    "record_motion": "bench.gap.replay",
+    "replay_sensordata": "bench.gap.replay",
+    "response": "bench.gap.prediction",
+    "run_gap": "bench.gap.run",
+    "sample_rows": "bench.gap.replay",
+    "simulate": "bench.gap.replay",
+    "sysid_refine": "bench.gap.sysid",
+    "timing": "bench.gap.replay",
+    "walk_innovations": "bench.gap.prediction",
+    "write_model_after": "bench.gap.writers",
+    "write_recording": "bench.gap.recording",
+    "write_report": "bench.gap.writers",
+}
+"""Each public name and the module that holds it."""
+
+
+def _module(home: str):
+    """The submodule ``bench.gap.<home>`` (static imports: the import-rule checks see them)."""
+    if home == "bench.gap.figure":
+        from bench.gap import figure as mod
+    elif home == "bench.gap.prediction":
+        from bench.gap import prediction as mod
+    elif home == "bench.gap.readout":
+        from bench.gap import readout as mod
+    elif home == "bench.gap.recording":
+        from bench.gap import recording as mod
+    elif home == "bench.gap.replay":
+        from bench.gap import replay as mod
+    elif home == "bench.gap.report":
+        from bench.gap import report as mod
+    elif home == "bench.gap.run":
+        from bench.gap import run as mod
+    elif home == "bench.gap.sysid":
+        from bench.gap import sysid as mod
+    elif home == "bench.gap.writers":
+        from bench.gap import writers as mod
+    else:
+        raise AttributeError(home)
+    return mod
+
+
+def __getattr__(name: str):
+    if name in _HOMES:
+        value = getattr(_module(_HOMES[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "FD_STEP", "MAX_REPLAY_STEPS", "MAX_TABLE_ACCEL", "MAX_TABLE_RATE", "MOTION_TOL",

@@ -19,14 +19,15 @@ from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from bench.effects import EffectSpec, apply_to_model
-from bench.gap.prediction import AxisPrediction, axis_term, fit_bias_scale, predict_axis
-from bench.gap.readout import AccelField, accel_field
-from bench.gap.recording import write_recording
+# The replay's modules only (MuJoCo, numpy, scipy.interpolate): the nominal re-simulation
+# starts on its thread before the analysis side is imported (scipy.stats and the catalog take
+# ≈ 0.5 s to import, GIL-bound; MuJoCo's rollout runs without the GIL meanwhile). The other
+# modules are imported where they are used.
+from bench.gap.readout import accel_field
 from bench.gap.replay import (
     MOTION_TOL,
     Replay,
@@ -36,18 +37,19 @@ from bench.gap.replay import (
     simulate,
     timing,
 )
-from bench.gap.report import GapReport
-from bench.gap.sysid import SYSID_EFFECTS, preload_sysid, sysid_refine, sysid_usable
-from bench.gap.writers import check_outputs, write_report
 from bench.model import ACC_SENSORS, ENCODER, TableEdits
-from bench.sensors import AxisErrors, SensorErrorModel
 from calib.conventions import AXES, G
-from calib.effects import stated_variances
-from calib.files.course import Ensayo
-from calib.gap import GapAnalysis, analyze_gap
-from calib.gap.practical import lattice_matters
-from calib.noise.sensor_profile import SensorProfile
-from calib.stats.diagnostics import detect_lattice, gap_measure
+from calib.input_rules import stated_variances
+
+if TYPE_CHECKING:
+    from bench.effects import EffectSpec
+    from bench.gap.prediction import AxisPrediction
+    from bench.gap.readout import AccelField
+    from bench.gap.report import GapReport
+    from bench.sensors import SensorErrorModel
+    from calib.files.course import Ensayo
+    from calib.gap import GapAnalysis
+    from calib.noise.sensor_profile import SensorProfile
 
 PathLike = str | os.PathLike
 Progress = Callable[[str], None] | None
@@ -95,6 +97,9 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
             progress("simulating the nominal bench alongside the analysis…")
         first = pool.submit(_replay_and_torque, tita, t)
         job = pool.submit(_nominal_run, first, base, datos, noise_var)
+        from bench.gap.report import GapReport
+        from calib.gap import analyze_gap
+
         with _step(progress, f"analysing {ensayo.n} samples (calib.gap)…", "analysis done"):
             analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate,
                                    family_alpha=family_alpha, sensor=sensor,
@@ -155,6 +160,8 @@ def _nominal_run(first, base: TableEdits, datos: np.ndarray, noise_var: np.ndarr
     """The nominal gap of the replay (:func:`_nominal_gap`; ``first`` the future of
     :func:`_replay_and_torque`) and the seconds replay and gap took; then ``mujoco.sysid``
     is imported, in case the analysis names a physical effect."""
+    from bench.gap.sysid import preload_sysid
+
     replay, _, seconds = first.result()
     clock = time.perf_counter()
     nominal = _nominal_gap(replay, base, datos, noise_var)
@@ -166,8 +173,10 @@ def _nominal_run(first, base: TableEdits, datos: np.ndarray, noise_var: np.ndarr
 def _check_inputs(noise_var: Sequence[float] | np.ndarray, report_dir: PathLike | None,
                   rrd: PathLike | None, force: bool) -> np.ndarray:
     """The stated noise as a (2,) array; refuses existing outputs unless ``force``."""
-    noise_var = stated_variances(noise_var)  # the one check of the statement (calib.effects)
+    noise_var = stated_variances(noise_var)  # the one check of the statement
     if report_dir is not None and not force:
+        from bench.gap.writers import check_outputs
+
         check_outputs(report_dir, rrd)
     elif rrd is not None and not force and Path(rrd).exists():
         raise FileExistsError(f"{rrd}: exists; pass --force to overwrite")
@@ -197,6 +206,9 @@ def _nominal_gap(replay: Replay, base: TableEdits, datos: np.ndarray, noise_var:
     readings are MuJoCo's sensors along it, read together with the probe accelerometers
     that later give any edited table's readout (:func:`bench.gap.readout.accel_field`).
     """
+    from bench.gap.prediction import fit_bias_scale
+    from calib.stats.diagnostics import gap_measure
+
     tita, t = replay.tita, replay.t
     accel = accel_field(record_motion(replay, base), base)
     a_nom = np.column_stack([accel.column(ACC_SENSORS[a])[:, 0] for a in AXES])
@@ -218,6 +230,9 @@ def _known_lattice(y: np.ndarray, sigma2: float) -> float | None:
     """The step of a lattice of the readings too fine to matter (reported, not named:
     :func:`calib.gap.practical.lattice_matters`), m/s², which the nominal gap is told about;
     None when there is none or when it matters (then it is a gap the model must close)."""
+    from calib.gap.practical import lattice_matters
+    from calib.stats.diagnostics import detect_lattice
+
     lat = detect_lattice(y)
     if lat.found and not lattice_matters(lat.lsb, sigma2):
         return float(lat.lsb)
@@ -227,6 +242,8 @@ def _known_lattice(y: np.ndarray, sigma2: float) -> float | None:
 def _effect_spec(est: Any) -> EffectSpec:
     """Catalog :class:`EffectSpec` of a ``calib.gap`` effect estimate (name, axis, params),
     or of a reported effect's dict (``GapAnalysis.reported``)."""
+    from bench.effects import EffectSpec
+
     if isinstance(est, dict):
         return EffectSpec(str(est["name"]), str(est["axis"]),
                           {k: float(v) for k, v in est["params"].items()})
@@ -244,6 +261,9 @@ def _bench_model(effects: Sequence[EffectSpec], base: TableEdits
                  ) -> tuple[TableEdits, SensorErrorModel]:
     """The nominal table and a noiseless sensor with ``effects`` added (``gravity_mismatch``
     is not identifiable on one table and is left out)."""
+    from bench.effects import apply_to_model
+    from bench.sensors import SensorErrorModel
+
     sensor0 = SensorErrorModel.from_pairs((0.0, 0.0), (0.0, 0.0), (0.0, 0.0))
     return apply_to_model([e for e in effects if e.name != "gravity_mismatch"], base, sensor0)
 
@@ -260,6 +280,9 @@ def _extension(analysis: GapAnalysis, replay: Replay, datos: np.ndarray,
     the practical threshold, :mod:`calib.gap.practical`) are in the model too, as
     estimated (not refined, not listed among the named ones).
     """
+    from bench.effects import EffectSpec
+    from bench.gap.sysid import SYSID_EFFECTS, sysid_refine, sysid_usable
+
     effects = [_effect_spec(e) for e in analysis.effects]
     reported = [_effect_spec(r) for r in getattr(analysis, "reported", ())]
     table_after, sensor_after = _bench_model([*effects, *reported], base)
@@ -327,6 +350,10 @@ def _extended_gap(replay: Replay, effects: Sequence[EffectSpec], table_after: Ta
     ``change``: ``max_abs`` (m/s²) and ``norm_over_sigma`` = ‖Δ‖/σ_stated of the change
     Δ = extended − nominal simulated mean reading.
     """
+    from bench.gap.prediction import axis_term, predict_axis
+    from bench.sensors import AxisErrors, SensorErrorModel
+    from calib.stats.diagnostics import gap_measure
+
     tita, t, a_nom = replay.tita, replay.t, nominal.a
     if not effects:
         a_ext, how = a_nom, "nominal: nothing added"
@@ -365,6 +392,9 @@ def _write_outputs(report: GapReport, report_dir: PathLike | None, rrd: PathLike
     files: dict[str, str] = {}
     if report_dir is None and rrd is None:
         return files
+    from bench.gap.recording import write_recording
+    from bench.gap.writers import write_report
+
     with _step(progress, "writing the report…", "report written"):
         if report_dir is not None:
             files.update(write_report(report, report_dir, force=force))

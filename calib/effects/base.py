@@ -40,6 +40,7 @@ from scipy import optimize
 from calib.calibration.ls import NotIdentifiableError
 from calib.conventions import AXES, EFFECT_NAMES, EFFECTS, EffectInfo
 from calib.effects.run import RunData
+from calib.input_rules import stated_variances  # noqa: F401  (its home; re-exported)
 from calib.stats.diagnostics import Lattice
 
 SIGN_P: tuple[float, float] = (1.0, -1.0)
@@ -48,18 +49,6 @@ SIGN_P: tuple[float, float] = (1.0, -1.0)
 
 class UntestableError(NotIdentifiableError):
     """The extension cannot be tested in this experiment (collinear, or no data for it)."""
-
-
-def stated_variances(noise_var) -> np.ndarray:
-    """The stated white-noise variances ``[σx², σy²]``, (m/s²)², as a (2,) array: the one
-    check of the statement (two finite positive values; a 2×2 covariance gives its
-    diagonal). ValueError otherwise."""
-    s2 = np.asarray(noise_var, dtype=float)
-    if s2.shape == (2, 2):
-        s2 = np.diag(s2)
-    if s2.shape != (2,) or np.any(~np.isfinite(s2)) or np.any(s2 <= 0):
-        raise ValueError(f"noise_var must be two positive variances, got {noise_var!r}")
-    return s2
 
 
 @dataclass(frozen=True)
