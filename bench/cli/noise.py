@@ -25,6 +25,15 @@ out with a note. ``--save`` refuses, in one line, a profile of an axis that no m
 rule describes (``fit_ok`` false), unless ``--save-failed-fit``, which writes it with
 ``fit_ok: false`` (``generate --sensor`` and ``gap --sensor`` then refuse it unless
 ``--allow-failed-fit``).
+
+A log with gaps in time (a step longer than 5 median steps, the reader's rule) is read as it
+is, without ``--allow-gaps``: it is split at its gaps and said so on stderr in one line, the
+Allan variance pooled over the segments as independent records (:mod:`calib.noise.allan`: Logs
+with gaps; a gap is never filled); the JSON holds the ``segments`` and the text summary says
+it. The static check lays its windows inside the segments (none straddles a gap) and compares
+all of them; ``--twin`` simulates the twin with the log's segment lengths. Refused in one line
+when no segment holds the 5 octaves a fit needs (naming the longest), or when the segments are
+sampled at different rates.
 """
 
 from __future__ import annotations
@@ -48,7 +57,8 @@ Overlapping Allan deviation of every axis (accelerometer x, y, z; gyro x, y, z) 
 intervals from its equivalent degrees of freedom; white-noise density (angle random walk),
 bias instability and rate random walk — and, when the curve needs them by the stated rule,
 quantization noise and a Gauss–Markov term — fitted by GLS with score-type intervals, each
-with the τ range it was read from, in SI and datasheet units (docs/noise.md).
+with the τ range it was read from, in SI and datasheet units (docs/noise.md). A log with gaps
+in time is split at them (never filled) and its Allan variance pooled over the segments.
 """
 """What ``--help`` says before the options (argparse reflows it)."""
 
@@ -69,18 +79,20 @@ def _calibration_entry(path: str) -> dict:
 
 def read_static_log(args: argparse.Namespace):
     """The log, read with the command's log options; no pose detection (the static check is
-    the stillness rule here, and a held log is one pose)."""
-    return read_log_from_args(args, args.log, detect=False)
+    the stillness rule here, and a held log is one pose); gaps allowed (this command splits the
+    log at them, :func:`calib.logs.static_log.log_segments`)."""
+    return read_log_from_args(args, args.log, detect=False, allow_gaps=True)
 
 
 def _static_reading(args: argparse.Namespace):
-    """(log, rate Hz, static-check numbers, columns (N, k), axis names, kinds, notes) of the
-    log, refused when it is not one held pose."""
+    """(log, rate Hz, static-check numbers, columns (N, k), axis names, kinds, notes, the
+    log's :class:`calib.logs.static_log.LogSegments`) of the log, refused when it is not one
+    held pose; a log with gaps is split at them."""
     import numpy as np
 
     from calib.input_rules import DataError
-    from calib.logs.static_log import stuck_axis
-    from calib.noise.allan import check_static, sample_rate_of
+    from calib.logs.static_log import log_segments, stuck_axis
+    from calib.noise.allan import check_static
 
     log = read_static_log(args)
     if args.rate is not None and not (np.isfinite(args.rate) and args.rate > 0):
@@ -92,10 +104,13 @@ def _static_reading(args: argparse.Namespace):
     if log.pose is not None and np.unique(log.pose[log.pose >= 0]).size > 1:
         raise DataError(f"{log.source}: the log holds {np.unique(log.pose[log.pose >= 0]).size}"
                         " held poses; `tiltbench noise` needs one (cut the log)")
-    rate = sample_rate_of(log.t, args.rate, log.source)
+    split = log_segments(log.t, args.rate, log.source)
+    rate = split.rate
     labels = _axis_labels(log.provenance.get("axes"))
     columns, names, kinds, notes = [log.acc[:, 0], log.acc[:, 1]], ["x", "y"], [
         "accelerometer"] * 2, []
+    if split.missing_note():
+        notes.append(split.missing_note())
     shown = list(labels)
     extra = []
     if log.acc_normal is not None:
@@ -119,10 +134,14 @@ def _static_reading(args: argparse.Namespace):
     # the stillness rules read the tilt plane, as before the third axis was characterized
     # (a held sensor that moves moves in x or y; z and the gyro are checked for a stuck
     # channel above)
+    segmented = split.count > 1
     checked = check_static(log.acc, rate, log.source, window=args.static_window,
                            shift=args.static_shift, var_ratio=args.static_var_ratio,
-                           gyro=log.gyro, axes=labels)
-    return log, rate, checked, np.column_stack(columns), tuple(names), tuple(kinds), notes
+                           gyro=log.gyro, axes=labels,
+                           segments=split.bounds if segmented else None,
+                           t=log.t if segmented else None)
+    return (log, rate, checked, np.column_stack(columns), tuple(names), tuple(kinds), notes,
+            split)
 
 
 def _axis_labels(mapped: list[str] | None) -> tuple[str, str]:
@@ -149,7 +168,9 @@ def _failed_fit_line(result, save: str) -> str:
 def _twin(result, profile, columns, rate: float, seed: int) -> dict:
     """The closure test of every axis (:mod:`calib.noise.closure`): the profile's axis
     simulated by the bench (:func:`bench.sensor_twin.simulate_axis`) for the log's length and
-    rate around the log's mean, seeded by ``seed`` (one stream per axis)."""
+    rate around the log's mean, seeded by ``seed`` (one stream per axis). A log with gaps: one
+    simulated record per segment, of the segment's length, drawn in order from the axis's
+    stream (the segments as the fit took them: independent records)."""
     import numpy as np
 
     from bench.sensor_twin import simulate_axis, twin_axis
@@ -157,10 +178,12 @@ def _twin(result, profile, columns, rate: float, seed: int) -> dict:
 
     out = {}
     seeds = np.random.SeedSequence(int(seed)).spawn(len(result.axes))
+    lengths = [b - a for a, b in result.segments] or [columns.shape[0]]
     for k, fit in enumerate(result.axes):
         errors = twin_axis(profile, fit.axis, rate)
-        y = simulate_axis(errors, columns.shape[0], rate, np.random.default_rng(seeds[k]),
-                          level=fit.mean)
+        rng = np.random.default_rng(seeds[k])
+        pieces = [simulate_axis(errors, n, rate, rng, level=fit.mean) for n in lengths]
+        y = pieces[0] if len(pieces) == 1 else pieces
         out[fit.axis] = closure_test(fit, twin_adev(fit, y, rate))
     return out
 
@@ -177,6 +200,8 @@ def _datasheet(texts: list[str]):
 
 
 def _cmd_noise(args: argparse.Namespace) -> int:
+    import sys
+
     from bench import __version__
     from calib.input_rules import DataError
     from calib.noise.allan import characterize_noise
@@ -200,10 +225,14 @@ def _cmd_noise(args: argparse.Namespace) -> int:
     refuse_overwrite([args.plot, args.save], args.force)
     sheet = _datasheet(args.datasheet) if args.datasheet else None
     cal = _calibration_entry(args.calibration) if args.calibration else None
-    log, rate, checked, columns, names, kinds, notes = _static_reading(args)
+    log, rate, checked, columns, names, kinds, notes, split = _static_reading(args)
     result = characterize_noise(columns, rate, level=level, alpha=alpha, tau_range=tau_range,
                                 axes=names, kinds=kinds, source=log.provenance.get("source"),
-                                static_check=checked, notes=tuple(notes))
+                                static_check=checked, notes=tuple(notes),
+                                segments=split.bounds if split.count > 1 else None, t=log.t)
+    line = split.line(log.source)
+    if line:  # said once the split log was characterized (a refusal stays one line)
+        print(f"note: {line}", file=sys.stderr)
     out = result.to_dict()
     check_finite(out, "the result")
     if args.save and not result.fit_ok and not args.save_failed_fit:

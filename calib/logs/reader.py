@@ -37,8 +37,10 @@ Conventions
 Validation (one-line :class:`calib.input_rules.DataError` naming the file, the line, message
 or index, and the fix): missing header, unknown units, non-numeric cells, NaN/Inf, time not
 strictly increasing, gaps in time longer than :data:`GAP_FACTOR` median steps (refused unless
-``--allow-gaps``: a gap breaks the Allan deviation and integration, while held poses on both
-sides stay valid — with the option the gaps are listed in the provenance), saturated
+``--allow-gaps``, which the commands that can use the stretches between gaps pass themselves
+or on request: held poses on both sides stay valid and ``noise`` pools its Allan variance over
+the segments, while integration and an ``acel.mat`` import refuse a gap; the gaps are listed
+in the provenance), saturated
 stretches (:data:`SATURATION_RUN` or more equal samples at a column's extreme value, that
 value at least g/2 in size; refused unless ``--allow-saturation``, for a sensor so coarse
 that a held pose reads one constant value).
@@ -496,8 +498,9 @@ def _check_time(raw: RawLog, t: np.ndarray, path: Path, allow_gaps: bool) -> lis
             g0 = gaps[0]
             raise DataError(f"{path}: {len(gaps)} gap(s) in time, the first {g0['length_s']:.4g}"
                             f" s long (median step {step:.4g} s) after {g0['after']} (t = "
-                            f"{g0['t']:.6g} s); pass --allow-gaps to read it anyway (held "
-                            "poses stay valid; noise and integration need an unbroken log)")
+                            f"{g0['t']:.6g} s); pass --allow-gaps to read it anyway (a gap "
+                            "is never filled: held poses and `noise` use the stretches between "
+                            "gaps; integration and an acel.mat import refuse a gapped log)")
     return gaps
 
 

@@ -39,6 +39,19 @@ curve.
 the fit, so its cost stays bounded; τ then starts at 2^k/fs (white, flicker, walk, the
 integrated-output quantization keep their Allan variance at every τ ≥ 2^k/fs).
 
+**Logs with gaps** (``segments``). A gap is never filled: a log split at its gaps
+(:func:`calib.logs.static_log.log_segments`, the reader's rule) is characterized from its
+segments, each evenly sampled at the one rate. The octave grid is the longest segment's; octave
+m pools the overlapping Allan variances of the segments that hold it (n_s ≥ 2m), weighted
+by their numbers of differences ``c_s(m) = n_s − 2m + 1`` (:func:`pooled_adev`), and the fit
+reads the exact moments of that pooled estimator with the segments as independent records
+(:func:`calib.noise.allan_model.pooled_moments`: IEEE Std 952-1997 Annex C's Allan variance of
+each record, their degrees of freedom adding as in Greenhall's EDF). A segment too short for
+the grid's first octave contributes nothing (said in a note); when no segment holds 5 octaves
+the log is refused, naming the longest. Long logs are averaged in blocks per segment (each
+truncated to a multiple of the block). The rise rule of K counts the non-overlapping clusters
+of every segment, ``Σ_s ⌊n_s/m⌋`` (none straddles a gap). One segment is exactly one record.
+
 **Quantization step.** Readings on a lattice (every distinct value a multiple of one step from
 the smallest) give the step; it is reported, and its white contribution Δ²/12 is part of N.
 
@@ -54,6 +67,7 @@ The checks of the log before (sample rate, the table did not move, quantization 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -84,7 +98,8 @@ from calib.noise.allan_model import (
     FLICKER_FLOOR,
     TERM_NAMES,
     edf,
-    moments,
+    record_moments,
+    supported_octaves,
     term_value,
 )
 from calib.noise.term_units import KINDS, SI_UNITS, datasheet, si_unit
@@ -120,7 +135,11 @@ UNITS = {
     "axes.*.chi2": "1", "axes.*.dof": "count", "axes.*.p_fit": "1",
     "axes.*.k_rise_steps": "count", "axes.*.n": "count", "axes.*.tried.*.chi2": "1",
     "axes.*.tried.*.dof": "count", "axes.*.tried.*.p": "1", "axes.*.tried.*.tau_range": "s",
-    "block": "count", "static_check.window": "s",
+    "axes.*.n_fit_segments": "count", "block": "count", "static_check.window": "s",
+    "segments.*.start": "row (0-based index of the log's first reading of the segment)",
+    "segments.*.stop": "row (one past the segment's last reading)",
+    "segments.*.n": "count", "segments.*.n_fit": "count (after block means)",
+    "segments.*.duration": "s (n / sample_rate)", "segments.*.octaves": "count",
     "static_check.shift": "m/s^2", "static_check.var_ratio": "1",
     "static_check.max_shift": "m/s^2", "static_check.max_var_ratio": "1",
     "static_check.max_rate": "rad/s", "static_check.max_gyro_rate": "rad/s",
@@ -160,6 +179,42 @@ def overlapping_adev(y: np.ndarray, rate: float, ms: tuple[int, ...]
     if taus.size != len(ms):
         raise DataError(f"allantools returned {taus.size} of {len(ms)} octave points")
     return np.asarray(taus), np.asarray(adev), np.asarray(n)
+
+
+def pooled_adev(pieces: list[np.ndarray], rate: float, ms: tuple[int, ...]
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The overlapping Allan deviation pooled over independent segments (module docstring):
+    ``s(m) = Σ_s c_s(m)·s_s(m) / Σ_s c_s(m)``, ``s_s`` each segment's
+    :func:`overlapping_adev` at the octaves it holds (n_s ≥ 2m), ``c_s`` its number of
+    overlapping differences. Returns (τ s, ADEV, Σ_s c_s per octave); one segment is
+    :func:`overlapping_adev` itself."""
+    if len(pieces) == 1:
+        return overlapping_adev(pieces[0], rate, ms)
+    k = len(ms)
+    num, count = np.zeros(k), np.zeros(k)
+    for y in pieces:
+        own = supported_octaves(np.asarray(y).size, ms)
+        if not own:
+            continue
+        _, adev, c = overlapping_adev(y, rate, own)
+        num[:len(own)] += c * adev ** 2
+        count[:len(own)] += c
+    if np.any(count <= 0):
+        raise DataError(f"no segment holds the octaves m = "
+                        f"{', '.join(str(m) for m, c in zip(ms, count, strict=True) if c <= 0)}")
+    return np.asarray(ms) / rate, np.sqrt(num / count), count
+
+
+def rise_record_length(lengths: tuple[int, ...], ms: tuple[int, ...]) -> int:
+    """The record length ``n`` for :func:`calib.noise.allan_fit.rise_steps` (which counts an
+    octave when ``n // m ≥ K_RISE_CLUSTERS``) that counts the clusters of segments: an octave
+    counts when the segments hold ``Σ_s ⌊n_s/m⌋ ≥ K_RISE_CLUSTERS`` non-overlapping clusters
+    in all (none straddling a gap). Both counts fall with m, so they agree when ``n = 8·m*``,
+    m* the largest octave of the grid (powers of 2) that passes. One segment: its length."""
+    if len(lengths) == 1:
+        return int(lengths[0])
+    passing = [m for m in ms if sum(n // m for n in lengths) >= K_RISE_CLUSTERS]
+    return K_RISE_CLUSTERS * max(passing) if passing else 0
 
 
 def adev_intervals(adev: np.ndarray, nu: np.ndarray, level: float
@@ -284,7 +339,9 @@ class AxisNoise(ResultMixin):
     of ``fit_range`` in ``taus``; b_bound: the largest B the Allan minimum allows (same unit
     as B) and b_bound_tau where; k_rise_steps: octave steps of the rise rule of K; tried: the
     models the rule fitted (terms, τ range, χ², dof, p, bound); quantization_step or None;
-    mean, std of the readings; n samples; n_fit samples after block means; ms the octaves.
+    mean, std of the readings; n samples; n_fit samples after block means; ms the octaves;
+    n_fit_segments: the samples (after block means) of each segment the Allan variance was
+    pooled over (module docstring: Logs with gaps); () or one entry: one record of n_fit.
     """
 
     axis: str
@@ -314,6 +371,7 @@ class AxisNoise(ResultMixin):
     n_fit: int = 0
     ms: tuple[int, ...] = ()
     tried: tuple[dict, ...] = ()
+    n_fit_segments: tuple[int, ...] = ()
 
     _TITLE = "Allan deviation of one axis"
     _UNITS = "τ s; ADEV in the reading unit; terms in calib.noise.term_units"
@@ -326,6 +384,13 @@ class AxisNoise(ResultMixin):
         object.__setattr__(self, "octaves", tuple(int(v) for v in self.octaves))
         object.__setattr__(self, "ms", tuple(int(v) for v in self.ms))
         object.__setattr__(self, "tried", tuple(self.tried))
+        object.__setattr__(self, "n_fit_segments", tuple(int(v) for v in self.n_fit_segments))
+
+    @property
+    def fit_lengths(self) -> tuple[int, ...]:
+        """The samples of each record the fit read (after block means): the segments, or the
+        one record of ``n_fit``."""
+        return self.n_fit_segments or (int(self.n_fit),)
 
     def term(self, name: str) -> TermFit | None:
         """The :class:`TermFit` ``name``; None for an extra term outside the model."""
@@ -393,7 +458,8 @@ class AxisNoise(ResultMixin):
                 "quantization_step": (None if self.quantization_step is None
                                       else float(self.quantization_step)),
                 "mean": float(self.mean), "std": float(self.std), "n": int(self.n),
-                "n_fit": int(self.n_fit), "ms": list(self.ms), "tried": list(self.tried)}
+                "n_fit": int(self.n_fit), "ms": list(self.ms), "tried": list(self.tried),
+                "n_fit_segments": list(self.n_fit_segments)}
 
     @classmethod
     def from_dict(cls, d: dict) -> AxisNoise:
@@ -411,13 +477,21 @@ class AxisNoise(ResultMixin):
                    b_bound=float(d.get("b_bound", float("inf"))),
                    b_bound_tau=float(d.get("b_bound_tau", float("nan"))),
                    k_rise_steps=int(d.get("k_rise_steps", 0)), n_fit=int(d.get("n_fit", 0)),
-                   ms=tuple(d.get("ms", ())), tried=tuple(d.get("tried", ())))
+                   ms=tuple(d.get("ms", ())), tried=tuple(d.get("tried", ())),
+                   n_fit_segments=tuple(d.get("n_fit_segments", ())))
 
 
 @dataclass(frozen=True, eq=False)
 class NoiseCharacterization(ResultMixin):
     """The result of :func:`characterize_noise`: per-axis :class:`AxisNoise`, the settings,
-    the static check and the source; ``notes``: axes left out and why."""
+    the static check and the source; ``notes``: axes left out and why, segments too short.
+
+    n : the readings characterized (all segments); ``duration`` = n / sample_rate, the time
+    sampled (the gaps not counted).
+    segments : ((start, stop), …) the rows of each record the Allan variance was pooled over
+        (module docstring: Logs with gaps); one entry (or ``()`` from an older JSON): one
+        record.
+    """
 
     sample_rate: float
     n: int
@@ -428,6 +502,7 @@ class NoiseCharacterization(ResultMixin):
     source: dict[str, str] | None = None
     block: int = 1
     notes: tuple[str, ...] = ()
+    segments: tuple[tuple[int, int], ...] = ()
 
     _TITLE = "Noise characterization (Allan deviation)"
     _UNITS = "Hz, s; readings m/s² (accelerometer) or rad/s (gyro); terms: calib.noise.term_units"
@@ -435,6 +510,8 @@ class NoiseCharacterization(ResultMixin):
     def __post_init__(self) -> None:
         object.__setattr__(self, "axes", tuple(self.axes))
         object.__setattr__(self, "notes", tuple(self.notes))
+        object.__setattr__(self, "segments",
+                           tuple((int(a), int(b)) for a, b in self.segments))
 
     @property
     def duration(self) -> float:
@@ -456,6 +533,12 @@ class NoiseCharacterization(ResultMixin):
                 f"variances); a term is resolved when zero is rejected at α = {self.alpha:g} "
                 f"(the walk K also needs {K_RISE_STEPS} octave steps of rise with ≥ 8 "
                 "clusters each)")
+        if len(self.segments) > 1:
+            sizes = [b - a for a, b in self.segments]
+            shown = " + ".join(str(v) for v in sizes[:6]) + (" + …" if len(sizes) > 6 else "")
+            head += (f"\nsegments: {len(sizes)} stretches between gaps in time, {shown} "
+                     "samples; the gaps never filled, the Allan variance pooled over the "
+                     "segments (note below)")
         if self.block > 1:
             head += (f"\nlong log: averaged in blocks of {self.block} samples before the fit "
                      f"(τ from {self.block / self.sample_rate:g} s)")
@@ -468,7 +551,20 @@ class NoiseCharacterization(ResultMixin):
                 "alpha": float(self.alpha), "fit_ok": bool(self.fit_ok),
                 "axes": {a.axis: a.to_dict() for a in self.axes},
                 "static_check": self.static_check, "source": self.source,
-                "block": int(self.block), "notes": list(self.notes), "units": UNITS}
+                "block": int(self.block), "notes": list(self.notes),
+                "segments": self._segments_dict(), "units": UNITS}
+
+    def _segments_dict(self) -> list[dict]:
+        """Each segment's rows, samples, samples after block means, duration and how many
+        octaves of the grid it holds (:data:`UNITS`)."""
+        ms = self.axes[0].ms if self.axes else ()
+        out = []
+        for a, b in self.segments:
+            fit = (b - a) // self.block
+            out.append({"start": a, "stop": b, "n": b - a, "n_fit": fit,
+                        "duration": (b - a) / self.sample_rate,
+                        "octaves": len(supported_octaves(fit, ms))})
+        return out
 
     @classmethod
     def from_dict(cls, d: dict) -> NoiseCharacterization:
@@ -476,7 +572,9 @@ class NoiseCharacterization(ResultMixin):
                    alpha=float(d["alpha"]),
                    axes=tuple(AxisNoise.from_dict(a) for a in d["axes"].values()),
                    static_check=d.get("static_check", {}), source=d.get("source"),
-                   block=int(d.get("block", 1)), notes=tuple(d.get("notes", ())))
+                   block=int(d.get("block", 1)), notes=tuple(d.get("notes", ())),
+                   segments=tuple((int(g["start"]), int(g["stop"]))
+                                  for g in d.get("segments", ())))
 
     def to_profile(self, calibration: dict | None = None, tool_version: str = "unknown"):
         """The :class:`calib.noise.sensor_profile.SensorProfile` of this log: resolved terms as
@@ -536,44 +634,85 @@ def _tried(f: ModelFit, taus: np.ndarray) -> dict:
 def fit_axis_noise(y: np.ndarray, rate: float, *, axis: str = "x", kind: str = "accelerometer",
                    level: float = 0.683, alpha: float = 0.05,
                    tau_range: tuple[float, float] | None = None, block: int = 1,
-                   select: bool = False) -> AxisNoise:
+                   select: bool = False,
+                   segments: tuple[tuple[int, int], ...] | None = None) -> AxisNoise:
     """Allan deviation and the noise terms of one axis (module docstring).
 
     Parameters
     ----------
     y : (N,) readings of a static log (m/s² or rad/s by ``kind``), evenly spaced at ``rate``
-        Hz.
+        Hz (within each segment).
     kind : ``accelerometer`` or ``gyro``: the units only.
     level : two-sided level of the intervals (ADEV points and terms).
     alpha : one-sided significance for "resolved".
     tau_range : (τ_min, τ_max) s to restrict the octave grid, or None (all of it).
-    block : average the readings in blocks of this many samples first (:data:`MAX_FIT_SAMPLES`);
-        the quantization step, mean and std are those of the raw readings.
+    block : average the readings in blocks of this many samples first (:data:`MAX_FIT_SAMPLES`;
+        per segment); the quantization step, mean and std are those of the raw readings.
     select : apply the model rule of :mod:`calib.noise.allan_fit` (``tiltbench noise``); False:
         the three core terms on the whole range, whatever their adequacy (the gap workflow's
         flicker test, :mod:`calib.gap.walk`, whose false-alarm rates were measured so).
+    segments : ((start, stop), …) rows of ``y`` between the log's gaps, or None (one record);
+        the Allan variance is pooled over those that hold the grid's first octave (module
+        docstring: Logs with gaps), the raw statistics are over all of them.
     """
     if kind not in KINDS:
         raise DataError(f"axis {axis}: kind must be one of {', '.join(KINDS)}, got {kind!r}")
-    raw = np.asarray(y, dtype=float)
+    y_all = np.asarray(y, dtype=float)
+    if segments is not None and len(segments) > 1:
+        return _fit_segments(y_all, rate, segments, axis=axis, kind=kind, level=level,
+                             alpha=alpha, tau_range=tau_range, block=block, select=select)
+    if segments is not None:  # one segment: that record
+        (a, b), = segments
+        y_all = y_all[a:b]
+    raw = y_all
     n_raw = raw.size
     y = raw if block == 1 else raw[:n_raw // block * block].reshape(-1, block).mean(axis=1)
     rate = rate / block
     n = y.size
     ms = octave_factors(n, rate, tau_range)
+    _check_octaves(ms, axis, tau_range)
+    taus, adev, _ = overlapping_adev(y, rate, ms)
+    return _fit_records(adev, taus, ms, (n,), raw=raw, rate=rate, axis=axis, kind=kind,
+                        level=level, alpha=alpha, select=select)
+
+
+def _check_octaves(ms: tuple[int, ...], axis: str, tau_range) -> None:
     if len(ms) < 5:
         raise DataError(f"axis {axis}: {len(ms)} octave τ points"
                         + (f" within --tau-range {tau_range[0]:g},{tau_range[1]:g} s"
                            if tau_range else "")
                         + "; the fit needs 5 (a log of at least "
                         f"{MIN_SAMPLES} samples, τ range spanning 4 octaves)")
-    taus, adev, _ = overlapping_adev(y, rate, ms)
+
+
+def _fit_segments(y_all: np.ndarray, rate: float, segments, *, axis, kind, level, alpha,
+                  tau_range, block, select) -> AxisNoise:
+    """:func:`fit_axis_noise` of a log with gaps: block means per segment (each truncated to a
+    multiple of ``block``), the longest segment's octave grid, the pooled Allan variance over
+    the segments that hold its first octave (module docstring: Logs with gaps)."""
+    raws = [y_all[a:b] for a, b in segments]
+    pieces = [r if block == 1 else r[:r.size // block * block].reshape(-1, block).mean(axis=1)
+              for r in raws]
+    rate = rate / block
+    ms = octave_factors(max(p.size for p in pieces), rate, tau_range)
+    _check_octaves(ms, axis, tau_range)
+    used = [p for p in pieces if supported_octaves(p.size, ms)]
+    taus, adev, _ = pooled_adev(used, rate, ms)
+    return _fit_records(adev, taus, ms, tuple(p.size for p in used),
+                        raw=np.concatenate(raws), rate=rate, axis=axis, kind=kind, level=level,
+                        alpha=alpha, select=select)
+
+
+def _fit_records(adev, taus, ms, lengths: tuple[int, ...], *, raw, rate, axis, kind, level,
+                 alpha, select) -> AxisNoise:
+    """The fit of the octave Allan deviations ``adev`` of records of ``lengths`` samples (one
+    record, or the segments they were pooled over) with their moments."""
     s = adev ** 2
     if not (np.all(np.isfinite(s)) and s[0] > 0):
         raise DataError(f"axis {axis}: the readings do not change from sample to sample (a "
                         "dead or saturated axis, or a quantization step far above the noise): "
                         "there is no noise to characterize")
-    mom = moments(n, ms)
+    mom = record_moments(lengths, ms)
     # a white floor keeps V positive definite whatever the fit does (a trillionth of the
     # smallest-τ variance: far below anything the data can tell)
     floor = 1e-12 * s[0] / mom.design[0, 0]
@@ -585,7 +724,8 @@ def fit_axis_noise(y: np.ndarray, rate: float, *, axis: str = "x", kind: str = "
         chosen = engine.fit(Model(CORE, None, 0, k))
         ok, tried = chosen.adequate, [chosen]
     return _axis_result(engine, chosen, ok, tried, raw=raw, taus=taus, adev=adev, ms=ms,
-                        n=n, rate=rate, axis=axis, kind=kind, level=level, alpha=alpha)
+                        lengths=lengths, rate=rate, axis=axis, kind=kind, level=level,
+                        alpha=alpha)
 
 
 def _caps(kind: str, rate: float) -> np.ndarray:
@@ -601,14 +741,15 @@ def _caps(kind: str, rate: float) -> np.ndarray:
 
 
 def _axis_result(engine: Engine, chosen: ModelFit, ok: bool, tried: list[ModelFit], *,
-                 raw, taus, adev, ms, n, rate, axis, kind, level, alpha) -> AxisNoise:
+                 raw, taus, adev, ms, lengths, rate, axis, kind, level, alpha) -> AxisNoise:
     model = chosen.model
+    n = int(sum(lengths))
     theta = chosen.theta
     z_one = float(stats.norm.ppf(1.0 - alpha))
     ends = engine.intervals(chosen, level, caps=_caps(kind, rate))
     design_all, tensor_all = engine.mom.full(model.g)
     ranges = _term_ranges(taus, design_all, theta, model.lo, model.hi)
-    rise = rise_steps(chosen, design_all, ms, n)
+    rise = rise_steps(chosen, design_all, ms, rise_record_length(lengths, ms))
     terms = []
     tc_seconds = (None if model.g is None else float(engine.mom.gm_tc[model.g]) / rate)
     for a in model.active:
@@ -642,7 +783,8 @@ def _axis_result(engine: Engine, chosen: ModelFit, ok: bool, tried: list[ModelFi
                      kind=kind, fit_ok=bool(ok), rule=rule, octaves=(model.lo, model.hi),
                      b_bound=b_bound, b_bound_tau=float(taus[chosen.b_bound_index]),
                      k_rise_steps=rise, n_fit=n, ms=ms,
-                     tried=tuple(_tried(f, taus) for f in tried))
+                     tried=tuple(_tried(f, taus) for f in tried),
+                     n_fit_segments=lengths if len(lengths) > 1 else ())
 
 
 def characterize_noise(acc: np.ndarray, rate: float, *, level: float = 0.683,
@@ -650,12 +792,21 @@ def characterize_noise(acc: np.ndarray, rate: float, *, level: float = 0.683,
                        axes: tuple[str, ...] = ("x", "y", "z"),
                        kinds: tuple[str, ...] | None = None, source: dict | None = None,
                        static_check: dict | None = None, select: bool = True,
-                       notes: tuple[str, ...] = ()) -> NoiseCharacterization:
+                       notes: tuple[str, ...] = (),
+                       segments: Sequence[int] | Sequence[tuple[int, int]] | None = None,
+                       t: np.ndarray | None = None) -> NoiseCharacterization:
     """Allan deviation and noise terms of every column of ``acc`` ((N, k) readings of a static
     log at ``rate`` Hz: m/s² for an accelerometer axis, rad/s for a gyro axis; see the module
     docstring), named by ``axes`` and of the sensor kinds ``kinds`` (default: every column an
     accelerometer). Check the log first with :func:`check_static`. ``select``: the model rule
-    (:func:`fit_axis_noise`)."""
+    (:func:`fit_axis_noise`).
+
+    ``segments``: the stretches of a log with gaps (:func:`calib.logs.static_log.log_segments`)
+    — their lengths in order (summing to N) or (start, stop) row pairs (in order, not
+    overlapping; rows outside them unused) — or None: one record. The Allan variance is
+    pooled over them (module docstring: Logs with gaps); the result records them
+    (``segments``) with a note. Refused in one line when no segment holds the 5 octaves a
+    fit needs (naming the longest: by its times when ``t`` ((N,) s) is given, else its rows)."""
     acc = np.asarray(acc, dtype=float)
     if acc.ndim == 1:
         acc = acc[:, None]
@@ -663,26 +814,95 @@ def characterize_noise(acc: np.ndarray, rate: float, *, level: float = 0.683,
         raise DataError(f"sample rate must be a positive number of Hz, got {rate}")
     if not (0.0 < level < 1.0) or not (0.0 < alpha < 0.5):
         raise DataError(f"level {level} must be in (0, 1) and alpha {alpha} in (0, 0.5)")
-    if acc.shape[0] < MIN_SAMPLES:
-        raise DataError(f"{acc.shape[0]} samples: an Allan deviation fit needs at least "
-                        f"{MIN_SAMPLES} (record a longer static log)")
-    if not np.isfinite(acc).all():
+    bounds = segment_bounds(segments, acc.shape[0])
+    if sum(b - a for a, b in bounds) < MIN_SAMPLES:
+        raise DataError(f"{sum(b - a for a, b in bounds)} samples: an Allan deviation fit "
+                        f"needs at least {MIN_SAMPLES} (record a longer static log)")
+    if not all(np.isfinite(acc[a:b]).all() for a, b in bounds):
         raise DataError("the readings hold NaN or Inf")
     if len(axes) < acc.shape[1]:
         raise DataError(f"{acc.shape[1]} columns but {len(axes)} axis names")
     kinds = kinds or ("accelerometer",) * acc.shape[1]
-    n = acc.shape[0]
+    n = sum(b - a for a, b in bounds)
     block = 1 if n <= MAX_FIT_SAMPLES else 2 ** math.ceil(math.log2(n / MAX_FIT_SAMPLES))
+    notes = tuple(notes)
+    if len(bounds) > 1:
+        notes += _segment_notes(bounds, rate, block, tau_range, source, t)
     fits = tuple(fit_axis_noise(acc[:, k], rate, axis=axes[k], kind=kinds[k], level=level,
-                                alpha=alpha, tau_range=tau_range, block=block, select=select)
+                                alpha=alpha, tau_range=tau_range, block=block, select=select,
+                                segments=bounds)
                  for k in range(acc.shape[1]))
     return NoiseCharacterization(sample_rate=float(rate), n=int(n), level=level,
                                  alpha=alpha, axes=fits, static_check=static_check or {},
-                                 source=source, block=block, notes=notes)
+                                 source=source, block=block, notes=notes, segments=bounds)
+
+
+def segment_bounds(segments, n: int) -> tuple[tuple[int, int], ...]:
+    """((start, stop), …) rows of ``segments`` (:func:`characterize_noise`) in a log of ``n``
+    rows: None → one record ((0, n),); lengths → consecutive rows (they must sum to n); pairs
+    → checked (in order, not overlapping, not empty, inside the log)."""
+    if segments is None:
+        return ((0, int(n)),)
+    items = list(segments)
+    if not items:
+        raise DataError("segments: none given (None means one record)")
+    if all(np.ndim(v) == 0 for v in items):
+        lengths = [int(v) for v in items]
+        if any(v <= 0 for v in lengths) or sum(lengths) != n:
+            raise DataError(f"segments: lengths {lengths} must be positive and sum to the "
+                            f"{n} readings")
+        stops = np.cumsum(lengths)
+        return tuple((int(b - v), int(b)) for v, b in zip(lengths, stops, strict=True))
+    pairs = tuple((int(a), int(b)) for a, b in items)
+    last = 0
+    for a, b in pairs:
+        if not last <= a < b <= n:
+            raise DataError(f"segments: {pairs} must be (start, stop) rows in order, not "
+                            f"empty or overlapping, within the {n} readings")
+        last = b
+    return pairs
+
+
+def _segment_notes(bounds, rate: float, block: int, tau_range, source, t
+                   ) -> tuple[str, ...]:
+    """The notes of a segmented characterization (what was pooled, what was left out), or a
+    one-line refusal when no segment holds the 5 octaves a fit needs."""
+    where = f"{source['name']}: " if source and source.get("name") else ""
+    fit_lengths = [(b - a) // block for a, b in bounds]
+    longest = int(np.argmax(fit_lengths))
+    ms = octave_factors(fit_lengths[longest], rate / block, tau_range)
+    a0, b0 = bounds[longest]
+
+    def span(a: int, b: int) -> str:
+        return (f"rows {a}–{b - 1}" if t is None
+                else f"t = {float(t[a]):.6g} to {float(t[b - 1]):.6g} s")
+
+    if len(ms) < 5:
+        raise DataError(
+            f"{where}no segment between the gaps holds the 5 octave τ points an Allan fit "
+            f"needs: the longest of {len(bounds)} ({span(a0, b0)}, {b0 - a0} samples = "
+            f"{(b0 - a0) / rate:.4g} s) holds {len(ms)}"
+            + (f" within --tau-range {tau_range[0]:g},{tau_range[1]:g} s" if tau_range else "")
+            + f"; a segment of at least {MIN_SAMPLES * block} samples "
+            f"({MIN_SAMPLES * block / rate:.4g} s) without a gap is needed (a gap is never "
+            "filled: record a longer still stretch)")
+    used = [k for k, f in enumerate(fit_lengths) if supported_octaves(f, ms)]
+    out = [f"the Allan variance pooled over {len(used)} of {len(bounds)} segments between "
+           f"gaps in time (never filled; octave grid of the longest, {b0 - a0} samples): "
+           "octave m averages the overlapping differences of the segments of ≥ 2m "
+           "samples, the segments taken as independent records"]
+    short = [k for k in range(len(bounds)) if k not in used]
+    if short:
+        rows = ", ".join(span(*bounds[k]) for k in short[:3])
+        out.append(f"{len(short)} segment(s) shorter than the first octave needs "
+                   f"({2 * ms[0]} samples{' after block means' if block > 1 else ''}) "
+                   f"contribute nothing ({rows}{', …' if len(short) > 3 else ''})")
+    return tuple(out)
 
 
 __all__ = ["EXTRA_TERM_NAMES", "FLICKER", "FLICKER_FLOOR", "LACK_OF_FIT_P", "MAX_FIT_SAMPLES",
            "MIN_SAMPLES", "TERM_NAMES", "TERM_UNITS", "UNITS", "AxisNoise",
            "NoiseCharacterization", "TermFit", "adev_intervals", "characterize_noise",
            "check_static", "fit_axis_noise", "octave_factors", "overlapping_adev",
-           "quantization_step", "sample_rate_of"]
+           "pooled_adev", "quantization_step", "rise_record_length", "sample_rate_of",
+           "segment_bounds"]

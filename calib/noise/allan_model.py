@@ -57,6 +57,32 @@ e^-40). The diagonal ``Var s(m_i)`` gives the exact equivalent degrees of freedo
 for the fitted mixture, ``ν_i = 2 (E s_i)² / Var s_i`` (:func:`edf`), which for a pure power-law
 noise is Greenhall's EDF (``allantools.edf_greenhall``; ``tests/test_allan.py`` compares them).
 
+**Segments** (a log with gaps, :func:`pooled_moments`). A log split at its gaps
+(:func:`calib.logs.static_log.log_segments`) gives segments of ``n_s`` samples, each evenly
+sampled at the one rate. Octave m of the pooled overlapping Allan variance averages every
+overlapping difference of every segment that holds one::
+
+    s(m) = Σ_s c_s(m)·s_s(m) / Σ_s c_s(m),   c_s(m) = max(n_s − 2m + 1, 0)
+
+(``s_s`` the segment's own overlapping Allan variance, ``c_s`` its number of differences; no
+difference straddles a gap — the gap is never filled). With the weights
+``w_s(m) = c_s(m)/Σ_s c_s(m)`` and the segments taken as independent records::
+
+    E s(m_i)              = Σ_s w_s(m_i) · E s_s(m_i)
+    Cov(s(m_i), s(m_j))   = Σ_s w_s(m_i) w_s(m_j) · Cov(s_s(m_i), s_s(m_j))
+
+each segment's moments those above for its own length, on the octaves it supports (``n_s ≥
+2m``, one difference or more; the others get weight 0). Independence is exact for white
+noise, quantization and the random walk (the differences inside a segment see only its own
+white draws and walk increments) and for a Gauss–Markov term whose correlation time is short
+against the gap; for
+flicker (and a longer T_c) the differences of two segments are weakly correlated through the
+process's memory, a positive cross term the pooled covariance leaves out (each segment's
+flicker is also truncated at its own length, as one record's is at its). This is the
+pooling of independent estimates of IEEE Std 952-1997 Annex C and of Greenhall's EDF
+(the degrees of freedom of independent records add, here through the exact covariance).
+One segment is one record: :func:`record_moments` then returns :func:`moments` itself.
+
 **Cost and cache.** Only the record length ``n`` and the octave grid enter these moments, never
 the data, so they are computed once per (n, grid) and kept: in memory, and on disk as one
 ``.npz`` per key under the user's cache folder (:func:`cache_dir`), written atomically (a
@@ -426,6 +452,131 @@ def gm_columns(n: int, ms: tuple[int, ...], tc: float) -> np.ndarray:
     return cols
 
 
+def segment_counts(lengths: tuple[int, ...], ms: tuple[int, ...]) -> np.ndarray:
+    """(S, k) the overlapping differences ``c_s(m) = max(n_s − 2m + 1, 0)`` of each segment at
+    each octave (module docstring: Segments)."""
+    n = np.asarray(lengths, dtype=float)[:, None]
+    m = np.asarray(ms, dtype=float)[None, :]
+    return np.maximum(n - 2.0 * m + 1.0, 0.0)
+
+
+def segment_weights(lengths: tuple[int, ...], ms: tuple[int, ...]) -> np.ndarray:
+    """(S, k) the weights ``w_s(m) = c_s(m)/Σ_s c_s(m)`` of the pooled Allan variance (0 at
+    an octave no segment holds)."""
+    c = segment_counts(lengths, ms)
+    total = c.sum(axis=0)
+    return c / np.where(total > 0, total, 1.0)
+
+
+@dataclass(frozen=True)
+class PooledMoments:
+    """Exact moments (independent segments, module docstring) of the overlapping Allan variance
+    pooled over segments of ``lengths`` samples at octaves ``ms``: the interface of
+    :class:`AllanMoments` (``design``, ``tensor``, ``gm_tc``, ``gm_design``, ``full``), so the
+    fit (:class:`calib.noise.allan_fit.Engine`) uses either unchanged.
+
+    lengths : (S,) samples of each segment (every one holds octave ``ms[0]``: n_s ≥ 2·ms[0]).
+    weights : (S, k) ``w_s(m_i)`` (:func:`segment_weights`).
+    parts : each segment's :class:`AllanMoments` on the octaves it supports (a prefix of ``ms``).
+    design (k, 4), tensor (k, k, 4, 4), gm_design (G, k) : pooled as in the module docstring.
+    gm_tc : (G,) the correlation times of :func:`gm_grid` of ``ms``, in samples.
+    n : Σ_s n_s, the samples of all segments.
+    """
+
+    lengths: tuple[int, ...]
+    ms: tuple[int, ...]
+    weights: np.ndarray
+    parts: tuple[AllanMoments, ...]
+    design: np.ndarray
+    tensor: np.ndarray
+    gm_tc: np.ndarray
+    gm_design: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return int(sum(self.lengths))
+
+    def full(self, g: int | None) -> tuple[np.ndarray, np.ndarray]:
+        """(design (k, 5), tensor (k, k, 5, 5)) with the Gauss–Markov process of T_c
+        ``gm_tc[g]`` in the last place (zeros when ``g`` is None): each segment's covariance
+        columns (:func:`gm_columns` of its length and octaves) pooled with the weights."""
+        k = len(self.ms)
+        design = np.zeros((k, N_PROCESSES))
+        tensor = np.zeros((k, k, N_PROCESSES, N_PROCESSES))
+        design[:, :4] = self.design
+        tensor[:, :, :4, :4] = self.tensor
+        if g is not None:
+            tc = float(self.gm_tc[g])
+            cols = np.zeros((k, k, N_PROCESSES))
+            for w, part in zip(self.weights, self.parts, strict=True):
+                ks = len(part.ms)
+                ww = w[:ks]
+                cols[:ks, :ks] += (ww[:, None, None] * ww[None, :, None]
+                                   * gm_columns(part.n, part.ms, tc))
+            design[:, 4] = self.gm_design[g]
+            tensor[:, :, 4, :] = cols
+            tensor[:, :, :, 4] = cols
+        return design, tensor
+
+
+def supported_octaves(n: int, ms: tuple[int, ...]) -> tuple[int, ...]:
+    """The octaves of ``ms`` a record of ``n`` samples holds a difference at: n ≥ 2m (its
+    ``n − 2m + 1`` overlapping differences ``ȳ_{k+m..k+2m-1} − ȳ_{k..k+m-1}``, one or more)."""
+    return tuple(int(m) for m in ms if n >= 2 * m)
+
+
+@lru_cache(maxsize=16)
+def pooled_moments(lengths: tuple[int, ...], ms: tuple[int, ...]) -> PooledMoments:
+    """:class:`PooledMoments` of segments of ``lengths`` samples at octaves ``ms`` (module
+    docstring: Segments). Each segment's own moments come from :func:`moments` (cached on disk
+    per length and octaves); segments that hold no octave are refused (give only the ones
+    that contribute).
+
+    ``gm_design``: the mean of a Gauss–Markov process's Allan variance does not depend on the
+    record's length (a finite filter against ``φ^|k|``, no memory truncation), so it is the
+    same in every segment and the pooled one (Σ_s w_s = 1) is that of the longest segment,
+    which holds every octave of ``ms``."""
+    lengths = tuple(int(n) for n in lengths)
+    ms = tuple(int(m) for m in ms)
+    k = len(ms)
+    parts = []
+    for n in lengths:
+        own = supported_octaves(n, ms)
+        if not own or own != ms[:len(own)]:
+            raise ValueError(f"a segment of {n} samples holds no octave of {ms}")
+        parts.append(moments(n, own))
+    weights = segment_weights(lengths, ms)
+    if np.any(weights.sum(axis=0) <= 0):
+        raise ValueError(f"no segment of {lengths} holds every octave of {ms}")
+    design = np.zeros((k, 4))
+    tensor = np.zeros((k, k, 4, 4))
+    for w, part in zip(weights, parts, strict=True):
+        ks = len(part.ms)
+        ww = w[:ks]
+        design[:ks] += ww[:, None] * part.design
+        tensor[:ks, :ks] += ww[:, None, None, None] * ww[None, :, None, None] * part.tensor
+    longest = parts[int(np.argmax(lengths))]
+    if longest.ms != ms:
+        raise ValueError(f"the longest segment ({max(lengths)} samples) holds octaves "
+                         f"{longest.ms}, not all of {ms}")
+    out = PooledMoments(lengths=lengths, ms=ms, weights=weights, parts=tuple(parts),
+                        design=design, tensor=tensor, gm_tc=longest.gm_tc,
+                        gm_design=longest.gm_design)
+    for a in (out.weights, out.design, out.tensor):
+        a.setflags(write=False)
+    return out
+
+
+def record_moments(lengths: tuple[int, ...], ms: tuple[int, ...]
+                   ) -> AllanMoments | PooledMoments:
+    """The moments of the records a fit reads: :func:`moments` of the one record (exactly the
+    unsegmented numbers), else :func:`pooled_moments` of the segments."""
+    lengths = tuple(int(n) for n in lengths)
+    if len(lengths) == 1:
+        return moments(lengths[0], tuple(int(m) for m in ms))
+    return pooled_moments(lengths, tuple(int(m) for m in ms))
+
+
 def allan_moments(n: int, ms: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
     """Design and covariance tensor of the overlapping Allan variance for ``n`` samples at the
     averaging factors ``ms``, for the three core unit processes (white, flicker, random walk;
@@ -456,6 +607,8 @@ def edf(design: np.ndarray, tensor: np.ndarray, theta: np.ndarray) -> np.ndarray
 
 __all__ = ["ALL_TERM_NAMES", "CACHE_ENV", "EXTRA_TERM_NAMES", "FLICKER_FLOOR", "GM_CUT",
            "GM_STEPS_PER_OCTAVE",
-           "MOMENTS_VERSION", "N_PROCESSES", "TERM_NAMES", "AllanMoments", "allan_moments",
-           "avar_covariance", "cache_dir", "edf", "flicker_coefficients", "gm_avar", "gm_columns",
-           "gm_grid", "moments", "term_value", "terms_from_theta", "theta_from_terms"]
+           "MOMENTS_VERSION", "N_PROCESSES", "TERM_NAMES", "AllanMoments", "PooledMoments",
+           "allan_moments", "avar_covariance", "cache_dir", "edf", "flicker_coefficients",
+           "gm_avar", "gm_columns", "gm_grid", "moments", "pooled_moments", "record_moments",
+           "segment_counts", "segment_weights", "supported_octaves", "term_value",
+           "terms_from_theta", "theta_from_terms"]

@@ -32,6 +32,12 @@ Leaving H out would make the test conservative (its size about half of α on 12 
 against the log's, and which is higher); when the joint test rejects but no single octave
 crosses that bound, the octave of largest |z| is named.
 
+**Logs with gaps.** A log characterized from segments (:mod:`calib.noise.allan`: Logs with
+gaps) is compared with a twin of the same segment lengths: each segment simulated as its own
+record (the model's independent records), averaged in the same blocks, its Allan variance
+pooled the same way (:func:`calib.noise.allan.pooled_adev`), and the moments those of the
+pooled estimator (:func:`calib.noise.allan_model.record_moments`).
+
 Size and power are measured in ``tests/test_twin_closure.py`` on logs made by a generator
 written apart from the bench (``validation/noise_independent``): rejection of a true twin at
 ≈ α (binomial band), of a twin 1.5× noisier in nearly every log.
@@ -44,9 +50,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special, stats
 
-from calib.noise.allan import overlapping_adev
+from calib.input_rules import DataError
+from calib.noise.allan import overlapping_adev, pooled_adev
 from calib.noise.allan_fit import LADDER, Engine, Model
-from calib.noise.allan_model import ALL_TERM_NAMES, edf, moments
+from calib.noise.allan_model import ALL_TERM_NAMES, edf, record_moments, supported_octaves
 from calib.results import ResultMixin, readonly
 
 CLOSURE_ALPHA = 0.05
@@ -117,7 +124,7 @@ def _model_of(fit) -> tuple[Model, np.ndarray]:
     active = tuple(sorted(ALL_TERM_NAMES.index(n) for n in names))
     active = next(a for a in LADDER if set(a) == set(active))
     g = None
-    mom = moments(fit.n_fit, fit.ms)
+    mom = record_moments(fit.fit_lengths, fit.ms)
     gm = fit.term("gauss_markov")
     if gm is not None:
         rate = fit.ms[0] / fit.taus[0]
@@ -139,7 +146,7 @@ def closure_test(fit, twin_adev: np.ndarray, alpha: float = CLOSURE_ALPHA) -> Cl
     alpha : family α.
     """
     model, theta_twin = _model_of(fit)
-    mom = moments(fit.n_fit, fit.ms)
+    mom = record_moments(fit.fit_lengths, fit.ms)
     design, tensor = mom.full(model.g)
     s = np.asarray(fit.adev, float) ** 2
     t = np.asarray(twin_adev, float) ** 2
@@ -192,9 +199,24 @@ def closure_test(fit, twin_adev: np.ndarray, alpha: float = CLOSURE_ALPHA) -> Cl
                    parted=parted if reject else ())
 
 
-def twin_adev(fit, y: np.ndarray, rate: float) -> np.ndarray:
-    """(k,) the overlapping ADEV of a twin's readings ``y`` ((N,) at ``rate`` Hz, as many as
-    the log's) on the log's grid: the same block means (N/n_fit samples each) and octaves."""
+def twin_adev(fit, y, rate: float) -> np.ndarray:
+    """(k,) the overlapping ADEV of a twin's readings on the log's grid: the same block means
+    and octaves. ``y``: (N,) at ``rate`` Hz, as many as the log's (one record, N/n_fit samples
+    per block), or a list of arrays, one per segment of a log with gaps (the log's segment
+    lengths, in order: block means per segment, the Allan variance pooled over the segments
+    that hold the first octave, as :func:`calib.noise.allan.fit_axis_noise` did)."""
+    if isinstance(y, (list, tuple)):
+        block = max(1, int(round(rate * float(fit.taus[0]) / fit.ms[0])))
+        pieces = [np.asarray(p, dtype=float) for p in y]
+        pieces = [p if block == 1 else p[:p.size // block * block].reshape(-1, block).mean(axis=1)
+                  for p in pieces]
+        used = [p for p in pieces if supported_octaves(p.size, fit.ms)]
+        if tuple(p.size for p in used) != fit.fit_lengths:
+            raise DataError(f"axis {fit.axis}: the twin's segments hold "
+                            f"{[p.size for p in used]} samples after block means, the log's "
+                            f"{list(fit.fit_lengths)}: simulate the twin with the log's "
+                            "segment lengths")
+        return pooled_adev(used, rate / block, fit.ms)[1]
     y = np.asarray(y, dtype=float)
     block = max(1, y.size // fit.n_fit)
     yb = y if block == 1 else y[:fit.n_fit * block].reshape(-1, block).mean(axis=1)
