@@ -174,7 +174,8 @@ def closure_test(fit, twin_adev: np.ndarray, alpha: float = CLOSURE_ALPHA) -> Cl
     xf = design[lo:hi][:, act]
     vff = v[lo:hi, lo:hi]
     cov_theta = np.asarray(fit.cov, float)
-    gain = cov_theta @ xf.T @ np.linalg.inv(vff)  # (p, k_f)
+    # (Cov θ) Xᵀ V⁻¹ as a solve (V symmetric): ((V⁻¹ X)(Cov θ))ᵀ, no inverted matrix
+    gain = (np.linalg.solve(vff, xf) @ cov_theta.T).T  # (p, k_f)
     kept = [i for i, a in enumerate(act) if theta_twin[a] > 0 or a == 0]
     h = np.zeros((k, k))
     h[:, lo:hi] = (design[:, [act[i] for i in kept]] @ gain[kept]) * mu[lo:hi][None, :]
