@@ -304,6 +304,8 @@ def _window_mean(x: np.ndarray, w: int) -> np.ndarray:
     return total
 
 
+_PREFIX = 1 << 14
+"""Samples of each column whose quantization step bounds the column's (:class:`_QuantFloor`)."""
 _BLOCK = 1 << 20
 """Samples per block where a long log's column is walked in pieces (bounded temporaries)."""
 
@@ -335,10 +337,37 @@ def _range_stats(x: np.ndarray, ranges: list[tuple[int, int]]
 
 def _ratio(nu: float, level: float) -> float:
     """``χ²_ν(0.999) / χ²_ν(level)``: from a quantile of static windows to their 99.9 %
-    point."""
-    from scipy.stats import chi2
+    point (``scipy.special.chdtri``, the inverse upper tail: scipy.stats takes ≈ 0.4 s to
+    import and a long log's import needs nothing else of it)."""
+    from scipy.special import chdtri
 
-    return float(chi2.ppf(STATIC_QUANTILE, nu) / chi2.ppf(level, nu))
+    return float(chdtri(nu, 1.0 - STATIC_QUANTILE) / chdtri(nu, 1.0 - level))
+
+
+class _QuantFloor:
+    """The quantization variance ``Σ_k Δ_k²/12`` of some columns (Δ_k: :func:`_quant_step`),
+    taken exactly only where it can matter: the steps of each column's first
+    :data:`_PREFIX` samples are at least the column's (their distinct values are a subset), so
+    their sum bounds the floor from above; :meth:`max_with` sorts the whole columns only when a
+    value falls below that bound. A long log's detection then needs no sort of its columns."""
+
+    def __init__(self, cols: list[np.ndarray], least: float = 0.0):
+        self.cols, self.least = cols, least
+        steps = [_quant_step(c[:_PREFIX]) for c in cols]
+        # one value in the prefix says nothing about the column's step: no bound
+        self.bound = (np.inf if any(d == 0.0 and c.size > _PREFIX for d, c in zip(steps, cols,
+                                                                                  strict=True))
+                      else max(sum(d * d / 12.0 for d in steps), least))
+        self._exact: float | None = None
+
+    def exact(self) -> float:
+        if self._exact is None:
+            self._exact = max(sum(_quant_step(c) ** 2 / 12.0 for c in self.cols), self.least)
+        return self._exact
+
+    def max_with(self, x: float) -> float:
+        """``max(x, floor)``, exactly."""
+        return x if x >= self.bound else max(x, self.exact())
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -397,19 +426,19 @@ def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray 
     v = window_variance(watch[0], w)
     for col in watch[1:]:  # summed in place: one accumulator, not a new array per axis
         v += window_variance(col, w)
-    floor = sum(_quant_step(col) ** 2 / 12.0 for col in watch)
-    q = max(float(np.quantile(v, QUIET_QUANTILE)), floor, 1e-18)
+    floor = _QuantFloor(watch)
+    q = max(floor.max_with(float(np.quantile(v, QUIET_QUANTILE))), 1e-18)
     thr = LOOSE * MARGIN * q * _ratio(nu_v, QUIET_QUANTILE)
     coarse = v <= thr
     gq = gthr = wsq = None
-    gfloor = 0.0
+    gfloor = None
     if gyro is not None:
         g = np.asarray(gyro, dtype=float).reshape(n, -1)
         nu_w = float(w * g.shape[1])
         wsq = sum(_window_mean((g[:, j] - np.median(g[:, j])) ** 2, w)
                   for j in range(g.shape[1]))
-        gfloor = max(sum(_quant_step(g[:, j]) ** 2 / 12.0 for j in range(g.shape[1])), 1e-24)
-        gq = max(float(np.quantile(wsq, QUIET_QUANTILE)), gfloor)
+        gfloor = _QuantFloor([g[:, j] for j in range(g.shape[1])], least=1e-24)
+        gq = gfloor.max_with(float(np.quantile(wsq, QUIET_QUANTILE)))
         gthr = LOOSE * MARGIN * gq * _ratio(nu_w, QUIET_QUANTILE)
         coarse &= wsq <= gthr
     # stage 2: each candidate hold against its own noise (median of its windows)
@@ -417,11 +446,11 @@ def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray 
     for a, b in _runs(coarse):
         if b - a < hold:
             continue
-        tau = min(thr, MARGIN * max(float(np.median(v[a:b])), floor) * _ratio(nu_v, 0.5))
+        tau = min(thr, MARGIN * floor.max_with(float(np.median(v[a:b]))) * _ratio(nu_v, 0.5))
         quiet = v[a:b] <= tau
         gtau = None
         if wsq is not None:
-            gtau = min(gthr, MARGIN * max(float(np.median(wsq[a:b])), gfloor)
+            gtau = min(gthr, MARGIN * gfloor.max_with(float(np.median(wsq[a:b])))
                        * _ratio(nu_w, 0.5))
             quiet &= wsq[a:b] <= gtau
         for x, y in _runs(quiet):
