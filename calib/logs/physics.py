@@ -32,8 +32,10 @@ _LIKELY = (  # (ratio of what is read to what is expected, what it suggests)
                        "header)"),
     (1e-3, "the numbers look like g read as mg: give --units g"),
     (1e3, "the numbers look like mg read as g: give --units mg"),
-    (STANDARD_GRAVITY / 1e3, "the numbers look like mg read as m/s²: give --units mg"),
-    (1e3 / STANDARD_GRAVITY, "the numbers look like m/s² read as mg: give --units m/s2"),
+    # m/s² numbers taken for mg read 1e-3 · g₀ m/s² per m/s²: g₀/1000 of the truth; mg
+    # numbers taken for m/s² read 1000/g₀ times it
+    (STANDARD_GRAVITY / 1e3, "the numbers look like m/s² read as mg: give --units m/s2"),
+    (1e3 / STANDARD_GRAVITY, "the numbers look like mg read as m/s²: give --units mg"),
 )
 
 

@@ -79,6 +79,8 @@ PROVENANCE_UNITS: dict[str, str] = {
 """Unit of every number a provenance record can hold (key paths as :mod:`calib.units` writes
 them; list items share their list's path). The detected poses and the gyro angle carry their
 own maps (:func:`provenance_units`)."""
+_BAG_SUFFIXES = (".bag", ".db3", ".mcap")
+"""Names of ROS bag files: one that does not read as a bag is refused as such, not as a .mat."""
 GAP_FACTOR = 5.0
 """A step longer than this many median steps is a gap."""
 SATURATION_RUN = 10
@@ -339,6 +341,10 @@ def read_log(path: str | os.PathLike, options: LogOptions | None = None,
     options = options or LogOptions()
     path = Path(path)
     fmt = detect_format(path, options)
+    if fmt == "unknown" and path.suffix.lower() in _BAG_SUFFIXES and path.is_file():
+        raise DataError(f"{path}: not a readable ROS bag (a ROS 1 bag starts with '#ROSBAG "
+                        "V2.0'; a ROS 2 bag is a folder with metadata.yaml): empty, cut short "
+                        "at its start or not a bag; give --format if it is another format")
     if expect is not None and fmt in ("course", "unknown"):
         names = _mat_names(path) if fmt == "course" else []
         if not (expect == "ensayo" and "pose" in names and "tita" not in names):
@@ -355,7 +361,9 @@ def read_log(path: str | os.PathLike, options: LogOptions | None = None,
         return _read_course(path, options, read_ensayo, read_acel)
     raw = _read_raw(path, fmt, options, progress)
     log = assemble(raw, options, path)
-    if expect != "acel":  # a vehicle run's readings are its motion, not gravity at rest
+    # a vehicle run's in-plane readings are its motion, not gravity at rest: it is checked
+    # only when it has the axis normal to its plane, where a planar vehicle feels g
+    if expect != "acel" or log.acc_normal is not None:
         check_one_g(log.acc, log.acc_normal, log.pose, G if options.g is None else options.g,
                     str(path), tilt_plane=expect == "ensayo" or log.theta is not None,
                     units=(log.provenance.get("units") or {}).get("acc"),

@@ -8,6 +8,13 @@ own folder ``DIR/cases/<id>``, prints a table by kind and writes ``DIR/fuzz.json
 The cases are written from the issue text and the user docs (``docs/*.md``,
 ``tiltbench X --help``), not from the code that handles them.
 
+The front door (issue 31: the log readers and every command that reads a log, the sensor
+profile) has kinds of its own, in :mod:`validation.fuzz.front_door` with the log writers of
+:mod:`validation.fuzz.logfiles`: ``unit_mistake``, ``sensor_file``, ``bad_bag``,
+``cell_count``, ``unit_suffix``, ``log_refusal`` and the named valid set ``valid_log``
+(``--kinds unit_mistake,sensor_file,bad_bag,cell_count,unit_suffix,log_refusal,valid_log``;
+``tests/test_fuzz_front_door.py`` runs them in its process).
+
 Classification of one run (a case can carry several faults)
 -----------------------------------------------------------
 =================  ===========================================================================
@@ -30,6 +37,9 @@ Classification of one run (a case can carry several faults)
                    uncertainty (fused / dead-reckoned end > 5σ from the true end, with no
                    "inconsistent" in the output), or exit 0 on an input the issue says must
                    be refused (an edited calibration graded, |ρ| > 1, n = 0)
+``vague``          a refusal (exit 2) whose error line does not say what the case says it
+                   must (``Case.says``): the likely unit, the file and field, the line
+``refused_valid``  exit 2 on an input of the named valid set (``expect="valid"``)
 =================  ===========================================================================
 
 A case with none of these is ``clean``. The summary ends with the widest line printed (of

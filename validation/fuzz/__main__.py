@@ -21,13 +21,15 @@ REPO = Path(__file__).resolve().parents[2]
 def table(outcomes: list[Outcome]) -> str:
     """Cases and faults by kind (a case with several faults counts in each column)."""
     kinds = list(dict.fromkeys(o.kind for o in outcomes))
-    head = f"{'kind':<12}{'cases':>6}{'clean':>6}" + "".join(f"{k:>13}" for k in FAULTS)
+    wide = {k: max(13, len(k) + 1) for k in FAULTS}  # a space before every column's name
+    head = f"{'kind':<12}{'cases':>6}{'clean':>6}" + "".join(f"{k:>{wide[k]}}" for k in FAULTS)
     rows = [head]
     for kind in [*kinds, "total"]:
         sel = [o for o in outcomes if kind in ("total", o.kind)]
         counts = [sum(k in o.faults for o in sel) for k in FAULTS]
         clean = sum(not o.faults for o in sel)
-        rows.append(f"{kind:<12}{len(sel):>6}{clean:>6}" + "".join(f"{c:>13}" for c in counts))
+        rows.append(f"{kind:<12}{len(sel):>6}{clean:>6}"
+                    + "".join(f"{c:>{wide[k]}}" for k, c in zip(FAULTS, counts, strict=True)))
     return "\n".join(rows)
 
 

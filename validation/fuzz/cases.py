@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from validation.fuzz import front_door
 from validation.fuzz.runner import Case, end_check, mention_check
 
 NMIN_FAST = ["--confirm-runs", "0", "--draws", "0", "--quiet", "--workers", "1"]
@@ -494,6 +495,7 @@ KINDS = {
     "int_sweep": int_sweep,
     "writers": writers,
     "message": messages,
+    **front_door.KINDS,  # issue 31: the log readers and the commands that read logs
 }
 
 

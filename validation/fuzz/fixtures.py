@@ -9,21 +9,14 @@ from __future__ import annotations
 
 import copy
 import json
-import subprocess
-import sys
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import scipy.io
 
-
-def tiltbench(argv: list[str], cwd: Path, env: dict) -> None:
-    """Run a fixture-building command; a failure here is the harness's, so it raises."""
-    proc = subprocess.run([sys.executable, "-m", "bench.cli", *argv], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=600)
-    if proc.returncode != 0:
-        raise RuntimeError(f"fixture `tiltbench {' '.join(argv)}` failed:\n{proc.stderr}")
+from validation.fuzz import front_door
+from validation.fuzz.runner import tiltbench
 
 
 def _mat(path: Path, **arrays) -> Path:
@@ -83,6 +76,7 @@ def build(base: Path, seed: int, env: dict,
     _small_and_empty(base, f, rng)
     _truth_files(base, f)
     _logs(base, f, rng)
+    f.update(front_door.build(base, seed, env, run))  # issue 31's front-door kinds
     return f
 
 

@@ -21,7 +21,7 @@ LAST_RESORT = ("please report", "would be nan", "singular matrix", "overflowerro
 """Messages that mean a check is missing (case-insensitive)."""
 
 FAULTS = ("traceback", "last_resort", "multi_line", "wide_line", "hang", "leftover",
-          "result_lost", "bad_exit", "silent_wrong")
+          "result_lost", "bad_exit", "silent_wrong", "vague", "refused_valid")
 
 WIDTH = 100
 """Widest line a command may print, in columns (the README's promise; issue 29)."""
@@ -37,7 +37,11 @@ class Case:
     ``argv``: the ``tiltbench`` arguments (paths relative to the case folder); ``files``:
     inputs copied into the case folder before the run ({name in case: source path});
     ``expect``: ``"refuse"`` (exit 2 expected: exit 0 is silent_wrong), ``"any"`` (exit 0 or
-    2), ``"truth"`` (exit 0 must pass ``check``); ``parallel``: more argvs started at the
+    2), ``"truth"`` (exit 0 must pass ``check``), ``"valid"`` (a valid input: exit 0 expected
+    and ``check`` passed; a refusal is ``refused_valid``); ``says``: a pattern (regular
+    expression, case ignored) that the error message of a refusal (exit 2) must hold — the
+    likely unit, the file and field, the line number —, else ``vague``; ``parallel``: more
+    argvs started at the
     same moment (concurrent writers); ``kill_after``: seconds after which the first run is
     killed (SIGKILL), then run again to see that start-up removes its temporaries;
     ``inputs_unchanged``: files that the run must not modify.
@@ -53,6 +57,7 @@ class Case:
     kill_after: float | None = None
     inputs_unchanged: tuple[str, ...] = ()
     ok_codes: tuple[int, ...] = (0, 2)
+    says: str | None = None
 
     def __post_init__(self) -> None:
         verdict = VERDICT_EXIT.get(self.argv[0] if self.argv else "")
@@ -155,12 +160,16 @@ def stage(case: Case, root: Path) -> None:
         shutil.copy2(src, dst)
 
 
+def before(case: Case, root: Path) -> tuple[set[str], dict[str, bytes]]:
+    """What :func:`classify` compares after the runs: the hidden files of the staged folder
+    ``root`` and the bytes of ``case.inputs_unchanged``."""
+    return _hidden(root), {n: (root / n).read_bytes() for n in case.inputs_unchanged}
+
+
 def run_case(case: Case, root: Path, env: dict) -> Outcome:
     """Run ``case`` in ``root`` (created, inputs copied) and classify it."""
     stage(case, root)
-    before_hidden = _hidden(root)
-    before_bytes = {n: (root / n).read_bytes() for n in case.inputs_unchanged}
-    faults: list[str] = []
+    before_hidden, before_bytes = before(case, root)
     details: list[str] = []
     t0 = time.monotonic()
     if case.kill_after is not None:
@@ -177,6 +186,18 @@ def run_case(case: Case, root: Path, env: dict) -> Outcome:
         left = max(1.0, TIMEOUT - (time.monotonic() - t0))
         results.append(_wait(p, left if case.kill_after is None else TIMEOUT))
     seconds = time.monotonic() - t0
+    return classify(case, root, results, seconds, before_hidden, before_bytes, details)
+
+
+def classify(case: Case, root: Path, results: list[tuple[int | None, str, str]],
+             seconds: float, before_hidden: set[str], before_bytes: dict[str, bytes],
+             details: list[str] | None = None) -> Outcome:
+    """The :class:`Outcome` of ``case`` from its runs' ``(exit code or None for a hang,
+    stdout, stderr)`` (the first: ``case.argv``; then ``case.parallel``), the hidden files
+    and the ``inputs_unchanged`` bytes of ``root`` before the runs (the table in the package
+    doc). Shared by :func:`run_case` (subprocesses) and any other way of running a case."""
+    faults: list[str] = []
+    details = list(details or [])
     codes = [r[0] for r in results]
     out, err = results[0][1], "\n".join(r[2] for r in results)
     if "Traceback" in err:
@@ -214,8 +235,19 @@ def run_case(case: Case, root: Path, env: dict) -> Outcome:
     if codes[0] == 0 and case.expect == "refuse":
         faults.append("silent_wrong")
         details.append("accepted an input that must be refused")
+    if codes[0] == 2 and case.expect == "valid":
+        faults.append("refused_valid")
+        details.append("refused a valid input")
+    if codes[0] == 2 and case.says is not None:
+        said = " ".join(error_lines(results[0][2]))
+        if not re.search(case.says, said, re.IGNORECASE):
+            faults.append("vague")
+            details.append(f"the refusal does not say /{case.says}/")
     if codes[0] == 0 and case.check is not None:
-        why = case.check(0, out, err, root)
+        try:
+            why = case.check(0, out, err, root)
+        except Exception as exc:  # an answer the check cannot read is no answer
+            why = f"the truth check cannot read the answer: {exc!r}"
         if why:
             faults.append("silent_wrong")
             details.append(why)
@@ -290,3 +322,11 @@ def mention_check(pattern: str, what: str) -> Check:
         return None if rx.search(out + err) else f"exit 0 and silent about {what}"
 
     return check
+
+
+def tiltbench(argv: list[str], cwd: Path, env: dict) -> None:
+    """Run a fixture-building command; a failure here is the harness's, so it raises."""
+    proc = subprocess.run([sys.executable, "-m", "bench.cli", *argv], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=600)
+    if proc.returncode != 0:
+        raise RuntimeError(f"fixture `tiltbench {' '.join(argv)}` failed:\n{proc.stderr}")
