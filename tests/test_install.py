@@ -236,8 +236,8 @@ def test_missing_recording_extra_is_one_line(monkeypatch, capsys, tmp_path):
 
 
 def _parser_with_handler(build, handler):
-    def patched():
-        parser = build()
+    def patched(only=None):
+        parser = build(only=only)
         parser.set_defaults(handler=handler)
         for action in parser._subparsers._group_actions:
             for sub in action.choices.values():
