@@ -184,9 +184,12 @@ def log_segments(t: np.ndarray | None, rate: float | None, where: str) -> LogSeg
     stops = np.concatenate([cut + 1, [t.size]])
     bounds = tuple((int(a), int(b)) for a, b in zip(starts, stops, strict=True))
     gaps = tuple((int(k), float(t[k]), float(dt[k])) for k in cut)
-    inside = np.delete(dt, cut)
-    missing = int(np.sum(np.maximum(np.rint(inside / med) - 1.0, 0.0)))
-    for k, (a, b) in enumerate(bounds):
+    # steps of 1.5 to GAP_FACTOR median steps: readings missing inside a segment (the few
+    # long steps only are looked at: no temporaries the length of the log)
+    long = np.flatnonzero(dt >= 1.5 * med)
+    long = long[dt[long] <= GAP_FACTOR * med]
+    missing = int(np.sum(np.rint(dt[long] / med) - 1.0))
+    for k, (a, b) in enumerate(bounds if len(bounds) > 1 else ()):  # one: its step is med
         if b - a < 3:
             continue  # a step or none: contributes nothing (too short for one octave)
         own = float(np.median(dt[a:b - 1]))
@@ -227,8 +230,8 @@ def stuck_axis(y: np.ndarray) -> float | None:
     y = np.asarray(y, dtype=float)
     if y.size == 0:
         return None
-    span = float(np.max(y) - np.min(y))
-    top = float(np.max(np.abs(y)))
+    hi, lo = float(np.max(y)), float(np.min(y))
+    span, top = hi - lo, max(abs(hi), abs(lo))
     return float(np.median(y)) if span <= STUCK_SPAN * max(1.0, top) else None
 
 
