@@ -50,8 +50,11 @@ def parse_pose_angles(text: str) -> tuple[float, ...]:
     return tuple(float("nan") if c == OUT_OF_PLANE else next(values) for c in cells)
 
 
-def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
-    """Add the log options (module docstring) to a command's parser."""
+def add_log_options(p: argparse.ArgumentParser, poses: bool = True,
+                    splits_gaps: bool = False) -> None:
+    """Add the log options (module docstring) to a command's parser; ``splits_gaps``: the
+    command reads a log with gaps on its own (it splits the log at them: ``noise``), and
+    ``--allow-gaps`` is kept for scripts but changes nothing."""
     # the command's name, for the progress of reading a long log (reading_progress)
     p.set_defaults(log_command=p.prog.split(" ", 1)[-1])
     g = p.add_argument_group("reading a measured log (docs/real-data.md)")
@@ -68,8 +71,11 @@ def add_log_options(p: argparse.ArgumentParser, poses: bool = True) -> None:
     add_option(g, "--angle-unit", choices=("rad", "deg"), help="unit of θ, --poses and "
                "label angles (if not given: rad, with the data-based degrees check)")
     add_option(g, "--map")
-    add_option(g, "--allow-gaps", help="read a log with gaps in time (> 5 median steps; "
-               "refused by default, listed in the provenance)")
+    add_option(g, "--allow-gaps", help=(
+        "accepted, changes nothing: this command splits a log at its gaps in time (> 5 "
+        "median steps) and never fills them" if splits_gaps else
+        "read a log with gaps in time (> 5 median steps; refused by default, listed in the "
+        "provenance)"))
     add_option(g, "--allow-saturation", help="read a log with stretches at a column's extreme "
                "value (refused by default as saturated)")
     if poses:

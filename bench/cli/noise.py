@@ -291,7 +291,7 @@ def register(sub) -> None:
     p = add_command(sub, "noise", _cmd_noise, description=DESCRIPTION,
                     help="Allan deviation and noise terms of a static log (sensor.json)")
     p.add_argument("log", metavar="STATIC_LOG", help="a log of one held pose")
-    add_log_options(p, poses=False)
+    add_log_options(p, poses=False, splits_gaps=True)
     add_option(p, "--rate", type=float, help="sample rate, Hz (required when the log has no "
                "sample times; overrides them otherwise)")
     add_option(p, "--level", type=float, default=0.683,
