@@ -100,6 +100,7 @@ from __future__ import annotations
 
 import csv
 import gzip
+import hashlib
 import io
 import os
 import re
@@ -312,6 +313,48 @@ class _NotUtf8Error(Exception):
     Latin-1 and is read again as such."""
 
 
+class _Hashed:
+    """A binary file read front to back, its bytes fed to a sha256 as they are read: the
+    provenance's hash of a log without reading the file a second time
+    (:func:`calib.logs.reader.file_sha256` gives the same digest)."""
+
+    def __init__(self, f) -> None:
+        self.f, self._sha = f, hashlib.sha256()
+        self.mode, self.name = "rb", getattr(f, "name", "")
+
+    def read(self, size: int = -1) -> bytes:
+        data = self.f.read(size)
+        self._sha.update(data)
+        return data
+
+    def readinto(self, view) -> int:
+        got = self.f.readinto(view)
+        self._sha.update(view[:got])
+        return got
+
+    def tell(self) -> int:
+        return self.f.tell()
+
+    def seek(self, offset: int, whence: int = 0) -> int:
+        """Only back to the start (the hash starts again): the reader reads front to back."""
+        if (offset, whence) != (0, 0):
+            raise io.UnsupportedOperation("a hashed log is read front to back")
+        self._sha = hashlib.sha256()
+        return self.f.seek(0)
+
+    def fileno(self) -> int:
+        return self.f.fileno()
+
+    def close(self) -> None:
+        self.f.close()
+
+    def hexdigest(self) -> str:
+        """The sha256 of the whole file: what was read, then the rest of it."""
+        while block := self.f.read(1 << 20):
+            self._sha.update(block)
+        return self._sha.hexdigest()
+
+
 class _Source:
     """The file's bytes in blocks of about :data:`CHUNK_BYTES` that end after a line end
     (gunzipped as read; the BOM dropped), the text encoding found so far and the progress.
@@ -323,7 +366,7 @@ class _Source:
 
     def __init__(self, path: Path, encoding: str | None, progress: Progress | None) -> None:
         self.path = path
-        self.raw = open(path, "rb")  # noqa: SIM115  (closed by close())
+        self.raw = _Hashed(open(path, "rb"))  # noqa: SIM115  (closed by close())
         self.total = os.fstat(self.raw.fileno()).st_size
         self.gzip = self.raw.read(2) == GZIP_MAGIC
         self.raw.seek(0)
@@ -704,6 +747,7 @@ def _read(path: Path, columns: dict[str, str], fmt: str, options: dict[str, str 
         src.report(src.total)
         labels = out.labels
         notes_gzip = src.gzip
+        sha256 = src.raw.hexdigest()
     if rows.n == 0:
         raise DataError(f"{path}: a header but no samples")
     acc = {r[4:]: v for r, v in values.items() if r.startswith("acc.")}
@@ -722,7 +766,7 @@ def _read(path: Path, columns: dict[str, str], fmt: str, options: dict[str, str 
         theta_unit=angle_unit(units.get("theta")),
         label=None if labels is None else np.array(labels, dtype=object),
         gyro=gyro, gyro_unit=g_unit,
-        rows=rows, row_word="line", mapping=mapping,
+        rows=rows, row_word="line", mapping=mapping, sha256=sha256,
         notes={"delimiter": {"\t": "tab", None: "spaces"}.get(delim, delim),
                "decimal": "," if decimal_comma and any("," in s for s in parser.firsts)
                else ".",

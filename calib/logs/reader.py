@@ -418,7 +418,8 @@ def _read_raw(path: Path, fmt: str, options: LogOptions,
         member = choose_member(path)
         with extracted(path, member) as inner:
             raw = _read_raw(inner, "csv", options, progress)
-        return replace(raw, notes=dict(raw.notes, zip_member=member))
+        # the member's hash is not the file's: the provenance hashes the zip itself
+        return replace(raw, notes=dict(raw.notes, zip_member=member), sha256=None)
     if fmt == "csv":
         from calib.logs.csvlog import read_csv
 
@@ -705,7 +706,7 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
         theta = _angles(raw.theta, theta_unit)
     prov: dict[str, Any] = {
         "format_version": LOG_FORMAT_VERSION,
-        "source": {"name": path.name, "sha256": file_sha256(path)},
+        "source": {"name": path.name, "sha256": raw.sha256 or file_sha256(path)},
         "format": raw.fmt,
         "mapping": dict(raw.mapping),
         "axes": list(options.axes),

@@ -183,6 +183,8 @@ class RawLog:
     mapping : role → the column, field or variable it was read from (provenance).
     columns : role → the column name to quote in messages (acc axes as ``acc.x`` …).
     notes : what the reader saw (delimiter, decimal mark, topic, …) — JSON-able.
+    sha256 : the file's sha256 (hex) when the reader hashed it as it read it (CSV), else
+        None (the provenance then hashes the file: :func:`calib.logs.reader.file_sha256`).
     """
 
     fmt: str
@@ -198,6 +200,7 @@ class RawLog:
     row_word: str = "sample"
     mapping: dict[str, str] = field(default_factory=dict)
     notes: dict[str, Any] = field(default_factory=dict)
+    sha256: str | None = None
 
     @property
     def n(self) -> int:
