@@ -50,14 +50,14 @@ from bench.cli import (  # noqa: E402
 from bench.cli.options import Parser, refuse_numbers, resolve_deferred  # noqa: E402
 from bench.cli.output import command_outputs, fit_columns, forget_logs_read  # noqa: E402
 
-COMMANDS = (generate, calibrate, apply, trajectory, nmin, design, fuse, fusion_study, record,
-            validate, gap, importlog, noise, demo, examples)
-"""Command modules, in the order of the help."""
 BY_NAME = {"generate": generate, "calibrate": calibrate, "apply": apply,
            "trajectory": trajectory, "nmin": nmin, "design": design, "fuse": fuse,
            "fusion-study": fusion_study, "record": record, "validate": validate, "gap": gap,
            "import": importlog, "noise": noise, "demo": demo, "examples": examples}
-"""The module of each command name (tests/test_cli_parser.py checks it against the parsers)."""
+"""The module of each command name, in the order of the help (tests/test_cli_parser.py checks
+it against the parsers)."""
+COMMANDS = tuple(BY_NAME.values())
+"""Command modules, in the order of the help."""
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:

@@ -693,7 +693,9 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
                 gyro_from = f"{'-' if sign < 0 else ''}{raw.mapping.get('gyro_' + k, k)}"
         if gyro is not None:
             _check_finite(raw, gyro, f"gyro '{gyro_from}'", path)
-        raw.gyro.clear()
+    # the gyro columns are in gyro / gyro_s now (or ignored): the originals go too, before
+    # the pose detector needs its own working memory (only labels and names are read later)
+    raw.gyro.clear()
     # θ
     theta = None
     theta_unit = None
@@ -732,10 +734,6 @@ def assemble(raw: RawLog, options: LogOptions, path: Path) -> ImuLog:
             arr.setflags(write=False)
     log = ImuLog(acc=acc, t=t, theta=theta, gyro=gyro, acc_normal=acc_normal, acc_s=acc_s,
                  gyro_s=gyro_s, source=where, provenance=prov)
-    # the raw columns are in the record now (scaled): let a long log's originals go before
-    # the pose detector needs its own working memory (only labels and names are read later)
-    raw.acc.clear()
-    raw.gyro.clear()
     return _poses(log, raw, options, path)
 
 

@@ -237,17 +237,28 @@ class AllanMoments:
     def full(self, g: int | None) -> tuple[np.ndarray, np.ndarray]:
         """(design (k, 5), tensor (k, k, 5, 5)) with the Gauss–Markov process of T_c
         ``gm_tc[g]`` in the last place (zeros when ``g`` is None)."""
-        k = len(self.ms)
-        design = np.zeros((k, N_PROCESSES))
-        tensor = np.zeros((k, k, N_PROCESSES, N_PROCESSES))
-        design[:, :4] = self.design
-        tensor[:, :, :4, :4] = self.tensor
-        if g is not None:
-            cols = gm_columns(self.n, self.ms, float(self.gm_tc[g]))
-            design[:, 4] = self.gm_design[g]
-            tensor[:, :, 4, :] = cols
-            tensor[:, :, :, 4] = cols
-        return design, tensor
+        if g is None:
+            return with_gauss_markov(self.design, self.tensor)
+        return with_gauss_markov(self.design, self.tensor, self.gm_design[g],
+                                 gm_columns(self.n, self.ms, float(self.gm_tc[g])))
+
+
+def with_gauss_markov(design4: np.ndarray, tensor4: np.ndarray,
+                      gm_design: np.ndarray | None = None, gm_cols: np.ndarray | None = None
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """(design (k, 5), tensor (k, k, 5, 5)) of the four processes' ``design4`` (k, 4) and
+    ``tensor4`` (k, k, 4, 4) with a Gauss–Markov process in the last place: its design column
+    ``gm_design`` (k,) and covariance products ``gm_cols`` (k, k, 5); zeros when not given."""
+    k = design4.shape[0]
+    design = np.zeros((k, N_PROCESSES))
+    tensor = np.zeros((k, k, N_PROCESSES, N_PROCESSES))
+    design[:, :4] = design4
+    tensor[:, :, :4, :4] = tensor4
+    if gm_cols is not None:
+        design[:, 4] = gm_design
+        tensor[:, :, 4, :] = gm_cols
+        tensor[:, :, :, 4] = gm_cols
+    return design, tensor
 
 
 GM_STEPS_PER_OCTAVE = 8
@@ -500,23 +511,16 @@ class PooledMoments:
         """(design (k, 5), tensor (k, k, 5, 5)) with the Gauss–Markov process of T_c
         ``gm_tc[g]`` in the last place (zeros when ``g`` is None): each segment's covariance
         columns (:func:`gm_columns` of its length and octaves) pooled with the weights."""
-        k = len(self.ms)
-        design = np.zeros((k, N_PROCESSES))
-        tensor = np.zeros((k, k, N_PROCESSES, N_PROCESSES))
-        design[:, :4] = self.design
-        tensor[:, :, :4, :4] = self.tensor
-        if g is not None:
-            tc = float(self.gm_tc[g])
-            cols = np.zeros((k, k, N_PROCESSES))
-            for w, part in zip(self.weights, self.parts, strict=True):
-                ks = len(part.ms)
-                ww = w[:ks]
-                cols[:ks, :ks] += (ww[:, None, None] * ww[None, :, None]
-                                   * gm_columns(part.n, part.ms, tc))
-            design[:, 4] = self.gm_design[g]
-            tensor[:, :, 4, :] = cols
-            tensor[:, :, :, 4] = cols
-        return design, tensor
+        if g is None:
+            return with_gauss_markov(self.design, self.tensor)
+        k, tc = len(self.ms), float(self.gm_tc[g])
+        cols = np.zeros((k, k, N_PROCESSES))
+        for w, part in zip(self.weights, self.parts, strict=True):
+            ks = len(part.ms)
+            ww = w[:ks]
+            cols[:ks, :ks] += (ww[:, None, None] * ww[None, :, None]
+                               * gm_columns(part.n, part.ms, tc))
+        return with_gauss_markov(self.design, self.tensor, self.gm_design[g], cols)
 
 
 def supported_octaves(n: int, ms: tuple[int, ...]) -> tuple[int, ...]:
@@ -611,4 +615,4 @@ __all__ = ["ALL_TERM_NAMES", "CACHE_ENV", "EXTRA_TERM_NAMES", "FLICKER_FLOOR", "
            "allan_moments", "avar_covariance", "cache_dir", "edf", "flicker_coefficients",
            "gm_avar", "gm_columns", "gm_grid", "moments", "pooled_moments", "record_moments",
            "segment_counts", "segment_weights", "supported_octaves", "term_value",
-           "terms_from_theta", "theta_from_terms"]
+           "terms_from_theta", "theta_from_terms", "with_gauss_markov"]
