@@ -104,3 +104,23 @@ def test_find_steps_places_and_sizes_and_the_words():
                      + 0.3 * np.random.default_rng(3).standard_normal(1000), 0.09)
     words = describe(one, np.arange(1000) / 10.0, "s", "x")
     assert words.startswith("a step of +0.99 m/s² (+3.3 σ) in the bias on x at t = 50 s")
+
+
+def test_a_faint_staircase_a_walk_fits_as_well_is_listed_as_not_identifiable():
+    """Three steps of 0.3 σ (two of them 1.2 s apart) fit about as well as a walk after their
+    charges (AIC gain within ``CYCLE_MARGIN``) and a walk adds nothing beyond them: the walk
+    is named (the catalog's) and the pair is listed under ``not_identifiable`` with the
+    steps' shape in words — never a silent walk."""
+    n = 4001
+    t, th, _ = stop_and_go(n, seed=0, moves=24, turns=3.0)
+    _, y = course_readings(th, 0)
+    for c in (0.2, 0.6, 0.63):
+        y[int(c * n):, 0] += 0.3 * SIGMA_X
+    res = analyze_gap(validate_ensayo(th, y, t), STATED)
+    walk = [w for w in res.adequacy["walk"] if w["axis"] == "x"][0]
+    assert walk["steps"]["decision"] == "describes", walk["steps"]
+    assert 0.0 < walk["steps"]["gain"] <= 12.0
+    pair = [d for d in res.not_identifiable if d["names"] == ["bias_random_walk", "bias_steps"]]
+    assert len(pair) == 1 and pair[0]["axis"] == "x", res.not_identifiable
+    assert pair[0]["reason"].startswith("cannot tell a walk from steps on x: a staircase of")
+    assert ("bias_random_walk", "x") in res.named

@@ -203,7 +203,8 @@ class WalkReview:
     steps: dict | None = None
     """Steps of the bias against the walk (:func:`step_drift`): ``{"decision": "steps" |
     "describes", "count", "gain", "share", "walk_beyond_lr", "walk_beyond_p", "size",
-    "description"}``, or None when the walk beats them or is needed beyond them."""
+    "description", "cannot_tell"}``, or None when the walk beats them or is needed beyond
+    them."""
 
     @property
     def cycle_wins(self) -> bool:
@@ -1051,7 +1052,11 @@ def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
     refitted, p ≥ :data:`WALK_BEYOND_ALPHA`) the drift is step-like (``"describes"``: its
     words are the steps'); when moreover D passes the slow cycle's margins
     (``D > CYCLE_MARGIN`` and ``D > CYCLE_SHARE·(LR_w − 2·c_w)``) the steps replace the walk
-    (``"steps"``: the walk is not named). A Brownian path segmented so leaves its walk inside
+    (``"steps"``: the walk is not named); within them (``"describes"``) the walk is named and
+    the pair is listed under ``not_identifiable`` (``"cannot_tell"``): on weak true walks of
+    4001 samples a walk adds nothing beyond one to three steps that fit about as well in a
+    few runs of fifty, as on faint staircases, so such a run cannot tell them apart. A
+    Brownian path segmented so leaves its walk inside
     every segment (the walk is still needed beyond the steps); two-level switching, a step or
     a staircase leaves white noise. None when there is no step, or with a sensor profile
     (q fixed: the walk is known noise)."""
@@ -1075,11 +1080,18 @@ def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
         return None
     share = gain / max(walk_criterion, 1e-300)
     decision = "steps" if gain > CYCLE_MARGIN else "describes"
+    words = describe(fit, run.tcol, run.time_unit, AXES[k])
+    beyond = ("a walk adds nothing beyond them" if logp >= np.log(WALK_BEYOND_ALPHA) else
+              "their levels alternate between two values")
     return {"decision": decision, "count": fit.count, "two_level": bool(two),
             "gain": float(gain),
             "share": float(share), "walk_beyond_lr": float(lr),
             "walk_beyond_p": float(np.exp(logp)), "size": float(np.max(np.abs(fit.sizes))),
-            "description": describe(fit, run.tcol, run.time_unit, AXES[k])}
+            "description": words,
+            "cannot_tell": (f"cannot tell a walk from steps on {AXES[k]}: {words} fits as "
+                            f"well (AIC gain {gain:.3g} over the walk's {walk_criterion:.4g}, "
+                            f"within the margin {CYCLE_MARGIN:g}) and {beyond}; a longer run "
+                            "(more steps, or a walk wandering between them) separates them")}
 
 
 def review_walk(ext: Extensions, state: ModelState, k: int, e: np.ndarray,
