@@ -274,7 +274,12 @@ def _cmd_noise(args: argparse.Namespace) -> int:
     c = checked
     excess = ", ".join(f"{a} {e:.3g} (limit {lim:.3g})" for a, e, lim in
                        zip(names, c["excess_std"], c["excess_limit"], strict=False))
-    print(f"static check: {c['window']:g} s windows, largest mean shift {c['max_shift']:.3g} "
+    from calib.logs.static_log import WINDOW_CORR
+
+    longer = (f" ({WINDOW_CORR:g} correlation times of {c['correlation_time']:.3g} s: a "
+              "filtered log)" if c["window"] > args.static_window * 1.5 else "")
+    print(f"static check: {c['window']:.3g} s windows{longer}, largest mean shift "
+          f"{c['max_shift']:.3g} "
           f"m/s² (limit {max([c['shift'], *c.get('shift_noise_floor', [])]):.3g} m/s²: "
           f"{c['shift']:g} or the noise floor), largest variance ratio {c['max_var_ratio']:.3g} "
           f"(limit {c['var_ratio']:g}); scatter beyond the sample-to-sample noise {excess} "

@@ -26,7 +26,8 @@ window shift           a window mean more than ``shift`` m/s² above the lowest 
                        window mean (a tilt of ≈ 1.75° at 0.3 m/s²), or above the
                        noise floor of the window means where that is larger
 window variance        a window variance above ``var_ratio`` × the median          9
-                       window's (handling, a burst of vibration)
+                       window's (handling, a burst of vibration); windows of
+                       at least ``WINDOW_CORR`` correlation times
 gyro                   with a gyro, a window mean rate above ``max_rate``          0.05 rad/s
 not still              the scatter the sample-to-sample noise does not explain,    0.3 m/s²
                        ``e² = var(y) − var(Δy)/2``, above ``MAX_EXCESS_STD²`` +
@@ -40,6 +41,16 @@ zero up to its sampling error (``e²`` is then the lag-1 autocovariance, std ``�
 slower than the sample rate adds to ``var(y)`` far more than to ``var(Δy)`` (a sine of
 frequency f adds A²/2 to the first and A²·sin²(πf/fs) to the second). Isolated spikes add
 equally to both and do not count. Drift counts, as the window shift does.
+
+**A filtered log.** A window of w white readings has a variance ``σ²·χ²_{w−1}/(w−1)``: its
+ratio to the median window's stays below 2 at w = 100, and 9 is a burst. A log low-pass
+filtered below its Nyquist frequency (a digital filter, a decimated export) holds few
+independent readings per window: a 10 Hz phone export with a correlation time of about a
+second has about two per 1-s window, and its quiet windows reach 14× the median by chance.
+The window tests therefore lay windows of at least :data:`WINDOW_CORR` correlation times
+(:func:`correlation_time`: the first lag where an axis' autocorrelation falls below 1/e, the
+longest over the axes, read on up to :data:`CORR_SAMPLES` readings), about ten independent
+readings each; a white log's correlation time is one sample and its window stays ``window``.
 The noise characterization itself: :mod:`calib.noise.allan`.
 """
 
@@ -52,6 +63,13 @@ import numpy as np
 
 from calib.input_rules import DataError
 from calib.logs.reader import GAP_FACTOR
+
+WINDOW_CORR = 10.0
+"""Shortest window of the window tests in correlation times (module docstring: A filtered
+log)."""
+
+CORR_SAMPLES = 1 << 17
+"""Readings (from the start) the correlation time is read on."""
 
 STUCK_SPAN = 1e-9
 """An axis is stuck when all its readings lie within ``STUCK_SPAN·max(1 m/s², max|y|)`` of each
@@ -307,11 +325,15 @@ def check_static(acc: np.ndarray, rate: float, where: str, *, window: float = 1.
                 f"{acc.shape[0]} readings within {STUCK_SPAN:g} of each other, relative): a "
                 "stuck, dead or saturated axis has no noise to characterize; check the logger "
                 "and its columns (--columns, --axes)")
-    w = max(2, int(round(window * rate)))
     spans = ((0, acc.shape[0]),) if segments is None else tuple(segments)
+    lag = max(correlation_time(acc[a:b]) for a, b in spans[:1])
+    # the correlation's window leaves at least 20 windows; never shorter than asked for
+    longest = max(b - a for a, b in spans)
+    w = max(2, int(round(window * rate)), min(int(np.ceil(WINDOW_CORR * lag)), longest // 20))
     nwin = sum((b - a) // w for a, b in spans)
     out: dict[str, Any] = {"window": w / rate, "shift": shift, "var_ratio": var_ratio,
-                           "max_shift": 0.0, "max_var_ratio": 1.0}
+                           "max_shift": 0.0, "max_var_ratio": 1.0,
+                           "correlation_time": lag / rate}
     if nwin >= 2:
         _check_windows(acc, rate, where, w, shift, var_ratio, gyro, max_rate, names, out,
                        spans, t)
@@ -329,6 +351,29 @@ def check_static(acc: np.ndarray, rate: float, where: str, *, window: float = 1.
                 "the log; `tiltbench noise` needs one held pose: record it lying still, or "
                 "cut the log to a still stretch")
     return out
+
+
+def correlation_time(acc: np.ndarray) -> int:
+    """The longest over the axes of the first lag (samples) where the autocorrelation of the
+    readings, a straight line removed, falls below 1/e: 1 for white noise, about the filter's
+    time constant for a low-pass filtered log; read on the first :data:`CORR_SAMPLES`
+    readings (module docstring: A filtered log)."""
+    y = np.asarray(acc[:CORR_SAMPLES], dtype=float)
+    if y.ndim == 1:
+        y = y[:, None]
+    n = y.shape[0]
+    if n < 16:
+        return 1
+    t = np.arange(n, dtype=float)
+    a = np.column_stack([np.ones(n), t - t.mean()])
+    y = y - a @ np.linalg.lstsq(a, y, rcond=None)[0]
+    size = 1 << int(np.ceil(np.log2(2 * n)))
+    f = np.fft.rfft(y, size, axis=0)
+    acf = np.fft.irfft(f * np.conj(f), size, axis=0)[:n // 2]
+    acf = acf / np.where(acf[0] > 0, acf[0], 1.0)
+    below = acf < np.exp(-1.0)
+    first = np.where(below.any(axis=0), np.argmax(below, axis=0), n // 2)
+    return int(max(1, first.max()))
 
 
 def _window_stats(acc: np.ndarray, a: int, w: int, nwin: int

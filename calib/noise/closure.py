@@ -27,6 +27,14 @@ twin), so
 
 Leaving H out would make the test conservative (its size about half of α on 12 octaves).
 
+**Inside the model's τ range.** When the model describes only part of the grid (a narrower τ
+range chosen by the fit's rule, :mod:`calib.noise.allan_fit`), the twin cannot follow the log
+outside it (a decimation filter, a feature no term has): the same statistic is also computed
+on the octaves of the model's range alone — ``u_r`` and the sub-block ``Σ_u,rr`` of the same
+covariance, ``T_r ~ χ²_{k_r}`` under the same hypothesis — and reported beside the joint test
+(``model_range``), which stays the verdict; the summary says when every octave where they part
+lies outside the model's range.
+
 **Where they part.** Per octave ``z_i = u_i / √Σ_u,ii``; octaves with ``|z_i|`` above the
 Šidák bound of the family, ``Φ⁻¹(1 − (1 − (1 − α)^{1/k})/2)``, are named (the twin's ADEV
 against the log's, and which is higher); when the joint test rejects but no single octave
@@ -68,6 +76,8 @@ class Closure(ResultMixin):
     taus (k,) s; adev, twin_adev (k,) in the reading's unit; z (k,) per-octave standardized
     differences (positive: the log above the twin); statistic T, dof k, p; alpha; reject;
     parted : indices of the octaves named as where the twin and the log part.
+    range_octaves : (lo, hi) the model's octaves (``taus[lo:hi]``); range_statistic,
+    range_p : the same test on them alone (module docstring: Inside the model's τ range).
     """
 
     axis: str
@@ -81,6 +91,9 @@ class Closure(ResultMixin):
     alpha: float
     reject: bool
     parted: tuple[int, ...]
+    range_octaves: tuple[int, int] = (0, 0)
+    range_statistic: float = float("nan")
+    range_p: float = float("nan")
 
     _TITLE = "Twin closure"
     _UNITS = "τ s; ADEV in the reading unit"
@@ -89,6 +102,18 @@ class Closure(ResultMixin):
         for name in ("taus", "adev", "twin_adev", "z"):
             object.__setattr__(self, name, readonly(getattr(self, name)))
         object.__setattr__(self, "parted", tuple(int(i) for i in self.parted))
+        object.__setattr__(self, "range_octaves", tuple(int(i) for i in self.range_octaves))
+
+    @property
+    def partial_range(self) -> bool:
+        """The model describes only part of the grid's octaves."""
+        lo, hi = self.range_octaves
+        return hi > lo and (lo > 0 or hi < self.taus.size)
+
+    @property
+    def range_reject(self) -> bool:
+        """The test on the model's octaves alone rejects at α."""
+        return bool(self.range_p < self.alpha)
 
     def summary(self) -> str:
         head = (f"twin closure, axis {self.axis}: T = {self.statistic:.1f} on {self.dof} "
@@ -100,21 +125,38 @@ class Closure(ResultMixin):
             side = "above" if self.z[i] < 0 else "below"
             parts.append(f"τ = {self.taus[i]:.3g} s (twin {self.twin_adev[i]:.3g} {side} the "
                          f"log's {self.adev[i]:.3g}, z = {self.z[i]:+.1f})")
-        return head + "REJECTED — the twin parts from the log at " + "; ".join(parts)
+        out = head + "REJECTED — the twin parts from the log at " + "; ".join(parts)
+        if self.partial_range:
+            lo, hi = self.range_octaves
+            inside = [i for i in self.parted if lo <= i < hi]
+            where = ("every one outside" if not inside else "some inside")
+            out += (f" — {where} the model's τ range {self.taus[lo]:.3g}–"
+                    f"{self.taus[hi - 1]:.3g} s (the profile does not describe the others); "
+                    f"on that range alone T = {self.range_statistic:.1f} on {hi - lo} octaves, "
+                    f"p = {self.range_p:.2g}: "
+                    + ("rejected" if self.range_reject else "not rejected"))
+        return out
 
     def to_dict(self) -> dict:
         return {"axis": self.axis, "taus": self.taus.tolist(), "adev": self.adev.tolist(),
                 "twin_adev": self.twin_adev.tolist(), "z": self.z.tolist(),
                 "statistic": float(self.statistic), "dof": int(self.dof), "p": float(self.p),
                 "alpha": float(self.alpha), "reject": bool(self.reject),
-                "parted": list(self.parted)}
+                "parted": list(self.parted),
+                "model_range": {"octaves": list(self.range_octaves),
+                                "statistic": float(self.range_statistic),
+                                "dof": int(self.range_octaves[1] - self.range_octaves[0]),
+                                "p": float(self.range_p), "reject": self.range_reject}}
 
     @classmethod
     def from_dict(cls, d: dict) -> Closure:
         return cls(axis=d["axis"], taus=d["taus"], adev=d["adev"], twin_adev=d["twin_adev"],
                    z=d["z"], statistic=float(d["statistic"]), dof=int(d["dof"]),
                    p=float(d["p"]), alpha=float(d["alpha"]), reject=bool(d["reject"]),
-                   parted=tuple(d["parted"]))
+                   parted=tuple(d["parted"]),
+                   range_octaves=tuple(d["model_range"]["octaves"]),
+                   range_statistic=float(d["model_range"]["statistic"]),
+                   range_p=float(d["model_range"]["p"]))
 
 
 def _model_of(fit) -> tuple[Model, np.ndarray]:
@@ -195,9 +237,12 @@ def closure_test(fit, twin_adev: np.ndarray, alpha: float = CLOSURE_ALPHA) -> Cl
     parted = tuple(int(i) for i in np.nonzero(np.abs(z) > crit)[0])
     if reject and not parted:
         parted = (int(np.argmax(np.abs(z))),)
+    r = slice(lo, hi)  # the model's octaves alone: the sub-block of the same covariance
+    stat_r = float(u[r] @ np.linalg.solve(cov_u[r, r], u[r]))
     return Closure(axis=fit.axis, taus=fit.taus, adev=fit.adev, twin_adev=twin_adev, z=z,
                    statistic=stat, dof=k, p=p, alpha=alpha, reject=bool(reject),
-                   parted=parted if reject else ())
+                   parted=parted if reject else (), range_octaves=(lo, hi),
+                   range_statistic=stat_r, range_p=float(stats.chi2.sf(stat_r, hi - lo)))
 
 
 def twin_adev(fit, y, rate: float) -> np.ndarray:

@@ -1,0 +1,1 @@
+"""validation.real_static — independent checks of ``tiltbench noise`` on real static IMU logs."""
