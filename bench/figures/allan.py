@@ -41,7 +41,7 @@ def _label(fit: AxisNoise) -> str:
         if t.resolved:
             parts.append(f"{_SHORT[t.name]} {ds['value']:.3g} {ds['unit']}")
         elif t.name in _SHORT and t.name != "white_noise_density":
-            parts.append(f"{_SHORT[t.name]} < {ds['upper_bound']:.2g}")
+            parts.append(f"{_SHORT[t.name]} < {ds['upper_bound']:.2g} {ds['unit']}")
     ok = "" if fit.fit_ok else " — NO model describes it"
     return f"{fit.axis}: " + ", ".join(parts) + f" (p = {fit.p_fit:.2g}{ok})"
 
@@ -73,9 +73,7 @@ def _kind_panel(ax, fits: list[AxisNoise], level: float) -> None:
     ax.set_yscale("log")
     ax.set_xlabel("averaging time τ (s)")
     ax.set_ylabel(f"Allan deviation ({fits[0].unit})")
-    ax.set_title(f"{kind}: points with {level:.1%} χ² bars (EDF); solid: the fitted model on "
-                 "its τ range, dotted: outside it; dashed: resolved terms' asymptotes",
-                 fontsize=8)
+    ax.set_title(kind, fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=6.5, loc="lower left")
 
@@ -91,8 +89,11 @@ def allan_figure(result: NoiseCharacterization, title: str | None = None) -> Fig
                             constrained_layout=True, squeeze=False)
     for ax, fits in zip(axs[0], kinds.values(), strict=True):
         _kind_panel(ax, fits, result.level)
-    fig.suptitle(title or f"Allan deviation: {result.n} samples at {result.sample_rate:g} Hz "
-                 f"({result.duration:.4g} s)")
+    fig.suptitle((title or f"Allan deviation: {result.n} samples at {result.sample_rate:g} Hz "
+                  f"({result.duration:.4g} s)")
+                 + f"\npoints with {result.level:.1%} χ² bars (EDF); solid: the fitted model on "
+                 "its τ range, dotted: outside it; dashed: resolved terms' asymptotes",
+                 fontsize=10)
     return fig
 
 

