@@ -80,6 +80,11 @@ board held by hand beside one resting on a table — and still be a candidate ho
 MERGE_STDS = 3.0
 """Runs closer than ``min_hold`` whose means differ by less than this many per-sample stds
 on both axes are the same pose."""
+
+FEW_HOLDS = 4
+"""Fewer detected holds than this (a multi-position calibration's least) get the hint to try a
+shorter window and minimum hold; with more, the detector found holds and what is missing is
+something else (poses in the tilt plane, orientations)."""
 DEFAULT_WINDOW_S, DEFAULT_HOLD_S = 0.5, 1.0
 """Window and minimum hold, s, when the log has sample times."""
 DEFAULT_WINDOW_N, DEFAULT_HOLD_N = 25, 100
@@ -196,13 +201,15 @@ class PoseDetection(ResultMixin):
         hand rarely holds still for a full second). ``rate``: Hz, to say them in seconds."""
         if rate:
             w, h = f"{self.window / rate:.3g} s", f"{self.min_samples / rate:.3g} s"
-            try_ = "--window 0.1 --min-hold 0.5 (seconds)"
+            try_ = "--static-window 0.1 --min-hold 0.5 (seconds)"
         else:
             w, h = f"{self.window} samples", f"{self.min_samples} samples"
-            try_ = "--window 10 --min-hold 50 (samples: the log has no times)"
-        return (f"the pose detector found {self.count} hold(s) with a window of {w} and a "
-                f"minimum hold of {h}; on a hand-held or high-rate log shorter ones find more: "
-                f"try {try_}")
+            try_ = "--static-window 10 --min-hold 50 (samples: the log has no times)"
+        found = (f"the pose detector found {self.count} hold(s) with a window of {w} and a "
+                 f"minimum hold of {h}")
+        if self.count >= FEW_HOLDS:  # holds were found: what is missing is not detection
+            return found
+        return f"{found}; on a hand-held or high-rate log shorter ones find more: try {try_}"
 
     def summary(self) -> str:
         held = int(np.sum(self.labels >= 0))
