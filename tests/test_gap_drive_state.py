@@ -81,7 +81,8 @@ def test_clean_stop_and_go_names_nothing(seed):
     res = _analyse(t, th, y)
     assert res.verdict == "nothing_detected", res.summary()
     names = {c["name"] for c in res.adequacy["checks"]}
-    assert {"drive_level", "drive_gain", "drive_variance", "drive_spectrum"} <= names
+    assert {"drive_level", "drive_gain", "drive_variance", "drive_spectrum",
+            "drive_tone"} <= names
 
 
 def test_the_checks_p_values_are_uniform_under_noise_alone():
@@ -100,7 +101,8 @@ def test_the_checks_p_values_are_uniform_under_noise_alone():
             resid = y[:, k] - design @ coef  # the nominal model's residual
             for c in drive_checks(ext, state, k, resid):
                 below.setdefault(c.name, []).append(c.p_value < 0.05)
-    assert set(below) == {"drive_level", "drive_gain", "drive_variance", "drive_spectrum"}
+    assert set(below) == {"drive_level", "drive_gain", "drive_variance", "drive_spectrum",
+                          "drive_tone"}
     for name, hits in below.items():
         share = float(np.mean(hits))
         assert 0.015 <= share <= 0.10, (name, share, len(hits))
@@ -154,6 +156,24 @@ def test_a_vibration_while_moving_is_unexplained_with_its_frequency():
     spec = [u for u in res.unexplained if u["signature"] == "drive_spectrum"]
     assert res.verdict == "unexplained" and spec, _words(res)
     assert "Hz" in spec[0]["description"]
+
+
+def test_a_faint_vibration_while_moving_is_found_by_its_tone():
+    """A 23 Hz tone of 0.13 m/s² (σ = 0.5 m/s²) only while moving: too faint for ten lags of
+    autocorrelation or the noise variance, one periodogram ordinate of the moving samples
+    holds it (``drive_tone``: S ≈ n_m·A²/(2σ²) ≈ 70 over ~2000 frequencies)."""
+    t, th, moving = stop_and_go(seed=7)
+    _, y = course_readings(th, 7)
+    y[:, 0] += moving * 0.13 * np.sin(2.0 * np.pi * 23.0 * t + 0.4)
+    res = _analyse(t, th, y)
+    tone = [u for u in res.unexplained if u["signature"] == "drive_tone"]
+    assert res.verdict == "unexplained" and tone, _words(res)
+    words = tone[0]["description"]
+    hz = float(words.split("a tone of ")[1].split(" Hz")[0])
+    amp = float(words.split("about ")[1].split(" m/s²")[0])
+    assert abs(hz - 23.0) < 0.05 and 0.09 < amp < 0.17, words
+    assert not any(u["signature"] in ("drive_spectrum", "drive_variance")
+                   for u in res.unexplained), _words(res)
 
 
 def test_a_disturbance_that_follows_the_drive_torque():

@@ -5,7 +5,7 @@ the sensor, a vibration of the drive, a cable that pulls while the table turns, 
 changes with the speed, the acceleration or the drive torque — is present while the table
 moves and gone while it holds. The catalog has none of these; the selection never looks at
 the drive state. So the final model's residuals are compared between the **moving** and the
-**held** stretches of a run, by four checks of the adequacy battery (:mod:`calib.gap.adequacy`,
+**held** stretches of a run, by five checks of the adequacy battery (:mod:`calib.gap.adequacy`,
 each at the battery's Bonferroni level; a failure makes the verdict "unexplained" with the
 words "present while moving …", where — the moving stretches and their share of the run — and
 how big, in m/s²).
@@ -39,6 +39,16 @@ check                     statistic and reference distribution under the model
                           stretch): ``Σ_j (r_j^m − r_j^h)² / (1/P_j^m + 1/P_j^h) ~ χ²(h)``,
                           ``P_j`` the pairs at lag j (each r_j ≈ N(0, 1/P_j) for white noise,
                           independent across lags). A vibration while moving.
+``drive_tone``            the periodogram of z on the moving samples alone (held ones set
+                          to 0): at each Fourier frequency f of the run the pair
+                          ``(Σ_M z cos ωk, Σ_M z sin ωk)`` with its exact covariance under
+                          the model, ``C(f) = [[Σ_M cos², Σ_M cos·sin], [·, Σ_M sin²]]``
+                          (from the mask's DFT at 2f), gives ``S(f) = uᵀC⁻¹u ~ χ²(2)``;
+                          the largest over the m frequencies of at least one cycle per
+                          median moving stretch, ``P ≤ m·e^{−S/2}`` (Bonferroni). A tone
+                          while moving — a vibration of the drive — which ``drive_spectrum``
+                          (ten lags) and ``drive_variance`` (the whole noise) dilute: a tone
+                          of amplitude A over n_m moving samples gives ``S ≈ n_m·A²/(2σ²)``.
 ========================  ==================================================================
 
 Why by hand: these are tests of this bench's drive states; no library conditions a
@@ -60,6 +70,11 @@ MIN_STATE = 50
 
 SPECTRUM_LAGS = 10
 """Lags h of ``drive_spectrum`` (each needs at least :data:`MIN_PAIRS` pairs per state)."""
+
+TONE_CONDITION = 0.2
+"""A frequency of ``drive_tone`` is scanned only where the moving mask leaves its cos and sin
+columns apart: ``det C(f) ≥ TONE_CONDITION·(n_m/2)²`` (near 0, the Nyquist frequency and a
+mask period's half, cos and sin sampled on the mask are nearly one column)."""
 
 MIN_PAIRS = 30
 """Fewest lagged pairs within the stretches of a state for a lag to be used."""
@@ -252,10 +267,55 @@ def _spectrum(z: np.ndarray, run, moving: np.ndarray, scale: float, axis: str, w
                  "the drive)")
 
 
+def _tone(z: np.ndarray, run, moving: np.ndarray, scale: float, axis: str, where: str
+          ) -> Check | None:
+    n = z.size
+    nm = int(moving.sum())
+    if nm < MIN_STATE or n - nm < MIN_STATE:
+        return None
+    x = np.where(moving, z - float(np.mean(z[moving])), 0.0)
+    spec = np.fft.rfft(x)  # Σ_M x e^{−iωk}, ω = 2πj/n
+    mask = np.fft.fft(moving.astype(float))  # Σ_M e^{−iωk} at every j: 2ω is index 2j
+    parts = stretches(moving)
+    lowest = int(np.ceil(n / max(float(np.median([b - a for a, b in parts])), 1.0)))
+    j = np.arange(max(lowest, 1), (n - 1) // 2 + 1)
+    if j.size == 0:
+        return None
+    a, b = spec[j].real, -spec[j].imag  # Σ x cos ωk, Σ x sin ωk
+    w2 = mask[(2 * j) % n]
+    cc, ss = 0.5 * (nm + w2.real), 0.5 * (nm - w2.real)
+    cs = -0.5 * w2.imag  # Σ cos·sin = ½ Σ sin 2ωk
+    det = cc * ss - cs * cs
+    ok = det >= TONE_CONDITION * (0.5 * nm) ** 2
+    if not np.any(ok):
+        return None
+    stat_all = np.where(ok, (ss * a * a - 2.0 * cs * a * b + cc * b * b)
+                        / np.where(ok, det, 1.0), 0.0)
+    i = int(np.argmax(stat_all))
+    stat, m = float(stat_all[i]), int(np.sum(ok))
+    logp = float(min(0.0, np.log(m) - 0.5 * stat))
+    amp = float(np.sqrt(max(2.0 * (stat - 2.0) / nm, 0.0))) * scale
+    held = ~moving  # the same frequency's amplitude on the held samples, for the words
+    kk = np.flatnonzero(held)
+    om = 2.0 * np.pi * j[i] / n
+    zh = z[kk] - float(np.mean(z[kk]))
+    amp_h = float(2.0 * np.hypot(zh @ np.cos(om * kk), zh @ np.sin(om * kk)) / kk.size) * scale
+    if run.time_unit == "s":
+        f = j[i] / n / float(np.median(np.diff(run.tcol)))
+        at = f"{f:.4g} Hz"
+    else:
+        at = f"{j[i] / n:.4g} cycles per sample"
+    return Check("drive_tone", axis, stat, logp, f"max χ²(2) over {m} frequencies", amp,
+                 "m/s²",
+                 f"present while moving on {axis}: a tone of {at}, about {amp:.2g} m/s² "
+                 f"{where}, against {amp_h:.2g} m/s² at that frequency held (a vibration of "
+                 "the drive)")
+
+
 def drive_checks(ext: Extensions, state: ModelState, k: int, residual: np.ndarray,
                  torque: np.ndarray | None = None, coarse: bool = False,
                  space: AxisSpace | None = None) -> list[Check]:
-    """The four drive-state checks on axis k of the final model (those that apply).
+    """The five drive-state checks on axis k of the final model (those that apply).
 
     residual : (N,) the final model's residuals of axis k, m/s², white with the model's
         variance σ²_eff under the model (:func:`calib.gap.adequacy.run_battery`'s input).
@@ -280,5 +340,6 @@ def drive_checks(ext: Extensions, state: ModelState, k: int, residual: np.ndarra
              _gain(space, run, k, moving, tq, axis, where)]
     if not coarse:
         found += [_variance(z, moving, scale, axis, where),
-                  _spectrum(z, run, moving, scale, axis, where)]
+                  _spectrum(z, run, moving, scale, axis, where),
+                  _tone(z, run, moving, scale, axis, where)]
     return [c for c in found if c is not None]
