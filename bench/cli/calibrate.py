@@ -130,6 +130,15 @@ def _gravity_note(args: argparse.Namespace, log) -> None:
               "--latitude DEG [--height M] or --g", file=sys.stderr)
 
 
+def _note_correlated(poses, source) -> None:
+    """One stderr line when the holds' noise is correlated and counted in the intervals."""
+    if poses.tau_int > 1.0:
+        print(f"note: {source}: the noise within the holds is correlated (integrated "
+              f"autocorrelation time {poses.tau_int:.3g} samples: a filtered or decimated "
+              "log); each hold counts its samples / that time as independent readings in the "
+              "intervals", file=sys.stderr)
+
+
 def detector_hint(log, message: str) -> str | None:
     """The pose detector's window and minimum hold, and shorter ones to try, when a refusal
     ``message`` is about too few held poses and the poses were detected (not labelled)."""
@@ -177,6 +186,7 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
     if log.acc_normal is not None:
         acc3 = np.column_stack([log.acc, log.acc_normal])
         poses3 = pose_statistics(acc3, pose, args.ensayo)
+        _note_correlated(poses3, args.ensayo)
         if on_faces(poses3):
             return _six_face(args, poses3, log)
         why_planar = three_axis_applies(poses3, args.g)
@@ -194,6 +204,8 @@ def _multiposition(args: argparse.Namespace, log, nv) -> int:
                               f"not apply here ({why_planar or 'the log has no third axis'}); "
                               "give σx²,σy² for the planar fit")
         poses = pose_statistics(log.acc, pose, args.ensayo)
+        if log.acc_normal is None:
+            _note_correlated(poses, args.ensayo)
         fit = warnings_to_stderr(lambda: fit_multiposition(poses, nv, args.g, args.ensayo))
     comparison = None
     if log.theta is not None:

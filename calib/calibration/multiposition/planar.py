@@ -57,6 +57,7 @@ class MultiPositionFit(PoseFit, ResultMixin):
         "residuals": "m/s²", "sigma2": "(m/s²)²", "sigma2_dof": "count", "dof": "count",
         "chi2": "1", "rank": "count", "cond": "1", "max_gap": "rad", "g": "m/s²",
         "poses.labels": "—", "poses.n": "count", "poses.means": "m/s²", "poses.ss": "(m/s²)²",
+        "poses.tau_int": "samples",
     }
     _ARRAYS = (*PoseFit._ARRAYS, "angles", "angles_std")
     _DICT_KEYS = ("param_names", "params", "std", "cov", "angles", "angles_std", "poses",
@@ -168,8 +169,7 @@ def in_plane(poses: Poses, g: float = G) -> tuple[Poses, np.ndarray]:
     ok = np.abs(norm - g) <= PLANE_FRACTION * g
     if np.all(ok):
         return poses, np.zeros(0, dtype=int)
-    return (Poses(poses.labels[ok], poses.n[ok], poses.means[ok], poses.ss[ok]),
-            poses.labels[~ok])
+    return poses.subset(ok), poses.labels[~ok]
 
 
 def fit_multiposition(
@@ -211,7 +211,7 @@ def fit_multiposition(
     """
     where = "" if source == "<memory>" else f"{source}: "
     if poses.axes == 3:  # the tilt plane only: the normal axis is the 3-axis fit's
-        poses = Poses(poses.labels, poses.n, poses.means[:, :2], poses.ss[:, :2])
+        poses = poses.subset(slice(None), axes=2)
     poses, left_out = in_plane(poses, g)
     if left_out.size:
         warnings.warn(

@@ -94,6 +94,7 @@ class MultiPosition3DFit(PoseFit, ResultMixin):
         "sigma2_dof": "count", "quantization": "m/s²", "dof": "count", "chi2": "1",
         "rank": "count", "cond": "1", "min_eig": "1", "largest_cap": "rad", "g": "m/s²",
         "poses.labels": "—", "poses.n": "count", "poses.means": "m/s²", "poses.ss": "(m/s²)²",
+        "poses.tau_int": "samples",
     }
     _ARRAYS = (*PoseFit._ARRAYS, "directions", "directions_std", "quantization")
     _DICT_HEAD = (("axes", 3),)
