@@ -111,8 +111,15 @@ class PoseFit:
 
     @property
     def n(self) -> int:
-        """Samples used (held poses only)."""
+        """Samples used (held poses only; the effective count when the holds' noise is
+        correlated, :attr:`Poses.tau_int`)."""
         return int(self.poses.n.sum())
+
+    def _count(self) -> str:
+        if self.poses.tau_int > 1.0:
+            return (f"N = {self.n} effective (correlated noise: τ_int = "
+                    f"{self.poses.tau_int:.3g} samples)")
+        return f"N = {self.n}"
 
     @property
     def bias(self) -> np.ndarray:
@@ -142,7 +149,7 @@ class PoseFit:
         return []
 
     def summary(self, level: float = 0.95) -> str:
-        out = [f"Calibration: {self._SUMMARY_TITLE}, g = {self.g} m/s², N = {self.n}, "
+        out = [f"Calibration: {self._SUMMARY_TITLE}, g = {self.g} m/s², {self._count()}, "
                f"{self.poses.count} poses", *self.param_table(level),
                self.sigma2_line(*self._SIGMA2_LINE), *self.pose_lines()]
         if self.lack_of_fit is not None:
