@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
-from calib.calibration.multiposition.shared import integrated_correlation, pose_statistics
+from calib.calibration.lackoffit import integrated_correlation
+from calib.calibration.multiposition.shared import pose_statistics
 from calib.calibration.sixface import fit_six_face
 from tests.cli import run
 
@@ -99,3 +100,38 @@ def test_calibrate_says_the_holds_are_correlated(tmp_path, capsys):
     assert "the noise within the holds is correlated" in said
     shown = " ".join(out.split())
     assert "six-face calibration" in shown and "6 holds on 6 faces" in shown
+
+
+def test_theta_least_squares_with_groups_cover_on_filtered_holds():
+    """The θ-based least squares with repeated poses (groups): twelve angles held 30 s at
+    10 Hz with Butterworth-filtered noise, R = 200. σ² from the pure error, read per τ_int
+    samples: each bias and scale's 95 % interval (Student t on the effective pure-error dof)
+    covers within the binomial band, and the lack of fit fires near its 5 %."""
+    from scipy import stats
+
+    from calib import Ensayo, calibrate
+    from calib.calibration.lackoffit import groups_from
+
+    th = np.repeat(np.radians(np.arange(0, 360, 30)), HOLD)
+    ref = np.column_stack([-9.8 * np.sin(th), -9.8 * np.cos(th)])
+    truth = {"x": (0.05, 0.01), "y": (-0.03, -0.02)}
+    r = 200
+    hits, flags, taus = 0, 0, []
+    for seed in range(r):
+        noise = 0.02 * filtered(np.random.default_rng(seed), ref.shape)
+        datos = ref * (1 + np.array([0.01, -0.02])) + np.array([0.05, -0.03]) + noise
+        cal = calibrate(Ensayo(th, datos), groups=groups_from(th))
+        for a, (b, s) in truth.items():
+            fit = cal.fits[a]
+            taus.append(fit.extra.get("tau_int", 1.0))
+            q = stats.t.ppf(0.975, fit.extra["sigma2_dof"])
+            hits += abs(fit.params[0] - b) <= q * fit.std[0]
+            hits += abs(fit.params[1] - s) <= q * fit.std[1]
+        flags += sum(v.p_value < 0.05 for v in cal.lack_of_fit.values())
+    assert np.median(taus) > 8.0
+    sd = np.sqrt(0.95 * 0.05 / (4 * r))
+    assert 0.95 - 3 * sd <= hits / (4 * r) <= 0.95 + 3 * sd, hits / (4 * r)
+    assert flags / (2 * r) <= 0.05 + 3 * np.sqrt(0.05 * 0.95 / (2 * r)), flags
+    white = calibrate(Ensayo(th, ref + 0.02 * np.random.default_rng(9).standard_normal(
+        ref.shape)), groups=groups_from(th))
+    assert "tau_int" not in white.fits["x"].extra  # white samples keep their counts

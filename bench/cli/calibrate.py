@@ -90,6 +90,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     groups = groups_from(ensayo.tita, log.pose)
     cal = warnings_to_stderr(lambda: calibrate(ensayo, nv, args.method or "ols", args.g,
                                                groups=groups))
+    _note_correlated(cal.fits["x"].extra.get("tau_int", 1.0), args.ensayo)
     if args.save:
         check_finite(cal.to_dict(), "the estimates")  # a file of finite numbers only
         _save(args, cal, log)
@@ -130,11 +131,14 @@ def _gravity_note(args: argparse.Namespace, log) -> None:
               "--latitude DEG [--height M] or --g", file=sys.stderr)
 
 
-def _note_correlated(poses, source) -> None:
-    """One stderr line when the holds' noise is correlated and counted in the intervals."""
-    if poses.tau_int > 1.0:
+def _note_correlated(tau, source) -> None:
+    """One stderr line when the holds' noise is correlated (``tau``: the integrated
+    autocorrelation time, samples, or the :class:`Poses` that carry it) and counted in the
+    intervals."""
+    tau = float(getattr(tau, "tau_int", tau))
+    if tau > 1.0:
         print(f"note: {source}: the noise within the holds is correlated (integrated "
-              f"autocorrelation time {poses.tau_int:.3g} samples: a filtered or decimated "
+              f"autocorrelation time {tau:.3g} samples: a filtered or decimated "
               "log); each hold counts its samples / that time as independent readings in the "
               "intervals", file=sys.stderr)
 

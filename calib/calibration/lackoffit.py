@@ -189,8 +189,103 @@ def pure_error_variance(values: np.ndarray, groups: np.ndarray) -> tuple[np.ndar
     return np.asarray(ss, dtype=float) / dof, dof
 
 
+TAU_MIN = 1.5
+"""Smallest integrated autocorrelation time (samples) :func:`pose_statistics` counts: white
+noise has 1, and a log filtered or decimated below its Nyquist frequency has several (a 10 Hz
+phone export with a 1-s correlation time: about 20)."""
+
+TAU_Z = 4.0
+"""… and only when it exceeds 1 by this many times the spread of its estimate on white noise
+(:func:`integrated_correlation`: white logs keep their counts)."""
+
+MAX_LAG = 2000
+"""Longest lag (samples) of the autocorrelation sums."""
+
+
+def integrated_correlation(dev: np.ndarray, pose: np.ndarray) -> tuple[float, float]:
+    """``(τ_int, sd₀)``: the integrated autocorrelation time of the readings about their pose
+    means, samples — the largest over the axes — and the spread of its estimate on white
+    noise with the same window, ``sd₀ = 2·√(M/N)`` (each ρ_k then ≈ N(0, 1/N)).
+
+    ``τ_int = 1 + 2·Σ_{k=1}^{M} ρ_k``, ρ_k the lag-k autocorrelation pooled over the held
+    stretches (pairs never cross a stretch; each stretch about its pose's mean), M the
+    smallest lag with ``M ≥ 5·τ_int(M)`` (Sokal's automatic window; Madras & Sokal 1988),
+    over the N held samples; each stretch's deviations are about its own mean, which takes
+    ``Var(mean) ≈ c₀τ/L̄`` from every autocovariance (L̄ the mean stretch length), so the sum
+    is corrected, ``τ = τ̂/(1 − (2M + 1 − τ̂)/L̄)`` (while that deficit is under one half:
+    Butterworth-filtered noise with τ = 16.3 on 300-sample holds reads 10.5 before, 15 after).
+    The variance
+    of a mean of n such readings is ``τ_int·σ²/n`` (n ≫ τ_int). Why by hand: numpy and scipy
+    have no windowed integrated autocorrelation time over segments.
+
+    dev : (N, k) deviations from the pose means (anything where ``pose`` < 0).
+    pose : (N,) labels, −1 moving.
+    """
+    pose = np.asarray(pose)
+    edges = np.r_[0, np.flatnonzero(np.diff(pose) != 0) + 1, pose.size]
+    parts = [(a, min(b, a + 16 * MAX_LAG)) for a, b in zip(edges[:-1], edges[1:], strict=True)
+             if pose[a] >= 0 and b - a >= 8]
+    if not parts:
+        return 1.0, 0.0
+    lags = min(MAX_LAG, max(b - a for a, b in parts) // 2)
+    sums = np.zeros((lags + 1, dev.shape[1]))
+    pairs = np.zeros(lags + 1)
+    for a, b in parts:
+        m = b - a
+        size = 1 << int(np.ceil(np.log2(2 * m)))
+        f = np.fft.rfft(dev[a:b], size, axis=0)
+        ac = np.fft.irfft(f * np.conj(f), size, axis=0)[:min(lags + 1, m)]
+        sums[:ac.shape[0]] += ac
+        pairs[:ac.shape[0]] += m - np.arange(ac.shape[0])
+    ok = pairs > 0
+    cov = sums[ok] / pairs[ok, None]
+    rho = cov / np.where(cov[0] > 0, cov[0], 1.0)
+    tau = 1.0 + 2.0 * np.cumsum(rho[1:], axis=0)  # τ(M), M = 1 … lags
+    n_held = sum(b - a for a, b in parts)
+    mean_len = n_held / len(parts)
+    best, best_se = 1.0, 0.0
+    for k in range(tau.shape[1]):
+        window = np.flatnonzero(np.arange(1, tau.shape[0] + 1) >= 5.0 * tau[:, k])
+        m = int(window[0]) if window.size else tau.shape[0] - 1
+        t_k = float(tau[m, k]) if tau.size else 1.0
+        # each stretch about its own mean: every ĉ_j falls short by Var(mean) ≈ c₀τ/L̄, so
+        # τ̂ = τ(1 − (2M+1)/L̄)/(1 − τ/L̄) (M = m + 1 lags); solved for τ, while the deficit
+        # is a minor part of it (else the stretches are too short to tell and τ̂ stands)
+        deficit = (2 * (m + 1) + 1 - t_k) / mean_len
+        if 0.0 < deficit < 0.5:
+            t_k /= 1.0 - deficit
+        t_k = max(t_k, 1.0)
+        if t_k > best:
+            best, best_se = t_k, 2.0 * float(np.sqrt((m + 1) / n_held))
+    return best, best_se
+
+
+def correlated_groups(values: np.ndarray, groups: np.ndarray) -> float:
+    """The integrated autocorrelation time (samples) of ``values`` (N,) or (N, k) about their
+    group means (``groups`` (N,) int, −1 left out) when it counts — at least
+    :data:`TAU_MIN` and above 1 by :data:`TAU_Z` times its spread on white noise — else 1.
+
+    A group mean of n such samples has the variance of ``n/τ`` independent ones: the held
+    poses' statistics (:func:`calib.calibration.multiposition.shared.pose_statistics`) and the
+    θ-based least squares with groups (:func:`calib.calibration.tilt_plane.calibrate`) count
+    it (docs/poses-calibration.md, Correlated samples)."""
+    flat = np.asarray(values, dtype=float).reshape(len(groups), -1)
+    groups = np.asarray(groups, dtype=int)
+    held = groups >= 0
+    if not np.any(held):
+        return 1.0
+    labels, inverse = np.unique(groups[held], return_inverse=True)
+    counts = np.bincount(inverse)
+    dev = np.zeros_like(flat)
+    for k in range(flat.shape[1]):
+        means = np.bincount(inverse, weights=flat[held, k]) / counts
+        dev[held, k] = flat[held, k] - means[inverse]
+    tau, spread = integrated_correlation(dev, groups)
+    return tau if tau >= TAU_MIN and tau - 1.0 > TAU_Z * spread else 1.0
+
+
 def lack_of_fit(residuals: np.ndarray, groups: np.ndarray, n_params: int,
-                axis: str = "x") -> LackOfFit | None:
+                axis: str = "x", tau: float = 1.0) -> LackOfFit | None:
     """Draper & Smith's F test of one axis (module docstring).
 
     Parameters
@@ -199,6 +294,9 @@ def lack_of_fit(residuals: np.ndarray, groups: np.ndarray, n_params: int,
     groups : (N,) group index per sample.
     n_params : p, parameters of the fit on this axis (2: bias and scale).
     axis : name for messages.
+    tau : the samples' integrated autocorrelation time (:func:`correlated_groups`): a group
+        mean's variance is ``τ·σ²/n``, so the pure error is read per ``τ`` samples (its mean
+        square ×τ, its dof ``Σ⌊n_i/τ⌋ − c``).
 
     Returns None when the test is undefined: fewer groups than ``p + 1`` (no lack-of-fit dof)
     or no repeated sample (no pure-error dof).
@@ -215,6 +313,11 @@ def lack_of_fit(residuals: np.ndarray, groups: np.ndarray, n_params: int,
     groups = np.asarray(groups, dtype=int)
     c = int(np.count_nonzero(np.bincount(groups)))
     ss_pe, dof_pe = pure_error(residuals, groups)
+    if tau > 1.0:  # a group mean of n correlated samples varies as n/τ independent ones
+        counts0 = np.bincount(groups)
+        dof_eff = int(np.sum(np.maximum(np.floor(counts0[counts0 > 0] / tau), 1)) - c)
+        if dof_pe > 0 and dof_eff > 0:
+            ss_pe, dof_pe = float(ss_pe) * tau * dof_eff / dof_pe, dof_eff
     dof_lof = c - n_params
     if dof_lof <= 0 or dof_pe <= 0:
         return None
@@ -232,16 +335,17 @@ def lack_of_fit(residuals: np.ndarray, groups: np.ndarray, n_params: int,
     return LackOfFit(axis, c, ss_lof, ss_pe, dof_lof, dof_pe, "F", float(value), p)
 
 
-def lack_of_fit_axes(residuals: np.ndarray, groups: np.ndarray, n_params: int = 2
-                     ) -> dict[str, LackOfFit] | None:
+def lack_of_fit_axes(residuals: np.ndarray, groups: np.ndarray, n_params: int = 2,
+                     tau: float = 1.0) -> dict[str, LackOfFit] | None:
     """:func:`lack_of_fit` of both columns of ``residuals`` (N, 2) → ``{"x": …, "y": …}``,
     or None when the test is undefined."""
-    out = {a: lack_of_fit(np.asarray(residuals)[:, k], groups, n_params, a)
+    out = {a: lack_of_fit(np.asarray(residuals)[:, k], groups, n_params, a, tau)
            for k, a in enumerate(AXES)}
     if any(v is None for v in out.values()):
         return None
     return out  # type: ignore[return-value]
 
 
-__all__ = ["LOF_ALPHA", "LackOfFit", "groups_from", "lack_of_fit", "lack_of_fit_axes",
+__all__ = ["LOF_ALPHA", "MAX_LAG", "TAU_MIN", "TAU_Z", "LackOfFit", "correlated_groups",
+           "groups_from", "integrated_correlation", "lack_of_fit", "lack_of_fit_axes",
            "pure_error", "pure_error_variance"]

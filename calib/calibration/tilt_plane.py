@@ -7,7 +7,12 @@ from typing import Literal
 
 import numpy as np
 
-from calib.calibration.lackoffit import LackOfFit, lack_of_fit_axes, pure_error_variance
+from calib.calibration.lackoffit import (
+    LackOfFit,
+    correlated_groups,
+    lack_of_fit_axes,
+    pure_error_variance,
+)
 from calib.calibration.ls import FitResult, NotIdentifiableError, chi2_from_dof, fit_axis, fit_joint
 from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G
 from calib.files.course import Ensayo
@@ -288,6 +293,9 @@ def _with_groups(ensayo: Ensayo, noise_var, method: Method, g: float,
     """:func:`calibrate` with repeated poses: pure-error σ² (when not given), lack of fit."""
     if groups.shape != (ensayo.n,):
         raise ValueError(f"groups must have shape ({ensayo.n},), got {groups.shape}")
+    # correlated samples (a filtered log): each group counts n/τ independent ones, so every
+    # variance of a mean — the stated σ² and the pure error alike — is read per τ samples
+    tau = correlated_groups(ensayo.datos, groups)
     pe = None
     if noise_var is None:
         try:
@@ -295,10 +303,18 @@ def _with_groups(ensayo: Ensayo, noise_var, method: Method, g: float,
         except ValueError:
             s2, dof = None, 0
         if s2 is not None and np.all(s2 > 0):
-            pe = (s2, dof)
+            if tau > 1.0:
+                counts = np.bincount(groups)
+                dof = int(np.sum(np.maximum(np.floor(counts[counts > 0] / tau), 1))
+                          - np.count_nonzero(counts))
+            pe = (s2 * tau, dof)
+    if noise_var is not None and tau > 1.0:
+        noise_var = np.asarray(noise_var, dtype=float) * tau
     cal = _calibrate(ensayo, noise_var if pe is None else pe[0], method, g)
     if pe is not None:
         extra = {"sigma2_dof": pe[1]}
+        if tau > 1.0:
+            extra["tau_int"] = float(tau)
 
         def est(f: FitResult) -> FitResult:
             return replace(f, sigma2_source="estimated", extra={**f.extra, **extra})
@@ -306,7 +322,7 @@ def _with_groups(ensayo: Ensayo, noise_var, method: Method, g: float,
         cal = replace(cal, fits={a: est(cal.fits[a]) for a in AXES},
                       joint=None if cal.joint is None else est(cal.joint))
     resid = np.column_stack([cal.fits[a].residuals for a in AXES])
-    return replace(cal, lack_of_fit=lack_of_fit_axes(resid, groups, 2))
+    return replace(cal, lack_of_fit=lack_of_fit_axes(resid, groups, 2, tau))
 
 
 def _calibrate(ensayo: Ensayo, noise_var, method: Method, g: float) -> Calibration:

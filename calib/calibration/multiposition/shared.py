@@ -15,7 +15,7 @@ import numpy as np
 from scipy import linalg as sla
 from scipy import optimize, stats
 
-from calib.calibration.lackoffit import LackOfFit
+from calib.calibration.lackoffit import LackOfFit, correlated_groups
 from calib.calibration.ls import FitResult, NotIdentifiableError, PoorlyIdentifiedWarning
 from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES
 from calib.input_rules import DataError
@@ -342,87 +342,16 @@ def pose_statistics(acc: np.ndarray, pose: np.ndarray, source: str = "<memory>")
     n = np.bincount(inverse)
     k_ax = acc.shape[1]
     means = np.stack([np.bincount(inverse, weights=a[:, k]) / n for k in range(k_ax)], axis=1)
-    dev = a - means[inverse]
-    ss = np.stack([np.bincount(inverse, weights=dev[:, k] ** 2) for k in range(k_ax)], axis=1)
-    full = np.zeros_like(acc)
-    full[held] = dev
-    tau, se = integrated_correlation(full, pose)
-    if tau < TAU_MIN or tau - 1.0 <= TAU_Z * se:
+    dev2 = (a - means[inverse]) ** 2
+    ss = np.stack([np.bincount(inverse, weights=dev2[:, k]) for k in range(k_ax)], axis=1)
+    tau = correlated_groups(acc, pose)
+    if tau == 1.0:
         return Poses(labels, n, means, ss)
     n_eff = np.maximum(np.floor(n / tau), 2).astype(int)
     shrink = np.where(n > 1, (n_eff - 1) / np.maximum(n - 1, 1), 1.0)
     return Poses(labels, np.minimum(n_eff, n), means, ss * shrink[:, None], float(tau))
 
 
-TAU_MIN = 1.5
-"""Smallest integrated autocorrelation time (samples) :func:`pose_statistics` counts: white
-noise has 1, and a log filtered or decimated below its Nyquist frequency has several (a 10 Hz
-phone export with a 1-s correlation time: about 20)."""
-
-TAU_Z = 4.0
-"""… and only when it exceeds 1 by this many times the spread of its estimate on white noise
-(:func:`integrated_correlation`: white logs keep their counts)."""
-
-MAX_LAG = 2000
-"""Longest lag (samples) of the autocorrelation sums."""
-
-
-def integrated_correlation(dev: np.ndarray, pose: np.ndarray) -> tuple[float, float]:
-    """``(τ_int, sd₀)``: the integrated autocorrelation time of the readings about their pose
-    means, samples — the largest over the axes — and the spread of its estimate on white
-    noise with the same window, ``sd₀ = 2·√(M/N)`` (each ρ_k then ≈ N(0, 1/N)).
-
-    ``τ_int = 1 + 2·Σ_{k=1}^{M} ρ_k``, ρ_k the lag-k autocorrelation pooled over the held
-    stretches (pairs never cross a stretch; each stretch about its pose's mean), M the
-    smallest lag with ``M ≥ 5·τ_int(M)`` (Sokal's automatic window; Madras & Sokal 1988),
-    over the N held samples; each stretch's deviations are about its own mean, which takes
-    ``Var(mean) ≈ c₀τ/L̄`` from every autocovariance (L̄ the mean stretch length), so the sum
-    is corrected, ``τ = τ̂/(1 − (2M + 1 − τ̂)/L̄)`` (while that deficit is under one half:
-    Butterworth-filtered noise with τ = 16.3 on 300-sample holds reads 10.5 before, 15 after).
-    The variance
-    of a mean of n such readings is ``τ_int·σ²/n`` (n ≫ τ_int). Why by hand: numpy and scipy
-    have no windowed integrated autocorrelation time over segments.
-
-    dev : (N, k) deviations from the pose means (anything where ``pose`` < 0).
-    pose : (N,) labels, −1 moving.
-    """
-    pose = np.asarray(pose)
-    edges = np.r_[0, np.flatnonzero(np.diff(pose) != 0) + 1, pose.size]
-    parts = [(a, min(b, a + 16 * MAX_LAG)) for a, b in zip(edges[:-1], edges[1:], strict=True)
-             if pose[a] >= 0 and b - a >= 8]
-    if not parts:
-        return 1.0, 0.0
-    lags = min(MAX_LAG, max(b - a for a, b in parts) // 2)
-    sums = np.zeros((lags + 1, dev.shape[1]))
-    pairs = np.zeros(lags + 1)
-    for a, b in parts:
-        m = b - a
-        size = 1 << int(np.ceil(np.log2(2 * m)))
-        f = np.fft.rfft(dev[a:b], size, axis=0)
-        ac = np.fft.irfft(f * np.conj(f), size, axis=0)[:min(lags + 1, m)]
-        sums[:ac.shape[0]] += ac
-        pairs[:ac.shape[0]] += m - np.arange(ac.shape[0])
-    ok = pairs > 0
-    cov = sums[ok] / pairs[ok, None]
-    rho = cov / np.where(cov[0] > 0, cov[0], 1.0)
-    tau = 1.0 + 2.0 * np.cumsum(rho[1:], axis=0)  # τ(M), M = 1 … lags
-    n_held = sum(b - a for a, b in parts)
-    mean_len = n_held / len(parts)
-    best, best_se = 1.0, 0.0
-    for k in range(tau.shape[1]):
-        window = np.flatnonzero(np.arange(1, tau.shape[0] + 1) >= 5.0 * tau[:, k])
-        m = int(window[0]) if window.size else tau.shape[0] - 1
-        t_k = float(tau[m, k]) if tau.size else 1.0
-        # each stretch about its own mean: every ĉ_j falls short by Var(mean) ≈ c₀τ/L̄, so
-        # τ̂ = τ(1 − (2M+1)/L̄)/(1 − τ/L̄) (M = m + 1 lags); solved for τ, while the deficit
-        # is a minor part of it (else the stretches are too short to tell and τ̂ stands)
-        deficit = (2 * (m + 1) + 1 - t_k) / mean_len
-        if 0.0 < deficit < 0.5:
-            t_k /= 1.0 - deficit
-        t_k = max(t_k, 1.0)
-        if t_k > best:
-            best, best_se = t_k, 2.0 * float(np.sqrt((m + 1) / n_held))
-    return best, best_se
 
 
 SAME_DIRECTION_DEG: float = 10.0
