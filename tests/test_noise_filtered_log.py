@@ -87,3 +87,20 @@ def test_noise_twin_on_a_filtered_log_parts_only_outside_the_model_range(tmp_pat
     said = " ".join(out.split())
     assert "every one outside the model's τ range" in said and "not rejected" in said
     assert "correlation times of" in said  # the static check says why its windows are long
+
+
+def test_the_read_note_names_every_gyro_axis(tmp_path, capsys):
+    """A log with three gyro columns: the one-line read note names all three (noise
+    characterizes each) and which one is about the tilt axis."""
+    rng = np.random.default_rng(8)
+    acc = rng.normal(0.0, 2e-3, (3000, 3)) + [0.0, 0.0, 9.8]
+    gyro = rng.normal(0.0, 1e-3, (3000, 3))
+    t = np.arange(3000) / RATE
+    path = tmp_path / "g.csv"
+    np.savetxt(path, np.column_stack([t, acc, gyro]), delimiter=",", fmt="%.8g", comments="",
+               header="t (s),ax (m/s^2),ay (m/s^2),az (m/s^2),gx (rad/s),gy (rad/s),gz (rad/s)")
+    rc, out, err = run(capsys, "noise", path)
+    assert rc == 0, err
+    note = " ".join(err.split())
+    assert "gyro gx (rad/s), gy (rad/s), gz (rad/s) (about the tilt axis: gz (rad/s))" in note
+    assert "axis gyro_x" in " ".join(out.split())

@@ -575,6 +575,9 @@ def provenance_line(prov: dict[str, Any]) -> str | None:
     factor = units.get("acc_to_m_s2")
     conv = "" if factor in (None, 1.0) else f" × {factor:.9g} → m/s²"
     gyro = units.get("gyro_from") or "none"
+    three = [mapping[k] for k in ("gyro_x", "gyro_y", "gyro_z") if k in mapping]
+    if len(three) > 1 and units.get("gyro_from"):  # every gyro axis read; one is the tilt's
+        gyro = ", ".join(three) + f" (about the tilt axis: {units['gyro_from']})"
     if units.get("gyro"):
         gyro += f" in {units['gyro']}"
     elif units.get("gyro_note"):
