@@ -284,6 +284,22 @@ def correlated_groups(values: np.ndarray, groups: np.ndarray) -> float:
     return tau if tau >= TAU_MIN and tau - 1.0 > TAU_Z * spread else 1.0
 
 
+def effective_counts(counts: np.ndarray, tau: float, least: int = 1) -> np.ndarray:
+    """Independent readings ``⌊n/τ⌋`` (at least ``least``) of groups of ``counts`` correlated
+    samples (:func:`correlated_groups`); the counts themselves when τ = 1."""
+    counts = np.asarray(counts, dtype=int)
+    if tau <= 1.0:
+        return counts
+    return np.minimum(np.maximum(np.floor(counts / tau), least).astype(int), counts)
+
+
+def pure_error_dof(groups: np.ndarray, tau: float = 1.0) -> int:
+    """Pure-error dof ``Σ n_eff − c`` of ``groups`` (:func:`effective_counts`)."""
+    counts = np.bincount(np.asarray(groups, dtype=int))
+    counts = counts[counts > 0]
+    return int(np.sum(effective_counts(counts, tau)) - counts.size)
+
+
 def lack_of_fit(residuals: np.ndarray, groups: np.ndarray, n_params: int,
                 axis: str = "x", tau: float = 1.0) -> LackOfFit | None:
     """Draper & Smith's F test of one axis (module docstring).
@@ -314,8 +330,7 @@ def lack_of_fit(residuals: np.ndarray, groups: np.ndarray, n_params: int,
     c = int(np.count_nonzero(np.bincount(groups)))
     ss_pe, dof_pe = pure_error(residuals, groups)
     if tau > 1.0:  # a group mean of n correlated samples varies as n/τ independent ones
-        counts0 = np.bincount(groups)
-        dof_eff = int(np.sum(np.maximum(np.floor(counts0[counts0 > 0] / tau), 1)) - c)
+        dof_eff = pure_error_dof(groups, tau)
         if dof_pe > 0 and dof_eff > 0:
             ss_pe, dof_pe = float(ss_pe) * tau * dof_eff / dof_pe, dof_eff
     dof_lof = c - n_params
@@ -347,5 +362,5 @@ def lack_of_fit_axes(residuals: np.ndarray, groups: np.ndarray, n_params: int = 
 
 
 __all__ = ["LOF_ALPHA", "MAX_LAG", "TAU_MIN", "TAU_Z", "LackOfFit", "correlated_groups",
-           "groups_from", "integrated_correlation", "lack_of_fit", "lack_of_fit_axes",
-           "pure_error", "pure_error_variance"]
+           "effective_counts", "groups_from", "integrated_correlation", "lack_of_fit",
+           "lack_of_fit_axes", "pure_error", "pure_error_dof", "pure_error_variance"]

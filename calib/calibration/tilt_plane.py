@@ -11,6 +11,7 @@ from calib.calibration.lackoffit import (
     LackOfFit,
     correlated_groups,
     lack_of_fit_axes,
+    pure_error_dof,
     pure_error_variance,
 )
 from calib.calibration.ls import FitResult, NotIdentifiableError, chi2_from_dof, fit_axis, fit_joint
@@ -303,11 +304,7 @@ def _with_groups(ensayo: Ensayo, noise_var, method: Method, g: float,
         except ValueError:
             s2, dof = None, 0
         if s2 is not None and np.all(s2 > 0):
-            if tau > 1.0:
-                counts = np.bincount(groups)
-                dof = int(np.sum(np.maximum(np.floor(counts[counts > 0] / tau), 1))
-                          - np.count_nonzero(counts))
-            pe = (s2 * tau, dof)
+            pe = (s2 * tau, pure_error_dof(groups, tau) if tau > 1.0 else dof)
     if noise_var is not None and tau > 1.0:
         noise_var = np.asarray(noise_var, dtype=float) * tau
     cal = _calibrate(ensayo, noise_var if pe is None else pe[0], method, g)

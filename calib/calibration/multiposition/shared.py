@@ -15,7 +15,7 @@ import numpy as np
 from scipy import linalg as sla
 from scipy import optimize, stats
 
-from calib.calibration.lackoffit import LackOfFit, correlated_groups
+from calib.calibration.lackoffit import LackOfFit, correlated_groups, effective_counts
 from calib.calibration.ls import FitResult, NotIdentifiableError, PoorlyIdentifiedWarning
 from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES
 from calib.input_rules import DataError
@@ -347,9 +347,9 @@ def pose_statistics(acc: np.ndarray, pose: np.ndarray, source: str = "<memory>")
     tau = correlated_groups(acc, pose)
     if tau == 1.0:
         return Poses(labels, n, means, ss)
-    n_eff = np.maximum(np.floor(n / tau), 2).astype(int)
+    n_eff = effective_counts(n, tau, least=2)
     shrink = np.where(n > 1, (n_eff - 1) / np.maximum(n - 1, 1), 1.0)
-    return Poses(labels, np.minimum(n_eff, n), means, ss * shrink[:, None], float(tau))
+    return Poses(labels, n_eff, means, ss * shrink[:, None], float(tau))
 
 
 
