@@ -1,6 +1,6 @@
 """Holds whose noise is correlated (a low-pass filtered or decimated log: a phone export at
 10 Hz) count their samples over the integrated autocorrelation time in the intervals
-(:func:`calib.calibration.multiposition.shared.integrated_correlation`), so a six-face fit on
+(:func:`calib.calibration.lackoffit.integrated_correlation`), so a six-face fit on
 such a log keeps its coverage without a spurious lack of fit, and white logs keep their
 counts.
 
