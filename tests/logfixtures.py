@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from validation.fuzz.logfiles import hold_and_turn
+
 ANGLES_DEG = (0.0, 90.0, 180.0, 270.0, 45.0)
 HOLD, TURN = 300, 80
 RATE_NS = 10_000_000  # 100 Hz
@@ -32,14 +34,7 @@ def simulated(seed: int = 3):
     """``(t_ns, theta, acc (N,3) m/s², gyro (N,3) rad/s, holds)``; ``holds`` lists each pose's
     true ``[start, stop)`` sample range."""
     rng = np.random.default_rng(seed)
-    angles = np.deg2rad(ANGLES_DEG)
-    theta, holds = [], []
-    for k, a in enumerate(angles):
-        holds.append((len(theta), len(theta) + HOLD))
-        theta += [a] * HOLD
-        if k + 1 < len(angles):
-            theta += list(np.linspace(a, angles[k + 1], TURN + 2)[1:-1])
-    theta = np.array(theta)
+    theta, holds = hold_and_turn(np.deg2rad(ANGLES_DEG), HOLD, TURN)
     n = theta.size
     t_ns = T0_NS + RATE_NS * np.arange(n, dtype=np.int64)
     acc = np.c_[-G * np.sin(theta), -G * np.cos(theta), 0.05 * np.ones(n)]

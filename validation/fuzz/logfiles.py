@@ -51,20 +51,25 @@ class Signal:
     holds: list[tuple[int, int]]
 
 
+def hold_and_turn(angles_rad, hold: int, turn: int) -> tuple[np.ndarray, list[tuple[int, int]]]:
+    """θ (rad) held ``hold`` samples at each angle and turned linearly to the next in ``turn``
+    samples, and each hold's ``[start, stop)``."""
+    theta: list[float] = []
+    holds = []
+    for k, a in enumerate(angles_rad):
+        holds.append((len(theta), len(theta) + hold))
+        theta += [a] * hold
+        if k + 1 < len(angles_rad):
+            theta += list(np.linspace(a, angles_rad[k + 1], turn + 2)[1:-1])
+    return np.array(theta), holds
+
+
 def poses(rng: np.random.Generator, angles_deg=(0, 60, 120, 180, 240, 300), hold: int = 300,
           turn: int = 80, gain=(1.0, 1.0, 1.0), bias=(0.0, 0.0, 0.0), noise: float = 0.02,
           gyro_bias: float = 0.003) -> Signal:
     """Held poses at ``angles_deg`` (``hold`` samples each) turned between in ``turn``
     samples; readings ``gain·a + bias + noise``; gyro z = dθ/dt + ``gyro_bias``."""
-    angles = np.radians(np.asarray(angles_deg, float))
-    theta: list[float] = []
-    holds = []
-    for k, a in enumerate(angles):
-        holds.append((len(theta), len(theta) + hold))
-        theta += [a] * hold
-        if k + 1 < len(angles):
-            theta += list(np.linspace(a, angles[k + 1], turn + 2)[1:-1])
-    th = np.array(theta)
+    th, holds = hold_and_turn(np.radians(np.asarray(angles_deg, float)), hold, turn)
     n = th.size
     t = np.arange(n) / RATE
     true = np.c_[-G_LOCAL * np.sin(th), -G_LOCAL * np.cos(th), np.full(n, 0.05)]
