@@ -1,9 +1,12 @@
-"""Small numerical helpers of the least-squares fits, written once: the R factor of a
-Householder QR and the condition number of a design with equilibrated (unit-norm) columns.
+"""Small numerical helpers, written once: the R factor of a Householder QR and the condition
+number of a design with equilibrated (unit-norm) columns (the least-squares fits), and the
+lagged products of a record by FFT (the autocovariance sums of the static check's
+correlation time and of the held poses' integrated autocorrelation time).
 
 Why by hand: ``numpy.linalg.qr(mode="r")`` computes the same factor, but its wrapper's copies
 cost 7× the factorisation on a 20001 × 3 design, so LAPACK ``dgeqrf`` (scipy) is called
-directly; numpy has no equilibrated condition number.
+directly; numpy has no equilibrated condition number; numpy's ``correlate`` is O(n²) and one
+column at a time.
 """
 
 from __future__ import annotations
@@ -48,4 +51,17 @@ def design_cond(h: np.ndarray) -> float:
     return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
 
 
-__all__ = ["design_cond", "equilibrated_cond", "r_factor"]
+def lagged_sums(x: np.ndarray, lags: int) -> np.ndarray:
+    """(min(lags + 1, n), k): ``S_j = Σ_{i=0}^{n−1−j} x_i·x_{i+j}``, j = 0 … lags, of each
+    column of ``x`` (n,) or (n, k) — the inverse FFT of |FFT(x)|² zero-padded to at least 2n
+    (no circular wrap)."""
+    x = np.asarray(x, dtype=float)
+    if x.ndim == 1:
+        x = x[:, None]
+    n = x.shape[0]
+    size = 1 << int(np.ceil(np.log2(max(2 * n, 2))))
+    f = np.fft.rfft(x, size, axis=0)
+    return np.fft.irfft(f * np.conj(f), size, axis=0)[:min(lags + 1, n)]
+
+
+__all__ = ["design_cond", "equilibrated_cond", "lagged_sums", "r_factor"]

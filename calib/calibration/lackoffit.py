@@ -35,6 +35,7 @@ import numpy as np
 from scipy import stats
 
 from calib.conventions import AXES
+from calib.numerics import lagged_sums
 from calib.results import ResultMixin
 from calib.units import format_p
 
@@ -232,9 +233,7 @@ def integrated_correlation(dev: np.ndarray, pose: np.ndarray) -> tuple[float, fl
     pairs = np.zeros(lags + 1)
     for a, b in parts:
         m = b - a
-        size = 1 << int(np.ceil(np.log2(2 * m)))
-        f = np.fft.rfft(dev[a:b], size, axis=0)
-        ac = np.fft.irfft(f * np.conj(f), size, axis=0)[:min(lags + 1, m)]
+        ac = lagged_sums(dev[a:b], lags)
         sums[:ac.shape[0]] += ac
         pairs[:ac.shape[0]] += m - np.arange(ac.shape[0])
     ok = pairs > 0

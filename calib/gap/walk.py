@@ -273,12 +273,9 @@ class WalkReview:
         best = self.best_rival
         if self.steps_win and not self.rival_wins and not self.failed:
             st = self.steps
-            beyond = (f"a walk adds nothing beyond them (LR {st['walk_beyond_lr']:.3g})"
-                      if st["walk_beyond_p"] >= WALK_BEYOND_ALPHA else
-                      "their levels alternate between two values, which a walk has no "
-                      "reason to revisit")
             why = (f"{st['count']} step(s) beat the random walk by {st['gain']:.4g} after "
-                   f"their charges (more than {CYCLE_MARGIN:g}) and {beyond}")
+                   f"their charges (more than {CYCLE_MARGIN:g}) and "
+                   f"{_beyond_steps(st['walk_beyond_lr'], st['walk_beyond_p'])}")
             size, stat = st["size"], st["gain"]
         elif self.rival_wins:
             why = (f"{best.name} (AIC gain {best.criterion:.4g}) beats the random walk "
@@ -1039,6 +1036,14 @@ def step_charge(n: int) -> float:
     return 1.0 + float(np.log(max(n, 2)))
 
 
+def _beyond_steps(lr: float, p: float) -> str:
+    """Why steps may stand for the walk: a walk adds nothing beyond them, or their levels
+    alternate (two-level switching)."""
+    if p >= WALK_BEYOND_ALPHA:
+        return f"a walk adds nothing beyond them (LR {lr:.3g})"
+    return "their levels alternate between two values, which a walk has no reason to revisit"
+
+
 def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
                e: np.ndarray, sigma2: float, walk_criterion: float, fixed_q: bool
                ) -> dict | None:
@@ -1081,8 +1086,6 @@ def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
     share = gain / max(walk_criterion, 1e-300)
     decision = "steps" if gain > CYCLE_MARGIN else "describes"
     words = describe(fit, run.tcol, run.time_unit, AXES[k])
-    beyond = ("a walk adds nothing beyond them" if logp >= np.log(WALK_BEYOND_ALPHA) else
-              "their levels alternate between two values")
     return {"decision": decision, "count": fit.count, "two_level": bool(two),
             "gain": float(gain),
             "share": float(share), "walk_beyond_lr": float(lr),
@@ -1090,7 +1093,8 @@ def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
             "description": words,
             "cannot_tell": (f"cannot tell a walk from steps on {AXES[k]}: {words} fits as "
                             f"well (AIC gain {gain:.3g} over the walk's {walk_criterion:.4g}, "
-                            f"within the margin {CYCLE_MARGIN:g}) and {beyond}; a longer run "
+                            f"within the margin {CYCLE_MARGIN:g}) and "
+                            f"{_beyond_steps(lr, float(np.exp(logp)))}; a longer run "
                             "(more steps, or a walk wandering between them) separates them")}
 
 

@@ -63,6 +63,7 @@ import numpy as np
 
 from calib.input_rules import DataError
 from calib.logs.reader import GAP_FACTOR
+from calib.numerics import lagged_sums
 
 WINDOW_CORR = 10.0
 """Shortest window of the window tests in correlation times (module docstring: A filtered
@@ -326,7 +327,7 @@ def check_static(acc: np.ndarray, rate: float, where: str, *, window: float = 1.
                 "stuck, dead or saturated axis has no noise to characterize; check the logger "
                 "and its columns (--columns, --axes)")
     spans = ((0, acc.shape[0]),) if segments is None else tuple(segments)
-    lag = max(correlation_time(acc[a:b]) for a, b in spans[:1])
+    lag = correlation_time(acc[spans[0][0]:spans[0][1]])  # read on the first segment
     # the correlation's window leaves at least 20 windows; never shorter than asked for
     longest = max(b - a for a, b in spans)
     w = max(2, int(round(window * rate)), min(int(np.ceil(WINDOW_CORR * lag)), longest // 20))
@@ -367,9 +368,7 @@ def correlation_time(acc: np.ndarray) -> int:
     t = np.arange(n, dtype=float)
     a = np.column_stack([np.ones(n), t - t.mean()])
     y = y - a @ np.linalg.lstsq(a, y, rcond=None)[0]
-    size = 1 << int(np.ceil(np.log2(2 * n)))
-    f = np.fft.rfft(y, size, axis=0)
-    acf = np.fft.irfft(f * np.conj(f), size, axis=0)[:n // 2]
+    acf = lagged_sums(y, n // 2 - 1)
     acf = acf / np.where(acf[0] > 0, acf[0], 1.0)
     below = acf < np.exp(-1.0)
     first = np.where(below.any(axis=0), np.argmax(below, axis=0), n // 2)
