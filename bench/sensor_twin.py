@@ -20,10 +20,15 @@ quantization_noise Q       :class:`QuantizationNoise` ``amplitude = Q·fs``: the
 gauss_markov σ, T_c        :class:`GaussMarkov` ``sigma = σ``, ``correlation_samples =
                            T_c·fs``: a stationary AR(1), ``x_k = φ x_{k−1} + σ√(1−φ²) w_k``,
                            ``φ = e^{−1/(T_c·fs)}``, x_0 drawn from N(0, σ²)
+export_filter f            :class:`ExportFilter` ``taps = f``: every reading so far (white
+                           noise and the terms above) convolved with the export's low-pass
+                           filter (lags −L … L, Σ f = 1; :mod:`calib.noise.shaping`), before
+                           the reading's own quantization step
 calibration bias, scale    ``AxisErrors.bias`` / ``scale`` (the profile's estimates)
 =========================  ===============================================================
 
-The last two are the processes of :mod:`calib.noise.allan_model` (what the fit assumes), so
+Quantization noise and the Gauss–Markov term are the processes of
+:mod:`calib.noise.allan_model` and the export filter its ``h_m ∗ f`` (what the fit assumes), so
 the twin of a profile has the Allan curve its fit describes. They are registered with
 :func:`bench.terms.register_term` here, where the twin needs them (``truth.json`` round-trips
 through ``AxisErrors.from_dict`` once this module is imported).
@@ -118,6 +123,36 @@ class GaussMarkov:
         return {k: float(v) for k, v in asdict(self).items()}
 
 
+@register_term("export_filter", "output")
+@dataclass(frozen=True)
+class ExportFilter:
+    """The export's low-pass filter (module table): the signal so far convolved with ``taps``
+    (lags −L … L, Σ = 1, centred). :func:`simulate_axis` draws ``pad`` = L extra readings on
+    each side and keeps the middle, so every reading it returns has its whole filter; on a
+    bench run (``generate --sensor``) the first and last L readings see part of it."""
+
+    taps: tuple[float, ...]
+    name: ClassVar[str]
+    stage: ClassVar[str]
+
+    def __post_init__(self) -> None:
+        taps = tuple(require_finite(v, "export_filter tap") for v in self.taps)
+        if len(taps) % 2 == 0 or abs(sum(taps) - 1.0) > 1e-6:
+            raise ValueError("export_filter taps must be an odd count (lags −L … L) summing "
+                             f"to 1, got {len(taps)} taps summing to {sum(taps):.9g}")
+        object.__setattr__(self, "taps", taps)
+
+    @property
+    def pad(self) -> int:
+        return (len(self.taps) - 1) // 2
+
+    def apply(self, a: np.ndarray, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:
+        return np.convolve(a, np.asarray(self.taps), mode="same")
+
+    def to_dict(self) -> dict:
+        return {"taps": [float(v) for v in self.taps]}
+
+
 def _value(terms: tuple[NoiseTerm | None, ...] | None, k: int) -> float | None:
     if terms is None or terms[k] is None:
         return None
@@ -168,6 +203,9 @@ def twin_axis(profile: SensorProfile, k: int | str, rate: float, bias: float = 0
                                  correlation_samples=float(gm.correlation_time) * rate))
     if quant is not None and quant > 0:
         terms.append(QuantizationNoise(amplitude=quant * rate))
+    taps = None if profile.export_filter is None else profile.export_filter[k]
+    if taps is not None:
+        terms.append(ExportFilter(taps=tuple(taps)))
     if lsb is not None and not counter_lattice(lsb, quant, profile.sample_rate):
         terms.append(Quantization(lsb=float(lsb)))
     return AxisErrors(bias=float(bias), scale=float(scale),
@@ -197,7 +235,11 @@ def simulate_axis(errors: AxisErrors, n: int, rate: float, rng: np.random.Genera
     """(n,) readings of one held axis with ``errors`` (:func:`twin_axis`) at ``rate`` Hz around
     the true reading ``level``: the same steps as :meth:`bench.sensors.SensorErrorModel.apply`
     for one axis (bias and scale, white noise, then the output terms in order), without the
-    MuJoCo pose (a held axis reads a constant)."""
+    MuJoCo pose (a held axis reads a constant). With an :class:`ExportFilter` the axis is
+    drawn ``pad`` readings longer on each side and its middle ``n`` kept."""
+    pad = max((int(getattr(t, "pad", 0)) for t in errors.terms), default=0)
+    keep = n
+    n = n + 2 * pad
     a_true = np.full(n, float(level))
     ctx = SensorContext(np.column_stack([a_true, a_true]), np.arange(n) / float(rate), 0)
     a = errors.bias + (1.0 + errors.scale) * a_true
@@ -206,7 +248,7 @@ def simulate_axis(errors: AxisErrors, n: int, rate: float, rng: np.random.Genera
     for term in errors.terms:
         if term.stage == "output":
             a = term.apply(a, ctx, rng)
-    return a
+    return a[pad:pad + keep]
 
 
 def twin_sensor(profile: SensorProfile, rate: float | None = None,

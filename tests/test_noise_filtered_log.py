@@ -9,10 +9,9 @@ bench:
 * the static check lays windows of ``WINDOW_CORR`` correlation times and accepts it with the
   default options, while a white log keeps its 1-s windows and a burst in the filtered log is
   still refused (:func:`calib.logs.static_log.correlation_time`);
-* ``noise --twin`` fits the octaves the model describes (τ ≥ a few s) and the twin, which
-  cannot follow the filter, parts from the log only outside that range: the joint test over
-  every octave rejects, the same test on the model's range alone does not
-  (:mod:`calib.noise.closure`, Inside the model's τ range).
+* ``noise --twin`` reads the export's filter (:mod:`calib.noise.shaping`), fits the whole
+  octave grid with it and its twin, filtered alike, closes (tests/test_shaping.py measures
+  the closure's size and power on filtered logs).
 """
 
 from __future__ import annotations
@@ -69,23 +68,20 @@ def test_a_burst_in_a_filtered_log_is_still_refused(tmp_path, capsys):
     assert "not a static log" in line and "variance is" in line
 
 
-def test_noise_twin_on_a_filtered_log_parts_only_outside_the_model_range(tmp_path, capsys):
-    path = write(tmp_path / "lp.csv", filtered(30000, 7))
+def test_noise_twin_on_a_filtered_log_follows_the_filter(tmp_path, capsys):
+    path = write(tmp_path / "lp.csv", filtered(30000, 8))
     rc, out, err = run(capsys, "noise", path, "--twin", "--json")
     assert rc == 0, err
     doc = json.loads(out)
     x = doc["axes"]["x"]
-    assert x["fit_range"][0] >= 1.6  # the filter's octaves are left out
+    assert x["export_filter"] is not None  # the export's filter is read and modelled
+    assert x["fit_range"][0] <= 0.4  # so the filter's octaves are described
     twin = doc["twin"]["x"]
-    lo, hi = twin["model_range"]["octaves"]
-    assert lo > 0 and x["taus"][lo] == x["fit_range"][0]
-    assert twin["reject"]  # the twin is white where the log is filtered
-    assert all(i < lo for i in twin["parted"])
-    assert not twin["model_range"]["reject"]  # (a true model: rejected with probability α)
+    assert not twin["reject"]  # (a true twin: rejected with probability ≤ α)
     rc, out, err = run(capsys, "noise", path, "--twin")
     assert rc == 0
     said = " ".join(out.split())
-    assert "every one outside the model's τ range" in said and "not rejected" in said
+    assert "shaped by the export's low-pass filter" in said
     assert "correlation times of" in said  # the static check says why its windows are long
 
 

@@ -102,6 +102,7 @@ from calib.noise.allan_model import (
     supported_octaves,
     term_value,
 )
+from calib.noise.shaping import blocked_filter, shaping_filter, shaping_summary
 from calib.noise.term_units import KINDS, SI_UNITS, datasheet, si_unit
 from calib.results import ResultMixin, readonly
 
@@ -341,7 +342,10 @@ class AxisNoise(ResultMixin):
     models the rule fitted (terms, τ range, χ², dof, p, bound); quantization_step or None;
     mean, std of the readings; n samples; n_fit samples after block means; ms the octaves;
     n_fit_segments: the samples (after block means) of each segment the Allan variance was
-    pooled over (module docstring: Logs with gaps); () or one entry: one record of n_fit.
+    pooled over (module docstring: Logs with gaps); () or one entry: one record of n_fit;
+    shaping: the export's low-pass filter the moments include (:mod:`calib.noise.shaping`:
+    its taps, Σ = 1, at the fit's rate: after block means), or None; export_filter: the same
+    filter at the log's own rate (what the twin applies before its block means), or None.
     """
 
     axis: str
@@ -372,6 +376,8 @@ class AxisNoise(ResultMixin):
     ms: tuple[int, ...] = ()
     tried: tuple[dict, ...] = ()
     n_fit_segments: tuple[int, ...] = ()
+    shaping: tuple[float, ...] | None = None
+    export_filter: tuple[float, ...] | None = None
 
     _TITLE = "Allan deviation of one axis"
     _UNITS = "τ s; ADEV in the reading unit; terms in calib.noise.term_units"
@@ -385,6 +391,9 @@ class AxisNoise(ResultMixin):
         object.__setattr__(self, "ms", tuple(int(v) for v in self.ms))
         object.__setattr__(self, "tried", tuple(self.tried))
         object.__setattr__(self, "n_fit_segments", tuple(int(v) for v in self.n_fit_segments))
+        for name in ("shaping", "export_filter"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
 
     @property
     def fit_lengths(self) -> tuple[int, ...]:
@@ -419,6 +428,10 @@ class AxisNoise(ResultMixin):
                  f"{self.unit}, std {self.std:.4g} {self.unit}, τ {self.taus[0]:.3g}–"
                  f"{self.taus[-1]:.3g} s ({self.taus.size} octaves)"]
         lines += ["  " + t.summary() for t in self.terms]
+        shaped = shaping_summary(self.export_filter, round(self.n / max(self.n_fit, 1))
+                                 * (self.ms[0] / self.taus[0]) if self.ms else 1.0)
+        if shaped is not None:
+            lines.append(f"  {shaped} (in the model and the twin)")
         q = self.quantization_step
         lines.append("  quantization step: " + ("none seen (readings not on a lattice)"
                                                 if q is None else f"{q:.4g} {self.unit}"))
@@ -459,7 +472,10 @@ class AxisNoise(ResultMixin):
                                       else float(self.quantization_step)),
                 "mean": float(self.mean), "std": float(self.std), "n": int(self.n),
                 "n_fit": int(self.n_fit), "ms": list(self.ms), "tried": list(self.tried),
-                "n_fit_segments": list(self.n_fit_segments)}
+                "n_fit_segments": list(self.n_fit_segments),
+                "shaping": None if self.shaping is None else list(self.shaping),
+                "export_filter": (None if self.export_filter is None
+                                  else list(self.export_filter))}
 
     @classmethod
     def from_dict(cls, d: dict) -> AxisNoise:
@@ -478,7 +494,10 @@ class AxisNoise(ResultMixin):
                    b_bound_tau=float(d.get("b_bound_tau", float("nan"))),
                    k_rise_steps=int(d.get("k_rise_steps", 0)), n_fit=int(d.get("n_fit", 0)),
                    ms=tuple(d.get("ms", ())), tried=tuple(d.get("tried", ())),
-                   n_fit_segments=tuple(d.get("n_fit_segments", ())))
+                   n_fit_segments=tuple(d.get("n_fit_segments", ())),
+                   shaping=None if d.get("shaping") is None else tuple(d["shaping"]),
+                   export_filter=(None if d.get("export_filter") is None
+                                  else tuple(d["export_filter"])))
 
 
 @dataclass(frozen=True, eq=False)
@@ -602,6 +621,8 @@ class NoiseCharacterization(ResultMixin):
             quantization_noise=per_axis("quantization_noise"),
             gauss_markov=per_axis("gauss_markov"),
             fit_tau_range=tuple(a.fit_range for a in self.axes),
+            export_filter=(None if all(a.export_filter is None for a in self.axes)
+                           else tuple(a.export_filter for a in self.axes)),
             calibration=calibration, source=self.source, tool_version=tool_version,
             axes=tuple(a.axis for a in self.axes),
             extra={"unresolved_upper_bounds": bounds, "level": self.level,
@@ -673,7 +694,8 @@ def fit_axis_noise(y: np.ndarray, rate: float, *, axis: str = "x", kind: str = "
     _check_octaves(ms, axis, tau_range)
     taus, adev, _ = overlapping_adev(y, rate, ms)
     return _fit_records(adev, taus, ms, (n,), raw=raw, rate=rate, axis=axis, kind=kind,
-                        level=level, alpha=alpha, select=select)
+                        level=level, alpha=alpha, select=select,
+                        shaped=_shaped([raw], block) if select else (None, None))
 
 
 def _check_octaves(ms: tuple[int, ...], axis: str, tau_range) -> None:
@@ -700,19 +722,34 @@ def _fit_segments(y_all: np.ndarray, rate: float, segments, *, axis, kind, level
     taus, adev, _ = pooled_adev(used, rate, ms)
     return _fit_records(adev, taus, ms, tuple(p.size for p in used),
                         raw=np.concatenate(raws), rate=rate, axis=axis, kind=kind, level=level,
-                        alpha=alpha, select=select)
+                        alpha=alpha, select=select,
+                        shaped=_shaped(raws, block) if select else (None, None))
+
+
+def _shaped(raws: list[np.ndarray], block: int
+            ) -> tuple[tuple[float, ...] | None, tuple[float, ...] | None]:
+    """(the shaping filter at the fit's rate, the export filter at the log's rate) of a log
+    (:mod:`calib.noise.shaping`): the export filter read on the longest record, the fit's
+    that of its block means (:func:`calib.noise.shaping.blocked_filter`). Both None when the
+    readings are not filtered; the first alone None when one block spans the filter."""
+    export = shaping_filter(max(raws, key=lambda r: r.size))
+    if export is None:
+        return None, None
+    return blocked_filter(export, block), export
 
 
 def _fit_records(adev, taus, ms, lengths: tuple[int, ...], *, raw, rate, axis, kind, level,
-                 alpha, select) -> AxisNoise:
+                 alpha, select, shaped=(None, None)) -> AxisNoise:
     """The fit of the octave Allan deviations ``adev`` of records of ``lengths`` samples (one
-    record, or the segments they were pooled over) with their moments."""
+    record, or the segments they were pooled over) with their moments (shaped by the log's
+    export filter ``shaping`` when it has one: :mod:`calib.noise.shaping`)."""
     s = adev ** 2
     if not (np.all(np.isfinite(s)) and s[0] > 0):
         raise DataError(f"axis {axis}: the readings do not change from sample to sample (a "
                         "dead or saturated axis, or a quantization step far above the noise): "
                         "there is no noise to characterize")
-    mom = record_moments(lengths, ms)
+    shaping, export = shaped
+    mom = record_moments(lengths, ms, shaping)
     # a white floor keeps V positive definite whatever the fit does (a trillionth of the
     # smallest-τ variance: far below anything the data can tell)
     floor = 1e-12 * s[0] / mom.design[0, 0]
@@ -725,7 +762,7 @@ def _fit_records(adev, taus, ms, lengths: tuple[int, ...], *, raw, rate, axis, k
         ok, tried = chosen.adequate, [chosen]
     return _axis_result(engine, chosen, ok, tried, raw=raw, taus=taus, adev=adev, ms=ms,
                         lengths=lengths, rate=rate, axis=axis, kind=kind, level=level,
-                        alpha=alpha)
+                        alpha=alpha, export=export)
 
 
 def _caps(kind: str, rate: float) -> np.ndarray:
@@ -741,7 +778,8 @@ def _caps(kind: str, rate: float) -> np.ndarray:
 
 
 def _axis_result(engine: Engine, chosen: ModelFit, ok: bool, tried: list[ModelFit], *,
-                 raw, taus, adev, ms, lengths, rate, axis, kind, level, alpha) -> AxisNoise:
+                 raw, taus, adev, ms, lengths, rate, axis, kind, level, alpha,
+                 export=None) -> AxisNoise:
     model = chosen.model
     n = int(sum(lengths))
     theta = chosen.theta
@@ -784,7 +822,8 @@ def _axis_result(engine: Engine, chosen: ModelFit, ok: bool, tried: list[ModelFi
                      b_bound=b_bound, b_bound_tau=float(taus[chosen.b_bound_index]),
                      k_rise_steps=rise, n_fit=n, ms=ms,
                      tried=tuple(_tried(f, taus) for f in tried),
-                     n_fit_segments=lengths if len(lengths) > 1 else ())
+                     n_fit_segments=lengths if len(lengths) > 1 else (),
+                     shaping=engine.mom.shaping, export_filter=export)
 
 
 def characterize_noise(acc: np.ndarray, rate: float, *, level: float = 0.683,

@@ -181,10 +181,31 @@ def _box(m: int) -> np.ndarray:
     return np.concatenate([-np.ones(m), np.ones(m)]) / m
 
 
-def _finite_filters(m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """White ``h_m``, random walk (its tail sums Σ_{t≥u} h_t, finite because Σ h = 0) and
-    quantization (``h_m`` convolved with [1, −1]), each on its process's own origin."""
+Shaping = tuple[float, ...] | None
+"""A log's shaping filter (:mod:`calib.noise.shaping`: the taps ``f`` of an export's low-pass
+filter, Σ f = 1), or None for none. Every process reaches the readings through it, so the
+Allan difference filter of octave m is ``h_m ∗ f`` instead of ``h_m`` (module docstring:
+Shaped logs); a tuple, so that the moments are cached per filter."""
+
+
+def _shaped(shaping: Shaping) -> tuple:
+    """The shaping argument of a cached function: none for an unshaped log, so that
+    ``moments(n, ms)`` and the moments a fit asks for are one cache entry."""
+    return () if shaping is None else (shaping,)
+
+
+def _difference_filter(m: int, shaping: Shaping = None) -> np.ndarray:
+    """The Allan difference filter of octave ``m``: ``h_m``, or ``h_m ∗ f`` for a shaped log."""
     h = _box(m)
+    return h if shaping is None else np.convolve(h, np.asarray(shaping, dtype=float))
+
+
+def _finite_filters(m: int, shaping: Shaping = None
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """White ``h_m`` (``h_m ∗ f`` when shaped), random walk (its tail sums Σ_{t≥u} h_t, finite
+    because Σ h = 0) and quantization (``h`` convolved with [1, −1]), each on its process's own
+    origin."""
+    h = _difference_filter(m, shaping)
     return h, np.cumsum(h[::-1])[::-1], np.convolve(h, [1.0, -1.0])
 
 
@@ -233,6 +254,7 @@ class AllanMoments:
     tensor: np.ndarray
     gm_tc: np.ndarray
     gm_design: np.ndarray
+    shaping: Shaping = None
 
     def full(self, g: int | None) -> tuple[np.ndarray, np.ndarray]:
         """(design (k, 5), tensor (k, k, 5, 5)) with the Gauss–Markov process of T_c
@@ -240,7 +262,8 @@ class AllanMoments:
         if g is None:
             return with_gauss_markov(self.design, self.tensor)
         return with_gauss_markov(self.design, self.tensor, self.gm_design[g],
-                                 gm_columns(self.n, self.ms, float(self.gm_tc[g])))
+                                 gm_columns(self.n, self.ms, float(self.gm_tc[g]),
+                                            *_shaped(self.shaping)))
 
 
 def with_gauss_markov(design4: np.ndarray, tensor4: np.ndarray,
@@ -286,18 +309,25 @@ def _pair_lags(n: int, ms: tuple[int, ...], i: int, j: int):
     return lo, hi, w
 
 
-def _compute(n: int, ms: tuple[int, ...]) -> dict[str, np.ndarray]:
+def _flicker_parts(n: int, filters: list) -> tuple[list[int], int, list[np.ndarray]]:
+    """The flicker filters of every octave (its difference filter convolved with Kasdin's,
+    memory one record): their lengths, the FFT length that holds a full correlation of two
+    of them (no wrap) and their FFTs."""
+    memory = int(n)
+    kern = flicker_coefficients(memory)[::-1]
+    flick_len = [f[0].size + memory - 1 for f in filters]
+    nfft = sfft.next_fast_len(2 * max(flick_len))
+    kernel_fft = sfft.rfft(kern, nfft)
+    return flick_len, nfft, [sfft.rfft(f[0], nfft) * kernel_fft for f in filters]
+
+
+def _compute(n: int, ms: tuple[int, ...], shaping: Shaping = None) -> dict[str, np.ndarray]:
     """The four processes' moments and the GM design of every T_c of :func:`gm_grid`."""
     from scipy import signal
 
-    memory = int(n)
     k = len(ms)
-    kern = flicker_coefficients(memory)[::-1]
-    flick_len = [2 * m + memory - 1 for m in ms]
-    nfft = sfft.next_fast_len(2 * max(flick_len))  # room for a full correlation: no wrap
-    kernel_fft = sfft.rfft(kern, nfft)
-    flick_fft = [sfft.rfft(_box(m), nfft) * kernel_fft for m in ms]
-    filters = [_finite_filters(m) for m in ms]
+    filters = [_finite_filters(m, shaping) for m in ms]
+    flick_len, nfft, flick_fft = _flicker_parts(n, filters)
     tc = gm_grid(ms)
     design = np.empty((k, 4))
     tensor = np.empty((k, k, 4, 4))
@@ -305,13 +335,13 @@ def _compute(n: int, ms: tuple[int, ...]) -> dict[str, np.ndarray]:
     for i in range(k):
         h, g, q = filters[i]
         design[i, 0], design[i, 2], design[i, 3] = h @ h / 2.0, g @ g / 2.0, q @ q / 2.0
-        cw0 = signal.correlate(h, h, mode="full")  # lags -(2m-1) … 2m-1
-        lag = np.arange(-(2 * ms[i] - 1), 2 * ms[i])
+        cw0 = signal.correlate(h, h, mode="full")  # lags -(len h - 1) … len h - 1
+        lag = np.arange(-(h.size - 1), h.size)
         gm_design[:, i] = (np.exp(-np.abs(lag)[None, :] / tc[:, None]) @ cw0) / 2.0
         for j in range(i, k):
             lo, hi, w = _pair_lags(n, ms, i, j)
             full = _four_correlations(filters[i], filters[j], flick_fft[i], flick_fft[j],
-                                      flick_len[i], flick_len[j], nfft, ms[j], lo, hi)
+                                      flick_len[i], flick_len[j], nfft, lo, hi)
             if j == i:
                 design[i, 1] = full[1, -lo] / 2.0
             t = np.einsum("d,ad,bd->ab", w, full, full)
@@ -319,12 +349,12 @@ def _compute(n: int, ms: tuple[int, ...]) -> dict[str, np.ndarray]:
     return {"design": design, "tensor": tensor, "gm_tc": tc, "gm_design": gm_design}
 
 
-def _four_correlations(fi, fj, ffi, ffj, fli, flj, nfft, mj, lo, hi) -> np.ndarray:
+def _four_correlations(fi, fj, ffi, ffj, fli, flj, nfft, lo, hi) -> np.ndarray:
     """(4, hi - lo + 1): the cross-correlations c_a(D) of white, flicker, random walk and
     quantization between two octaves, on the lags lo … hi."""
     from scipy import signal
 
-    first = -(2 * mj - 1)  # scipy: index 0 is lag -(len(b) - 1)
+    first = -(fj[0].size - 1)  # scipy: index 0 is lag -(len(b) - 1)
     cw = signal.correlate(fi[0], fj[0], mode="full")
     cr = signal.correlate(fi[1], fj[1], mode="full")
     cq = signal.correlate(fi[2], fj[2], mode="full")
@@ -335,33 +365,29 @@ def _four_correlations(fi, fj, ffi, ffj, fli, flj, nfft, mj, lo, hi) -> np.ndarr
                      _on_lags(cr, first, lo, hi), _on_lags(cq, first - 1, lo, hi)])
 
 
-def _compute_gm(n: int, ms: tuple[int, ...], tc: float) -> np.ndarray:
+def _compute_gm(n: int, ms: tuple[int, ...], tc: float, shaping: Shaping = None
+                ) -> np.ndarray:
     """(k, k, 5): covariance products of the Gauss–Markov process of correlation time ``tc``
     samples with white, flicker, random walk, quantization and itself (module docstring)."""
     from scipy import signal
 
-    memory = int(n)
     k = len(ms)
-    kern = flicker_coefficients(memory)[::-1]
-    flick_len = [2 * m + memory - 1 for m in ms]
-    nfft = sfft.next_fast_len(2 * max(flick_len))
-    kernel_fft = sfft.rfft(kern, nfft)
-    flick_fft = [sfft.rfft(_box(m), nfft) * kernel_fft for m in ms]
-    filters = [_finite_filters(m) for m in ms]
+    filters = [_finite_filters(m, shaping) for m in ms]
+    flick_len, nfft, flick_fft = _flicker_parts(n, filters)
     phi = math.exp(-1.0 / tc)
     pad = int(min(n, math.ceil(GM_CUT * tc)))
     out = np.empty((k, k, 5))
     for i in range(k):
         for j in range(i, k):
             lo, hi, w = _pair_lags(n, ms, i, j)
-            first = -(2 * ms[j] - 1)
+            first = -(filters[j][0].size - 1)
             c_first = first - pad  # the lag of cg[0]
             cw = signal.correlate(filters[i][0], filters[j][0], mode="full")
             cg = _gm_correlation(cw, phi, pad)
             # only the lags where the GM correlation is not (yet) below e^-40
             a, b = max(lo, c_first), min(hi, c_first + cg.size - 1)
             full = _four_correlations(filters[i], filters[j], flick_fft[i], flick_fft[j],
-                                      flick_len[i], flick_len[j], nfft, ms[j], a, b)
+                                      flick_len[i], flick_len[j], nfft, a, b)
             seg = cg[a - c_first:b - c_first + 1]
             wg = w[a - lo:b - lo + 1] * seg
             out[i, j] = out[j, i] = np.concatenate([full @ wg, [seg @ wg]])
@@ -380,8 +406,11 @@ def cache_dir() -> Path | None:
     return Path(base) / "tiltbench" / "allan"
 
 
-def _key(n: int, ms: tuple[int, ...], part: str) -> str:
+def _key(n: int, ms: tuple[int, ...], part: str, shaping: Shaping = None) -> str:
     text = f"v{MOMENTS_VERSION}|{part}|n={n}|ms={','.join(map(str, ms))}"
+    if shaping is not None:  # the taps' exact bits: another filter, another file
+        text += "|shaping=" + np.asarray(shaping, dtype="<f8").tobytes().hex()
+        part = "shaped-" + part
     return f"{part}-n{n}-k{len(ms)}-{hashlib.sha256(text.encode()).hexdigest()[:16]}"
 
 
@@ -418,7 +447,7 @@ def _store(path: Path, key: str, arrays: dict[str, np.ndarray]) -> None:
 
 
 @lru_cache(maxsize=16)
-def moments(n: int, ms: tuple[int, ...]) -> AllanMoments:
+def moments(n: int, ms: tuple[int, ...], shaping: Shaping = None) -> AllanMoments:
     """:class:`AllanMoments` for ``n`` samples at octaves ``ms`` — from memory, the disk cache
     (module docstring) or computed. Cost of a computation: the flicker filters are a record
     long; their correlations share one FFT per τ and one inverse FFT per pair of τ (1.4 s at
@@ -427,24 +456,24 @@ def moments(n: int, ms: tuple[int, ...]) -> AllanMoments:
     k = len(ms)
     tc = gm_grid(ms)
     folder = cache_dir()
-    key = _key(n, ms, "base")
+    key = _key(n, ms, "base", shaping)
     shapes = {"design": (k, 4), "tensor": (k, k, 4, 4), "gm_tc": (tc.size,),
               "gm_design": (tc.size, k)}
     got = None if folder is None else _load(folder / f"{key}.npz", key, shapes)
     if got is not None and not np.array_equal(got["gm_tc"], tc):
         got = None
     if got is None:
-        got = _compute(n, ms)
+        got = _compute(n, ms, shaping)
         if folder is not None:
             _store(folder / f"{key}.npz", key, got)
-    out = AllanMoments(n=int(n), ms=ms, **got)
+    out = AllanMoments(n=int(n), ms=ms, shaping=shaping, **got)
     for a in (out.design, out.tensor, out.gm_tc, out.gm_design):
         a.setflags(write=False)
     return out
 
 
 @lru_cache(maxsize=64)
-def gm_columns(n: int, ms: tuple[int, ...], tc: float) -> np.ndarray:
+def gm_columns(n: int, ms: tuple[int, ...], tc: float, shaping: Shaping = None) -> np.ndarray:
     """(k, k, 5): the covariance products of the Gauss–Markov process of correlation time
     ``tc`` samples with white, flicker, random walk, quantization and itself — from memory,
     the disk cache or computed (about 1 s at 2^15 samples, 3 s at 2^17: one T_c at a time,
@@ -452,10 +481,10 @@ def gm_columns(n: int, ms: tuple[int, ...], tc: float) -> np.ndarray:
     ms = tuple(int(m) for m in ms)
     k = len(ms)
     folder = cache_dir()
-    key = _key(n, ms, f"gm{float(tc)!r}")
+    key = _key(n, ms, f"gm{float(tc)!r}", shaping)
     got = None if folder is None else _load(folder / f"{key}.npz", key, {"cols": (k, k, 5)})
     if got is None:
-        got = {"cols": _compute_gm(n, ms, float(tc))}
+        got = {"cols": _compute_gm(n, ms, float(tc), shaping)}
         if folder is not None:
             _store(folder / f"{key}.npz", key, got)
     cols = got["cols"]
@@ -502,6 +531,7 @@ class PooledMoments:
     tensor: np.ndarray
     gm_tc: np.ndarray
     gm_design: np.ndarray
+    shaping: Shaping = None
 
     @property
     def n(self) -> int:
@@ -519,7 +549,7 @@ class PooledMoments:
             ks = len(part.ms)
             ww = w[:ks]
             cols[:ks, :ks] += (ww[:, None, None] * ww[None, :, None]
-                               * gm_columns(part.n, part.ms, tc))
+                               * gm_columns(part.n, part.ms, tc, *_shaped(self.shaping)))
         return with_gauss_markov(self.design, self.tensor, self.gm_design[g], cols)
 
 
@@ -530,7 +560,8 @@ def supported_octaves(n: int, ms: tuple[int, ...]) -> tuple[int, ...]:
 
 
 @lru_cache(maxsize=16)
-def pooled_moments(lengths: tuple[int, ...], ms: tuple[int, ...]) -> PooledMoments:
+def pooled_moments(lengths: tuple[int, ...], ms: tuple[int, ...], shaping: Shaping = None
+                   ) -> PooledMoments:
     """:class:`PooledMoments` of segments of ``lengths`` samples at octaves ``ms`` (module
     docstring: Segments). Each segment's own moments come from :func:`moments` (cached on disk
     per length and octaves); segments that hold no octave are refused (give only the ones
@@ -548,7 +579,7 @@ def pooled_moments(lengths: tuple[int, ...], ms: tuple[int, ...]) -> PooledMomen
         own = supported_octaves(n, ms)
         if not own or own != ms[:len(own)]:
             raise ValueError(f"a segment of {n} samples holds no octave of {ms}")
-        parts.append(moments(n, own))
+        parts.append(moments(n, own, *_shaped(shaping)))
     weights = segment_weights(lengths, ms)
     if np.any(weights.sum(axis=0) <= 0):
         raise ValueError(f"no segment of {lengths} holds every octave of {ms}")
@@ -565,20 +596,23 @@ def pooled_moments(lengths: tuple[int, ...], ms: tuple[int, ...]) -> PooledMomen
                          f"{longest.ms}, not all of {ms}")
     out = PooledMoments(lengths=lengths, ms=ms, weights=weights, parts=tuple(parts),
                         design=design, tensor=tensor, gm_tc=longest.gm_tc,
-                        gm_design=longest.gm_design)
+                        gm_design=longest.gm_design, shaping=shaping)
     for a in (out.weights, out.design, out.tensor):
         a.setflags(write=False)
     return out
 
 
-def record_moments(lengths: tuple[int, ...], ms: tuple[int, ...]
+def record_moments(lengths: tuple[int, ...], ms: tuple[int, ...], shaping: Shaping = None
                    ) -> AllanMoments | PooledMoments:
     """The moments of the records a fit reads: :func:`moments` of the one record (exactly the
-    unsegmented numbers), else :func:`pooled_moments` of the segments."""
+    unsegmented numbers), else :func:`pooled_moments` of the segments; ``shaping`` the log's
+    shaping filter (None: none)."""
     lengths = tuple(int(n) for n in lengths)
+    if shaping is not None:
+        shaping = tuple(float(v) for v in shaping)
     if len(lengths) == 1:
-        return moments(lengths[0], tuple(int(m) for m in ms))
-    return pooled_moments(lengths, tuple(int(m) for m in ms))
+        return moments(lengths[0], tuple(int(m) for m in ms), *_shaped(shaping))
+    return pooled_moments(lengths, tuple(int(m) for m in ms), *_shaped(shaping))
 
 
 def allan_moments(n: int, ms: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
@@ -612,7 +646,8 @@ def edf(design: np.ndarray, tensor: np.ndarray, theta: np.ndarray) -> np.ndarray
 __all__ = ["ALL_TERM_NAMES", "CACHE_ENV", "EXTRA_TERM_NAMES", "FLICKER_FLOOR", "GM_CUT",
            "GM_STEPS_PER_OCTAVE",
            "MOMENTS_VERSION", "N_PROCESSES", "TERM_NAMES", "AllanMoments", "PooledMoments",
-           "allan_moments", "avar_covariance", "cache_dir", "edf", "flicker_coefficients",
-           "gm_avar", "gm_columns", "gm_grid", "moments", "pooled_moments", "record_moments",
+           "Shaping", "allan_moments", "avar_covariance", "cache_dir", "edf",
+           "flicker_coefficients", "gm_avar", "gm_columns", "gm_grid", "moments",
+           "pooled_moments", "record_moments",
            "segment_counts", "segment_weights", "supported_octaves", "term_value",
            "terms_from_theta", "theta_from_terms", "with_gauss_markov"]

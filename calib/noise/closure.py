@@ -35,6 +35,14 @@ covariance, ``T_r ~ χ²_{k_r}`` under the same hypothesis — and reported besi
 (``model_range``), which stays the verdict; the summary says when every octave where they part
 lies outside the model's range.
 
+**A shaped log** (an export's low-pass filter, :mod:`calib.noise.shaping`). The twin filters
+with the filter read from this log, so the two curves also differ by that estimate's error:
+at short τ, where the filter shapes the curve, the octaves move nearly as one and a 1 %
+error in the filter's passband is many of their joint standard deviations. Its covariance,
+``Σ_f`` of the log white Allan variance over re-estimates of the filter
+(:func:`calib.noise.shaping.shaping_spread`: a seeded parametric bootstrap), weighted by each
+octave's white share ``w_i = θ_w·X_iw / μ_i``, is added: ``Σ_u + diag(w) Σ_f diag(w)``.
+
 **Where they part.** Per octave ``z_i = u_i / √Σ_u,ii``; octaves with ``|z_i|`` above the
 Šidák bound of the family, ``Φ⁻¹(1 − (1 − (1 − α)^{1/k})/2)``, are named (the twin's ADEV
 against the log's, and which is higher); when the joint test rejects but no single octave
@@ -166,7 +174,7 @@ def _model_of(fit) -> tuple[Model, np.ndarray]:
     active = tuple(sorted(ALL_TERM_NAMES.index(n) for n in names))
     active = next(a for a in LADDER if set(a) == set(active))
     g = None
-    mom = record_moments(fit.fit_lengths, fit.ms)
+    mom = record_moments(fit.fit_lengths, fit.ms, fit.shaping)
     gm = fit.term("gauss_markov")
     if gm is not None:
         rate = fit.ms[0] / fit.taus[0]
@@ -188,7 +196,7 @@ def closure_test(fit, twin_adev: np.ndarray, alpha: float = CLOSURE_ALPHA) -> Cl
     alpha : family α.
     """
     model, theta_twin = _model_of(fit)
-    mom = record_moments(fit.fit_lengths, fit.ms)
+    mom = record_moments(fit.fit_lengths, fit.ms, fit.shaping)
     design, tensor = mom.full(model.g)
     s = np.asarray(fit.adev, float) ** 2
     t = np.asarray(twin_adev, float) ** 2
@@ -224,6 +232,13 @@ def closure_test(fit, twin_adev: np.ndarray, alpha: float = CLOSURE_ALPHA) -> Cl
     h /= mu[:, None]
     a = np.eye(k) - h
     cov_u = a @ sig @ a.T + sig_t
+    if fit.export_filter is not None:  # the filter was read from this log (module docstring)
+        from calib.noise.shaping import shaping_spread
+
+        block = max(1, round(fit.n / max(fit.n_fit, 1)))
+        share = design[:, 0] * th[0] / mu  # the white noise's part of each octave
+        spread = shaping_spread(fit.export_filter, fit.n, fit.ms, block)
+        cov_u = cov_u + share[:, None] * spread * share[None, :]
 
     def bias(x):
         return special.digamma(x / 2.0) - np.log(x / 2.0)

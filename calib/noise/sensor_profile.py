@@ -28,6 +28,9 @@ Format ``tiltbench-sensor``, version 2 (:data:`FORMAT_VERSION`), one JSON object
         quantization_noise    optional: NoiseTerm or null, m/s (Δv quantization, 3Q²/τ²)
         gauss_markov          optional: NoiseTerm + "correlation_time" (s), or null, m/s²
         fit_tau_range         optional: [τ0, τ1] s the model describes, or null
+        export_filter         optional: the taps of the export's low-pass filter on lags
+                              −L … L (odd count ≤ 2049, Σ = 1; calib.noise.shaping), or
+                              null (readings not filtered)
         (gyro axes: rad/s for m/s², rad for m/s; GYRO_TERM_UNITS)
     fit                     {"level", "alpha", "n"} of the fit, or null          defining
     calibration             null, a cal.json's {"param_names", "params", "cov",  defining
@@ -195,7 +198,7 @@ COSMETIC_FIELDS = ("tool",)
 """Fields never checked nor used."""
 REQUIRED_AXIS_FIELDS = (*TERM_NAMES, "quantization_step", "unresolved_upper_bounds", "fit_ok")
 """The keys every axis block holds (a null where there is nothing)."""
-OPTIONAL_AXIS_FIELDS = ("quantization_noise", "gauss_markov", "fit_tau_range")
+OPTIONAL_AXIS_FIELDS = ("quantization_noise", "gauss_markov", "fit_tau_range", "export_filter")
 """Keys added to version 2 after its first files were written: the extra terms of the model
 (a NoiseTerm, the Gauss–Markov one with its ``correlation_time``) and the τ range the model
 describes. **Rule:** absent means null (a profile written before them has no such term and no
@@ -238,8 +241,17 @@ UNITS = {
     "gyro_*.quantization_noise": "rad",
     "gyro_*.gauss_markov": "rad/s",
 }
+"""The ``units`` object of the version-2 files written before ``export_filter``: still
+accepted from a file whose axis blocks have no ``export_filter`` key."""
+UNITS_V2_1 = dict(UNITS)
+UNITS = {**UNITS_V2_1, "export_filter": "1 (filter taps, sum 1)"}
 """The ``units`` object of every version-2 file this tiltbench writes: a term's unit applies
 to its value, interval and upper bound; the ``gyro_*`` keys are the units of the gyro axes."""
+EXPORT_FILTER_TAPS = (3, 2049)
+"""Fewest and most taps of an ``export_filter`` (an odd count: lags −L … L;
+:data:`calib.noise.shaping.MAX_TAPS`)."""
+EXPORT_FILTER_SUM_TOL = 1e-6
+"""|Σ taps − 1| allowed (the taps are written as the shortest round trip of each float)."""
 
 _REQUIRED = ("format", "format_version", "sample_rate", "axes", "fit", "calibration",
              "source", "units", "checksum")
@@ -291,6 +303,8 @@ class SensorProfile:
     quantization_noise, gauss_markov : per axis a :class:`NoiseTerm` (the GM one with its
         ``correlation_time``) or None (not in the model, or not resolved); or None.
     fit_tau_range : per axis (τ0, τ1) s, the τ range the model describes, or None; or None.
+    export_filter : per axis the taps of the export's low-pass filter (lags −L … L, Σ = 1;
+        :mod:`calib.noise.shaping`) or None; or None.
     calibration : a cal.json's ``{"param_names", "params", "cov", …}`` or
         ``{"bias", "scale"}`` of the tilt plane x, y (a list [x, y] or an object keyed by
         axis name), or None.
@@ -314,6 +328,7 @@ class SensorProfile:
     quantization_noise: tuple[NoiseTerm | None, ...] | None = None
     gauss_markov: tuple[NoiseTerm | None, ...] | None = None
     fit_tau_range: tuple[tuple[float, float] | None, ...] | None = None
+    export_filter: tuple[tuple[float, ...] | None, ...] | None = None
 
     def fit_ok(self, axis: int | str) -> bool | None:
         """Whether the model described ``axis``'s Allan curve when the profile was written
@@ -451,6 +466,9 @@ def profile_document(profile: SensorProfile, where: Any = "<memory>") -> dict:
         rng = _per_axis(profile, "fit_tau_range", k, where)
         block["fit_tau_range"] = ([_num(v) for v in rng]
                                   if isinstance(rng, (tuple, list, np.ndarray)) else rng)
+        taps = _per_axis(profile, "export_filter", k, where)
+        block["export_filter"] = ([_num(v) for v in taps]
+                                  if isinstance(taps, (tuple, list, np.ndarray)) else taps)
         blocks[a] = block
     fit = ({k: (extra[k] if k == "n" else _num(extra[k])) for k in _FIT_KEYS if k in extra}
            or None)
@@ -651,7 +669,27 @@ def _axis_from(d: Any, axis: str, where: Any, level: float | None) -> dict:
                         f"{TAU_RANGE[0]:g} ≤ τ0 ≤ τ1 ≤ {TAU_RANGE[1]:g} s")
         rng = (t0, t1)
     out["fit_tau_range"] = rng
+    taps = d.get("export_filter")
+    out["export_filter"] = None if taps is None else _taps(taps, f"{name}.export_filter", where)
     return out
+
+
+def _taps(v: Any, name: str, where: Any) -> tuple[float, ...]:
+    """An ``export_filter``: an odd number of finite taps (:data:`EXPORT_FILTER_TAPS`), each
+    within ±1, summing to 1 (:data:`EXPORT_FILTER_SUM_TOL`)."""
+    lo, hi = EXPORT_FILTER_TAPS
+    if (not isinstance(v, list) or not lo <= len(v) <= hi or len(v) % 2 == 0
+            or not all(_is_number(x) for x in v)):
+        raise _fail(where, name, f"must be a list of an odd number ({lo}–{hi}) of filter taps "
+                    f"(numbers) or null, got {_short(v)}")
+    taps = tuple(float(x) for x in v)
+    if not all(math.isfinite(x) and abs(x) <= 1.0 for x in taps):
+        raise _fail(where, name, "holds a tap that is not a finite number within ±1")
+    total = math.fsum(taps)
+    if abs(total - 1.0) > EXPORT_FILTER_SUM_TOL:
+        raise _fail(where, name, f"sums to {total:.9g}; a low-pass filter's taps sum to 1 "
+                    f"(unit gain at zero frequency); {_RERUN}")
+    return taps
 
 
 def _fit_from(d: Any, where: Any) -> dict | None:
@@ -819,7 +857,9 @@ def profile_from_document(doc: Any, where: Any = "<memory>") -> SensorProfile:
     tool = doc.get("tool")
     first = (set(axes) <= {"x", "y"}
              and not any(k in blocks[a] for a in axes for k in OPTIONAL_AXIS_FIELDS))
-    if doc["units"] != UNITS and not (first and doc["units"] == UNITS_V2_0):
+    before_filter = not any("export_filter" in blocks[a] for a in axes)
+    if (doc["units"] != UNITS and not (before_filter and doc["units"] == UNITS_V2_1)
+            and not (first and doc["units"] == UNITS_V2_0)):
         raise DataError(f"{where}: checksum/consistency failed: field 'units' differs from "
                         f"this format's units (the file was edited); {_RERUN}")
     stored = doc["checksum"]
@@ -850,7 +890,8 @@ def profile_from_document(doc: Any, where: Any = "<memory>") -> SensorProfile:
         quantization_step=per_axis("quantization_step"), calibration=calibration,
         source=source, tool_version=str(version) if version is not None else "unknown",
         axes=axes, extra=extra, quantization_noise=per_axis("quantization_noise"),
-        gauss_markov=per_axis("gauss_markov"), fit_tau_range=per_axis("fit_tau_range"))
+        gauss_markov=per_axis("gauss_markov"), fit_tau_range=per_axis("fit_tau_range"),
+        export_filter=per_axis("export_filter"))
 
 
 FAILED_FIT_FLAG = "--allow-failed-fit"
@@ -930,13 +971,13 @@ def load_profile(path: str | os.PathLike) -> SensorProfile:
 
 __all__ = ["AXIS_FIELDS", "AXIS_NAMES", "BIAS_INSTABILITY_RANGE", "CALIBRATION_AXES",
            "CALIBRATION_METHODS", "CHECKSUM_FIELDS", "CORRELATION_EIG_MIN",
-           "CORRELATION_TIME_RANGE", "COSMETIC_FIELDS", "DEFINING_FIELDS", "EXTRA_KEYS",
-           "FAILED_FIT_FLAG", "FORMAT", "FORMAT_VERSION", "GAIN_RANGE",
-           "GYRO_QUANTIZATION_STEP_RANGE", "GYRO_TERM_RANGES", "GYRO_TERM_UNITS", "G_RANGE",
-           "MAX_ABS_CALIBRATION_BIAS", "N_RANGE", "NoiseTerm", "OPTIONAL_AXIS_FIELDS",
+           "CORRELATION_TIME_RANGE", "COSMETIC_FIELDS", "DEFINING_FIELDS", "EXPORT_FILTER_SUM_TOL",
+           "EXPORT_FILTER_TAPS", "EXTRA_KEYS", "FAILED_FIT_FLAG", "FORMAT", "FORMAT_VERSION",
+           "GAIN_RANGE", "GYRO_QUANTIZATION_STEP_RANGE", "GYRO_TERM_RANGES", "GYRO_TERM_UNITS",
+           "G_RANGE", "MAX_ABS_CALIBRATION_BIAS", "N_RANGE", "OPTIONAL_AXIS_FIELDS",
            "QUANTIZATION_NOISE_RANGE", "QUANTIZATION_STEP_RANGE", "RATE_RANDOM_WALK_RANGE",
            "REQUIRED_AXES", "REQUIRED_AXIS_FIELDS", "SAMPLE_RATE_RANGE", "SIGMA2_RANGE",
-           "SensorProfile", "TAU_RANGE", "TERM_NAMES", "TERM_RANGES", "TERM_UNITS", "UNITS",
-           "UNITS_V2_0", "WHITE_NOISE_DENSITY_RANGE", "check_profile", "defining_checksum",
-           "load_profile", "profile_document", "profile_from_document", "require_fit_ok",
-           "save_profile"]
+           "TAU_RANGE", "TERM_NAMES", "TERM_RANGES", "TERM_UNITS", "UNITS", "UNITS_V2_0",
+           "UNITS_V2_1", "WHITE_NOISE_DENSITY_RANGE", "NoiseTerm", "SensorProfile", "check_profile",
+           "defining_checksum", "load_profile", "profile_document", "profile_from_document",
+           "require_fit_ok", "save_profile"]

@@ -1,0 +1,210 @@
+"""A static log's shaping filter: the low-pass filter an export applied to every reading.
+
+Phones and many loggers do not hand out the sensor's raw samples: the readings went through a
+low-pass (decimation) filter first. Its mark on the Allan deviation is at short τ: the curve
+sits below the white noise's ``N/√τ`` and rises to meet it a few filter lengths later (the
+real 6-hour Galaxy S5 log of docs/noise.md rises from τ = 0.2 to 3 s). No term of the noise
+model has that shape, so without the filter the fit can only describe the octaves beyond it,
+and a twin made of white noise is several times noisier than the log at short τ.
+
+**The model.** Every process reaches the readings through one linear filter ``f`` with unit
+gain at zero frequency (Σ f = 1): ``y = f ∗ x``, x the sum of the model's processes. The
+octave-m Allan difference of ``y`` is then the difference filter ``h_m ∗ f`` applied to x,
+so the exact moments of :mod:`calib.noise.allan_model` hold with ``h_m ∗ f`` in place of
+``h_m`` (:func:`calib.noise.allan_model.record_moments` with ``shaping``). Beyond a few
+filter lengths ``h_m ∗ f`` acts as ``h_m`` on every term, so N, B and K keep their meaning
+(f passes zero frequency unchanged); the twin draws its processes and filters them with the
+same ``f`` (:func:`bench.sensor_twin.simulate_axis`).
+
+**The rule (when a log is shaped).** On the first :data:`MAX_SAMPLES` readings, a straight
+line removed, the autocorrelation at lag 1 is at least ``1/e`` (:data:`LAG1_CORRELATION`):
+the correlation time (the first lag below 1/e, as in the static check of
+:mod:`calib.logs.static_log`) is longer than one sample. White noise, flicker and a random
+walk at the levels of a sensor leave the lag-1 correlation near 0 at the sample rate; a
+filtered export puts it near 1. A log whose autocorrelation never falls below 1/e within
+``n/64`` lags (a slow process dominates the readings) is not shaped.
+
+**The estimate.** With the correlation time T (samples) the filter's lags are ``L =``
+:data:`SPAN` · T. The autocovariance ``c(k)`` (k ≤ 4L, unbiased per lag) has the slow terms'
+share as a near-constant level over those lags (flicker's and a walk's correlation decays
+over the record, not over a filter's length): their level is read as the mean of ``c`` on
+lags 2L … 4L, where the filter's own correlation has died out, and removed. The spectrum
+``S(ω) = c(0) + 2 Σ_{k=1..L} c(k) cos ωk`` (clipped at 0) gives the zero-phase filter
+``|F(ω)| = √(S(ω)/S(0))``: ``f`` is its inverse transform on lags −L … L, scaled to Σ f = 1.
+A filter is only known up to its phase from second-order statistics, and the Allan variance
+depends on nothing else.
+
+Hand-written because no library estimates an export filter from its output (scipy's
+``signal`` designs filters from a specification, not from a record).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from calib.numerics import lagged_sums
+
+LAG1_CORRELATION = math.exp(-1.0)
+"""A log is shaped when its lag-1 autocorrelation (a line removed) is at least this."""
+SPAN = 10
+"""The filter's lags: this many correlation times (about ten independent readings, the
+window rule of the static check)."""
+LOW_BINS = 3
+"""Spectrum bins (of a segment of ≈ 8L readings) left to the slow terms: below them the
+filter's passband is taken as flat (gain 1)."""
+MAX_SAMPLES = 1 << 18
+"""Readings the estimate reads (the first ones): far more than a filter of a few hundred lags
+needs (the autocorrelation's spread is ≈ 1/√n = 0.002 at this length)."""
+MAX_TAPS = 2049
+"""Longest filter kept (lags −1024 … 1024): the moments' cost grows with the taps."""
+
+
+def shaping_filter(y: np.ndarray) -> tuple[float, ...] | None:
+    """The shaping filter of the readings ``y`` (module docstring: the rule and the
+    estimate): its taps on lags −L … L, Σ = 1, as a tuple; None when the log is not shaped
+    (or too short to tell: fewer than 64 readings)."""
+    y = np.asarray(y, dtype=float).ravel()[:MAX_SAMPLES]
+    n = y.size
+    if n < 64 or not np.all(np.isfinite(y)):
+        return None
+    t = np.arange(n, dtype=float)
+    a = np.column_stack([np.ones(n), t - t.mean()])
+    y = y - a @ np.linalg.lstsq(a, y, rcond=None)[0]
+    top = n // 64
+    sums = lagged_sums(y, top)[:, 0]
+    if sums[0] <= 0.0:
+        return None
+    c = sums / (n - np.arange(sums.size))
+    r = c / c[0]
+    if r[1] < LAG1_CORRELATION:
+        return None
+    below = np.nonzero(r < LAG1_CORRELATION)[0]
+    if below.size == 0:
+        return None
+    lags = SPAN * int(below[0])
+    if 16 * lags > n or 2 * lags + 1 > MAX_TAPS:
+        return None
+    from scipy import signal
+
+    size = min(1 << int(math.ceil(math.log2(8 * (lags + 1)))), 1 << int(math.log2(n)))
+    _, psd = signal.welch(y, nperseg=size, window="blackmanharris", detrend="linear")
+    # the passband: the bins from LOW_BINS up to where the spectrum falls to half its peak;
+    # its white level is their median over the lower half of it
+    peak = float(psd[LOW_BINS:].max())
+    edge = LOW_BINS + int(np.argmax(psd[LOW_BINS:] < peak / 2.0))
+    band = psd[LOW_BINS:max(LOW_BINS + 2, (LOW_BINS + edge) // 2)]
+    white = float(np.median(band))
+    if not (white > 0.0 and math.isfinite(white)):
+        return None
+    power = psd / white
+    power[:LOW_BINS] = 1.0  # the passband is flat down to zero frequency
+    gain = np.sqrt(np.maximum(power, 0.0))
+    taps = np.fft.irfft(gain, size)
+    f = np.concatenate([taps[size - lags:], taps[:lags + 1]])
+    total = float(f.sum())
+    if not math.isfinite(total) or total <= 0.0:
+        return None
+    return tuple(float(v) for v in f / total)
+
+
+def blocked_filter(taps: tuple[float, ...], block: int) -> tuple[float, ...] | None:
+    """The shaping filter of the block means (``block`` readings each) of a log shaped by
+    ``taps``: the zero-phase filter whose autocorrelation is that of the block means of
+    ``taps ∗ w`` (w white), ``r_b(k) = Σ_d (b − |d|)·r(kb + d) / b²`` with ``r = taps ⋆ taps``,
+    normalized to Σ = 1: one filter, so the fit of the block means and the twin that filters
+    at the log's rate describe the same readings. ``taps`` itself for ``block`` 1; None when
+    the block means are white (the filter within one block)."""
+    f = np.asarray(taps, dtype=float)
+    if block == 1:
+        return tuple(float(v) for v in f)
+    r = np.correlate(f, f, mode="full")  # lags −(len−1) … len−1
+    half = f.size - 1
+    lags = (half + block - 1) // block  # r_b(k) = 0 beyond
+    if lags == 0:
+        return None
+    d = np.arange(-(block - 1), block)
+    weight = (block - np.abs(d)) / block ** 2
+
+    def at(lag: np.ndarray) -> np.ndarray:
+        inside = np.abs(lag) <= half
+        return np.where(inside, r[np.clip(lag + half, 0, r.size - 1)], 0.0)
+
+    rb = np.array([weight @ at(k * block + d) for k in range(lags + 1)])
+    if rb[1] < 1e-6 * rb[0]:
+        return None
+    size = 1 << int(math.ceil(math.log2(8 * (lags + 1))))
+    omega = 2.0 * np.pi * np.arange(size // 2 + 1) / size
+    spectrum = rb[0] + 2.0 * np.cos(np.outer(omega, np.arange(1, lags + 1))) @ rb[1:]
+    gain = np.sqrt(np.maximum(spectrum, 0.0) / spectrum[0])
+    full = np.fft.irfft(gain, size)
+    g = np.concatenate([full[size - lags:], full[:lags + 1]])
+    return tuple(float(v) for v in g / g.sum())
+
+
+SPREAD_DRAWS = 24
+"""Re-estimates of a filter behind :func:`shaping_spread`: a covariance of a few octaves that
+are nearly one (the shaped octaves move together) is read well from a few dozen draws."""
+
+
+def _white_allan(f: np.ndarray, ms: tuple[int, ...]) -> np.ndarray:
+    """(k,) the Allan variance of unit white noise shaped by ``f`` at octaves ``ms``:
+    ``Σ (h_m ∗ f)² / 2`` (:mod:`calib.noise.allan_model`, white column)."""
+    out = []
+    for m in ms:
+        h = np.concatenate([-np.ones(m), np.ones(m)]) / m
+        d = np.convolve(h, f)
+        out.append(float(d @ d) / 2.0)
+    return np.array(out)
+
+
+def shaping_spread(taps: tuple[float, ...], n: int, ms: tuple[int, ...], block: int = 1,
+                   seed: int = 0, draws: int = SPREAD_DRAWS) -> np.ndarray:
+    """(k, k) covariance of the log of each octave's white Allan variance over re-estimates
+    of the filter: the spread a filter read from ``n`` readings leaves in the model it shapes.
+
+    A parametric bootstrap with ``taps`` taken as true: ``draws`` records of ``n`` readings
+    (at most :data:`MAX_SAMPLES`, what the estimate reads) of white noise through ``taps``,
+    the filter estimated on each (:func:`shaping_filter`; then :func:`blocked_filter` of
+    ``block``), and ``log Σ(h_m ∗ g)²/2 − log Σ(h_m ∗ f)²/2`` at the fit's octaves ``ms``.
+    The twin-closure test adds it to its covariance (:mod:`calib.noise.closure`: the filter
+    was read from the log it is compared with). Seeded: the same numbers on every run."""
+    from scipy import signal
+
+    f = np.asarray(taps, dtype=float)
+    fit_f = blocked_filter(tuple(f), block)
+    if fit_f is None:
+        return np.zeros((len(ms), len(ms)))
+    base = _white_allan(np.asarray(fit_f), ms)
+    rng = np.random.default_rng(seed)
+    size = min(int(n), MAX_SAMPLES)
+    rows = []
+    for _ in range(draws):
+        y = signal.fftconvolve(rng.standard_normal(size + f.size - 1), f, mode="valid")
+        g = shaping_filter(y)
+        gb = None if g is None else blocked_filter(g, block)
+        if gb is None:
+            continue
+        rows.append(np.log(_white_allan(np.asarray(gb), ms) / base))
+    if len(rows) < 2:
+        return np.zeros((len(ms), len(ms)))
+    return np.atleast_2d(np.cov(np.array(rows), rowvar=False))
+
+
+def shaping_summary(shaping: tuple[float, ...] | None, rate: float) -> str | None:
+    """One line about a shaping filter: its lags and its equivalent noise bandwidth
+    ``fs·Σf²/2`` (Hz; the one-sided band of an ideal low-pass with the same white-noise
+    power); None for no filter."""
+    if shaping is None:
+        return None
+    f = np.asarray(shaping, dtype=float)
+    lags = (f.size - 1) // 2
+    band = rate * float(f @ f) / 2.0
+    return (f"shaped by the export's low-pass filter: {f.size} taps (±{lags} samples = "
+            f"±{lags / rate:.3g} s), noise bandwidth {band:.3g} Hz of the {rate / 2:.3g} Hz "
+            "Nyquist band")
+
+
+__all__ = ["LAG1_CORRELATION", "LOW_BINS", "MAX_SAMPLES", "MAX_TAPS", "SPAN", "SPREAD_DRAWS",
+           "blocked_filter", "shaping_filter", "shaping_spread", "shaping_summary"]
