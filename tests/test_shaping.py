@@ -80,12 +80,19 @@ def test_shaped_moments_match_filtered_white_noise():
     assert np.abs(s.mean(axis=0)[0] - plain[0]) > 100.0 * se[0]
 
 
-@pytest.mark.parametrize("spec", [NoiseSpec(rate=RATE, white=1e-3),
-                                  NoiseSpec(rate=RATE, white=1e-3, flicker=5e-4, walk=1e-4),
-                                  NoiseSpec(rate=RATE, white=1e-3, gm_sigma=1e-3, gm_tc=5.0)])
+@pytest.mark.parametrize("spec", [
+    NoiseSpec(rate=RATE, white=1e-3),
+    NoiseSpec(rate=RATE, white=1e-3, flicker=5e-4, walk=1e-4),
+    NoiseSpec(rate=RATE, white=1e-3, gm_sigma=1e-3, gm_tc=5.0),
+    # correlated at lag 1 (a walk or a Gauss–Markov bias far above the white noise), but
+    # with rough steps: not a low-pass (the rule's second condition)
+    NoiseSpec(rate=RATE, white=4e-5, flicker=2.4e-5, walk=7e-6, read_step=4e-5),
+    NoiseSpec(rate=RATE, white=1e-4, walk=1e-4),
+    NoiseSpec(rate=RATE, white=1e-3, gm_sigma=1e-2, gm_tc=5.0)])
 def test_unfiltered_logs_are_not_shaped(spec):
     rng = np.random.default_rng(1)
-    assert shaping_filter(static_log(spec, 30000, rng)[0]) is None
+    for _ in range(10):
+        assert shaping_filter(static_log(spec, 16384, rng)[0]) is None
 
 
 def test_the_filter_read_from_a_log_errs_as_the_closure_assumes():

@@ -102,7 +102,12 @@ from calib.noise.allan_model import (
     supported_octaves,
     term_value,
 )
-from calib.noise.shaping import blocked_filter, shaping_filter, shaping_summary
+from calib.noise.shaping import (
+    blocked_filter,
+    shaping_filter,
+    shaping_spread,
+    shaping_summary,
+)
 from calib.noise.term_units import KINDS, SI_UNITS, datasheet, si_unit
 from calib.results import ResultMixin, readonly
 
@@ -760,9 +765,12 @@ def _fit_records(adev, taus, ms, lengths: tuple[int, ...], *, raw, rate, axis, k
     else:
         chosen = engine.fit(Model(CORE, None, 0, k))
         ok, tried = chosen.adequate, [chosen]
+    spread = None
+    if shaping is not None:  # the filter was read from this log: N's interval widens
+        spread = shaping_spread(export, raw.size, ms, max(1, round(raw.size / sum(lengths))))
     return _axis_result(engine, chosen, ok, tried, raw=raw, taus=taus, adev=adev, ms=ms,
                         lengths=lengths, rate=rate, axis=axis, kind=kind, level=level,
-                        alpha=alpha, export=export)
+                        alpha=alpha, export=export, spread=spread)
 
 
 def _caps(kind: str, rate: float) -> np.ndarray:
@@ -779,7 +787,7 @@ def _caps(kind: str, rate: float) -> np.ndarray:
 
 def _axis_result(engine: Engine, chosen: ModelFit, ok: bool, tried: list[ModelFit], *,
                  raw, taus, adev, ms, lengths, rate, axis, kind, level, alpha,
-                 export=None) -> AxisNoise:
+                 export=None, spread=None) -> AxisNoise:
     model = chosen.model
     n = int(sum(lengths))
     theta = chosen.theta
@@ -797,6 +805,8 @@ def _axis_result(engine: Engine, chosen: ModelFit, ok: bool, tried: list[ModelFi
         resolved = z0 > z_one and theta[a] > 0 and (a != WALK or rise >= K_RISE_STEPS)
         est = term_value(name, max(theta[a], 0.0), rate)
         lo_t, hi_t = term_value(name, lo, rate), term_value(name, hi, rate)
+        if a == WHITE and spread is not None:
+            lo_t, hi_t = _with_filter_spread(est, lo_t, hi_t, spread, level)
         terms.append(TermFit(name=name, resolved=bool(resolved),
                              value=est if resolved else None,
                              interval=(min(lo_t, est), max(hi_t, est)),
@@ -824,6 +834,23 @@ def _axis_result(engine: Engine, chosen: ModelFit, ok: bool, tried: list[ModelFi
                      tried=tuple(_tried(f, taus) for f in tried),
                      n_fit_segments=lengths if len(lengths) > 1 else (),
                      shaping=engine.mom.shaping, export_filter=export)
+
+
+def _with_filter_spread(est: float, lo: float, hi: float, spread: np.ndarray, level: float
+                        ) -> tuple[float, float]:
+    """N's interval [lo, hi] widened by the error of a filter read from the log
+    (:mod:`calib.noise.shaping`). The short-τ octaves tie N to the filter's passband level, so
+    that level's relative error moves N by half of it (N² scales with it): in log N, the
+    variance ``Σ_f,00 / 4`` of the first octave's white Allan variance over re-estimates of
+    the filter is added in quadrature to each side's half-width (the whole of it: as if N were
+    read from the short τ alone — conservative when the long τ hold it too)."""
+    if not est > 0.0:
+        return lo, hi
+    z = float(stats.norm.ppf(0.5 + level / 2.0))
+    extra = z * z * float(spread[0, 0]) / 4.0
+    down = math.sqrt(math.log(est / lo) ** 2 + extra) if lo > 0 else math.inf
+    up = math.sqrt(math.log(hi / est) ** 2 + extra)
+    return (est * math.exp(-down) if math.isfinite(down) else 0.0), est * math.exp(up)
 
 
 def characterize_noise(acc: np.ndarray, rate: float, *, level: float = 0.683,

@@ -218,6 +218,14 @@ def closure_test(fit, twin_adev: np.ndarray, alpha: float = CLOSURE_ALPHA) -> Cl
         return corr * np.outer(d, d)
 
     sig, sig_t = log_cov(v, nu), log_cov(v_t, nu_t)
+    # a shaped log: the spread of its filter's estimate (relative; module docstring)
+    spread = np.zeros((k, k))
+    if fit.export_filter is not None:
+        from calib.noise.shaping import shaping_spread
+
+        block = max(1, round(fit.n / max(fit.n_fit, 1)))
+        spread = shaping_spread(fit.export_filter, fit.n, fit.ms, block)
+    white = design[:, 0] * th[0]  # the white noise's part of each octave
     # the GLS hat of the kept terms, in relative units (module docstring)
     lo, hi = model.lo, model.hi
     act = list(model.active)
@@ -231,14 +239,8 @@ def closure_test(fit, twin_adev: np.ndarray, alpha: float = CLOSURE_ALPHA) -> Cl
     h[:, lo:hi] = (design[:, [act[i] for i in kept]] @ gain[kept]) * mu[lo:hi][None, :]
     h /= mu[:, None]
     a = np.eye(k) - h
-    cov_u = a @ sig @ a.T + sig_t
-    if fit.export_filter is not None:  # the filter was read from this log (module docstring)
-        from calib.noise.shaping import shaping_spread
-
-        block = max(1, round(fit.n / max(fit.n_fit, 1)))
-        share = design[:, 0] * th[0] / mu  # the white noise's part of each octave
-        spread = shaping_spread(fit.export_filter, fit.n, fit.ms, block)
-        cov_u = cov_u + share[:, None] * spread * share[None, :]
+    share = white / mu  # the filter read from this log (module docstring: A shaped log)
+    cov_u = a @ sig @ a.T + sig_t + share[:, None] * spread * share[None, :]
 
     def bias(x):
         return special.digamma(x / 2.0) - np.log(x / 2.0)

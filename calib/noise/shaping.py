@@ -17,12 +17,18 @@ filter lengths ``h_m ∗ f`` acts as ``h_m`` on every term, so N, B and K keep t
 same ``f`` (:func:`bench.sensor_twin.simulate_axis`).
 
 **The rule (when a log is shaped).** On the first :data:`MAX_SAMPLES` readings, a straight
-line removed, the autocorrelation at lag 1 is at least ``1/e`` (:data:`LAG1_CORRELATION`):
-the correlation time (the first lag below 1/e, as in the static check of
-:mod:`calib.logs.static_log`) is longer than one sample. White noise, flicker and a random
-walk at the levels of a sensor leave the lag-1 correlation near 0 at the sample rate; a
-filtered export puts it near 1. A log whose autocorrelation never falls below 1/e within
-``n/64`` lags (a slow process dominates the readings) is not shaped.
+line removed, both hold:
+
+* the autocorrelation at lag 1 is at least ``1/e`` (:data:`LAG1_CORRELATION`): the
+  correlation time (the first lag below 1/e, as in the static check of
+  :mod:`calib.logs.static_log`) is longer than one sample;
+* the Allan deviation does not fall over the first octave: ``σ_A(2τ0) ≥`` :data:`RISING_START`
+  ``· σ_A(τ0)`` (0.85). White noise at the shortest τ gives 1/√2 = 0.71 whatever slow terms
+  (flicker, a walk, a Gauss–Markov bias) ride on it — they can correlate the readings at
+  lag 1 when they dominate the record's variance, but not the shortest τ — while an export's
+  filter flattens or raises the curve there (the Galaxy S5 log: 0.91 on every axis).
+
+A log whose autocorrelation never falls below 1/e within ``n/64`` lags is not shaped either.
 
 **The estimate.** With the correlation time T (samples) the filter's lags are ``L =``
 :data:`SPAN` · T. The autocovariance ``c(k)`` (k ≤ 4L, unbiased per lag) has the slow terms'
@@ -48,9 +54,25 @@ from calib.numerics import lagged_sums
 
 LAG1_CORRELATION = math.exp(-1.0)
 """A log is shaped when its lag-1 autocorrelation (a line removed) is at least this."""
+RISING_START = 0.85
+"""…and its Allan deviation at 2τ0 is at least this times the one at τ0: white noise gives
+1/√2 = 0.71 (falling), a low-pass filter makes it level or rising."""
+
+
+def _first_octave_ratio(y: np.ndarray) -> float:
+    """σ_A(2τ0)/σ_A(τ0) of the readings (overlapping Allan deviations, written out here: the
+    rule's two numbers)."""
+    d1 = np.diff(y)
+    pair = y[:-1] + y[1:]
+    d2 = pair[2:] - pair[:-2]
+    a1 = float(d1 @ d1) / (2.0 * d1.size)
+    a2 = float(d2 @ d2) / (8.0 * d2.size)
+    return math.sqrt(a2 / a1) if a1 > 0 else 0.0
 SPAN = 10
 """The filter's lags: this many correlation times (about ten independent readings, the
 window rule of the static check)."""
+BAND_BINS = 8
+"""Fewest bins the passband's level is fitted on."""
 LOW_BINS = 3
 """Spectrum bins (of a segment of ≈ 8L readings) left to the slow terms: below them the
 filter's passband is taken as flat (gain 1)."""
@@ -80,6 +102,8 @@ def shaping_filter(y: np.ndarray) -> tuple[float, ...] | None:
     r = c / c[0]
     if r[1] < LAG1_CORRELATION:
         return None
+    if _first_octave_ratio(y) < RISING_START:
+        return None  # white noise at the shortest τ: slow terms correlate it, not a filter
     below = np.nonzero(r < LAG1_CORRELATION)[0]
     if below.size == 0:
         return None
@@ -91,14 +115,20 @@ def shaping_filter(y: np.ndarray) -> tuple[float, ...] | None:
     size = min(1 << int(math.ceil(math.log2(8 * (lags + 1)))), 1 << int(math.log2(n)))
     _, psd = signal.welch(y, nperseg=size, window="blackmanharris", detrend="linear")
     # the passband: the bins from LOW_BINS up to where the spectrum falls to half its peak;
-    # its white level is their median over the lower half of it
+    # its white level and the slow terms from their lower half (module docstring)
     peak = float(psd[LOW_BINS:].max())
     edge = LOW_BINS + int(np.argmax(psd[LOW_BINS:] < peak / 2.0))
-    band = psd[LOW_BINS:max(LOW_BINS + 2, (LOW_BINS + edge) // 2)]
-    white = float(np.median(band))
+    k = np.arange(LOW_BINS, max(LOW_BINS + BAND_BINS, (LOW_BINS + edge) // 2))
+    freq = k / size  # cycles per sample
+    a = np.column_stack([np.ones(k.size), freq[0] / freq])  # white + flicker (1/f)
+    weight = 1.0 / psd[k]  # each bin's relative error is the same (Welch, χ² bins)
+    coef = np.linalg.lstsq(a * weight[:, None], np.ones(k.size), rcond=None)[0]
+    white, flicker = float(coef[0]), max(float(coef[1]), 0.0)
     if not (white > 0.0 and math.isfinite(white)):
         return None
-    power = psd / white
+    # the filter shapes every term, flicker too: |F|² = S / (white + flicker·f₀/f)
+    bins = np.arange(psd.size, dtype=float)
+    power = psd / (white + flicker * k[0] / np.maximum(bins, 1.0))
     power[:LOW_BINS] = 1.0  # the passband is flat down to zero frequency
     gain = np.sqrt(np.maximum(power, 0.0))
     taps = np.fft.irfft(gain, size)
@@ -206,5 +236,6 @@ def shaping_summary(shaping: tuple[float, ...] | None, rate: float) -> str | Non
             "Nyquist band")
 
 
-__all__ = ["LAG1_CORRELATION", "LOW_BINS", "MAX_SAMPLES", "MAX_TAPS", "SPAN", "SPREAD_DRAWS",
+__all__ = ["BAND_BINS", "LAG1_CORRELATION", "LOW_BINS", "MAX_SAMPLES", "MAX_TAPS",
+           "RISING_START", "SPAN", "SPREAD_DRAWS",
            "blocked_filter", "shaping_filter", "shaping_spread", "shaping_summary"]

@@ -21,7 +21,9 @@ Per axis y (m/s² or rad/s, sampled every τ0 = 1/fs, fs = (n − 1)/(t_last −
 3. Bias instability (IEEE Std 952 C.1: flat floor σ = √(2 ln2/π)·B = 0.664·B, and every other
    term only adds): B ≤ hi(τ*)/0.664, τ* the argmin of the ADEV, hi its upper bound at p.
    σ_min/0.664 is the textbook (graphical) B, an over-estimate when other terms reach the floor.
-4. White noise on the octaves of the JSON white term's ``tau_range``: ln σ = ln N − ½ ln τ with
+4. White noise on the octaves of the JSON white term's ``tau_range`` — from two octaves past
+   the ADEV's peak on when it rises first (a filtered export: the rise is the filter, not
+   white noise) —: ln σ = ln N − ½ ln τ with
    the slope fixed, N from the weighted mean of ln(σ_i·√τ_i), weights w_i = 2ν_i (var ln σ_i ≈
    1/(2ν_i)); interval exp(ln N ± z·se), se = Σw_i·se_i/Σw_i (octaves taken as fully correlated:
    conservative; the independent-point se 1/√Σw is far narrower), z the normal quantile of p.
@@ -169,6 +171,11 @@ def check_axis(y: np.ndarray, fs: float, a: dict, level: float) -> dict:
     w = 2 * edf
     jn = terms["white_noise_density"]
     sw = in_range(taus, *jn["tau_range"])
+    # a filtered export: its ADEV rises to a peak before white noise's −½ line; the line is
+    # read from two octaves past that peak on (none for a log whose ADEV falls from the start)
+    peak = int(np.argmax(np.where(sw, s, -np.inf)))
+    if peak > 0:
+        sw &= taus >= 4.0 * taus[peak]
     lt, ls = np.log(taus), np.log(s)
     white = fixed_slope(s[sw] * np.sqrt(taus[sw]), w[sw], z)
     white["tau_range"] = [float(taus[sw][0]), float(taus[sw][-1])]
