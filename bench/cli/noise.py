@@ -8,7 +8,10 @@ fail) with a calibration's bias/scale if given (``--calibration cal.json``); the
 (``--twin``: the profile simulated by the bench for the log's length and rate, its Allan
 deviation tested against the log's, :mod:`calib.noise.closure`). ``--json`` prints one object:
 the :class:`calib.noise.allan.NoiseCharacterization` with its ``units``, the closure per axis
-(``twin``), plus the files written.
+(``twin``), plus the files written. A log whose readings went through an export's low-pass
+filter (:mod:`calib.noise.shaping`: its rule) is fitted with that filter in the model; the
+summary says so per axis, the JSON holds its taps (``export_filter``) and ``--save`` writes
+them to ``sensor.json`` for the twin.
 
 ``--datasheet SPEC|FILE`` (repeatable; :mod:`calib.noise.datasheet`) compares each datasheet
 value — ``N=60ug/rtHz,B=20ug,ARW=0.2deg/rth,BI=5deg/h`` (``x.N=…`` for one axis) or a JSON
@@ -306,7 +309,7 @@ def register(sub) -> None:
     add_option(p, "--alpha", type=float, default=0.05,
                help="one-sided significance for calling a term resolved")
     add_option(p, "--tau-range", help="fit only the octave τ within MIN,MAX s (e.g. to leave "
-               "out a filter's τ)")
+               "out a feature no term has; an export's low-pass filter is in the model)")
     add_option(p, "--static-window", type=float, default=1.0,
                help="window of the static check, s (longer than the pose detector's 0.5 s: "
                     "each window's variance needs a few samples even at 5 Hz)")

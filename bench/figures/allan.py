@@ -92,9 +92,19 @@ def allan_figure(result: NoiseCharacterization, title: str | None = None) -> Fig
     fig.suptitle((title or f"Allan deviation: {result.n} samples at {result.sample_rate:g} Hz "
                   f"({result.duration:.4g} s)")
                  + f"\npoints with {result.level:.1%} χ² bars (EDF); solid: the fitted model on "
-                 "its τ range, dotted: outside it; dashed: resolved terms' asymptotes",
-                 fontsize=10)
+                 "its τ range, dotted: outside it; dashed: resolved terms' asymptotes"
+                 + _shaped_note(result), fontsize=10)
     return fig
+
+
+def _shaped_note(result: NoiseCharacterization) -> str:
+    """A caption line naming the axes whose model includes the export's low-pass filter
+    (:mod:`calib.noise.shaping`), or nothing."""
+    shaped = [f.axis for f in result.axes if f.export_filter is not None]
+    if not shaped:
+        return ""
+    return (f"\nthe model of {', '.join(shaped)} includes the export's low-pass filter read "
+            "from the log (the rise at short τ); the white asymptote is N/√τ without it")
 
 
 def save_allan_plot(path: str | Path, result: NoiseCharacterization, force: bool = False,

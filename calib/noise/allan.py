@@ -35,6 +35,14 @@ the largest term (the model's whole range when it is nowhere the largest). The m
 range is reported too (``fit_range``); outside it, the model is not claimed to describe the
 curve.
 
+**An export's low-pass filter** (:mod:`calib.noise.shaping`). When its rule finds the
+readings filtered (the curve level or rising over the first octave where white noise falls),
+the filter is read from the log and every process of the model reaches the readings through
+it: the moments are those of ``h_m ∗ f`` (``shaping``, at the fit's rate), the twin filters
+at the log's rate (``export_filter``), N's interval is widened by the filter estimate's
+spread, and the whole octave grid can be described (the rule used to narrow the range to the
+octaves beyond the filter). Only ``tiltbench noise``'s fit (``select``) reads it.
+
 **Long logs** (more than :data:`MAX_FIT_SAMPLES`) are averaged in blocks of 2^k samples before
 the fit, so its cost stays bounded; τ then starts at 2^k/fs (white, flicker, walk, the
 integrated-output quantization keep their Allan variance at every τ ≥ 2^k/fs).
@@ -142,6 +150,8 @@ UNITS = {
     "axes.*.k_rise_steps": "count", "axes.*.n": "count", "axes.*.tried.*.chi2": "1",
     "axes.*.tried.*.dof": "count", "axes.*.tried.*.p": "1", "axes.*.tried.*.tau_range": "s",
     "axes.*.n_fit_segments": "count", "block": "count", "static_check.window": "s",
+    "axes.*.shaping": "1 (filter taps at the fit's rate, sum 1)",
+    "axes.*.export_filter": "1 (filter taps at the log's rate, sum 1)",
     "segments.*.start": "row (0-based index of the log's first reading of the segment)",
     "segments.*.stop": "row (one past the segment's last reading)",
     "segments.*.n": "count", "segments.*.n_fit": "count (after block means)",
