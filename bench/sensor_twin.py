@@ -127,9 +127,10 @@ class GaussMarkov:
 @dataclass(frozen=True)
 class ExportFilter:
     """The export's low-pass filter (module table): the signal so far convolved with ``taps``
-    (lags −L … L, Σ = 1, centred). :func:`simulate_axis` draws ``pad`` = L extra readings on
-    each side and keeps the middle, so every reading it returns has its whole filter; on a
-    bench run (``generate --sensor``) the first and last L readings see part of it."""
+    (lags −L … L, Σ = 1, centred), the ends held at their first and last readings.
+    :func:`simulate_axis` draws ``pad`` = L extra readings on each side and keeps the middle,
+    so every reading it returns has its whole filter; on a bench run (``generate --sensor``)
+    the first and last L readings see their end's reading repeated."""
 
     taps: tuple[float, ...]
     name: ClassVar[str]
@@ -147,7 +148,10 @@ class ExportFilter:
         return (len(self.taps) - 1) // 2
 
     def apply(self, a: np.ndarray, ctx: SensorContext, rng: np.random.Generator) -> np.ndarray:
-        return np.convolve(a, np.asarray(self.taps), mode="same")
+        # the ends held at their first and last readings: a constant stays that constant
+        # (zeros beyond the ends would halve the reading level there)
+        padded = np.pad(a, self.pad, mode="edge")
+        return np.convolve(padded, np.asarray(self.taps), mode="valid")
 
     def to_dict(self) -> dict:
         return {"taps": [float(v) for v in self.taps]}

@@ -174,6 +174,15 @@ def test_noise_on_a_filtered_log_fits_every_octave_and_saves_the_filter(tmp_path
     assert any(isinstance(t, ExportFilter) for t in twin_axis(profile, "x", RATE).terms)
     rc, out, err = run(capsys, "noise", path)
     assert "shaped by the export's low-pass filter" in " ".join(out.split())
+    # the twin on the MuJoCo table (generate --sensor) is filtered alike, and noise reads it
+    rc, out, err = run(capsys, "generate", "static", "--sensor", saved, "--duration", "2000",
+                       "--theta", "0", "--seed", "1", "--out", tmp_path / "twin")
+    assert rc == 0, err
+    truth = json.loads((tmp_path / "twin" / "truth.json").read_text())
+    assert "export_filter" in {t["name"] for t in truth["sensor"]["x"]["terms"]}
+    rc, out, err = run(capsys, "noise", tmp_path / "twin" / "static.mat", "--json")
+    assert rc == 0, err
+    assert json.loads(out)["axes"]["x"]["export_filter"] is not None
 
 
 @pytest.mark.slow

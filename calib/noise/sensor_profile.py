@@ -61,7 +61,8 @@ hand edit of a file without a checksum cannot be told from the original, as for 
 Version 2 grew without a new number, by a stated rule: the axes ``z`` and ``gyro_*`` are new
 keys of :data:`AXIS_NAMES` (optional, like every axis but x and y), the axis keys of
 :data:`OPTIONAL_AXIS_FIELDS` are optional (absent = null), and ``units`` is :data:`UNITS` or,
-in a file that has none of these, the first version-2 object :data:`UNITS_V2_0`. So every
+in a file that has none of these, the first version-2 object :data:`UNITS_V2_0`, and in a
+file whose axis blocks have no ``export_filter`` key, :data:`UNITS_V2_1`. So every
 version-2 file ever written loads; a file with the new keys is refused by an older tiltbench
 ("not part of format version 2").
 
