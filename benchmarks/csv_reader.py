@@ -13,14 +13,21 @@ temporary folder, then reads each in fresh processes, ``--repeat`` times:
 
 In each process numpy, pandas and the reader are imported first; then the peak resident
 memory is reset (``/proc/self/clear_refs``; elsewhere the process's ``ru_maxrss`` is used)
-and the read is timed. Reported: the best CPU time of the runs (``time.process_time``; both
-readers run on one thread, so on an idle machine it is the wall time, which is printed too,
-and on a shared one it is not inflated by other processes), and the peak memory above the
-resident memory after the imports (the smallest of the runs), against
+and the read is timed. Reported: the best CPU time of the runs (``time.process_time``: the
+work each reader does, not inflated by other processes on a shared machine) and the best
+wall time beside it, and the peak memory above the resident memory after the imports (the
+smallest of the runs), against
 
 * the numeric array, rows × 7 × 8 bytes: the reader's peak must stay within
   :data:`MEMORY_BOUND` × the array;
-* the plain pandas read's time: the reader must take at most :data:`TIME_BOUND` × it.
+* the plain pandas read's CPU time: the reader must take at most :data:`TIME_BOUND` × it.
+
+The wall-time ratio is printed too, and is not the bound: pandas ≥ 3.1 parses a long file
+from its path on two threads (it maps the whole file and parses pieces of it in parallel,
+its peak memory then ≈ 3× the array), while this reader streams on one thread (pandas on its
+blocks holds the GIL too long for threads to pay: two threads measured 1.4× the CPU for
+10–20 % less wall time). On a 2-core machine its wall time is therefore ≈ 2× pandas' for a
+10-hour log.
 
 The 24-hour log's peak (8 640 000 rows) is projected linearly from the two largest logs
 measured (``--hours 24`` measures it: a 0.8 GB file); the goal is under 1 GiB. The exit code
@@ -50,7 +57,7 @@ HEADER = "t (s),ax (m/s^2),ay (m/s^2),az (m/s^2),gx (rad/s),gy (rad/s),gz (rad/s
 MEMORY_BOUND = 2.0
 """The reader's peak memory above the imports, in units of the numeric array it returns."""
 TIME_BOUND = 1.5
-"""The reader's time, in units of a plain ``pandas.read_csv`` of the same file."""
+"""The reader's CPU time, in units of a plain ``pandas.read_csv``'s of the same file."""
 GOAL_24H_BYTES = 1 << 30
 """A 24-hour 100 Hz log must be read in less than this (peak above the imports)."""
 
@@ -195,21 +202,24 @@ def main(argv: list[str] | None = None) -> int:
     print(f"best of {args.repeat} fresh processes: CPU time (wall time in brackets) and peak "
           "memory above the imports; array = rows × 7 × 8 bytes")
     print(f"{'log':>5}{'rows':>9}{'file MB':>8}{'array MiB':>10}{'pandas s':>15}"
-          f"{'ours s':>15}{'× pandas':>10}{'pandas MiB':>11}{'× array':>8}{'ours MiB':>9}"
-          f"{'× array':>8}")
+          f"{'ours s':>15}{'× pandas':>10}{'wall ×':>8}{'pandas MiB':>11}{'× array':>8}"
+          f"{'ours MiB':>9}{'× array':>8}")
     for h, rows, size, base, ours in results:
         array = rows * COLUMNS * 8
         t_ratio, m_ratio = ours["time"] / base["time"], ours["peak"] / array
         times = (f"{base['time']:>7.3f} ({base['wall']:.3f}){ours['time']:>7.3f} "
                  f"({ours['wall']:.3f})")
         print(f"{h:>4g}h{rows:>9}{size / 1e6:>8.0f}{mib(array):>10}{times:>30}"
-              f"{t_ratio:>9.2f}×{mib(base['peak']):>11}{base['peak'] / array:>7.2f}×"
+              f"{t_ratio:>9.2f}×{ours['wall'] / base['wall']:>7.2f}×"
+              f"{mib(base['peak']):>11}{base['peak'] / array:>7.2f}×"
               f"{mib(ours['peak']):>9}{m_ratio:>7.2f}×")
         if t_ratio > TIME_BOUND:
             fails.append(f"{h:g} h: time {t_ratio:.2f}× pandas (bound {TIME_BOUND:g}×)")
         if m_ratio > MEMORY_BOUND:
             fails.append(f"{h:g} h: peak {m_ratio:.2f}× the array (bound {MEMORY_BOUND:g}×)")
-    print(f"bounds: peak memory ≤ {MEMORY_BOUND:g}× the array, time ≤ {TIME_BOUND:g}× pandas")
+    print(f"bounds: peak memory ≤ {MEMORY_BOUND:g}× the array, CPU time ≤ {TIME_BOUND:g}× "
+          "pandas (the wall ratio is printed, not bound: pandas parses a long file on two "
+          "threads)")
     rows24 = 24 * 3600 * RATE_HZ
     measured = [r for r in results if r[1] == rows24]
     if measured:

@@ -214,3 +214,36 @@ def test_twin_closure_on_filtered_logs_has_its_size_and_power():
     assert same / total <= CLOSURE_ALPHA + band(CLOSURE_ALPHA, total)
     assert louder / total >= 0.9
     assert abs(covered / total - 0.683) <= band(0.683, total)
+
+
+@pytest.mark.parametrize("taps, words", [([0.2, 0.3, 0.4], "sums to 0.9"),
+                                         ([0.5, 0.5], "odd number"),
+                                         ([-2.0, 4.0, -1.0], "within ±1")])
+def test_a_profile_with_bad_filter_taps_is_refused_naming_the_field(tmp_path, taps, words):
+    """``export_filter`` checked on load like every field: one line naming the file and the
+    field (the checksum is recomputed, so the taps' own checks are what refuse)."""
+    from calib.input_rules import DataError
+    from calib.noise.sensor_profile import (
+        NoiseTerm,
+        SensorProfile,
+        defining_checksum,
+        profile_document,
+    )
+
+    term = NoiseTerm(value=1e-3, interval=(9e-4, 1.1e-3), tau_range=(0.1, 10.0), level=0.683)
+    doc = profile_document(SensorProfile(sample_rate=10.0, white_noise_density=(term, term),
+                                         export_filter=((0.25, 0.5, 0.25), None),
+                                         extra={"level": 0.683, "alpha": 0.05, "n": 1000}))
+    doc["axes"]["x"]["export_filter"] = taps
+    doc["checksum"]["value"] = defining_checksum(doc)
+    path = tmp_path / "sensor.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(DataError) as err:
+        load_profile(path)
+    line = str(err.value)
+    assert "\n" not in line and str(path) in line and "axes.x.export_filter" in line
+    assert words in line
+    doc["axes"]["x"]["export_filter"] = [0.25, 0.5, 0.25]
+    doc["checksum"]["value"] = defining_checksum(doc)
+    path.write_text(json.dumps(doc))
+    assert load_profile(path).export_filter[0] == (0.25, 0.5, 0.25)

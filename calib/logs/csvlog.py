@@ -91,9 +91,10 @@ of the file and ``numpy.fromstring`` 4.6×, and neither checks a row's length wh
 columns are read; ``pandas.read_csv`` on 1 MiB blocks takes the time of the plain read. The
 goal — at most 1.5× the plain pandas read's time and 2× the numeric array's memory — is out
 of numpy's reach, so pandas is a dependency. pandas' working set is ≈ 6× the block, hence
-1 MiB blocks: ``benchmarks/csv_reader.py`` gives, for 1-, 10- and 24-hour logs, 1.2× the plain
-pandas read's time and 1.28×, 1.06×, 1.03× the array's memory (pandas: 3.2–3.7×; this reader
-before it streamed: 12.8× the array and ≈ 7× pandas' time on the 10-hour log).
+1 MiB blocks: ``benchmarks/csv_reader.py`` gives, for 1-, 10- and 24-hour logs, 1.1–1.2× the
+plain pandas read's CPU time (≈ 2× its wall time: pandas ≥ 3.1 parses a long file on two
+threads) and 1.28×, 1.06×, 1.03× the array's memory (pandas: 3.2–3.7×; this reader before it
+streamed: 12.8× the array and ≈ 7× pandas' time on the 10-hour log).
 """
 
 from __future__ import annotations
