@@ -247,3 +247,27 @@ def test_a_profile_with_bad_filter_taps_is_refused_naming_the_field(tmp_path, ta
     doc["checksum"]["value"] = defining_checksum(doc)
     path.write_text(json.dumps(doc))
     assert load_profile(path).export_filter[0] == (0.25, 0.5, 0.25)
+
+
+def test_a_filtered_log_with_a_gap_is_shaped_from_all_its_segments(tmp_path, capsys):
+    """A gap (2000 rows cut out): the log is split, the filter read from the spectrum of both
+    segments, every octave fitted from τ ≤ 0.4 s, and the profile written (N's widened
+    interval kept inside its physical range)."""
+    spec = NoiseSpec(rate=RATE, white=2e-3, flicker=2e-4)
+    rng = np.random.default_rng(3)
+    acc = np.column_stack([exported(static_log(spec, 32000, rng)[0]) for _ in range(3)])
+    t = np.arange(acc.shape[0]) / RATE
+    keep = np.r_[0:14000, 16000:acc.shape[0]]
+    path = tmp_path / "gap.csv"
+    np.savetxt(path, np.column_stack([t[keep], acc[keep] + [0.05, -0.03, 9.8]]),
+               delimiter=",", fmt="%.9g", comments="",
+               header="t (s),ax (m/s^2),ay (m/s^2),az (m/s^2)")
+    rc, out, err = run(capsys, "noise", path, "--twin", "--json", "--save",
+                       tmp_path / "s.json")
+    assert rc == 0, err
+    doc = json.loads(out)
+    assert len(doc["segments"]) == 2
+    for axis in ("x", "y", "z"):
+        fit = doc["axes"][axis]
+        assert fit["export_filter"] is not None and fit["fit_range"][0] <= 0.4
+    assert not doc["twin"]["x"]["reject"]

@@ -744,10 +744,11 @@ def _fit_segments(y_all: np.ndarray, rate: float, segments, *, axis, kind, level
 def _shaped(raws: list[np.ndarray], block: int
             ) -> tuple[tuple[float, ...] | None, tuple[float, ...] | None]:
     """(the shaping filter at the fit's rate, the export filter at the log's rate) of a log
-    (:mod:`calib.noise.shaping`): the export filter read on the longest record, the fit's
-    that of its block means (:func:`calib.noise.shaping.blocked_filter`). Both None when the
-    readings are not filtered; the first alone None when one block spans the filter."""
-    export = shaping_filter(max(raws, key=lambda r: r.size))
+    (:mod:`calib.noise.shaping`): the export filter read on the records (the rule on the
+    longest, the spectrum over all of them), the fit's that of its block means
+    (:func:`calib.noise.shaping.blocked_filter`). Both None when the readings are not
+    filtered; the first alone None when one block spans the filter."""
+    export = shaping_filter(list(raws))
     if export is None:
         return None, None
     return blocked_filter(export, block), export
@@ -802,7 +803,8 @@ def _axis_result(engine: Engine, chosen: ModelFit, ok: bool, tried: list[ModelFi
     n = int(sum(lengths))
     theta = chosen.theta
     z_one = float(stats.norm.ppf(1.0 - alpha))
-    ends = engine.intervals(chosen, level, caps=_caps(kind, rate))
+    caps = _caps(kind, rate)
+    ends = engine.intervals(chosen, level, caps=caps)
     design_all, tensor_all = engine.mom.full(model.g)
     ranges = _term_ranges(taus, design_all, theta, model.lo, model.hi)
     rise = rise_steps(chosen, design_all, ms, rise_record_length(lengths, ms))
@@ -817,6 +819,7 @@ def _axis_result(engine: Engine, chosen: ModelFit, ok: bool, tried: list[ModelFi
         lo_t, hi_t = term_value(name, lo, rate), term_value(name, hi, rate)
         if a == WHITE and spread is not None:
             lo_t, hi_t = _with_filter_spread(est, lo_t, hi_t, spread, level)
+            hi_t = min(hi_t, term_value(name, caps[a], rate))  # the term's physical range
         terms.append(TermFit(name=name, resolved=bool(resolved),
                              value=est if resolved else None,
                              interval=(min(lo_t, est), max(hi_t, est)),

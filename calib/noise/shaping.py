@@ -83,11 +83,23 @@ MAX_TAPS = 2049
 """Longest filter kept (lags −1024 … 1024): the moments' cost grows with the taps."""
 
 
-def shaping_filter(y: np.ndarray) -> tuple[float, ...] | None:
+def shaping_filter(y: np.ndarray | list[np.ndarray]) -> tuple[float, ...] | None:
     """The shaping filter of the readings ``y`` (module docstring: the rule and the
     estimate): its taps on lags −L … L, Σ = 1, as a tuple; None when the log is not shaped
-    (or too short to tell: fewer than 64 readings)."""
-    y = np.asarray(y, dtype=float).ravel()[:MAX_SAMPLES]
+    (or too short to tell: fewer than 64 readings). ``y`` may be a list of records (a log's
+    segments between its gaps): the rule reads the longest, the spectrum is the mean of every
+    record's that holds a Welch segment (weighted by their segments), at most
+    :data:`MAX_SAMPLES` readings in all."""
+    records = [np.asarray(r, dtype=float).ravel() for r in
+               (y if isinstance(y, (list, tuple)) else [y])]
+    records, budget = [r[:MAX_SAMPLES] for r in records], MAX_SAMPLES
+    kept = []
+    for r in sorted(records, key=lambda r: -r.size):
+        if budget <= 0:
+            break
+        kept.append(r[:budget])
+        budget -= kept[-1].size
+    y = kept[0]
     n = y.size
     if n < 64 or not np.all(np.isfinite(y)):
         return None
@@ -113,7 +125,13 @@ def shaping_filter(y: np.ndarray) -> tuple[float, ...] | None:
     from scipy import signal
 
     size = min(1 << int(math.ceil(math.log2(8 * (lags + 1)))), 1 << int(math.log2(n)))
-    _, psd = signal.welch(y, nperseg=size, window="blackmanharris", detrend="linear")
+    spectra, weights = [], []
+    for rec in kept:
+        if rec.size >= size and np.all(np.isfinite(rec)):
+            spectra.append(signal.welch(rec, nperseg=size, window="blackmanharris",
+                                        detrend="linear")[1])
+            weights.append(rec.size // (size // 2))  # Welch's segments at half overlap
+    psd = np.average(np.array(spectra), axis=0, weights=weights)
     # the passband: the bins from LOW_BINS up to where the spectrum falls to half its peak;
     # its white level and the slow terms from their lower half (module docstring)
     peak = float(psd[LOW_BINS:].max())
