@@ -31,14 +31,28 @@ line removed, both hold:
 A log whose autocorrelation never falls below 1/e within ``n/64`` lags is not shaped either.
 
 **The estimate.** With the correlation time T (samples) the filter's lags are ``L =``
-:data:`SPAN` · T. The autocovariance ``c(k)`` (k ≤ 4L, unbiased per lag) has the slow terms'
-share as a near-constant level over those lags (flicker's and a walk's correlation decays
-over the record, not over a filter's length): their level is read as the mean of ``c`` on
-lags 2L … 4L, where the filter's own correlation has died out, and removed. The spectrum
-``S(ω) = c(0) + 2 Σ_{k=1..L} c(k) cos ωk`` (clipped at 0) gives the zero-phase filter
-``|F(ω)| = √(S(ω)/S(0))``: ``f`` is its inverse transform on lags −L … L, scaled to Σ f = 1.
-A filter is only known up to its phase from second-order statistics, and the Allan variance
-depends on nothing else.
+:data:`SPAN` · T. The spectrum ``S`` is Welch's (Blackman–Harris segments of the power of two
+≥ 8(L + 1) readings, a line removed from each; a low-leakage window, so that the filter's
+deep stopband is not filled by the passband's sidelobes), averaged over the log's records
+when it has gaps. The passband runs from bin :data:`LOW_BINS` to where S falls to half its
+peak; on its lower half (at least :data:`BAND_BINS` bins) ``S ≈ w + c·f₀/f`` — white noise
+and flicker — is fitted by least squares in relative terms (each Welch bin has the same
+relative error). The filter shapes every term, so ``|F(f)|² = S(f) / (w + c·f₀/f)``, set to 1
+below bin :data:`LOW_BINS` (the passband is flat down to zero frequency); ``f`` is the
+zero-phase filter with that gain, its inverse transform on lags −L … L, scaled to Σ f = 1. A
+filter is only known up to its phase from second-order statistics, and the Allan variance
+depends on nothing else. (Without the 1/f part, flicker at B = 0.2·N/√Hz made the passband
+read 8 % high and Σ f² 8 % low; with it, 0.3 % on average.)
+
+**What it leaves uncertain** (:func:`shaping_spread`). The passband's level relative to zero
+frequency is read from the low frequencies alone, and the short-τ octaves tie N to it. A
+seeded parametric bootstrap gives the covariance of each octave's log white Allan variance
+over re-estimates; the fit widens N's interval by it and the twin closure adds it
+(:mod:`calib.noise.allan`, :mod:`calib.noise.closure`).
+
+**Block means.** A long log read in block means is fitted with the block means' filter
+(:func:`blocked_filter`, exact from f's autocorrelation); the twin filters at the log's rate
+and takes the same block means.
 
 Hand-written because no library estimates an export filter from its output (scipy's
 ``signal`` designs filters from a specification, not from a record).
