@@ -53,6 +53,7 @@ from bench.cli.options import (
     parse_pair,
 )
 from bench.cli.output import check_finite, print_files, print_json, refuse_overwrite
+from bench.cli.progress import Progress
 from bench.cli.vocabulary import add_option
 
 DESCRIPTION = """\
@@ -168,7 +169,11 @@ def _failed_fit_line(result, save: str) -> str:
             "generate/gap --sensor then refuse it unless --allow-failed-fit)")
 
 
-def _twin(result, profile, columns, rate: float, seed: int) -> dict:
+LONG_FIT_SAMPLES = 100_000
+"""Logs at least this long report their fit's progress on stderr (seconds per axis)."""
+
+
+def _twin(result, profile, columns, rate: float, seed: int, progress=None) -> dict:
     """The closure test of every axis (:mod:`calib.noise.closure`): the profile's axis
     simulated by the bench (:func:`bench.sensor_twin.simulate_axis`) for the log's length and
     rate around the log's mean, seeded by ``seed`` (one stream per axis). A log with gaps: one
@@ -188,6 +193,8 @@ def _twin(result, profile, columns, rate: float, seed: int) -> dict:
         pieces = [simulate_axis(errors, n, rate, rng, level=fit.mean) for n in lengths]
         y = pieces[0] if len(pieces) == 1 else pieces
         out[fit.axis] = closure_test(fit, twin_adev(fit, y, rate))
+        if progress is not None:
+            progress(f"twin axes {k + 1}/{len(result.axes)}")
     return out
 
 
@@ -229,10 +236,12 @@ def _cmd_noise(args: argparse.Namespace) -> int:
     sheet = _datasheet(args.datasheet) if args.datasheet else None
     cal = _calibration_entry(args.calibration) if args.calibration else None
     log, rate, checked, columns, names, kinds, notes, split = _static_reading(args)
+    progress = Progress("noise") if columns.shape[0] >= LONG_FIT_SAMPLES else None
     result = characterize_noise(columns, rate, level=level, alpha=alpha, tau_range=tau_range,
                                 axes=names, kinds=kinds, source=log.provenance.get("source"),
                                 static_check=checked, notes=tuple(notes),
-                                segments=split.bounds if split.count > 1 else None, t=log.t)
+                                segments=split.bounds if split.count > 1 else None, t=log.t,
+                                progress=progress)
     line = split.line(log.source)
     if line:  # said once the split log was characterized (a refusal stays one line)
         print(f"note: {line}", file=sys.stderr)
@@ -245,7 +254,7 @@ def _cmd_noise(args: argparse.Namespace) -> int:
         profile = result.to_profile(calibration=cal, tool_version=__version__)
     closure = {}
     if args.twin:
-        closure = _twin(result, profile, columns, rate, args.seed)
+        closure = _twin(result, profile, columns, rate, args.seed, progress)
         out["twin"] = {a: c.to_dict() for a, c in closure.items()}
         out["twin_seed"] = int(args.seed)
         out["units"] = {**out["units"], "twin.*.taus": "s",

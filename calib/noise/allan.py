@@ -75,7 +75,7 @@ The checks of the log before (sample rate, the table did not move, quantization 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -873,7 +873,9 @@ def characterize_noise(acc: np.ndarray, rate: float, *, level: float = 0.683,
                        static_check: dict | None = None, select: bool = True,
                        notes: tuple[str, ...] = (),
                        segments: Sequence[int] | Sequence[tuple[int, int]] | None = None,
-                       t: np.ndarray | None = None) -> NoiseCharacterization:
+                       t: np.ndarray | None = None,
+                       progress: Callable[[str], None] | None = None
+                       ) -> NoiseCharacterization:
     """Allan deviation and noise terms of every column of ``acc`` ((N, k) readings of a static
     log at ``rate`` Hz: m/s² for an accelerometer axis, rad/s for a gyro axis; see the module
     docstring), named by ``axes`` and of the sensor kinds ``kinds`` (default: every column an
@@ -885,7 +887,10 @@ def characterize_noise(acc: np.ndarray, rate: float, *, level: float = 0.683,
     overlapping; rows outside them unused) — or None: one record. The Allan variance is
     pooled over them (module docstring: Logs with gaps); the result records them
     (``segments``) with a note. Refused in one line when no segment holds the 5 octaves a
-    fit needs (naming the longest: by its times when ``t`` ((N,) s) is given, else its rows)."""
+    fit needs (naming the longest: by its times when ``t`` ((N,) s) is given, else its rows).
+
+    ``progress``: called with ``"axes fitted k/n"`` after each axis (a long or filtered log
+    takes seconds per axis), or None."""
     acc = np.asarray(acc, dtype=float)
     if acc.ndim == 1:
         acc = acc[:, None]
@@ -907,10 +912,14 @@ def characterize_noise(acc: np.ndarray, rate: float, *, level: float = 0.683,
     notes = tuple(notes)
     if len(bounds) > 1:
         notes += _segment_notes(bounds, rate, block, tau_range, source, t)
-    fits = tuple(fit_axis_noise(acc[:, k], rate, axis=axes[k], kind=kinds[k], level=level,
-                                alpha=alpha, tau_range=tau_range, block=block, select=select,
-                                segments=bounds)
-                 for k in range(acc.shape[1]))
+    fits = []
+    for k in range(acc.shape[1]):
+        fits.append(fit_axis_noise(acc[:, k], rate, axis=axes[k], kind=kinds[k], level=level,
+                                   alpha=alpha, tau_range=tau_range, block=block,
+                                   select=select, segments=bounds))
+        if progress is not None:  # "what k/n": a counter to the CLI's progress
+            progress(f"axes fitted {k + 1}/{acc.shape[1]}")
+    fits = tuple(fits)
     return NoiseCharacterization(sample_rate=float(rate), n=int(n), level=level,
                                  alpha=alpha, axes=fits, static_check=static_check or {},
                                  source=source, block=block, notes=notes, segments=bounds)
