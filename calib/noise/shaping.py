@@ -117,6 +117,10 @@ def shaping_filter(y: np.ndarray | list[np.ndarray]) -> tuple[float, ...] | None
     n = y.size
     if n < 64 or not np.all(np.isfinite(y)):
         return None
+    # the cheap half of the rule first (on 2^16 readings: ±0.005), most logs being white at
+    # the shortest τ
+    if _first_octave_ratio(y[:1 << 16]) < RISING_START:
+        return None  # white noise at the shortest τ: slow terms correlate it, not a filter
     t = np.arange(n, dtype=float)
     a = np.column_stack([np.ones(n), t - t.mean()])
     y = y - a @ np.linalg.lstsq(a, y, rcond=None)[0]
@@ -128,8 +132,6 @@ def shaping_filter(y: np.ndarray | list[np.ndarray]) -> tuple[float, ...] | None
     r = c / c[0]
     if r[1] < LAG1_CORRELATION:
         return None
-    if _first_octave_ratio(y) < RISING_START:
-        return None  # white noise at the shortest τ: slow terms correlate it, not a filter
     below = np.nonzero(r < LAG1_CORRELATION)[0]
     if below.size == 0:
         return None
