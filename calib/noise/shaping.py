@@ -61,6 +61,7 @@ Hand-written because no library estimates an export filter from its output (scip
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 
@@ -223,6 +224,7 @@ def _white_allan(f: np.ndarray, ms: tuple[int, ...]) -> np.ndarray:
     return np.array(out)
 
 
+@lru_cache(maxsize=32)
 def shaping_spread(taps: tuple[float, ...], n: int, ms: tuple[int, ...], block: int = 1,
                    seed: int = 0, draws: int = SPREAD_DRAWS) -> np.ndarray:
     """(k, k) covariance of the log of each octave's white Allan variance over re-estimates
@@ -238,22 +240,21 @@ def shaping_spread(taps: tuple[float, ...], n: int, ms: tuple[int, ...], block: 
 
     f = np.asarray(taps, dtype=float)
     fit_f = blocked_filter(tuple(f), block)
-    if fit_f is None:
-        return np.zeros((len(ms), len(ms)))
-    base = _white_allan(np.asarray(fit_f), ms)
-    rng = np.random.default_rng(seed)
     size = min(int(n), MAX_SAMPLES)
     rows = []
-    for _ in range(draws):
+    base = None if fit_f is None else _white_allan(np.asarray(fit_f), ms)
+    rng = np.random.default_rng(seed)
+    for _ in range(draws if fit_f is not None else 0):
         y = signal.fftconvolve(rng.standard_normal(size + f.size - 1), f, mode="valid")
         g = shaping_filter(y)
         gb = None if g is None else blocked_filter(g, block)
         if gb is None:
             continue
         rows.append(np.log(_white_allan(np.asarray(gb), ms) / base))
-    if len(rows) < 2:
-        return np.zeros((len(ms), len(ms)))
-    return np.atleast_2d(np.cov(np.array(rows), rowvar=False))
+    out = (np.zeros((len(ms), len(ms))) if len(rows) < 2
+           else np.atleast_2d(np.cov(np.array(rows), rowvar=False)))
+    out.setflags(write=False)  # cached (the fit and the twin closure ask for the same one)
+    return out
 
 
 def shaping_summary(shaping: tuple[float, ...] | None, rate: float) -> str | None:
