@@ -1,7 +1,7 @@
 """Coverage and twin closure on filtered static logs, at a run count the test suite cannot
 afford (``tests/test_shaping.py`` runs R = 40).
 
-    python -m validation.noise_independent.filtered [--calls 100] [--seed S] [--jobs 2]
+    python -m validation.noise_independent.score [--calls 100] [--seed S] [--jobs 2]
 
 Each call draws two axis-logs of 16 384 readings at 10 Hz from the independent generator
 (:mod:`validation.noise_independent.generator`: white noise N = 2e-3 (m/s²)/√Hz and a flicker
