@@ -194,7 +194,7 @@ def _shaped(shaping: Shaping) -> tuple:
     return () if shaping is None else (shaping,)
 
 
-def _difference_filter(m: int, shaping: Shaping = None) -> np.ndarray:
+def difference_filter(m: int, shaping: Shaping = None) -> np.ndarray:
     """The Allan difference filter of octave ``m``: ``h_m``, or ``h_m ∗ f`` for a shaped log."""
     h = _box(m)
     return h if shaping is None else np.convolve(h, np.asarray(shaping, dtype=float))
@@ -205,7 +205,7 @@ def _finite_filters(m: int, shaping: Shaping = None
     """White ``h_m`` (``h_m ∗ f`` when shaped), random walk (its tail sums Σ_{t≥u} h_t, finite
     because Σ h = 0) and quantization (``h`` convolved with [1, −1]), each on its process's own
     origin."""
-    h = _difference_filter(m, shaping)
+    h = difference_filter(m, shaping)
     return h, np.cumsum(h[::-1])[::-1], np.convolve(h, [1.0, -1.0])
 
 
@@ -646,7 +646,7 @@ def edf(design: np.ndarray, tensor: np.ndarray, theta: np.ndarray) -> np.ndarray
 __all__ = ["ALL_TERM_NAMES", "CACHE_ENV", "EXTRA_TERM_NAMES", "FLICKER_FLOOR", "GM_CUT",
            "GM_STEPS_PER_OCTAVE",
            "MOMENTS_VERSION", "N_PROCESSES", "TERM_NAMES", "AllanMoments", "PooledMoments",
-           "Shaping", "allan_moments", "avar_covariance", "cache_dir", "edf",
+           "Shaping", "allan_moments", "avar_covariance", "cache_dir", "difference_filter", "edf",
            "flicker_coefficients", "gm_avar", "gm_columns", "gm_grid", "moments",
            "pooled_moments", "record_moments",
            "segment_counts", "segment_weights", "supported_octaves", "term_value",

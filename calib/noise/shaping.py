@@ -216,10 +216,11 @@ are nearly one (the shaped octaves move together) is read well from a few dozen 
 def _white_allan(f: np.ndarray, ms: tuple[int, ...]) -> np.ndarray:
     """(k,) the Allan variance of unit white noise shaped by ``f`` at octaves ``ms``:
     ``Σ (h_m ∗ f)² / 2`` (:mod:`calib.noise.allan_model`, white column)."""
+    from calib.noise.allan_model import difference_filter
+
     out = []
     for m in ms:
-        h = np.concatenate([-np.ones(m), np.ones(m)]) / m
-        d = np.convolve(h, f)
+        d = difference_filter(m, tuple(f))
         out.append(float(d @ d) / 2.0)
     return np.array(out)
 
