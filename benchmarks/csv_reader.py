@@ -115,11 +115,16 @@ def write_log(path: Path, rows: int, seed: int = 0) -> None:
             f.write("".join(f"{(start + k) / RATE_HZ:.2f},{tails[k]}\n" for k in range(m)))
 
 
+def _env() -> dict[str, str]:
+    """The children's environment: one BLAS thread, this checkout first on the path."""
+    return dict(os.environ, OPENBLAS_NUM_THREADS="1",
+                PYTHONPATH=os.pathsep.join(filter(None, (str(REPO),
+                                                         os.environ.get("PYTHONPATH")))))
+
+
 def measure(path: Path, engine: str, repeat: int) -> dict:
     """Best time and smallest peak of ``repeat`` fresh processes reading ``path``."""
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1",
-               PYTHONPATH=os.pathsep.join(filter(None, (str(REPO),
-                                                        os.environ.get("PYTHONPATH")))))
+    env = _env()
     runs = []
     for _ in range(repeat):
         done = subprocess.run([sys.executable, "-c", CHILD, str(path), engine], env=env,
@@ -135,9 +140,7 @@ def measure_import(path: Path, out: Path) -> dict:
     import resource
     import time
 
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1",
-               PYTHONPATH=os.pathsep.join(filter(None, (str(REPO),
-                                                        os.environ.get("PYTHONPATH")))))
+    env = _env()
     before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
     t0 = time.perf_counter()
     subprocess.run([sys.executable, "-m", "bench.cli", "import", str(path), "--out", str(out),
@@ -154,9 +157,7 @@ def import_wall(path: Path, out: Path) -> float:
     """Wall seconds of ``tiltbench import LOG --out OUT --force`` in a fresh process."""
     import time
 
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1",
-               PYTHONPATH=os.pathsep.join(filter(None, (str(REPO),
-                                                        os.environ.get("PYTHONPATH")))))
+    env = _env()
     t0 = time.perf_counter()
     subprocess.run([sys.executable, "-m", "bench.cli", "import", str(path), "--out", str(out),
                     "--force"], env=env, cwd=REPO, capture_output=True, text=True, check=True)

@@ -152,6 +152,7 @@ UNITS = {
     "axes.*.n_fit_segments": "count", "block": "count", "static_check.window": "s",
     "axes.*.shaping": "1 (filter taps at the fit's rate, sum 1)",
     "axes.*.export_filter": "1 (filter taps at the log's rate, sum 1)",
+    "axes.*.block": "count",
     "segments.*.start": "row (0-based index of the log's first reading of the segment)",
     "segments.*.stop": "row (one past the segment's last reading)",
     "segments.*.n": "count", "segments.*.n_fit": "count (after block means)",
@@ -360,7 +361,8 @@ class AxisNoise(ResultMixin):
     pooled over (module docstring: Logs with gaps); () or one entry: one record of n_fit;
     shaping: the export's low-pass filter the moments include (:mod:`calib.noise.shaping`:
     its taps, Σ = 1, at the fit's rate: after block means), or None; export_filter: the same
-    filter at the log's own rate (what the twin applies before its block means), or None.
+    filter at the log's own rate (what the twin applies before its block means), or None;
+    block: readings per block mean of the fit (1: none).
     """
 
     axis: str
@@ -393,6 +395,7 @@ class AxisNoise(ResultMixin):
     n_fit_segments: tuple[int, ...] = ()
     shaping: tuple[float, ...] | None = None
     export_filter: tuple[float, ...] | None = None
+    block: int = 1
 
     _TITLE = "Allan deviation of one axis"
     _UNITS = "τ s; ADEV in the reading unit; terms in calib.noise.term_units"
@@ -443,8 +446,8 @@ class AxisNoise(ResultMixin):
                  f"{self.unit}, std {self.std:.4g} {self.unit}, τ {self.taus[0]:.3g}–"
                  f"{self.taus[-1]:.3g} s ({self.taus.size} octaves)"]
         lines += ["  " + t.summary() for t in self.terms]
-        shaped = shaping_summary(self.export_filter, round(self.n / max(self.n_fit, 1))
-                                 * (self.ms[0] / self.taus[0]) if self.ms else 1.0)
+        shaped = shaping_summary(self.export_filter, self.block * self.ms[0] / self.taus[0]
+                                 if self.ms else 1.0)
         if shaped is not None:
             lines.append(f"  {shaped} (in the model and the twin)")
         q = self.quantization_step
@@ -490,7 +493,8 @@ class AxisNoise(ResultMixin):
                 "n_fit_segments": list(self.n_fit_segments),
                 "shaping": None if self.shaping is None else list(self.shaping),
                 "export_filter": (None if self.export_filter is None
-                                  else list(self.export_filter))}
+                                  else list(self.export_filter)),
+                "block": int(self.block)}
 
     @classmethod
     def from_dict(cls, d: dict) -> AxisNoise:
@@ -512,7 +516,8 @@ class AxisNoise(ResultMixin):
                    n_fit_segments=tuple(d.get("n_fit_segments", ())),
                    shaping=None if d.get("shaping") is None else tuple(d["shaping"]),
                    export_filter=(None if d.get("export_filter") is None
-                                  else tuple(d["export_filter"])))
+                                  else tuple(d["export_filter"])),
+                   block=int(d.get("block", 1)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -709,8 +714,7 @@ def fit_axis_noise(y: np.ndarray, rate: float, *, axis: str = "x", kind: str = "
     _check_octaves(ms, axis, tau_range)
     taus, adev, _ = overlapping_adev(y, rate, ms)
     return _fit_records(adev, taus, ms, (n,), raw=raw, rate=rate, axis=axis, kind=kind,
-                        level=level, alpha=alpha, select=select,
-                        shaped=_shaped([raw], block) if select else (None, None))
+                        level=level, alpha=alpha, select=select, block=block)
 
 
 def _check_octaves(ms: tuple[int, ...], axis: str, tau_range) -> None:
@@ -737,12 +741,11 @@ def _fit_segments(y_all: np.ndarray, rate: float, segments, *, axis, kind, level
     taus, adev, _ = pooled_adev(used, rate, ms)
     return _fit_records(adev, taus, ms, tuple(p.size for p in used),
                         raw=np.concatenate(raws), rate=rate, axis=axis, kind=kind, level=level,
-                        alpha=alpha, select=select,
-                        shaped=_shaped(raws, block) if select else (None, None))
+                        alpha=alpha, select=select, block=block, records=raws)
 
 
-def _shaped(raws: list[np.ndarray], block: int
-            ) -> tuple[tuple[float, ...] | None, tuple[float, ...] | None]:
+def _filters(raws: list[np.ndarray], block: int
+             ) -> tuple[tuple[float, ...] | None, tuple[float, ...] | None]:
     """(the shaping filter at the fit's rate, the export filter at the log's rate) of a log
     (:mod:`calib.noise.shaping`): the export filter read on the records (the rule on the
     longest, the spectrum over all of them), the fit's that of its block means
@@ -755,16 +758,17 @@ def _shaped(raws: list[np.ndarray], block: int
 
 
 def _fit_records(adev, taus, ms, lengths: tuple[int, ...], *, raw, rate, axis, kind, level,
-                 alpha, select, shaped=(None, None)) -> AxisNoise:
+                 alpha, select, block=1, records=None) -> AxisNoise:
     """The fit of the octave Allan deviations ``adev`` of records of ``lengths`` samples (one
     record, or the segments they were pooled over) with their moments (shaped by the log's
-    export filter ``shaping`` when it has one: :mod:`calib.noise.shaping`)."""
+    export filter when the model rule runs and finds one, :mod:`calib.noise.shaping`; read on
+    ``records``, the raw readings of each segment, or on ``raw``)."""
     s = adev ** 2
     if not (np.all(np.isfinite(s)) and s[0] > 0):
         raise DataError(f"axis {axis}: the readings do not change from sample to sample (a "
                         "dead or saturated axis, or a quantization step far above the noise): "
                         "there is no noise to characterize")
-    shaping, export = shaped
+    shaping, export = (_filters(records or [raw], block) if select else (None, None))
     mom = record_moments(lengths, ms, shaping)
     # a white floor keeps V positive definite whatever the fit does (a trillionth of the
     # smallest-τ variance: far below anything the data can tell)
@@ -778,10 +782,10 @@ def _fit_records(adev, taus, ms, lengths: tuple[int, ...], *, raw, rate, axis, k
         ok, tried = chosen.adequate, [chosen]
     spread = None
     if shaping is not None:  # the filter was read from this log: N's interval widens
-        spread = shaping_spread(export, raw.size, ms, max(1, round(raw.size / sum(lengths))))
+        spread = shaping_spread(export, raw.size, ms, block)
     return _axis_result(engine, chosen, ok, tried, raw=raw, taus=taus, adev=adev, ms=ms,
                         lengths=lengths, rate=rate, axis=axis, kind=kind, level=level,
-                        alpha=alpha, export=export, spread=spread)
+                        alpha=alpha, export=export, spread=spread, block=block)
 
 
 def _caps(kind: str, rate: float) -> np.ndarray:
@@ -798,7 +802,7 @@ def _caps(kind: str, rate: float) -> np.ndarray:
 
 def _axis_result(engine: Engine, chosen: ModelFit, ok: bool, tried: list[ModelFit], *,
                  raw, taus, adev, ms, lengths, rate, axis, kind, level, alpha,
-                 export=None, spread=None) -> AxisNoise:
+                 export=None, spread=None, block=1) -> AxisNoise:
     model = chosen.model
     n = int(sum(lengths))
     theta = chosen.theta
@@ -846,7 +850,7 @@ def _axis_result(engine: Engine, chosen: ModelFit, ok: bool, tried: list[ModelFi
                      k_rise_steps=rise, n_fit=n, ms=ms,
                      tried=tuple(_tried(f, taus) for f in tried),
                      n_fit_segments=lengths if len(lengths) > 1 else (),
-                     shaping=engine.mom.shaping, export_filter=export)
+                     shaping=engine.mom.shaping, export_filter=export, block=int(block))
 
 
 def _with_filter_spread(est: float, lo: float, hi: float, spread: np.ndarray, level: float

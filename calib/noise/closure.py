@@ -223,8 +223,7 @@ def closure_test(fit, twin_adev: np.ndarray, alpha: float = CLOSURE_ALPHA) -> Cl
     if fit.export_filter is not None:
         from calib.noise.shaping import shaping_spread
 
-        block = max(1, round(fit.n / max(fit.n_fit, 1)))
-        spread = shaping_spread(fit.export_filter, fit.n, fit.ms, block)
+        spread = shaping_spread(fit.export_filter, fit.n, fit.ms, fit.block)
     white = design[:, 0] * th[0]  # the white noise's part of each octave
     # the GLS hat of the kept terms, in relative units (module docstring)
     lo, hi = model.lo, model.hi

@@ -19,16 +19,17 @@ same ``f`` (:func:`bench.sensor_twin.simulate_axis`).
 **The rule (when a log is shaped).** On the first :data:`MAX_SAMPLES` readings, a straight
 line removed, both hold:
 
-* the autocorrelation at lag 1 is at least ``1/e`` (:data:`LAG1_CORRELATION`): the
-  correlation time (the first lag below 1/e, as in the static check of
-  :mod:`calib.logs.static_log`) is longer than one sample;
+* the correlation time is longer than one sample: the autocorrelation at lag 1 is at least
+  ``1/e`` (:func:`calib.logs.static_log.correlation_time`, the static check's: the first lag
+  below 1/e, a line removed, on the first 2^17 readings);
 * the Allan deviation does not fall over the first octave: ``σ_A(2τ0) ≥`` :data:`RISING_START`
   ``· σ_A(τ0)`` (0.85). White noise at the shortest τ gives 1/√2 = 0.71 whatever slow terms
   (flicker, a walk, a Gauss–Markov bias) ride on it — they can correlate the readings at
   lag 1 when they dominate the record's variance, but not the shortest τ — while an export's
-  filter flattens or raises the curve there (the Galaxy S5 log: 0.91 on every axis).
+  filter flattens or raises the curve there (the Galaxy S5 log: 0.90–0.92).
 
-A log whose autocorrelation never falls below 1/e within ``n/64`` lags is not shaped either.
+A log whose correlation time is longer than ``n/160`` readings (the filter's lags would not
+fit 16 times in the record) is not shaped either.
 
 **The estimate.** With the correlation time T (samples) the filter's lags are ``L =``
 :data:`SPAN` · T. The spectrum ``S`` is Welch's (Blackman–Harris segments of the power of two
@@ -65,10 +66,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from calib.numerics import lagged_sums
+from calib.logs.static_log import correlation_time
 
-LAG1_CORRELATION = math.exp(-1.0)
-"""A log is shaped when its lag-1 autocorrelation (a line removed) is at least this."""
 RISING_START = 0.85
 """…and its Allan deviation at 2τ0 is at least this times the one at τ0: white noise gives
 1/√2 = 0.71 (falling), a low-pass filter makes it level or rising."""
@@ -122,23 +121,12 @@ def shaping_filter(y: np.ndarray | list[np.ndarray]) -> tuple[float, ...] | None
     # the shortest τ
     if _first_octave_ratio(y[:1 << 16]) < RISING_START:
         return None  # white noise at the shortest τ: slow terms correlate it, not a filter
-    t = np.arange(n, dtype=float)
-    a = np.column_stack([np.ones(n), t - t.mean()])
-    y = y - a @ np.linalg.lstsq(a, y, rcond=None)[0]
-    top = n // 64
-    sums = lagged_sums(y, top)[:, 0]
-    if sums[0] <= 0.0:
-        return None
-    c = sums / (n - np.arange(sums.size))
-    r = c / c[0]
-    if r[1] < LAG1_CORRELATION:
-        return None
-    below = np.nonzero(r < LAG1_CORRELATION)[0]
-    if below.size == 0:
-        return None
-    lags = SPAN * int(below[0])
+    tau = correlation_time(y)  # the static check's: the first lag below 1/e, a line removed
+    if tau <= 1:
+        return None  # lag-1 autocorrelation below 1/e
+    lags = SPAN * tau
     if 16 * lags > n or 2 * lags + 1 > MAX_TAPS:
-        return None
+        return None  # never below 1/e within n/160 lags: a slow process, not a filter
     from scipy import signal
 
     size = min(1 << int(math.ceil(math.log2(8 * (lags + 1)))), 1 << int(math.log2(n)))
@@ -165,7 +153,12 @@ def shaping_filter(y: np.ndarray | list[np.ndarray]) -> tuple[float, ...] | None
     bins = np.arange(psd.size, dtype=float)
     power = psd / (white + flicker * k[0] / np.maximum(bins, 1.0))
     power[:LOW_BINS] = 1.0  # the passband is flat down to zero frequency
-    gain = np.sqrt(np.maximum(power, 0.0))
+    return _zero_phase(np.sqrt(np.maximum(power, 0.0)), size, lags)
+
+
+def _zero_phase(gain: np.ndarray, size: int, lags: int) -> tuple[float, ...] | None:
+    """The zero-phase filter of amplitude response ``gain`` (rfft bins of ``size``), kept on
+    lags −``lags`` … ``lags`` and scaled to Σ = 1; None when it does not pass zero frequency."""
     taps = np.fft.irfft(gain, size)
     f = np.concatenate([taps[size - lags:], taps[:lags + 1]])
     total = float(f.sum())
@@ -202,10 +195,7 @@ def blocked_filter(taps: tuple[float, ...], block: int) -> tuple[float, ...] | N
     size = 1 << int(math.ceil(math.log2(8 * (lags + 1))))
     omega = 2.0 * np.pi * np.arange(size // 2 + 1) / size
     spectrum = rb[0] + 2.0 * np.cos(np.outer(omega, np.arange(1, lags + 1))) @ rb[1:]
-    gain = np.sqrt(np.maximum(spectrum, 0.0) / spectrum[0])
-    full = np.fft.irfft(gain, size)
-    g = np.concatenate([full[size - lags:], full[:lags + 1]])
-    return tuple(float(v) for v in g / g.sum())
+    return _zero_phase(np.sqrt(np.maximum(spectrum, 0.0) / spectrum[0]), size, lags)
 
 
 SPREAD_DRAWS = 24
@@ -272,6 +262,6 @@ def shaping_summary(shaping: tuple[float, ...] | None, rate: float) -> str | Non
             "Nyquist band")
 
 
-__all__ = ["BAND_BINS", "LAG1_CORRELATION", "LOW_BINS", "MAX_SAMPLES", "MAX_TAPS",
+__all__ = ["BAND_BINS", "LOW_BINS", "MAX_SAMPLES", "MAX_TAPS",
            "RISING_START", "SPAN", "SPREAD_DRAWS",
            "blocked_filter", "shaping_filter", "shaping_spread", "shaping_summary"]
