@@ -160,3 +160,54 @@ def test_a_turn_that_moves_only_the_normal_axis_is_not_a_hold():
     assert both.count == 2 and plane.count == 2
     assert both.segments[0].stop <= 300  # the turn starts at sample 300
     assert plane.segments[0].stop >= 330
+
+
+def _exported_still(seed: int, n: int = 36000, fs: float = 10.0):
+    """A phone-like export of a sensor lying still (made here, not by the bench): white noise
+    through a 4-pole Butterworth at 0.3 Hz, then decimated by repeating readings — stretches of
+    2–25 samples hold a value that drifts by 1e-6 m/s² a step, as the real Galaxy S5 export
+    does (data/real/README.md)."""
+    from scipy import signal
+
+    rng = np.random.default_rng(seed)
+    b, a = signal.butter(4, 0.3, fs=fs)
+    raw = np.c_[0.01 + 0.03 * rng.standard_normal(n), 0.2 + 0.03 * rng.standard_normal(n),
+                9.9 + 0.05 * rng.standard_normal(n)]
+    acc = signal.filtfilt(b, a, raw, axis=0)
+    k = 0
+    while k < n:
+        run = int(rng.integers(2, 26))
+        if rng.random() < 0.3:  # a held stretch
+            stop = min(n, k + run)
+            acc[k:stop] = acc[k] + 1e-6 * np.arange(stop - k)[:, None]
+        k += run
+    t = np.arange(n) / fs
+    gyro = 0.02 + 0.001 * rng.standard_normal((n, 3))
+    return t, acc, gyro
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_an_export_still_throughout_is_one_pose(seed):
+    """Its held stretches are far quieter than its noise: without the static check of the
+    whole log the two stages cut it into many "holds" (the Galaxy S5 log: 1942)."""
+    t, acc, gyro = _exported_still(seed)
+    det = detect_poses(acc[:, :2], t, gyro, more_acc=acc[:, 2])
+    assert det.still and det.count == 1 and np.all(det.labels == 0)
+    seg = det.segments[0]
+    assert (seg.start, seg.stop, seg.n) == (0, t.size, t.size)
+    assert np.allclose(seg.mean, acc[:, :2].mean(0)) and np.allclose(seg.std, acc[:, :2].std(0,
+                                                                                      ddof=1))
+    assert "the whole log is still" in det.thresholds_line()
+    back = PoseDetection.from_dict(json.loads(json.dumps(det.to_dict())))
+    assert back.still and back.to_dict() == det.to_dict()
+
+
+def test_an_export_with_two_poses_two_degrees_apart_is_not_one():
+    """The static check allows 0.3 m/s² (≈ 1.75°) between window means: two holds 2° apart
+    are not still throughout, and the stages look for holds."""
+    t, acc, gyro = _exported_still(3)
+    half = t.size // 2
+    tilt = np.radians(2.0)
+    acc[half:, 0] += 9.9 * np.sin(tilt)  # x reads the 2° tilt: 0.35 m/s²
+    det = detect_poses(acc[:, :2], t, gyro, more_acc=acc[:, 2])
+    assert not det.still

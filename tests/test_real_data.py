@@ -104,14 +104,19 @@ MIT = ("MIT License",
        "copies or substantial portions of the Software.")
 
 
+AGPL_3 = ("GNU AFFERO GENERAL PUBLIC LICENSE", "Version 3, 19 November 2007",
+          "Everyone is permitted to copy and distribute verbatim copies")
+
+
 @pytest.mark.parametrize(("name", "copyright_line", "terms"), [
     ("LICENSE-scikit-kinematics", "Copyright (C) 2016 Thomas Haslwanter", BSD_3),
+    ("LICENSE-scikit-diveMove", "Copyright (C) 2007 Free Software Foundation, Inc.", AGPL_3),
     ("LICENSE-labda-accelerometers", "Copyright (c) 2025, Josef Heidler", BSD_3),
     ("LICENSE-imucal", "Copyright (c) 2018 MaD-Lab Erlangen", MIT),
 ])
 def test_licence_copy_is_its_notice(name, copyright_line, terms):
     """Each licence file is the notice its licence requires to travel with the copies (BSD
-    3-Clause, MIT), and the README names it for its files."""
+    3-Clause, MIT; the AGPL's whole text), and the README names it for its files."""
     text = (REAL / name).read_text()
     assert copyright_line in text
     for words in terms:

@@ -51,6 +51,19 @@ constant does not get a zero threshold. The gyro's statistic goes through the sa
 stages with ``ν = w`` (a mean of w squares). Both thresholds of each pose are in its
 :class:`Segment`.
 
+A log still throughout
+----------------------
+Before the holds are cut, the whole log goes through the static check of ``tiltbench noise``
+(:func:`calib.logs.static_log.check_static`: no window mean more than 0.3 m/s² from another —
+a tilt of ≈ 1.75° —, no window variance 9× the median one, no scatter beyond the
+sample-to-sample noise, a gyro under 0.05 rad/s; windows of at least ten correlation times).
+A log that passes is **one** held pose, all of it (``still``). The two stages above assume
+readings independent within a window; an export that is low-pass filtered or decimated holds
+stretches of smoothed or repeated values far quieter than its noise (a real Galaxy S5 export:
+windows 10⁴× below the median), and its 10th percentile then splits one still log into
+thousands of "holds". Poses closer than 1.75° in one log are not a calibration design either
+way (its poses must spread around the turn).
+
 Segments
 --------
 Runs of static samples shorter than ``min_hold`` become moving. Two runs separated by less
@@ -155,6 +168,7 @@ class PoseDetection(ResultMixin):
     gyro_quiet_level, gyro_threshold : the same for the gyro, (rad/s)², or None.
     axes_watched : acceleration axes whose variances V sums (2: the tilt plane; 3 with the
         normal axis of a 3-axis log).
+    still : the whole log passed the static check: one hold, every sample (module docstring).
     """
 
     segments: tuple[Segment, ...]
@@ -166,6 +180,7 @@ class PoseDetection(ResultMixin):
     gyro_quiet_level: float | None = None
     gyro_threshold: float | None = None
     axes_watched: int = 2
+    still: bool = False
 
     _TITLE = "Held poses"
     _UNITS = {"quiet_level": "(m/s²)²", "threshold": "(m/s²)²",
@@ -182,6 +197,10 @@ class PoseDetection(ResultMixin):
 
     def thresholds_line(self) -> str:
         """One line: the window, the minimum hold and the thresholds with how they came."""
+        if self.still:
+            return ("the whole log is still (the static check of `tiltbench noise`: window "
+                    "means within 0.3 m/s² of each other, no scatter beyond the sample-to-sample "
+                    "noise, gyro under 0.05 rad/s): one hold, every sample")
         watched = "var_x + var_y" + (" + var_n" if self.axes_watched == 3 else "") if (
             self.axes_watched <= 3) else f"the variances of {self.axes_watched} axes"
         line = (f"candidate holds where {watched} over {self.window} samples ≤ "
@@ -229,6 +248,7 @@ class PoseDetection(ResultMixin):
                 "quiet_level": self.quiet_level, "threshold": self.threshold,
                 "gyro_quiet_level": self.gyro_quiet_level,
                 "gyro_threshold": self.gyro_threshold, "axes_watched": self.axes_watched,
+                "still": self.still,
                 "units": dict(self._UNITS, **{"segments.mean": "m/s²", "segments.std": "m/s²",
                                              "segments.t_start": "s",
                                              "segments.t_stop": "s",
@@ -249,7 +269,8 @@ class PoseDetection(ResultMixin):
                    quiet_level=d["quiet_level"], threshold=d["threshold"],
                    gyro_quiet_level=d.get("gyro_quiet_level"),
                    gyro_threshold=d.get("gyro_threshold"),
-                   axes_watched=int(d.get("axes_watched", 2)))
+                   axes_watched=int(d.get("axes_watched", 2)),
+                   still=bool(d.get("still", False)))
 
 
 def _window_sums(s: np.ndarray, n: int, w: int
@@ -384,6 +405,30 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(edges[0::2].tolist(), edges[1::2].tolist(), strict=True))
 
 
+def _still_throughout(acc: np.ndarray, t: np.ndarray | None, gyro: np.ndarray | None,
+                      extra: list[np.ndarray], hold: int) -> bool:
+    """Whether the whole log passes :func:`calib.logs.static_log.check_static` (module
+    docstring: A log still throughout): its windows of one minimum hold at least, the gyro's
+    magnitude as the rate. A log shorter than two holds is left to the two stages."""
+    from calib.input_rules import DataError
+    from calib.logs.static_log import check_static
+
+    n = acc.shape[0]
+    if n < 2 * hold:
+        return False
+    rate = 1.0 / float(np.median(np.diff(t))) if t is not None else 1.0
+    cols = np.column_stack([acc, *extra]) if extra else acc
+    rates = None
+    if gyro is not None:
+        g = np.asarray(gyro, dtype=float).reshape(n, -1)
+        rates = np.sqrt(np.sum(g * g, axis=1))
+    try:
+        check_static(cols, rate, "log", window=hold / rate, gyro=rates)
+    except DataError:
+        return False
+    return True
+
+
 def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray | None = None,
                  *, window: float | None = None, min_hold: float | None = None,
                  more_acc: np.ndarray | None = None) -> PoseDetection:
@@ -448,6 +493,16 @@ def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray 
         gq = gfloor.max_with(float(np.quantile(wsq, QUIET_QUANTILE)))
         gthr = LOOSE * MARGIN * gq * _ratio(nu_w, QUIET_QUANTILE)
         coarse &= wsq <= gthr
+    if _still_throughout(acc, t, gyro, extra, hold):
+        labels = np.zeros(n, dtype=int)
+        labels.setflags(write=False)
+        mean, std = _range_stats(acc, [(0, n)])
+        one = Segment(start=0, stop=n, n=n, t_start=None if t is None else float(t[0]),
+                      t_stop=None if t is None else float(t[-1]), mean=mean, std=std,
+                      threshold=thr, gyro_threshold=gthr)
+        return PoseDetection(segments=(one,), labels=labels, window=w, min_samples=hold,
+                             quiet_level=q, threshold=thr, gyro_quiet_level=gq,
+                             gyro_threshold=gthr, axes_watched=k_acc, still=True)
     # stage 2: each candidate hold against its own noise (median of its windows)
     runs, own = [], []
     for a, b in _runs(coarse):

@@ -61,7 +61,7 @@ from calib.conventions import STANDARD_GRAVITY, G
 from calib.input_rules import MAX_ABS_TIME, DataError, file_head
 from calib.logs.physics import check_one_g
 from calib.logs.poses import LOOSE, MARGIN
-from calib.logs.table import ACCEL_UNITS, GYRO_UNITS, RawLog
+from calib.logs.table import ACCEL_UNITS, GAP_FACTOR, GYRO_UNITS, RawLog
 from calib.results import readonly
 
 LOG_FORMAT_VERSION = 1
@@ -81,8 +81,6 @@ them; list items share their list's path). The detected poses and the gyro angle
 own maps (:func:`provenance_units`)."""
 _BAG_SUFFIXES = (".bag", ".db3", ".mcap")
 """Names of ROS bag files: one that does not read as a bag is refused as such, not as a .mat."""
-GAP_FACTOR = 5.0
-"""A step longer than this many median steps is a gap."""
 SATURATION_RUN = 10
 """This many equal consecutive samples at a column's extreme value are a saturated stretch."""
 MOVING_LABELS = ("", "-1", "moving", "nan", "none")

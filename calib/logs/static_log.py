@@ -62,7 +62,7 @@ from typing import Any
 import numpy as np
 
 from calib.input_rules import DataError
-from calib.logs.reader import GAP_FACTOR
+from calib.logs.table import GAP_FACTOR
 from calib.numerics import lagged_sums
 
 WINDOW_CORR = 10.0

@@ -35,6 +35,10 @@ from typing import Any
 
 import numpy as np
 
+GAP_FACTOR = 5.0
+"""A step longer than this many median steps is a gap (every reader's rule and the static
+log's segments; :mod:`calib.logs.reader` exports it too)."""
+
 ACCEL_UNITS = ("m/s2", "g", "mg", "counts")
 """Acceleration units a log may be in (``--units``)."""
 GYRO_UNITS = ("rad/s", "deg/s")

@@ -240,6 +240,25 @@ SPECS: dict[str, LogSpec] = {
                      "x_p … z_a; imucal slices data.iloc[start:end], so end is exclusive)"),
         norm_tolerance=0.08,
     ),
+    # Samsung Galaxy S5 lying flat, screen up, for 4 h (scikit-diveMove's test data, AGPL):
+    # 10 Hz, acceleration m/s², gyro rad/s ("output" channels), t = index / 10. One hold: the
+    # whole excerpt. The phone's gyro biases (up to 0.035 rad/s) are far above the 0.02 rad/s
+    # the tumble tests allow a hold, so it is not among their LOGS (tests/test_real_static.py).
+    "galaxy-s5-static-4h.csv.gz": LogSpec(
+        header_lines=1,
+        acc_columns=(1, 2, 3),
+        acc_names=("ax (m/s^2)", "ay (m/s^2)", "az (m/s^2)"),
+        acc_in_g=None,
+        acc_unit="m/s^2",
+        time_column=0,
+        time_to_s=1.0,
+        sample_column=None,
+        rate_hz=None,
+        gyro_columns=(4, 5, 6),
+        gyro_to_rads=1.0,
+        poses=(Pose("z_up", "z", +1, 0, 144000),),
+        pose_source="the whole excerpt: the phone lay still (its publisher's static test)",
+    ),
 }
 
 

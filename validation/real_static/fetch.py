@@ -1,6 +1,8 @@
 """Fetch the real long static log this project checks ``tiltbench noise`` on, as a CSV.
 
     python -m validation.real_static.fetch --out DIR        # DIR/galaxy_s5_static.csv
+    python -m validation.real_static.fetch --out DIR --excerpt-hours 4
+                                    # DIR/galaxy-s5-static-4h.csv.gz, as in data/real/
 
 The recording: a Samsung Galaxy S5 phone lying still for 5.97 h, its accelerometer (m/s²)
 and gyro (rad/s) on three axes exported at 10 Hz ("subset, decimated" by its publisher), from
@@ -8,11 +10,17 @@ the test data of the PyPI package **scikit-diveMove 0.3.3**
 (``skdiveMove/tests/data/samsung_galaxy_s5.nc``, netCDF-4; source file
 ``samsung_galaxy_s5_20210502.csv``). It is licensed **AGPL-3.0** (the wheel's LICENSE), which
 allows redistributing it but would put that licence on the file inside this MIT repository,
-so it is not shipped: this script downloads the pinned wheel from PyPI (the registry the
-project installs from), checks both SHA-256 digests, and writes a CSV the readers take
+so the whole log is not shipped: this script downloads the pinned wheel from PyPI (the registry
+the project installs from), checks both SHA-256 digests, and writes a CSV the readers take
 directly (``t (s)``, ``ax/ay/az (m/s^2)``, ``gx/gy/gz (rad/s)``: the gyro's "output" columns;
-the "measured" ones differ from them only on z). No searched source with a permissive licence
-had a long static log whose bytes were reachable (docs/noise.md, On a real long log).
+the "measured" ones differ from them only on z; values printed with 9 significant digits, a
+rounding of at most 5e-9 relative, < 10⁻⁵ of the white noise). No searched source with a
+permissive licence had a long static log whose bytes were reachable (docs/noise.md, On a real
+long log). Its first four hours ship in ``data/real/galaxy-s5-static-4h.csv.gz`` (4.4 MB)
+beside their licence, ``data/real/LICENSE-scikit-diveMove``: an aggregate, the AGPL covering
+that file only (data/real/README.md). ``--excerpt-hours H`` writes that excerpt: the first
+H·3600·10 rows of the same CSV, gzipped with no name and no time in its header (the same rows
+give the same bytes with the same zlib).
 
 Reading netCDF-4 needs ``h5py`` (``pip install -e '.[realdata]'``); nothing else in the
 project does. The CSV is written atomically and never over an existing file without
@@ -22,7 +30,9 @@ project does. The CSV is written atomically and never over an existing file with
 from __future__ import annotations
 
 import argparse
+import gzip
 import hashlib
+import io
 import subprocess
 import sys
 import tempfile
@@ -39,6 +49,8 @@ MEMBER_SHA256 = "427f2060ce639146cfcf4f09df971170f73d9249945a46d1bf106e399aaf5b6
 RATE_HZ = 10.0
 """The export's sample rate (its ``sampling_rate`` attribute; its time stamps are indices)."""
 CSV_NAME = "galaxy_s5_static.csv"
+HEADER = "t (s),ax (m/s^2),ay (m/s^2),az (m/s^2),gx (rad/s),gy (rad/s),gz (rad/s)"
+FORMATS = ["%.1f"] + ["%.9g"] * 6
 
 
 def _sha256(data: bytes) -> str:
@@ -88,12 +100,31 @@ def to_table(nc: Path) -> np.ndarray:
     return np.column_stack([t, acc, gyro[:, out]])
 
 
+def csv_bytes(table: np.ndarray) -> bytes:
+    """The table as CSV text (LF line ends), :data:`HEADER` first."""
+    buf = io.BytesIO()
+    np.savetxt(buf, table, delimiter=",", fmt=FORMATS, comments="", header=HEADER)
+    return buf.getvalue()
+
+
 def write_csv(table: np.ndarray, path: Path) -> None:
-    """The table as CSV, written to a temporary name and renamed (atomic)."""
+    """The table as CSV (or gzip of it, no name and mtime 0 in its header, for a ``.gz``
+    path), written to a temporary name and renamed (atomic)."""
     tmp = path.with_name(path.name + ".part")
-    np.savetxt(tmp, table, delimiter=",", fmt=["%.1f"] + ["%.9g"] * 6, comments="",
-               header="t (s),ax (m/s^2),ay (m/s^2),az (m/s^2),gx (rad/s),gy (rad/s),gz (rad/s)")
+    data = csv_bytes(table)
+    with open(tmp, "wb") as raw:
+        if path.suffix == ".gz":
+            with gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0,
+                               compresslevel=9) as z:
+                z.write(data)
+        else:
+            raw.write(data)
     tmp.replace(path)
+
+
+def excerpt_name(hours: float) -> str:
+    """``galaxy-s5-static-{hours}h.csv.gz``: the shipped excerpt's name."""
+    return f"galaxy-s5-static-{hours:g}h.csv.gz"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -101,8 +132,13 @@ def main(argv: list[str] | None = None) -> int:
                                 description=__doc__.split("\n\n")[0])
     p.add_argument("--out", type=Path, required=True, help="folder of the CSV")
     p.add_argument("--force", action="store_true", help="overwrite an existing CSV")
+    p.add_argument("--excerpt-hours", type=float, default=None,
+                   help="write only the first H hours, gzipped (data/real/ ships 4)")
     args = p.parse_args(argv)
-    path = args.out / CSV_NAME
+    hours_kept = args.excerpt_hours
+    if hours_kept is not None and not 0 < hours_kept * 3600 * RATE_HZ:
+        p.error("--excerpt-hours must be positive")
+    path = args.out / (CSV_NAME if hours_kept is None else excerpt_name(hours_kept))
     if path.exists() and not args.force:
         print(f"fetch: {path} exists (--force overwrites it)", file=sys.stderr)
         return 2
@@ -111,6 +147,12 @@ def main(argv: list[str] | None = None) -> int:
         nc = Path(tmp) / "samsung_galaxy_s5.nc"
         nc.write_bytes(download(Path(tmp)))
         table = to_table(nc)
+    if hours_kept is not None:
+        rows = int(round(hours_kept * 3600 * RATE_HZ))
+        if rows > table.shape[0]:
+            p.error(f"--excerpt-hours {hours_kept:g}: the log holds "
+                    f"{table.shape[0] / RATE_HZ / 3600:.2f} h")
+        table = table[:rows]
     write_csv(table, path)
     hours = table[-1, 0] / 3600.0
     print(f"wrote {path}: {table.shape[0]} readings at {RATE_HZ:g} Hz ({hours:.2f} h), "

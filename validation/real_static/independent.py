@@ -42,6 +42,7 @@ Per axis y (m/s² or rad/s, sampled every τ0 = 1/fs, fs = (n − 1)/(t_last −
 from __future__ import annotations
 
 import argparse
+import gzip
 import json
 import math
 import sys
@@ -59,7 +60,9 @@ ALPHA_CODE = {0: "W", -1: "F", -2: "R"}
 
 
 def load_log(path: str) -> tuple[np.ndarray, list[str]]:
-    with open(path, encoding="utf-8") as f:
+    """The log's numbers and header cells (a ``.gz`` path is read through gzip)."""
+    opener = gzip.open if str(path).endswith(".gz") else open
+    with opener(path, "rt", encoding="utf-8") as f:
         header = [h.strip() for h in f.readline().split(",")]
     return np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2), header
 
