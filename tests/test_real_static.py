@@ -126,3 +126,22 @@ def test_datasheet_units(run, axis, unit, factor):
     b_factor = factor if unit == "µg/√Hz" else 180 / math.pi * 3600
     assert b["datasheet"]["unit"] == b_unit
     assert np.isclose(b["datasheet"]["value"], b["value"] * b_factor, rtol=1e-9)
+
+
+def test_import_takes_the_still_log_as_one_pose(tmp_path):
+    """The export holds stretches of smoothed, nearly repeated readings far quieter than its
+    noise: the pose detector once cut this still log into 1942 "holds". It passes the static
+    check whole, so it is one hold of every sample (calib.logs.poses: A log still
+    throughout)."""
+    out = tmp_path / "imp"
+    cmd = [sys.executable, "-m", "bench.cli", "import", str(LOG), "--units", "m/s2",
+           "--gyro-unit", "rad/s", "--out", str(out), "--json"]
+    done = subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, check=True)
+    prov = json.loads((out / "provenance.json").read_text())
+    detection = prov["poses"]["detection"]
+    assert detection["still"] is True
+    assert len(detection["segments"]) == 1
+    seg = detection["segments"][0]
+    assert (seg["start"], seg["stop"], seg["n"]) == (0, 144000, 144000)
+    assert "the whole log is still" in prov["poses"]["thresholds"]
+    assert json.loads(done.stdout)  # --json: one object on stdout
