@@ -56,7 +56,8 @@ A log still throughout
 Before the holds are cut, the whole log goes through the static check of ``tiltbench noise``
 (:func:`calib.logs.static_log.check_static`: no window mean more than 0.3 m/s² from another —
 a tilt of ≈ 1.75° —, no window variance 9× the median one, no scatter beyond the
-sample-to-sample noise, a gyro under 0.05 rad/s; windows of at least ten correlation times).
+sample-to-sample noise, every gyro axis under 0.05 rad/s; windows of at least ten correlation
+times).
 A log that passes is **one** held pose, all of it (``still``). The two stages above assume
 readings independent within a window; an export that is low-pass filtered or decimated holds
 stretches of smoothed or repeated values far quieter than its noise (a real Galaxy S5 export:
@@ -198,9 +199,12 @@ class PoseDetection(ResultMixin):
     def thresholds_line(self) -> str:
         """One line: the window, the minimum hold and the thresholds with how they came."""
         if self.still:
+            from calib.logs.static_log import MAX_RATE, WINDOW_SHIFT
+
             return ("the whole log is still (the static check of `tiltbench noise`: window "
-                    "means within 0.3 m/s² of each other, no scatter beyond the sample-to-sample "
-                    "noise, gyro under 0.05 rad/s): one hold, every sample")
+                    f"means within {WINDOW_SHIFT:g} m/s² of each other, no scatter beyond the "
+                    f"sample-to-sample noise, every gyro axis under {MAX_RATE:g} rad/s): one "
+                    "hold, every sample")
         watched = "var_x + var_y" + (" + var_n" if self.axes_watched == 3 else "") if (
             self.axes_watched <= 3) else f"the variances of {self.axes_watched} axes"
         line = (f"candidate holds where {watched} over {self.window} samples ≤ "
@@ -408,8 +412,8 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 def _still_throughout(acc: np.ndarray, t: np.ndarray | None, gyro: np.ndarray | None,
                       extra: list[np.ndarray], hold: int) -> bool:
     """Whether the whole log passes :func:`calib.logs.static_log.check_static` (module
-    docstring: A log still throughout): its windows of one minimum hold at least, the gyro's
-    magnitude as the rate. A log shorter than two holds is left to the two stages."""
+    docstring: A log still throughout): its windows of one minimum hold at least, every gyro
+    axis checked. A log shorter than two holds is left to the two stages."""
     from calib.input_rules import DataError
     from calib.logs.static_log import check_static
 
@@ -417,13 +421,13 @@ def _still_throughout(acc: np.ndarray, t: np.ndarray | None, gyro: np.ndarray | 
     if n < 2 * hold:
         return False
     rate = 1.0 / float(np.median(np.diff(t))) if t is not None else 1.0
-    cols = np.column_stack([acc, *extra]) if extra else acc
-    rates = None
-    if gyro is not None:
-        g = np.asarray(gyro, dtype=float).reshape(n, -1)
-        rates = np.sqrt(np.sum(g * g, axis=1))
+    rates = None if gyro is None else np.asarray(gyro, dtype=float).reshape(n, -1)
+    # the tilt-plane axes with every gyro axis, then each other axis: views of the log, no
+    # copy of a long one
     try:
-        check_static(cols, rate, "log", window=hold / rate, gyro=rates)
+        check_static(acc, rate, "log", window=hold / rate, gyro=rates)
+        for col in extra:
+            check_static(col, rate, "log", window=hold / rate)
     except DataError:
         return False
     return True

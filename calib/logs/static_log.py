@@ -77,6 +77,12 @@ STUCK_SPAN = 1e-9
 other: float64 rounding and unit conversions (g, counts → m/s²) move a constant reading by a
 few ulps (≈ 1e-15 relative); the finest quantizer of a logged accelerometer (a 24-bit
 converter over ±2 g: 2.3e-6 m/s² ≈ 2.4e-7 g) is 200× above this span."""
+WINDOW_SHIFT = 0.3
+"""Largest shift of a window mean above the lowest one, m/s² (a tilt of ≈ 1.75° at 1 g)."""
+MAX_RATE = 0.05
+"""Largest window mean gyro rate, rad/s (≈ 3°/s)."""
+_BLOCK_ROWS = 1 << 20
+"""Rows handled at a time where a long log is walked in pieces (bounded temporaries)."""
 MAX_EXCESS_STD = 0.3
 """Largest scatter not explained by sample-to-sample noise, m/s² (std): the same 0.3 m/s² as
 the window shift (``--static-shift``: a tilt of ≈ 1.75°); a held sensor's drift over a log
@@ -262,22 +268,29 @@ def excess_scatter(y: np.ndarray, bounds: tuple[tuple[int, int], ...] | None = N
     differences Δy then stay inside the segments (none across a gap), var(y) is over all of
     their readings."""
     y = np.asarray(y, dtype=float)
-    if bounds is None:
-        diffs = np.diff(y)
-    else:
-        diffs = np.concatenate([np.diff(y[a:b]) for a, b in bounds] or [np.empty(0)])
-        y = np.concatenate([y[a:b] for a, b in bounds] or [np.empty(0)])
-    n = y.size
-    if n < 3 or diffs.size < 2:
+    spans = ((0, y.size),) if bounds is None else tuple(bounds)
+    n = sum(b - a for a, b in spans)
+    n_d = sum(max(b - a - 1, 0) for a, b in spans)
+    if n < 3 or n_d < 2:
         return 0.0, MAX_EXCESS_STD ** 2
-    white = float(np.var(diffs, ddof=1)) / 2.0
-    excess = float(np.var(y, ddof=1)) - white
+    # two passes over pieces (no copy, no difference array the length of a long log)
+    mean = sum(float(np.sum(y[a:b])) for a, b in spans) / n
+    mean_d = sum(float(y[b - 1] - y[a]) for a, b in spans if b - a > 1) / n_d
+    ss = ss_d = 0.0
+    for a, b in spans:
+        for c in range(a, b, _BLOCK_ROWS):
+            piece = y[c:min(c + _BLOCK_ROWS + 1, b)]  # one row more: the step to the next
+            ss += float(np.sum(np.square(piece[:_BLOCK_ROWS] - mean)))
+            ss_d += float(np.sum(np.square(np.diff(piece) - mean_d)))
+    white = ss_d / (n_d - 1) / 2.0
+    excess = ss / (n - 1) - white
     return excess, MAX_EXCESS_STD ** 2 + EXCESS_Z * white / np.sqrt(n)
 
 
 def check_static(acc: np.ndarray, rate: float, where: str, *, window: float = 1.0,
-                 shift: float = 0.3, var_ratio: float = 9.0, gyro: np.ndarray | None = None,
-                 max_rate: float = 0.05, axes: tuple[str, ...] | None = None,
+                 shift: float = WINDOW_SHIFT, var_ratio: float = 9.0,
+                 gyro: np.ndarray | None = None, max_rate: float = MAX_RATE,
+                 axes: tuple[str, ...] | None = None,
                  segments: tuple[tuple[int, int], ...] | None = None,
                  t: np.ndarray | None = None) -> dict[str, Any]:
     """Refuse a static log that cannot be characterized (module docstring's table: a stuck
@@ -292,7 +305,8 @@ def check_static(acc: np.ndarray, rate: float, where: str, *, window: float = 1.
     window : window of the window tests, s.
     shift : largest window-mean shift, m/s².
     var_ratio : largest window variance over the median window's.
-    gyro : (N,) rate about the tilt axis, rad/s, or None.
+    gyro : (N,) rate about the tilt axis, or (N, m) rates of m axes (each axis' window means
+        checked), rad/s, or None.
     max_rate : largest window mean gyro rate, rad/s.
     axes : the name of each column for the messages (default x, y, …).
     segments : ((start, stop), …) rows of the stretches between the log's gaps
@@ -385,10 +399,15 @@ def _window_stats(acc: np.ndarray, a: int, w: int, nwin: int
                   ) -> tuple[np.ndarray, np.ndarray]:
     """(means (nwin, k), variances (nwin, k)) of ``nwin`` windows of ``w`` rows from row
     ``a`` (a view of the readings: no copy of a long log)."""
-    blocks = acc[a:a + nwin * w].reshape(nwin, w, -1)
-    means = blocks.mean(axis=1)
-    centred = blocks - means[:, None, :]  # one temporary; np.var would take the means again
-    var = np.einsum("ijk,ijk->ik", centred, centred) / (w - 1)
+    k = acc.shape[1]
+    means, var = np.empty((nwin, k)), np.empty((nwin, k))
+    step = max(1, _BLOCK_ROWS // w)  # windows per piece: temporaries of ≈ _BLOCK_ROWS rows
+    for i in range(0, nwin, step):
+        j = min(i + step, nwin)
+        blocks = acc[a + i * w:a + j * w].reshape(j - i, w, k)
+        means[i:j] = blocks.mean(axis=1)
+        centred = blocks - means[i:j, None, :]  # np.var would take the means again
+        var[i:j] = np.einsum("ijk,ijk->ik", centred, centred) / (w - 1)
     return means, var
 
 
@@ -416,8 +435,9 @@ def _check_windows(acc: np.ndarray, rate: float, where: str, w: int, shift: floa
     ratio = var / np.where(med_var > 0, med_var, np.inf)
     if gyro is not None:
         g = np.asarray(gyro, dtype=float)
-        spin = np.abs(np.concatenate([g[a:a + count * w].reshape(count, w).mean(axis=1)
-                                      for a, count in parts]))
+        g = g.reshape(g.shape[0], -1)
+        spin = np.abs(np.concatenate([g[a:a + count * w].reshape(count, w, -1).mean(axis=1)
+                                      for a, count in parts])).max(axis=1)
         out["max_rate"], out["max_gyro_rate"] = max_rate, float(spin.max())
         if spin.max() > max_rate:
             k = int(np.argmax(spin))
@@ -448,6 +468,6 @@ def _check_windows(acc: np.ndarray, rate: float, where: str, w: int, shift: floa
                 + what.format(v=v) + f" (limit {limit}); `tiltbench noise` needs one held "
                 "pose: cut the log to a still stretch")
 
-__all__ = ["EXCESS_Z", "MAX_EXCESS_STD", "SEGMENT_STEP_TOLERANCE", "STUCK_SPAN", "LogSegments",
-           "check_static", "excess_scatter", "log_segments", "quantization_step",
-           "sample_rate_of", "stuck_axis"]
+__all__ = ["EXCESS_Z", "MAX_EXCESS_STD", "MAX_RATE", "SEGMENT_STEP_TOLERANCE", "STUCK_SPAN",
+           "WINDOW_SHIFT", "LogSegments", "check_static", "excess_scatter", "log_segments",
+           "quantization_step", "sample_rate_of", "stuck_axis"]
