@@ -136,8 +136,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="write only the first H hours, gzipped (data/real/ ships 4)")
     args = p.parse_args(argv)
     hours_kept = args.excerpt_hours
-    if hours_kept is not None and not 0 < hours_kept * 3600 * RATE_HZ:
-        p.error("--excerpt-hours must be positive")
+    readings = None if hours_kept is None else hours_kept * 3600 * RATE_HZ
+    if readings is not None and not (np.isfinite(readings) and readings >= 0.5):  # NaN too
+        p.error("--excerpt-hours must hold at least one reading (a positive number of hours)")
     path = args.out / (CSV_NAME if hours_kept is None else excerpt_name(hours_kept))
     if path.exists() and not args.force:
         print(f"fetch: {path} exists (--force overwrites it)", file=sys.stderr)
@@ -148,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
         nc.write_bytes(download(Path(tmp)))
         table = to_table(nc)
     if hours_kept is not None:
-        rows = int(round(hours_kept * 3600 * RATE_HZ))
+        rows = int(round(readings))
         if rows > table.shape[0]:
             p.error(f"--excerpt-hours {hours_kept:g}: the log holds "
                     f"{table.shape[0] / RATE_HZ / 3600:.2f} h")
