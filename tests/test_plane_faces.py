@@ -44,6 +44,8 @@ def test_logs_that_are_not_six_face_logs_are_left_alone(tmp_path):
     acc = np.tile([0.0, -G], (30, 1))
     assert tilt_plane_faces(ImuLog(acc=acc, theta=np.zeros(30))) is None  # θ known
     assert tilt_plane_faces(ImuLog(acc=acc, pose=np.zeros(30, int))) is None  # 2 axes
+    one_hold = ImuLog(acc=np.zeros((30, 2)), acc_normal=np.full(30, G), pose=np.zeros(30, int))
+    assert tilt_plane_faces(one_hold) is None  # a still log: θ unknown, not a six-face log
     tilted = np.tile([G * 0.6, -G * 0.8], (30, 1))  # 37° off the y face
     assert tilt_plane_faces(ImuLog(acc=tilted, acc_normal=np.zeros(30),
                                    pose=np.zeros(30, int))) is None

@@ -211,3 +211,12 @@ def test_an_export_with_two_poses_two_degrees_apart_is_not_one():
     acc[half:, 0] += 9.9 * np.sin(tilt)  # x reads the 2° tilt: 0.35 m/s²
     det = detect_poses(acc[:, :2], t, gyro, more_acc=acc[:, 2])
     assert not det.still
+
+
+def test_a_still_log_is_not_told_to_shorten_the_windows():
+    """One hold because the sensor never moved: the hint says so instead of suggesting
+    shorter windows (which would find nothing more)."""
+    t, acc, gyro = _exported_still(4)
+    det = detect_poses(acc[:, :2], t, gyro, more_acc=acc[:, 2])
+    hint = det.few_poses_hint(10.0)
+    assert det.still and "whole log is still" in hint and "--static-window" not in hint

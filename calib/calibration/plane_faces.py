@@ -40,8 +40,8 @@ def face_angle(u: np.ndarray) -> float:
 
 def tilt_plane_faces(log: ImuLog) -> ImuLog | None:
     """The held samples of ``log`` on faces in the tilt plane, with θ from each face; None
-    when ``log`` is not a six-face log with θ unknown (θ known, no third axis, no held
-    poses, or a hold off every face).
+    when ``log`` is not a six-face log with θ unknown (θ known, no third axis, fewer than two
+    held poses, or a hold off every face).
 
     Returns
     -------
@@ -57,7 +57,7 @@ def tilt_plane_faces(log: ImuLog) -> ImuLog | None:
     if log.theta is not None or log.acc_normal is None or log.pose is None:
         return None
     labels = np.unique(log.pose[log.pose >= 0])
-    if labels.size == 0:
+    if labels.size < 2:  # one hold (a still log) is no six-face log: θ is simply unknown
         return None
     acc3 = np.column_stack([log.acc, log.acc_normal])
     means = np.array([acc3[log.pose == k].mean(axis=0) for k in labels])

@@ -230,6 +230,9 @@ class PoseDetection(ResultMixin):
             try_ = "--static-window 10 --min-hold 50 (samples: the log has no times)"
         found = (f"the pose detector found {self.count} hold(s) with a window of {w} and a "
                  f"minimum hold of {h}")
+        if self.still:  # shorter windows cannot find poses the sensor never took
+            return ("the whole log is still (the static check of `tiltbench noise`): one hold; "
+                    "record the sensor held in several orientations")
         if self.count >= FEW_HOLDS:  # holds were found: what is missing is not detection
             return found
         return f"{found}; on a hand-held or high-rate log shorter ones find more: try {try_}"
