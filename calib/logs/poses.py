@@ -79,6 +79,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from calib.input_rules import DataError
+from calib.logs.static_log import MAX_RATE, WINDOW_SHIFT, check_static
 from calib.results import ResultMixin, readonly
 
 QUIET_QUANTILE = 0.10
@@ -199,8 +201,6 @@ class PoseDetection(ResultMixin):
     def thresholds_line(self) -> str:
         """One line: the window, the minimum hold and the thresholds with how they came."""
         if self.still:
-            from calib.logs.static_log import MAX_RATE, WINDOW_SHIFT
-
             return ("the whole log is still (the static check of `tiltbench noise`: window "
                     f"means within {WINDOW_SHIFT:g} m/s² of each other, no scatter beyond the "
                     f"sample-to-sample noise, every gyro axis under {MAX_RATE:g} rad/s): one "
@@ -412,18 +412,15 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(edges[0::2].tolist(), edges[1::2].tolist(), strict=True))
 
 
-def _still_throughout(acc: np.ndarray, t: np.ndarray | None, gyro: np.ndarray | None,
+def _still_throughout(acc: np.ndarray, rate: float, gyro: np.ndarray | None,
                       extra: list[np.ndarray], hold: int) -> bool:
     """Whether the whole log passes :func:`calib.logs.static_log.check_static` (module
     docstring: A log still throughout): its windows of one minimum hold at least, every gyro
-    axis checked. A log shorter than two holds is left to the two stages."""
-    from calib.input_rules import DataError
-    from calib.logs.static_log import check_static
-
+    axis checked. A log shorter than two holds is left to the two stages. ``rate``: Hz, or 1
+    for a log without times (``hold`` then in samples)."""
     n = acc.shape[0]
     if n < 2 * hold:
         return False
-    rate = 1.0 / float(np.median(np.diff(t))) if t is not None else 1.0
     rates = None if gyro is None else np.asarray(gyro, dtype=float).reshape(n, -1)
     # the tilt-plane axes with every gyro axis, then each other axis: views of the log, no
     # copy of a long one
@@ -472,9 +469,11 @@ def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray 
         dt = float(np.median(np.diff(t))) if n > 1 else 1.0
         w = int(round((DEFAULT_WINDOW_S if window is None else window) / dt))
         hold = int(round((DEFAULT_HOLD_S if min_hold is None else min_hold) / dt))
+        rate = 1.0 / dt
     else:
         w = int(DEFAULT_WINDOW_N if window is None else window)
         hold = int(DEFAULT_HOLD_N if min_hold is None else min_hold)
+        rate = 1.0  # samples: windows and holds count them
     w = max(w, 5)
     hold = max(hold, w)
     # the watched axes as a list of columns (views): no (N, k) copy of a long log
@@ -500,7 +499,7 @@ def detect_poses(acc: np.ndarray, t: np.ndarray | None = None, gyro: np.ndarray 
         gq = gfloor.max_with(float(np.quantile(wsq, QUIET_QUANTILE)))
         gthr = LOOSE * MARGIN * gq * _ratio(nu_w, QUIET_QUANTILE)
         coarse &= wsq <= gthr
-    if _still_throughout(acc, t, gyro, extra, hold):
+    if _still_throughout(acc, rate, gyro, extra, hold):
         labels = np.zeros(n, dtype=int)
         labels.setflags(write=False)
         mean, std = _range_stats(acc, [(0, n)])
