@@ -104,6 +104,12 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
             analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate,
                                    family_alpha=family_alpha, sensor=sensor,
                                    drive_torque=lambda: first.result()[1])
+        if _needs_sysid(analysis):
+            # the refinement's import (≈ 0.4 s, GIL-bound) while the re-simulation still runs
+            # on the other thread, and only when the analysis named a physical effect
+            from bench.gap.sysid import preload_sysid
+
+            preload_sysid()
         replay, nominal, seconds = job.result()
     if progress is not None:
         progress(f"nominal re-simulation ({replay.mode}) done in {seconds:.1f} s")
@@ -158,16 +164,19 @@ def _replay_and_torque(tita: np.ndarray, t: np.ndarray | None
 def _nominal_run(first, base: TableEdits, datos: np.ndarray, noise_var: np.ndarray
                  ) -> tuple[Replay, _Nominal, float]:
     """The nominal gap of the replay (:func:`_nominal_gap`; ``first`` the future of
-    :func:`_replay_and_torque`) and the seconds replay and gap took; then ``mujoco.sysid``
-    is imported, in case the analysis names a physical effect."""
-    from bench.gap.sysid import preload_sysid
-
+    :func:`_replay_and_torque`) and the seconds replay and gap took."""
     replay, _, seconds = first.result()
     clock = time.perf_counter()
     nominal = _nominal_gap(replay, base, datos, noise_var)
     seconds += time.perf_counter() - clock
-    preload_sysid()
     return replay, nominal, seconds
+
+
+def _needs_sysid(analysis: GapAnalysis) -> bool:
+    """True when the analysis named a physical effect that ``mujoco.sysid`` refines."""
+    from bench.gap.sysid import SYSID_EFFECTS
+
+    return any(str(e.name) in SYSID_EFFECTS for e in analysis.effects)
 
 
 def _check_inputs(noise_var: Sequence[float] | np.ndarray, report_dir: PathLike | None,

@@ -76,9 +76,9 @@ def _sysid() -> Any:
 
 
 def preload_sysid() -> None:
-    """Import ``mujoco.sysid`` ahead of its first use (the gap run does it on the thread of
-    the nominal re-simulation, while the analysis runs: the refinement then does not wait
-    for the import)."""
+    """Import ``mujoco.sysid`` ahead of its first use (the gap run does it once the analysis
+    has named a physical effect, while the nominal re-simulation still runs on its thread:
+    the refinement then does not wait for the import)."""
     _sysid()
 
 
