@@ -91,10 +91,13 @@ of the file and ``numpy.fromstring`` 4.6×, and neither checks a row's length wh
 columns are read; ``pandas.read_csv`` on 1 MiB blocks takes the time of the plain read. The
 goal — at most 1.5× the plain pandas read's time and 2× the numeric array's memory — is out
 of numpy's reach, so pandas is a dependency. pandas' working set is ≈ 6× the block, hence
-1 MiB blocks: ``benchmarks/csv_reader.py`` gives, for 1-, 10- and 24-hour logs, 1.1–1.2× the
-plain pandas read's CPU time (≈ 2× its wall time: pandas ≥ 3.1 parses a long file on two
-threads) and 1.28×, 1.06×, 1.03× the array's memory (pandas: 3.2–3.7×; this reader before it
-streamed: 12.8× the array and ≈ 7× pandas' time on the 10-hour log).
+1 MiB blocks. Each block's working set is kept allocated for the next one
+(:func:`_keep_block_memory`: glibc would hand it back to the kernel after every block, and
+the page faults of the next block cost ≈ 15 % of the read). ``benchmarks/csv_reader.py``
+gives, for 1- and 10-hour logs, 1.07× and 1.10× the plain pandas read's CPU time (1.9× and
+2.1× its wall time: pandas ≥ 3.1 parses a long file on two threads) and 1.59× and 1.09× the
+array's memory (pandas: 3.2–3.7×; this reader before it streamed: 12.8× the array and ≈ 7×
+pandas' time on the 10-hour log).
 """
 
 from __future__ import annotations
@@ -127,6 +130,10 @@ from calib.logs.table import gyro_unit as gyro_unit_of
 
 CHUNK_BYTES = 1 << 20
 """Bytes of the file read and parsed at a time (1 MiB: pandas' working set is ≈ 6× that)."""
+HEAP_MMAP_BYTES = 4 * CHUNK_BYTES
+"""glibc's ``M_MMAP_THRESHOLD`` while blocks are parsed (:func:`_keep_block_memory`)."""
+HEAP_TRIM_BYTES = 8 * CHUNK_BYTES
+"""glibc's ``M_TRIM_THRESHOLD`` while blocks are parsed: above one block's working set."""
 SMALL_BYTES = 4 << 20
 """Files (gzip: compressed) smaller than this are parsed line by line, without pandas."""
 GZIP_MAGIC = b"\x1f\x8b"
@@ -658,6 +665,41 @@ def _counted(data: bytes | str, delim: str | None, rows: int, n: int) -> bool:
 
 # --- the reader -----------------------------------------------------------------------------
 
+_HEAP_KEPT = False
+
+
+def _keep_block_memory() -> None:
+    """Keep one block's working set allocated from one block to the next (glibc only).
+
+    Each block's parse allocates and frees the same ≈ 6 MiB (pandas' tokenizer, the block's
+    columns). glibc hands such memory back to the kernel when it is freed (an ``mmap``
+    chunk, or a heap top above its trim threshold) and the next block faults every page in
+    again: on a 1-hour log 12 000–16 000 more page faults than one plain ``pandas.read_csv``
+    (which allocates once), ≈ 15 % of its CPU time (``benchmarks/csv_reader.py``). Setting
+    the thresholds to :data:`HEAP_MMAP_BYTES` and :data:`HEAP_TRIM_BYTES` keeps the working
+    set on the heap: at most 8 MiB more resident memory, once per process (the settings are
+    the process's; glibc's own adaptive thresholds reach 32/64 MiB). Elsewhere (no glibc, no
+    ``mallopt``) nothing is changed.
+    """
+    global _HEAP_KEPT
+    if _HEAP_KEPT:
+        return
+    _HEAP_KEPT = True
+    import ctypes
+    import platform
+
+    if platform.libc_ver()[0] != "glibc":
+        return
+    try:
+        libc = ctypes.CDLL(None)
+        mallopt = libc.mallopt
+    except (OSError, AttributeError):
+        return
+    m_trim_threshold, m_mmap_threshold = -1, -3  # <malloc.h>
+    mallopt(m_mmap_threshold, HEAP_MMAP_BYTES)
+    mallopt(m_trim_threshold, HEAP_TRIM_BYTES)
+
+
 def read_csv(path: Path, columns: dict[str, str] | None = None, fmt: str = "auto", *,
              units: str | None = None, gyro_unit: str | None = None,
              time_unit: str | None = None, progress: Progress | None = None) -> RawLog:
@@ -737,6 +779,8 @@ def _read(path: Path, columns: dict[str, str], fmt: str, options: dict[str, str 
         want = {role: i for role, i in index.items() if role != "label"}
         parser = _Parser(path, names, delim, decimal_comma, want, index.get("label"), src,
                          fast=src.total >= SMALL_BYTES)
+        if parser.fast:
+            _keep_block_memory()
         out = _Columns(tuple(want), src, "label" in index)
         rest = data[start:]
         del data
