@@ -94,8 +94,9 @@ of numpy's reach, so pandas is a dependency. pandas' working set is ≈ 6× the 
 1 MiB blocks. Each block's working set is kept allocated for the next one
 (:func:`_keep_block_memory`: glibc would hand it back to the kernel after every block, and
 the page faults of the next block cost ≈ 15 % of the read). ``benchmarks/csv_reader.py``
-gives, for 1- and 10-hour logs, 1.07× and 1.10× the plain pandas read's CPU time (1.9× and
-2.1× its wall time: pandas ≥ 3.1 parses a long file on two threads) and 1.59× and 1.09× the
+gives, for 1- and 10-hour logs, 0.94–1.07× and 1.10–1.44× the plain pandas read's CPU time
+run to run (1.5× and 2.3× its wall time: pandas ≥ 3.1 parses a long file on two threads;
+the file's hash runs on a second thread here, :class:`_Hashed`) and 1.6–1.7× and 1.1× the
 array's memory (pandas: 3.2–3.7×; this reader before it streamed: 12.8× the array and ≈ 7×
 pandas' time on the 10-hour log).
 """
@@ -324,21 +325,40 @@ class _NotUtf8Error(Exception):
 class _Hashed:
     """A binary file read front to back, its bytes fed to a sha256 as they are read: the
     provenance's hash of a log without reading the file a second time
-    (:func:`calib.logs.reader.file_sha256` gives the same digest)."""
+    (:func:`calib.logs.reader.file_sha256` gives the same digest).
+
+    The hash runs on a thread of its own, in read order (hashlib releases the GIL on large
+    updates): on a 10-hour log it is ≈ 0.2 s of the read's 1.2 s, which the parse no longer
+    waits for. What it hashes is an owned copy of each read (the reader reuses its buffer).
+    """
 
     def __init__(self, f) -> None:
+        from concurrent.futures import ThreadPoolExecutor
+
         self.f, self._sha = f, hashlib.sha256()
         self.mode, self.name = "rb", getattr(f, "name", "")
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="log-sha256")
+        self._pending = None
+
+    def _update(self, data: bytes) -> None:
+        if data:  # one worker: the updates run in the order they were submitted
+            self._pending = self._pool.submit(self._sha.update, data)
+
+    def _wait(self) -> None:
+        if self._pending is not None:
+            self._pending.result()
+            self._pending = None
 
     def read(self, size: int = -1) -> bytes:
         data = self.f.read(size)
-        self._sha.update(data)
+        self._update(data)
         return data
 
     def readinto(self, view) -> int:
-        got = self.f.readinto(view)
-        self._sha.update(view[:got])
-        return got
+        data = self.f.read(len(view))
+        view[:len(data)] = data
+        self._update(data)
+        return len(data)
 
     def tell(self) -> int:
         return self.f.tell()
@@ -347,6 +367,7 @@ class _Hashed:
         """Only back to the start (the hash starts again): the reader reads front to back."""
         if (offset, whence) != (0, 0):
             raise io.UnsupportedOperation("a hashed log is read front to back")
+        self._wait()
         self._sha = hashlib.sha256()
         return self.f.seek(0)
 
@@ -354,12 +375,14 @@ class _Hashed:
         return self.f.fileno()
 
     def close(self) -> None:
+        self._pool.shutdown(wait=True)
         self.f.close()
 
     def hexdigest(self) -> str:
         """The sha256 of the whole file: what was read, then the rest of it."""
         while block := self.f.read(1 << 20):
-            self._sha.update(block)
+            self._update(block)
+        self._wait()
         return self._sha.hexdigest()
 
 
