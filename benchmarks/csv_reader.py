@@ -1,11 +1,12 @@
 """The CSV reader's peak memory and time, as ratios against the numeric array it returns and
 against a plain pandas read of the same file, measured in the same run.
 
-    python benchmarks/csv_reader.py [--hours 1,10] [--repeat 3] [--dir DIR]   # or: make bench
+    python benchmarks/csv_reader.py [--hours 1,10] [--repeat 5] [--dir DIR]   # or: make bench
 
 Writes 100 Hz logs of 7 columns (``t (s)``, ``ax``/``ay``/``az (m/s^2)``,
 ``gx``/``gy``/``gz (rad/s)``; 1 and 10 hours by default: 360 000 and 3 600 000 rows) to a
-temporary folder, then reads each in fresh processes, ``--repeat`` times:
+temporary folder, then reads each in fresh processes, ``--repeat`` times (5; the two readers
+take turns):
 
 * **tiltbench**: :func:`calib.logs.csvlog.read_csv` (the reader of every command that reads a
   CSV log), which keeps the 7 columns as float64 arrays;
@@ -122,16 +123,20 @@ def _env() -> dict[str, str]:
                                                          os.environ.get("PYTHONPATH")))))
 
 
-def measure(path: Path, engine: str, repeat: int) -> dict:
-    """Best time and smallest peak of ``repeat`` fresh processes reading ``path``."""
+def measure(path: Path, engines: tuple[str, ...], repeat: int) -> dict[str, dict]:
+    """Per engine, the best time and smallest peak of ``repeat`` fresh processes reading
+    ``path``. The engines take turns, one process each per round, so that a machine that
+    slows down or speeds up during the runs weighs on both sides alike."""
     env = _env()
-    runs = []
+    runs: dict[str, list[dict]] = {e: [] for e in engines}
     for _ in range(repeat):
-        done = subprocess.run([sys.executable, "-c", CHILD, str(path), engine], env=env,
-                              cwd=REPO, capture_output=True, text=True, check=True)
-        runs.append(json.loads(done.stdout.strip().splitlines()[-1]))
-    return {"time": min(r["time"] for r in runs), "wall": min(r["wall"] for r in runs),
-            "peak": min(r["peak"] for r in runs), "rows": runs[0]["rows"]}
+        for engine in engines:
+            done = subprocess.run([sys.executable, "-c", CHILD, str(path), engine], env=env,
+                                  cwd=REPO, capture_output=True, text=True, check=True)
+            runs[engine].append(json.loads(done.stdout.strip().splitlines()[-1]))
+    return {e: {"time": min(r["time"] for r in rs), "wall": min(r["wall"] for r in rs),
+                "peak": min(r["peak"] for r in rs), "rows": rs[0]["rows"]}
+            for e, rs in runs.items()}
 
 
 def measure_import(path: Path, out: Path) -> dict:
@@ -199,7 +204,8 @@ def _import_24h(folder: Path | None) -> int:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
     p.add_argument("--hours", default="1,10", help="log lengths in hours (comma-separated)")
-    p.add_argument("--repeat", type=int, default=3, help="processes per reader and log")
+    p.add_argument("--repeat", type=int, default=5, help="processes per reader and log "
+                   "(in turns: pandas, tiltbench, pandas, …)")
     p.add_argument("--dir", type=Path, default=None, help="where to write the logs "
                    "(default: a temporary folder, removed afterwards)")
     p.add_argument("--import-24h", action="store_true",
@@ -221,8 +227,8 @@ def main(argv: list[str] | None = None) -> int:
             rows = int(round(h * 3600 * RATE_HZ))
             path = folder / f"log-{h:g}h.csv"
             write_log(path, rows)
-            base = measure(path, "pandas", args.repeat)
-            ours = measure(path, "tiltbench", args.repeat)
+            got = measure(path, ("pandas", "tiltbench"), args.repeat)
+            base, ours = got["pandas"], got["tiltbench"]
             if ours["rows"] != rows or base["rows"] != rows:
                 raise SystemExit(f"{path}: read {ours['rows']} / {base['rows']} rows of "
                                  f"{rows}")
