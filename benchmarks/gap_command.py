@@ -14,6 +14,12 @@ refinement runs) and timed two ways, each in a fresh process:
 * **analysis**: the estimation side alone, one :func:`calib.gap.analyze_gap` call on the same
   file in a fresh process (wall and CPU of the call), BLAS at one thread as the CLI sets it.
 
+* **two parts alone** (CPU seconds, fresh process): importing what the command imports (the
+  workflow, the analysis, the report, ``mujoco.sysid``: GIL-bound, so they add up on one
+  thread) and the servo replay's MuJoCo rollout (every physics step of the run at the model's
+  1 ms, one trajectory on one core) — with the analysis, what no scheduling of the command's
+  two threads can hide.
+
 Each is the best of ``--repeat`` runs. The table gives both, the ratio command / analysis and
 the growth from N = 20001 to 60001 (three times the samples: ≈ 3 when linear in N). The
 command's own step lines (``[gap] … in x s``, stderr) of its best run are shown below it.
@@ -100,6 +106,34 @@ def _analysis_cell(path: str) -> dict:
     return {"wall": time.perf_counter() - t0, "cpu": time.process_time() - c0}
 
 
+def time_floor(path: Path) -> dict:
+    """Two parts of the command timed alone in a fresh process (:func:`_floor_cell`)."""
+    out = subprocess.run([sys.executable, __file__, "--floor", str(path)], env=_env(),
+                         cwd=REPO, check=True, capture_output=True, text=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _floor_cell(path: str) -> dict:
+    """CPU seconds of importing what the command imports (the workflow, the analysis, the
+    report and ``mujoco.sysid``; GIL-bound: they cannot overlap one another), and the servo
+    replay's MuJoCo rollout alone (:func:`bench.gap.replay.record_motion`: every physics
+    step of the run at the model's timestep), with its step count."""
+    c0 = time.process_time()
+    import mujoco.sysid  # noqa: F401
+
+    from bench.gap.replay import make_replay, record_motion
+    from bench.gap.report import GapReport  # noqa: F401
+    from calib.files.course import read_ensayo
+    from calib.gap import analyze_gap  # noqa: F401
+
+    imports = time.process_time() - c0
+    ensayo = read_ensayo(path)
+    replay = make_replay(ensayo.tita, ensayo.t)
+    c0 = time.process_time()
+    record_motion(replay)
+    return {"imports": imports, "rollout": time.process_time() - c0, "steps": replay.nstep}
+
+
 def best(fn, arg, repeat: int) -> dict:
     """The run of ``fn(arg)`` with the shortest wall time among ``repeat``."""
     return min((fn(arg) for _ in range(repeat)), key=lambda r: r["wall"])
@@ -111,9 +145,13 @@ def main(argv: list[str] | None = None) -> int:
                    help="samples per run (growth reported for 20001 → 60001 if both)")
     p.add_argument("--repeat", type=int, default=3, help="runs per cell (best wall time)")
     p.add_argument("--analysis", help=argparse.SUPPRESS)
+    p.add_argument("--floor", help=argparse.SUPPRESS)
     args = p.parse_args(argv)
     if args.analysis:
         print(json.dumps(_analysis_cell(args.analysis)))
+        return 0
+    if args.floor:
+        print(json.dumps(_floor_cell(args.floor)))
         return 0
 
     load0 = os.getloadavg()
@@ -122,7 +160,9 @@ def main(argv: list[str] | None = None) -> int:
         for n in args.sizes:
             path = make_input(n, Path(tmp) / f"n{n}")
             rows[n] = {"command": best(time_command, path, args.repeat),
-                       "analysis": best(time_analysis, path, args.repeat)}
+                       "analysis": best(time_analysis, path, args.repeat),
+                       "floor": min((time_floor(path) for _ in range(args.repeat)),
+                                    key=lambda r: r["imports"] + r["rollout"])}
     load1 = os.getloadavg()
     print(f"tiltbench gap --json on a timed constant sweep ({RATE:g} Hz, {EFFECT}) against "
           f"calib.gap.analyze_gap alone;\nbest of {args.repeat} fresh processes; load "
@@ -139,6 +179,14 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{n:>7}{c['wall']:>11.2f}{c['cpu']:>8.2f}{a['wall']:>12.2f}{a['cpu']:>8.2f}"
               f"{c['wall'] / a['wall']:>13.1f}×{mark:>16}  "
               f"{','.join(c['effects']) or '-'}, {how}")
+    print("two parts alone, in fresh processes (CPU s): the imports of the command (GIL-bound) "
+          "and the replay's MuJoCo rollout (one trajectory: one core)")
+    for n, r in rows.items():
+        f = r["floor"]
+        print(f"{n:>7}  imports {f['imports']:.2f} s, rollout {f['rollout']:.2f} s for "
+              f"{f['steps']} physics steps ({1e6 * f['rollout'] / max(f['steps'], 1):.2f} µs "
+              f"a step), analysis {r['analysis']['cpu']:.2f} s: imports + analysis "
+              f"{f['imports'] + r['analysis']['cpu']:.2f} s on the main thread")
     last = rows[max(rows)]["command"]
     print(f"steps of the command at N = {max(rows)}:")
     for line in last["steps"]:
