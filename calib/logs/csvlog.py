@@ -94,10 +94,10 @@ of numpy's reach, so pandas is a dependency. pandas' working set is ≈ 6× the 
 1 MiB blocks. Each block's working set is kept allocated for the next one
 (:func:`_keep_block_memory`: glibc would hand it back to the kernel after every block, and
 the page faults of the next block cost ≈ 15 % of the read). ``benchmarks/csv_reader.py``
-gives, for 1- and 10-hour logs, 0.94–1.07× and 1.10–1.44× the plain pandas read's CPU time
-run to run (1.5× and 2.3× its wall time: pandas ≥ 3.1 parses a long file on two threads;
-the file's hash runs on a second thread here, :class:`_Hashed`) and 1.6–1.7× and 1.1× the
-array's memory (pandas: 3.2–3.7×; this reader before it streamed: 12.8× the array and ≈ 7×
+gives, for 1- and 10-hour logs, 0.94–1.14× and 1.10–1.49× the plain pandas read's CPU time
+run to run (1.5–1.9× and 2.0–2.5× its wall time: pandas ≥ 3.1 parses a long file on two
+threads; the file's hash runs on a second thread here, :class:`_Hashed`) and 1.6–1.7× and
+1.1× the array's memory (pandas: 3.2–3.7×; this reader before it streamed: 12.8× the array and ≈ 7×
 pandas' time on the 10-hour log).
 """
 
