@@ -26,6 +26,7 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
+import gc  # noqa: E402
 import sys  # noqa: E402
 import warnings  # noqa: E402
 
@@ -103,6 +104,25 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into `head`: not an error
         sys.stderr.close()
         return 0
+
+
+def console() -> int:
+    """The ``tiltbench`` program (its console script and ``python -m bench.cli``):
+    :func:`main`, then an exit that does not trace every object the imports left alive.
+
+    At exit CPython clears every module and collects the reference cycles among what they
+    held: after ``tiltbench gap`` that is ≈ 1300 modules (scipy, MuJoCo, mujoco.sysid, …) and
+    ≈ 130 000 objects, 0.2–0.35 s of the command's wall time, spent after its last line is
+    printed. So the command's own garbage is collected here (``gc.collect``: its finalizers
+    run as they always did) and what is still alive is then frozen (``gc.freeze``), which
+    leaves it out of the exit's collections: the exit takes ≈ 0.03 s. atexit handlers (a
+    recording's flush) and the flush of stdout and stderr run as before; the commands close
+    their own files (atomic writes). Library callers of :func:`main` (tests, scripts) keep
+    their process's collector untouched."""
+    code = main()
+    gc.collect()
+    gc.freeze()
+    return code
 
 
 def _run(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:
