@@ -295,7 +295,7 @@ def _extension(analysis: GapAnalysis, replay: Replay, datos: np.ndarray,
     effects = [_effect_spec(e) for e in analysis.effects]
     reported = [_effect_spec(r) for r in getattr(analysis, "reported", ())]
     table_after, sensor_after = _bench_model([*effects, *reported], base)
-    if not any(e.name in SYSID_EFFECTS for e in effects):
+    if not _needs_sysid(analysis):
         return effects, table_after, sensor_after, {}
     with _step(progress, "refining physical effects (mujoco.sysid)…", "sysid done"):
         sigma2 = np.array([sensor_after.axis(a).noise_var or noise_var[k]

@@ -104,6 +104,7 @@ pandas' time on the 10-hour log).
 from __future__ import annotations
 
 import csv
+import functools
 import gzip
 import hashlib
 import io
@@ -688,9 +689,7 @@ def _counted(data: bytes | str, delim: str | None, rows: int, n: int) -> bool:
 
 # --- the reader -----------------------------------------------------------------------------
 
-_HEAP_KEPT = False
-
-
+@functools.cache
 def _keep_block_memory() -> None:
     """Keep one block's working set allocated from one block to the next (glibc only).
 
@@ -701,13 +700,9 @@ def _keep_block_memory() -> None:
     (which allocates once), ≈ 15 % of its CPU time (``benchmarks/csv_reader.py``). Setting
     the thresholds to :data:`HEAP_MMAP_BYTES` and :data:`HEAP_TRIM_BYTES` keeps the working
     set on the heap: at most 8 MiB more resident memory, once per process (the settings are
-    the process's; glibc's own adaptive thresholds reach 32/64 MiB). Elsewhere (no glibc, no
-    ``mallopt``) nothing is changed.
+    the process's; glibc's own adaptive thresholds reach 32/64 MiB; cached: the first call
+    sets them). Elsewhere (no glibc, no ``mallopt``) nothing is changed.
     """
-    global _HEAP_KEPT
-    if _HEAP_KEPT:
-        return
-    _HEAP_KEPT = True
     import ctypes
     import platform
 
