@@ -25,6 +25,8 @@ One job per module:
   while moving against while held (level, gain, variance, spectrum).
 * :mod:`~calib.gap.steps`       — step-like bias changes (one step, a staircase, two-level
   switching) found and said in words.
+* :mod:`~calib.gap.switching`   — faint two-level switching by the likelihood of a two-state
+  hidden Markov level (its switches integrated out), set against the walk.
 
 Effects that need timing are skipped without ``t`` or ``rate`` and listed in ``needs_timing``.
 """

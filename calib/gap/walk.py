@@ -105,6 +105,7 @@ from calib.gap.space import (
     tilt_drift_columns,
 )
 from calib.gap.steps import describe, find_steps, two_level
+from calib.gap.switching import SWITCH_CHARGE, block_means, block_size, fit_switching
 from calib.input_rules import DataError
 from calib.noise.allan import MAX_FIT_SAMPLES, AxisNoise, fit_axis_noise
 
@@ -273,8 +274,12 @@ class WalkReview:
         best = self.best_rival
         if self.steps_win and not self.rival_wins and not self.failed:
             st = self.steps
-            why = (f"{st['count']} step(s) beat the random walk by {st['gain']:.4g} after "
-                   f"their charges (more than {CYCLE_MARGIN:g}) and "
+            what = ("two-level switching (a hidden Markov level, its switches integrated out)"
+                    " beats" if st.get("model") == "two_level_markov"
+                    else f"{st['count']} step(s) beat")
+            margin = SWITCH_MARGIN if st.get("model") == "two_level_markov" else CYCLE_MARGIN
+            why = (f"{what} the random walk by {st['gain']:.4g} after "
+                   f"their charges (more than {margin:g}) and "
                    f"{_beyond_steps(st['walk_beyond_lr'], st['walk_beyond_p'])}")
             size, stat = st["size"], st["gain"]
         elif self.rival_wins:
@@ -1098,6 +1103,80 @@ def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
                             "(more steps, or a walk wandering between them) separates them")}
 
 
+SWITCH_MARGIN = 12.0
+"""AIC gain of two-level switching over the walk, on the walk's path (:func:`switching_drift`),
+beyond which the switching replaces the walk (below it, and above 0, the pair is listed as not
+told apart). Measured on paths made apart from the detector (``python -m
+validation.switching_study``, ``docs/gap.md``): of 400 random walks of q√T = 0.3–4 σ none
+gained more than 12 (largest 9.1), while telegraphs with levels 0.2–0.6 σ apart and 4–30
+switches did in 99 of 150."""
+
+
+def path_walk_lr(e: np.ndarray, sigma2: float, dt: np.ndarray, m: int = 1) -> float:
+    """Gain in ``-2 log L`` of a random walk over white noise on path ``e`` (m/s²; noise σ²,
+    step Δt (N-1,)), q at its maximum likelihood: the differenced local level
+    (:func:`_local_level_nll`) of the path's means in blocks of ``m`` samples (noise σ²/m,
+    the walk's steps ``q²·Σ_block Δt``), as :func:`calib.gap.switching.fit_switching` sees
+    the path."""
+    eb = block_means(e, m)
+    if eb.size < 3:
+        return 0.0
+    de = np.diff(eb)
+    s2 = float(sigma2) / m
+    dtb = block_means(np.r_[dt, dt[-1:]], m)[1:] * m
+    white = _local_level_nll(de, s2, np.zeros(de.size))
+
+    def nll(lr: float) -> float:  # lr: log of q²Δt relative to σ²/m
+        return _local_level_nll(de, s2, s2 * np.exp(lr) * dtb / float(np.mean(dtb)))
+
+    res = optimize.minimize_scalar(nll, bounds=(np.log(1e-9), np.log(1e2)), method="bounded",
+                                   options={"xatol": 1e-3})
+    return max(white - float(min(res.fun, white)), 0.0)
+
+
+def switching_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
+                    e: np.ndarray, sigma2: float, fixed_q: bool) -> dict | None:
+    """Two-level switching of the bias, not a walk? (:mod:`calib.gap.switching`).
+
+    The walk's path ``e`` is fitted by a two-state Markov level (switching histories
+    integrated out) and by a walk (:func:`path_walk_lr`) on the same points; AIC gain
+    ``D = (LR_s − 2·3) − (LR_w − 2·1)``. When D > 0 and a walk adds nothing beyond the
+    decoded switching (its steps as columns, :func:`walk_beyond_refit`, p ≥
+    :data:`WALK_BEYOND_ALPHA`) the drift is described as switching (``"describes"``: the walk
+    stays named, the pair listed as not told apart); beyond :data:`SWITCH_MARGIN` the
+    switching replaces the walk (``"steps"``). The same dict as :func:`step_drift`; None with
+    a sensor profile (q fixed: the walk is known noise) or when the walk fits better."""
+    if fixed_q:
+        return None
+    run = ext.run
+    fit = fit_switching(e, sigma2)
+    if fit is None:
+        return None
+    walk_lr = path_walk_lr(e, sigma2, run.dt_walk, block_size(run.n))
+    gain = (fit.lr - 2.0 * SWITCH_CHARGE) - (walk_lr - 2.0)
+    steps = fit.step_fit()
+    if gain <= 0 or steps.count == 0:
+        return None
+    lr, logp = walk_beyond_refit(ext, state, reduced, k, steps.columns(run.n))
+    if logp < np.log(WALK_BEYOND_ALPHA):
+        return None
+    words = describe(steps, run.tcol, run.time_unit, AXES[k])
+    size = fit.levels[1] - fit.levels[0]
+    return {"decision": "steps" if gain > SWITCH_MARGIN else "describes",
+            "model": "two_level_markov", "count": steps.count,
+            "two_level": bool(two_level(steps)), "gain": float(gain),
+            "share": float(gain / max(walk_lr - 2.0, 1e-300)),
+            "walk_beyond_lr": float(lr), "walk_beyond_p": float(np.exp(logp)),
+            "size": float(size), "levels": [float(v) for v in fit.levels],
+            "rates_per_sample": [float(v) for v in fit.rates],
+            "description": words,
+            "cannot_tell": (f"cannot tell a walk from two-level switching on {AXES[k]}: "
+                            f"{words} fits as well (AIC gain {gain:.3g} over the walk on its "
+                            f"path, within the margin {SWITCH_MARGIN:g}) and "
+                            f"{_beyond_steps(lr, float(np.exp(logp)))}; a longer run (more "
+                            "switches, or a walk wandering beyond two levels) separates them")}
+
+
 def review_walk(ext: Extensions, state: ModelState, k: int, e: np.ndarray,
                 innov: np.ndarray) -> WalkReview:
     """Rivals and path battery for the walk named on axis k of ``state``.
@@ -1120,5 +1199,9 @@ def review_walk(ext: Extensions, state: ModelState, k: int, e: np.ndarray,
     cycle = (structured_drift(ext, state, reduced, k, found, lr - 2.0 * charge, fixed)
              or slow_cycle(ext, e, st.sigma2_eff, st.q, k, found, lr - 2.0 * charge, fixed))
     steps = step_drift(ext, state, reduced, k, e, st.sigma2_eff, lr - 2.0 * charge, fixed)
+    if steps is None or steps["decision"] != "steps":  # faint switching the search missed
+        switching = switching_drift(ext, state, reduced, k, e, st.sigma2_eff, fixed)
+        if switching is not None and (steps is None or switching["gain"] > steps["gain"]):
+            steps = switching
     return WalkReview(axis, lr, charge, tuple(found), tuple(checks), profile=fixed,
                       cycle=cycle, steps=steps)
