@@ -12,6 +12,7 @@ import pytest
 
 from calib.files.course import validate_ensayo
 from calib.gap import analyze_gap
+from calib.gap.confusions import design_hint
 from calib.gap.switching import block_means, fit_switching, two_level_m2ll, viterbi
 from calib.gap.walk import SWITCH_MARGIN
 from tests.test_gap_drive_state import STATED, course_readings, stop_and_go
@@ -139,4 +140,26 @@ def test_faint_telegraph_noise_is_said_as_switching_not_named_a_walk():
             assert ("bias_random_walk", "x") not in res.named
             assert "the bias on x switches between two levels" in said, said
             said_as_switching += 1
+        elif steps is not None and steps.get("model") == "two_level_markov":
+            pair = [d for d in res.not_identifiable
+                    if d["names"] == ["bias_random_walk", "bias_switching"]]
+            assert ("bias_random_walk", "x") in res.named
+            assert len(pair) == 1 and pair[0]["reason"].startswith(
+                "cannot tell a walk from two-level switching on x (AIC gain"), pair
     assert said_as_switching >= FAINT_MIN_SAID, said_as_switching
+
+
+def test_a_pair_outside_the_catalog_gets_no_design_to_compare():
+    assert "cycle" in design_hint(["bias_random_walk", "slow_cycle"])
+    for other in ("bias_steps", "bias_switching"):
+        hint = design_hint(["bias_random_walk", other])
+        assert hint.startswith("not a catalog pair") and "cycle" not in hint
+    assert "tiltbench design --effects" in design_hint(["lowpass_lag", "misalignment"])
+
+
+def test_the_study_runs_and_prints_its_table(capsys):
+    from validation.switching.score import main
+
+    assert main(["--walks", "2", "--telegraphs", "2", "--seed", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "random walks" in out and "telegraphs" in out and ">12" in out

@@ -24,10 +24,14 @@ reported as not told apart."""
 def design_hint(names: list[str]) -> str:
     """Where to compare experiments that would separate a confused pair (printed after the
     reason in the text report; the JSON ``reason`` is unchanged). A pair with a shape outside
-    the catalog (``slow_cycle``: :func:`calib.gap.walk.slow_cycle`) has no design to compare:
-    a longer run separates it."""
-    if not all(n in EFFECTS for n in names):
+    the catalog has no design to compare: a slow cycle (:func:`calib.gap.walk.slow_cycle`) is
+    separated by a run several of its periods long; steps and two-level switching
+    (:func:`calib.gap.walk.step_drift`, :func:`calib.gap.walk.switching_drift`) by a longer
+    run, as their reason says."""
+    if "slow_cycle" in names:
         return "not a catalog pair: a run several periods of the cycle long separates them"
+    if not all(n in EFFECTS for n in names):
+        return "not a catalog pair: no design of `tiltbench design` compares it"
     return f"compare designs with `tiltbench design --effects {','.join(names)}`"
 
 

@@ -1107,7 +1107,7 @@ SWITCH_MARGIN = 12.0
 """AIC gain of two-level switching over the walk, on the walk's path (:func:`switching_drift`),
 beyond which the switching replaces the walk (below it, and above 0, the pair is listed as not
 told apart). Measured on paths made apart from the detector (``python -m
-validation.switching_study``, ``docs/gap.md``): of 400 random walks of q√T = 0.3–4 σ none
+validation.switching.score``, ``docs/gap.md``): of 400 random walks of q√T = 0.3–4 σ none
 gained more than 12 (largest 9.1), while telegraphs with levels 0.2–0.6 σ apart and 4–30
 switches did in 99 of 150."""
 
@@ -1170,11 +1170,11 @@ def switching_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: 
             "size": float(size), "levels": [float(v) for v in fit.levels],
             "rates_per_sample": [float(v) for v in fit.rates],
             "description": words,
-            "cannot_tell": (f"cannot tell a walk from two-level switching on {AXES[k]}: "
-                            f"{words} fits as well (AIC gain {gain:.3g} over the walk on its "
-                            f"path, within the margin {SWITCH_MARGIN:g}) and "
-                            f"{_beyond_steps(lr, float(np.exp(logp)))}; a longer run (more "
-                            "switches, or a walk wandering beyond two levels) separates them")}
+            "cannot_tell": (f"cannot tell a walk from two-level switching on {AXES[k]} "
+                            f"(AIC gain {gain:.3g} over the walk on its path, within the "
+                            f"margin {SWITCH_MARGIN:g}; a walk adds nothing beyond the "
+                            f"switching, LR {lr:.3g}): {words}; a longer run (more switches, or "
+                            "a walk wandering beyond two levels) separates them")}
 
 
 def review_walk(ext: Extensions, state: ModelState, k: int, e: np.ndarray,

@@ -1,11 +1,12 @@
 """Two-level switching against a random walk on paths made here: the study behind
 :data:`calib.gap.walk.SWITCH_MARGIN`.
 
-    python -m validation.switching_study                    # 400 walks, 150 telegraphs
-    python -m validation.switching_study --walks 100 --telegraphs 50 --seed 7
+    python -m validation.switching.score                    # 400 walks, 150 telegraphs
+    python -m validation.switching.score --walks 100 --telegraphs 50 --seed 7
 
-Each path is made with numpy alone (not with the detector's code): white noise of std σ
-(0.05–1 m/s²), N of 2001, 4001, 6001 or 12001 samples at 50, 100 or 200 Hz, plus
+Each path is made with numpy alone (:mod:`validation.switching.paths`, not the detector's
+code): white noise of std σ (0.05–1 m/s²), N of 2001, 4001, 6001 or 12001 samples at 50, 100
+or 200 Hz, plus
 
 * a **random walk** of q√T = 0.3–1.2 σ (half the walks: the faint ones a telegraph is
   confused with) or 0.3–4 σ (the other half);
@@ -27,29 +28,9 @@ import numpy as np
 
 from calib.gap.switching import SWITCH_CHARGE, block_size, fit_switching
 from calib.gap.walk import SWITCH_MARGIN, path_walk_lr
+from validation.switching.paths import make_path
 
 LEVELS = (0.0, 6.0, SWITCH_MARGIN, 20.0, 30.0)
-
-
-def make_path(rng: np.random.Generator, kind: str, faint: bool) -> tuple[np.ndarray, float,
-                                                                        float, dict]:
-    """(path, σ², Δt, what was made) of one walk or telegraph (module docstring)."""
-    n = int(rng.choice([2001, 4001, 6001, 12001]))
-    dt = 1.0 / float(rng.choice([50.0, 100.0, 200.0]))
-    sigma = float(rng.uniform(0.05, 1.0))
-    t = np.arange(n) * dt
-    if kind == "walk":
-        qt = float(rng.uniform(0.3, 1.2 if faint else 4.0))
-        q = qt * sigma / np.sqrt(t[-1])
-        drift = np.cumsum(rng.normal(0.0, q * np.sqrt(dt), n))
-        info = {"q_sqrt_T_over_sigma": qt}
-    else:
-        k = int(rng.integers(4, 31))
-        times = np.sort(rng.uniform(0.05, 0.95, k) * t[-1])
-        h = float(rng.uniform(0.2, 0.6))
-        drift = h * sigma * ((int(rng.integers(0, 2)) + np.searchsorted(times, t, "right")) % 2)
-        info = {"h_over_sigma": h, "switches": k}
-    return drift + rng.normal(0.0, sigma, n), sigma**2, dt, info
 
 
 def gain(e: np.ndarray, sigma2: float, dt: float) -> float:
