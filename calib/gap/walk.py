@@ -204,8 +204,9 @@ class WalkReview:
     steps: dict | None = None
     """Steps of the bias against the walk (:func:`step_drift`): ``{"decision": "steps" |
     "describes", "count", "gain", "share", "walk_beyond_lr", "walk_beyond_p", "size",
-    "description", "cannot_tell"}``, or None when the walk beats them or is needed beyond
-    them."""
+    "description", "cannot_tell"}``, or two-level switching (:func:`switching_drift`: the same
+    keys and ``"model": "two_level_markov"``, ``"levels"`` m/s², ``"rates_per_sample"``), or
+    None when the walk beats them or is needed beyond them."""
 
     @property
     def cycle_wins(self) -> bool:
@@ -1116,14 +1117,14 @@ def path_walk_lr(e: np.ndarray, sigma2: float, dt: np.ndarray, m: int = 1) -> fl
     """Gain in ``-2 log L`` of a random walk over white noise on path ``e`` (m/s²; noise σ²,
     step Δt (N-1,)), q at its maximum likelihood: the differenced local level
     (:func:`_local_level_nll`) of the path's means in blocks of ``m`` samples (noise σ²/m,
-    the walk's steps ``q²·Σ_block Δt``), as :func:`calib.gap.switching.fit_switching` sees
-    the path."""
+    the walk's step ``q²·Δt_b`` with Δt_b the time between the blocks' mean times), as
+    :func:`calib.gap.switching.fit_switching` sees the path."""
     eb = block_means(e, m)
     if eb.size < 3:
         return 0.0
     de = np.diff(eb)
     s2 = float(sigma2) / m
-    dtb = block_means(np.r_[dt, dt[-1:]], m)[1:] * m
+    dtb = np.diff(block_means(np.concatenate([[0.0], np.cumsum(dt)]), m))
     white = _local_level_nll(de, s2, np.zeros(de.size))
 
     def nll(lr: float) -> float:  # lr: log of q²Δt relative to σ²/m
