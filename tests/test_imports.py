@@ -36,6 +36,7 @@ small synthetic tree below, so a check that can never fail would show.
 from __future__ import annotations
 
 import ast
+import functools
 import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -420,7 +421,9 @@ def check_private_imports(mods: dict[str, Module], root: Path,
             if (where.split(":")[0], target, name) not in allowed]
 
 
+@functools.cache
 def _real() -> dict[str, Module]:
+    """The repository's modules, scanned once per test process (the checks only read them)."""
     return scan(REPO)
 
 
