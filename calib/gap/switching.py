@@ -78,9 +78,10 @@ def block_size(n: int) -> int:
 
 def two_level_m2ll(e: np.ndarray, sigma2: float, mu: tuple[float, float],
                    p01: float, p10: float) -> float:
-    """``-2 log L`` of the two-level Markov model (module docstring), without the terms
-    shared by every model of the path (``N log 2πσ²``): white noise about one level μ gives
-    ``Σ(e − μ)²/σ²`` on the same scale."""
+    """``-2 log L`` of the two-level Markov model (module docstring; levels ``mu`` m/s²,
+    switch probabilities per point 0 < p₀₁, p₁₀ < 1), without the terms shared by every model
+    of the path (``N log 2πσ²``): white noise about one level μ gives ``Σ(e − μ)²/σ²`` on the
+    same scale."""
     e = np.asarray(e, dtype=float)
     d = np.empty((e.size, 2))
     d[:, 0] = (e - mu[0]) ** 2
