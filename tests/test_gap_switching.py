@@ -15,6 +15,7 @@ from calib.gap import analyze_gap
 from calib.gap.confusions import design_hint
 from calib.gap.switching import block_means, fit_switching, two_level_m2ll, viterbi
 from calib.gap.walk import SWITCH_MARGIN
+from calib.units import missing_units
 from tests.test_gap_drive_state import STATED, course_readings, stop_and_go
 
 SIGMA_X = float(np.sqrt(STATED[0]))
@@ -133,6 +134,7 @@ def test_faint_telegraph_noise_is_said_as_switching_not_named_a_walk():
         assert "1/f" not in said, said
         walk = [w for w in res.adequacy["walk"] if w["axis"] == "x"]
         steps = walk[0]["steps"] if walk else None
+        assert missing_units(res.to_dict()) == []  # levels and rates have theirs too
         if steps is not None and steps.get("model") == "two_level_markov" \
                 and steps["decision"] == "steps":
             assert steps["gain"] > SWITCH_MARGIN

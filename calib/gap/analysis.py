@@ -232,9 +232,8 @@ def _walk_or_cycle(reviews: dict[int, WalkReview]) -> list[dict]:
                "reason": r.cycle["description"]}
               for r in reviews.values()
               if r.earned and r.cycle is not None and r.cycle["decision"] == "cannot_tell"]
-    steps = [{"names": ["bias_random_walk", ("bias_switching" if r.steps.get("model")
-                                             == "two_level_markov" else "bias_steps")],
-              "axis": r.axis, "reason": r.steps["cannot_tell"]}
+    steps = [{"names": ["bias_random_walk", r.steps["pair"]], "axis": r.axis,
+              "reason": r.steps["cannot_tell"]}
              for r in reviews.values()
              if r.earned and r.steps is not None and r.steps["decision"] == "describes"]
     return cycles + steps

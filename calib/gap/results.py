@@ -96,6 +96,8 @@ def gap_units() -> dict[str, str]:
         "adequacy.walk.steps.gain": "1", "adequacy.walk.steps.share": "1",
         "adequacy.walk.steps.walk_beyond_lr": "1", "adequacy.walk.steps.walk_beyond_p": "1",
         "adequacy.walk.steps.size": "m/s²", "adequacy.walk.steps.count": "count",
+        "adequacy.walk.steps.margin": "1", "adequacy.walk.steps.levels": "m/s²",
+        "adequacy.walk.steps.rates_per_sample": "1/sample",
         "adequacy.sponges.statistic": "1", "adequacy.sponges.p_value": "1",
         "reported.change": "σ", **{f"reported.*.{k}": u for k, u in effect_units().items()},
         "criterion.profile.rate_random_walk.*.value": "m/s²/√s",

@@ -203,8 +203,9 @@ class WalkReview:
     AIC or is needed beyond them."""
     steps: dict | None = None
     """Steps of the bias against the walk (:func:`step_drift`): ``{"decision": "steps" |
-    "describes", "count", "gain", "share", "walk_beyond_lr", "walk_beyond_p", "size",
-    "description", "cannot_tell"}``, or two-level switching (:func:`switching_drift`: the same
+    "describes", "pair" (the name beside the walk in ``not_identifiable``), "margin", "count",
+    "gain", "share", "walk_beyond_lr", "walk_beyond_p", "size", "description",
+    "cannot_tell"}``, or two-level switching (:func:`switching_drift`: the same
     keys and ``"model": "two_level_markov"``, ``"levels"`` m/s², ``"rates_per_sample"``), or
     None when the walk beats them or is needed beyond them."""
 
@@ -276,11 +277,10 @@ class WalkReview:
         if self.steps_win and not self.rival_wins and not self.failed:
             st = self.steps
             what = ("two-level switching (a hidden Markov level, its switches integrated out)"
-                    " beats" if st.get("model") == "two_level_markov"
+                    " beats" if st["pair"] == "bias_switching"
                     else f"{st['count']} step(s) beat")
-            margin = SWITCH_MARGIN if st.get("model") == "two_level_markov" else CYCLE_MARGIN
             why = (f"{what} the random walk by {st['gain']:.4g} after "
-                   f"their charges (more than {margin:g}) and "
+                   f"their charges (more than {st['margin']:g}) and "
                    f"{_beyond_steps(st['walk_beyond_lr'], st['walk_beyond_p'])}")
             size, stat = st["size"], st["gain"]
         elif self.rival_wins:
@@ -1092,7 +1092,8 @@ def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
     share = gain / max(walk_criterion, 1e-300)
     decision = "steps" if gain > CYCLE_MARGIN else "describes"
     words = describe(fit, run.tcol, run.time_unit, AXES[k])
-    return {"decision": decision, "count": fit.count, "two_level": bool(two),
+    return {"decision": decision, "pair": "bias_steps", "margin": CYCLE_MARGIN,
+            "count": fit.count, "two_level": bool(two),
             "gain": float(gain),
             "share": float(share), "walk_beyond_lr": float(lr),
             "walk_beyond_p": float(np.exp(logp)), "size": float(np.max(np.abs(fit.sizes))),
@@ -1164,6 +1165,7 @@ def switching_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: 
     words = describe(steps, run.tcol, run.time_unit, AXES[k])
     size = fit.levels[1] - fit.levels[0]
     return {"decision": "steps" if gain > SWITCH_MARGIN else "describes",
+            "pair": "bias_switching", "margin": SWITCH_MARGIN,
             "model": "two_level_markov", "count": steps.count,
             "two_level": bool(two_level(steps)), "gain": float(gain),
             "share": float(gain / max(walk_lr - 2.0, 1e-300)),
