@@ -16,6 +16,7 @@ import pytest
 from calib.files.course import validate_ensayo
 from calib.gap import analyze_gap
 from calib.gap.steps import describe, find_steps, step_threshold, two_level
+from calib.gap.walk import CYCLE_MARGIN, LEAN_MARGIN, steps_decision
 from tests.test_gap_drive_state import STATED, course_readings, stop_and_go
 
 SIGMA_X = float(np.sqrt(STATED[0]))
@@ -106,21 +107,34 @@ def test_find_steps_places_and_sizes_and_the_words():
     assert words.startswith("a step of +0.99 m/s² (+3.3 σ) in the bias on x at t = 50 s")
 
 
-def test_a_faint_staircase_a_walk_fits_as_well_is_listed_as_not_identifiable():
-    """Three steps of 0.3 σ (two of them 1.2 s apart) fit about as well as a walk after their
-    charges (AIC gain within ``CYCLE_MARGIN``) and a walk adds nothing beyond them: the walk
-    is named (the catalog's) and the pair is listed under ``not_identifiable`` with the
-    steps' shape in words — never a silent walk."""
+def test_a_faint_staircase_ahead_of_the_walk_is_not_told_apart_and_the_walk_not_named():
+    """Three steps of 0.33 σ (two of them 1.2 s apart) beat a walk after their charges by
+    more than ``LEAN_MARGIN`` but within ``CYCLE_MARGIN``, and a walk adds nothing beyond
+    them: this run cannot tell them apart, so the pair is listed under ``not_identifiable``
+    with the steps' shape in words, the walk is not presented as the explanation and the
+    verdict is "unexplained" — never a silent walk."""
     n = 4001
     t, th, _ = stop_and_go(n, seed=0, moves=24, turns=3.0)
     _, y = course_readings(th, 0)
     for c in (0.2, 0.6, 0.63):
-        y[int(c * n):, 0] += 0.3 * SIGMA_X
+        y[int(c * n):, 0] += 0.33 * SIGMA_X
     res = analyze_gap(validate_ensayo(th, y, t), STATED)
     walk = [w for w in res.adequacy["walk"] if w["axis"] == "x"][0]
-    assert walk["steps"]["decision"] == "describes", walk["steps"]
-    assert 0.0 < walk["steps"]["gain"] <= 12.0
+    assert walk["steps"]["decision"] == "leans", walk["steps"]
+    assert LEAN_MARGIN < walk["steps"]["gain"] <= CYCLE_MARGIN
     pair = [d for d in res.not_identifiable if d["names"] == ["bias_random_walk", "bias_steps"]]
     assert len(pair) == 1 and pair[0]["axis"] == "x", res.not_identifiable
     assert pair[0]["reason"].startswith("cannot tell a walk from steps on x: a staircase of")
-    assert ("bias_random_walk", "x") in res.named
+    assert ("bias_random_walk", "x") not in res.named and res.verdict == "unexplained"
+    said = _said(res)
+    assert "a staircase of" in said and "cannot tell them apart" in said, said
+
+
+def test_the_tiers_of_steps_against_the_walk():
+    """``steps_decision``: replaced beyond the margin, not named beyond ``LEAN_MARGIN``,
+    named with the pair listed below it."""
+    assert steps_decision(CYCLE_MARGIN + 0.1, CYCLE_MARGIN) == "steps"
+    assert steps_decision(CYCLE_MARGIN, CYCLE_MARGIN) == "leans"
+    assert steps_decision(LEAN_MARGIN + 0.1, CYCLE_MARGIN) == "leans"
+    assert steps_decision(LEAN_MARGIN, CYCLE_MARGIN) == "describes"
+    assert steps_decision(0.5, CYCLE_MARGIN) == "describes"

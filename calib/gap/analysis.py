@@ -226,16 +226,16 @@ def _torque(torque, n: int) -> np.ndarray | None:
 def _walk_or_cycle(reviews: dict[int, WalkReview]) -> list[dict]:
     """``not_identifiable`` entries of named walks that this run cannot tell from a slow cycle
     in time (:func:`calib.gap.walk.slow_cycle`), from steps of the bias
-    (:func:`calib.gap.walk.step_drift`, decision ``"describes"``) or from two-level switching
-    (:func:`calib.gap.walk.switching_drift`)."""
+    (:func:`calib.gap.walk.step_drift`, decision ``"describes"``, or ``"leans"``: then the
+    walk is not named) or from two-level switching (:func:`calib.gap.walk.switching_drift`)."""
     cycles = [{"names": ["bias_random_walk", "slow_cycle"], "axis": r.axis,
                "reason": r.cycle["description"]}
               for r in reviews.values()
               if r.earned and r.cycle is not None and r.cycle["decision"] == "cannot_tell"]
     steps = [{"names": ["bias_random_walk", r.steps["pair"]], "axis": r.axis,
               "reason": r.steps["cannot_tell"]}
-             for r in reviews.values()
-             if r.earned and r.steps is not None and r.steps["decision"] == "describes"]
+             for r in reviews.values() if r.steps is not None and (
+                 r.steps["decision"] == "leans" or r.earned and r.steps["decision"] == "describes")]
     return cycles + steps
 
 

@@ -17,6 +17,16 @@ On each path the two-level Markov fit (:func:`calib.gap.switching.fit_switching`
 table gives how often D passes 0, 6, 12 (the margin), 20 and 30, the telegraphs also by h.
 A walk above the margin would be a walk the review stops naming (with the walk-beyond check
 of :func:`calib.gap.walk.switching_drift` as a second guard, not counted here).
+
+    python -m validation.switching.score --analysis            # 400 walks, 160 telegraphs
+
+``--analysis`` runs the whole analysis (:func:`calib.gap.analyze_gap`) on calibration runs
+built around such paths (:func:`validation.switching.paths.make_run`: the path on x, a
+constant-rate or stop-and-go table, N ≤ 6001; longer paths are skipped) and counts, for
+walks and telegraphs, the verdicts, whether the walk on x is named, and the decision of the
+steps or switching against it (``"describes"``: the pair listed, the walk named; ``"leans"``:
+beyond :data:`calib.gap.walk.LEAN_MARGIN`, the walk not named; ``"steps"``: beyond the
+margin) with the largest gain of each kind. Two processes by default (``--jobs``).
 """
 
 from __future__ import annotations
@@ -28,7 +38,7 @@ import numpy as np
 
 from calib.gap.switching import SWITCH_CHARGE, block_size, fit_switching
 from calib.gap.walk import SWITCH_MARGIN, path_walk_lr
-from validation.switching.paths import make_path
+from validation.switching.paths import make_path, make_run
 
 LEVELS = (0.0, 6.0, SWITCH_MARGIN, 20.0, 30.0)
 
@@ -45,12 +55,68 @@ def _row(name: str, d: np.ndarray) -> str:
     return f"{name:<28s} {d.size:>5d} {cells}   largest {np.max(d):+.1f}"
 
 
+def analysed(job: tuple[int, str, bool]) -> dict | None:
+    """The whole analysis of one run of :func:`make_run` (seed, kind, faint): verdict, walk
+    on x named, and the decision and gain of the steps or switching against that walk."""
+    from calib.files.course import Ensayo
+    from calib.gap import analyze_gap
+
+    seed, kind, faint = job
+    run = make_run(np.random.default_rng(seed), kind, faint)
+    if run is None:
+        return None
+    res = analyze_gap(Ensayo(run["tita"], run["datos"], run["t"]), run["noise_var"])
+    walk = [w for w in res.adequacy.get("walk", []) if w["axis"] == "x"]
+    steps = walk[0]["steps"] if walk else None
+    return {"kind": kind, "verdict": res.verdict,
+            "walk_named": ("bias_random_walk", "x") in res.named,
+            "decision": None if steps is None else steps["decision"],
+            "gain": None if steps is None else float(steps["gain"]), **run["info"]}
+
+
+def analysis_study(walks: int, telegraphs: int, seed: int, jobs: int) -> int:
+    """``--analysis`` of the module docstring: the table on stdout."""
+    from multiprocessing import get_context
+
+    work = [(seed + i, "walk", i % 2 == 0) for i in range(walks)]
+    work += [(seed + walks + i, "telegraph", True) for i in range(telegraphs)]
+    rows = []
+    with get_context("spawn").Pool(max(1, jobs)) as pool:
+        for i, r in enumerate(pool.imap(analysed, work, chunksize=4)):
+            if r is not None:
+                rows.append(r)
+            print(f"\rrun {i + 1}/{len(work)}", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    print(f"whole analysis (seed {seed}, N ≤ 6001): runs | verdict explained / unexplained / "
+          "nothing | walk on x named | steps or switching against it: describes (pair, walk "
+          "named) / leans (walk not named) / steps (replaced) | largest gain of each")
+    for kind in ("walk", "telegraph"):
+        rs = [r for r in rows if r["kind"] == kind]
+        verdicts = "/".join(str(sum(r["verdict"] == v for r in rs))
+                            for v in ("explained", "unexplained", "nothing_detected"))
+        tiers = "/".join(str(sum(r["decision"] == d for r in rs))
+                         for d in ("describes", "leans", "steps"))
+        top = ", ".join(f"{d} {max((r['gain'] for r in rs if r['decision'] == d), default=0):.1f}"
+                        for d in ("describes", "leans", "steps"))
+        print(f"{kind + 's':<11s} {len(rs):>5d} | {verdicts:>11s} | "
+              f"{sum(r['walk_named'] for r in rs):>5d} | {tiers:>9s} | {top}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--walks", type=int, default=400)
-    p.add_argument("--telegraphs", type=int, default=150)
+    p.add_argument("--telegraphs", type=int, default=None,
+                   help="telegraphs (default 150 paths, 160 runs with --analysis)")
     p.add_argument("--seed", type=int, default=2033)
+    p.add_argument("--analysis", action="store_true",
+                   help="run the whole analysis on runs built around the paths")
+    p.add_argument("--jobs", type=int, default=2, help="processes of --analysis")
     a = p.parse_args(argv)
+    if a.analysis:
+        return analysis_study(a.walks, 160 if a.telegraphs is None else a.telegraphs,
+                              a.seed, a.jobs)
+    a.telegraphs = 150 if a.telegraphs is None else a.telegraphs
     rng = np.random.default_rng(a.seed)
     walks, tele, sizes = [], [], []
     for i in range(a.walks):
