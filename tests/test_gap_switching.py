@@ -169,3 +169,19 @@ def test_the_study_runs_and_prints_its_table(capsys):
     assert main(["--walks", "2", "--telegraphs", "2", "--seed", "1"]) == 0
     out = capsys.readouterr().out
     assert "random walks" in out and "telegraphs" in out and ">12" in out
+
+
+def test_the_whole_analysis_study_counts_its_runs(capsys):
+    """``--analysis``: every run made (N ≤ 6001) is counted once under its kind."""
+    from validation.switching.score import analysed, main
+
+    assert main(["--analysis", "--walks", "3", "--telegraphs", "2", "--seed", "11",
+                 "--jobs", "1"]) == 0
+    out = capsys.readouterr().out
+    made = [analysed(job) for job in ((11, "walk", True), (12, "walk", False),
+                                      (13, "walk", True), (14, "telegraph", True),
+                                      (15, "telegraph", True))]
+    for kind, label in (("walk", "walks"), ("telegraph", "telegraphs")):
+        runs = sum(r is not None and r["kind"] == kind for r in made)
+        line = next(x for x in out.splitlines() if x.startswith(label))
+        assert int(line.split()[1]) == runs, (line, made)
