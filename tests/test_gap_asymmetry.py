@@ -21,6 +21,8 @@ from calib.conventions import G
 from calib.files.course import Ensayo
 from calib.gap import analyze_gap
 from calib.gap.adequacy import CHECK_WEIGHTS
+from calib.gap.walk import LEAN_MARGIN
+from calib.units import missing_units
 from validation import designs
 from validation.score import max_wrong
 
@@ -60,14 +62,55 @@ def test_a_scale_asymmetry_is_unexplained_not_a_k2():
     assert c["size"] == pytest.approx(kappa * G, rel=0.15)
 
 
+def test_a_faint_asymmetry_ahead_of_k2_leaves_k2_unnamed():
+    """κ = 0.11 on a stop-and-go run: below the ``rival_shapes`` check's Bonferroni level,
+    but the asymmetry fits better than K2 by more than ``LEAN_MARGIN`` (one parameter each):
+    K2 is not named, the verdict is "unexplained" with the asymmetry in words, and the pair
+    is listed under ``not_identifiable``."""
+    res = _run("asymmetry", 0.11, 1)
+    assert _rival_shapes(res, "y")["passed"]
+    found = [f for f in res.adequacy["asymmetry"] if f["axis"] == "y"]
+    assert len(found) == 1 and found[0]["decision"] == "leans", res.adequacy["asymmetry"]
+    assert found[0]["gain"] > LEAN_MARGIN
+    # κ within 25 % of the truth (its spread over seeds 2–11 at this noise: 0.0094, 9 %)
+    assert found[0]["asymmetry"] == pytest.approx(0.11, rel=0.25)
+    assert res.verdict == "unexplained" and ("nonlinearity_k2", "y") not in res.named
+    said = [u for u in res.unexplained if u["signature"] == "scale_asymmetry"]
+    assert len(said) == 1 and "differs for positive and negative" in said[0]["description"]
+    pair = [d for d in res.not_identifiable
+            if d["names"] == ["nonlinearity_k2", "scale_asymmetry"]]
+    assert len(pair) == 1 and pair[0]["reason"].startswith("cannot tell K2 from a scale")
+    assert missing_units(res.to_dict()) == []
+
+
+K2_LEAN_RATE = 0.01
+"""Bound on how often a true K2 is left unnamed for the asymmetry (the whole-analysis study,
+``python -m validation.asymmetry.score``, measured 1 of 181 named)."""
+
+
 def test_true_k2_keeps_its_name_beside_the_asymmetry_shape():
-    """R = 8 K2 runs (two designs, strong K2): K2 named in all, and the ``rival_shapes``
-    check fails in at most the 0.999 quantile of Binomial(8, 0.005) runs."""
+    """R = 8 K2 runs (two designs, strong K2): K2 named in all but at most the 0.999
+    quantile of Binomial(8, K2_LEAN_RATE) left unnamed for the asymmetry, and the
+    ``rival_shapes`` check fails in at most the 0.999 quantile of Binomial(8, 0.005)
+    runs."""
     runs = [_run("k2", 0.01, s, d) for s in range(4) for d in ("stop_and_go", "full_turn")]
+    leans = sum(f["decision"] == "leans" for r in runs for f in r.adequacy["asymmetry"])
+    assert leans <= max_wrong(len(runs), K2_LEAN_RATE), leans
     named = sum(("nonlinearity_k2", "y") in r.named for r in runs)
-    assert named == len(runs), [r.named for r in runs]
+    assert named + leans == len(runs), [r.named for r in runs]
     failed = sum(not _rival_shapes(r, "y")["passed"] for r in runs)
     assert failed <= max_wrong(len(runs), FAMILY_ALPHA), failed
+
+
+def test_the_asymmetry_study_counts_its_runs(capsys):
+    """``python -m validation.asymmetry.score``: every run counted once under its kind."""
+    from validation.asymmetry.score import main
+
+    assert main(["--k2", "2", "--asymmetry", "2", "--seed", "5", "--jobs", "1"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    for kind in ("k2", "asymmetry"):
+        line = next(x for x in lines if x.startswith(kind + " "))
+        assert int(line.split()[1]) == 2, line
 
 
 def test_weighted_bonferroni_levels_sum_to_the_family_alpha():

@@ -46,7 +46,7 @@ PACKAGES = ("bench", "calib")
 CALIB_FORBIDDEN = ("bench", "mujoco", "argparse", "matplotlib", "rerun")
 VALIDATION_SCORING = ("validation.score", "validation.independent.score",
                       "validation.drive.score", "validation.noise_independent.score",
-                      "validation.switching.score")
+                      "validation.switching.score", "validation.asymmetry.score")
 """The only modules of ``validation/`` that may import ``calib`` (they run the analysis)."""
 GENERATOR_FORBIDDEN = ("bench", "calib", *VALIDATION_SCORING)
 

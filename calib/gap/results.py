@@ -99,6 +99,8 @@ def gap_units() -> dict[str, str]:
         "adequacy.walk.steps.margin": "1", "adequacy.walk.steps.levels": "m/s²",
         "adequacy.walk.steps.rates_per_sample": "1/sample",
         "adequacy.sponges.statistic": "1", "adequacy.sponges.p_value": "1",
+        "adequacy.asymmetry.gain": "1", "adequacy.asymmetry.asymmetry": "1",
+        "adequacy.asymmetry.size": "m/s²",
         "reported.change": "σ", **{f"reported.*.{k}": u for k, u in effect_units().items()},
         "criterion.profile.rate_random_walk.*.value": "m/s²/√s",
         "criterion.profile.rate_random_walk.*.interval": "m/s²/√s",

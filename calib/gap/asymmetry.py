@@ -1,0 +1,89 @@
+"""K2 or a scale asymmetry? The even part of the response, told apart when the run can.
+
+IEEE Std 1293's accelerometer model has a scale factor that differs by the sign of the input
+(scale asymmetry, as in the terminology of IEEE Std 528); the catalog has the second-order
+term K2 and not the asymmetry. On the axis' reference ``A_r`` (m/s², the course signs
+``A_rx = −g sin θ``, ``A_ry = −g cos θ``) an asymmetric gain adds ``κ·max(A_r, 0)`` (the
+gain is ``1 + s + κ`` for positive specific force, ``1 + s`` for negative; ``κ``
+dimensionless), whose even part ``κ·|A_r|/2`` K2's ``K2·A_r²`` follows closely: on a turn
+``|sin θ|`` and ``sin² θ`` share their ``cos 2θ`` term and part with ``cos 4θ`` (one fifth
+of the amplitude). A true asymmetry is therefore named K2, and the gap after the fit is
+consistent, unless the battery's ``rival_shapes`` check sees it beyond its Bonferroni level.
+
+With K2 in the final model of axis k, its column is swapped for ``max(A_r, 0)`` in the
+whitened space of the model without K2 (:class:`calib.gap.space.AxisSpace`: every other
+parameter refitted). One parameter each, no search, so the AIC gain of the asymmetry is the
+difference of their likelihood ratios, ``D = LR_asym − LR_K2`` (``−2 log L``), and it is read
+as the walk's steps are (:data:`calib.gap.walk.LEAN_MARGIN`):
+
+* ``D ≤ 0``: K2 fits as well or better; nothing to say;
+* ``0 < D ≤ LEAN_MARGIN`` (``"describes"``): K2 stays named and ``not_identifiable`` lists
+  ``nonlinearity_k2`` / ``scale_asymmetry``;
+* ``D > LEAN_MARGIN`` (``"leans"``): the asymmetry fits better by a likelihood ratio beyond
+  e³ ≈ 20 after their (equal) charges — K2 has considerably less support — so K2 is **not
+  named** and the verdict is "unexplained" with the asymmetry in words; the pair is listed.
+
+Measured through the whole analysis on runs made with numpy (``python -m
+validation.asymmetry.score``, ``docs/gap.md`` "K2 or a scale asymmetry").
+
+Why by hand: a two-column swap in this model's own whitened space; no library knows it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from calib.conventions import AXES
+from calib.effects import Extensions, ModelState
+from calib.gap.space import AxisSpace
+from calib.gap.walk import LEAN_MARGIN
+
+K2 = "nonlinearity_k2"
+PAIR = "scale_asymmetry"
+"""The name beside K2 in ``not_identifiable`` (not a catalog effect)."""
+
+
+def k2_or_asymmetry(ext: Extensions, state: ModelState, k: int) -> dict | None:
+    """K2 of axis k against a scale asymmetry in its place (module docstring).
+
+    Returns ``{"axis", "decision": "describes" | "leans", "gain" (D, 1), "asymmetry"
+    (κ, 1), "size" (κ·max|A_r|, m/s²), "description", "reason"}``, or None when K2 is not in
+    the model of axis k, the reference keeps one sign (no asymmetry to see) or ``D ≤ 0``.
+    """
+    axis = AXES[k]
+    if (K2, axis) not in state.effects():
+        return None
+    a = np.asarray(ext.run.a_ref[:, k], dtype=float)
+    if not (np.min(a) < 0.0 < np.max(a)):
+        return None
+    reduced = state.without(K2, axis)
+    lr_k2 = float(ext.nll(reduced) - ext.nll(state))
+    fit = AxisSpace(ext, reduced, k).test(np.maximum(a, 0.0)[:, None])
+    if fit is None:
+        return None
+    gain = float(fit[0]) - lr_k2
+    if gain <= 0.0:
+        return None
+    kappa = float(fit[2][0])
+    size = abs(kappa) * float(np.max(np.abs(a)))
+    shape = (f"a gain on {axis} that differs for positive and negative specific force by "
+             f"{kappa:+.3g} ({100 * kappa:+.3g} %; {size:.3g} m/s² at full scale: a scale "
+             "asymmetry, IEEE Std 1293)")
+    decision = "leans" if gain > LEAN_MARGIN else "describes"
+    reason = (f"cannot tell K2 from a scale asymmetry on {axis}: {shape} fits "
+              f"{'better' if decision == 'leans' else 'as well'} (AIC gain {gain:.3g} over "
+              f"K2, one parameter each); a run whose specific force reaches both signs at "
+              "more levels (poses spread over the whole turn) separates them")
+    description = (f"{shape} fits the even part of the response better than K2 by "
+                   f"{gain:.3g} after their charges (more than {LEAN_MARGIN:g}: K2 has "
+                   "considerably less support; the catalog has no asymmetry, so K2 is not "
+                   "named)")
+    return {"axis": axis, "decision": decision, "gain": gain, "asymmetry": kappa,
+            "size": size, "description": description, "reason": reason}
+
+
+def signature(found: dict) -> dict:
+    """The ``unexplained`` entry of a K2 the asymmetry leans against."""
+    return {"axis": found["axis"], "signature": PAIR, "reason": "scale asymmetry",
+            "size": float(found["size"]), "unit": "m/s²", "statistic": float(found["gain"]),
+            "p_value": None, "description": found["description"]}
