@@ -11,6 +11,10 @@ check                     statistic and reference distribution under the model
 ``harmonics``             columns cos jθ, sin jθ, j = 3 … 6, added to the model (GLS in the
                           model's whitened space): ``ΔRSS ~ χ²(k)``, k the columns not
                           collinear with the model here
+``angle_profile``         indicators of 10° bins of θ mod 2π (those with at least
+                          :data:`ANGLE_BIN_MIN` samples) added: ``ΔRSS ~ χ²(k)`` — a
+                          disturbance tied to one angle (a cable, a magnet, a contact)
+                          that spreads over many harmonics
 ``periodic``              Fisher's g = max periodogram ordinate / sum of the whitened
                           residuals; exact ``P(g > x) = Σ_j (-1)^{j-1} C(m,j) (1 - jx)^{m-1}``
                           (first term, a bound)
@@ -98,6 +102,13 @@ HARMONICS = (3, 4, 5, 6)
 SEGMENTS = 8
 """Equal-count groups of the variance checks (time segments, θ bins)."""
 
+ANGLE_BINS = 36
+"""Bins of θ mod 2π of ``angle_profile`` (10° each: a disturbance a few degrees wide lands in
+one or two; its harmonics spread beyond the 3rd–6th that ``harmonics`` tests)."""
+
+ANGLE_BIN_MIN = 10
+"""Fewest samples in a bin of ``angle_profile`` for its column (fewer: the bin is left out)."""
+
 MIN_GROUP = 30
 """Fewest samples per group for the variance checks (fewer groups on short runs)."""
 
@@ -173,6 +184,30 @@ def _harmonics(space: AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
     return Check("harmonics", axis, stat, logp, f"chi2({dof})", size, "m/s²",
                  f"a {_ordinal(j)} harmonic of θ on {axis}, {size:.3g} m/s² "
                  f"(harmonics {HARMONICS[0]}–{HARMONICS[-1]} tested)")
+
+
+def _angle_profile(space: AxisSpace, tita: np.ndarray, axis: str) -> Check | None:
+    """The residual's level in 10° bins of θ mod 2π (module docstring): a disturbance tied to
+    one table angle. Where: the bin whose coefficient is largest in magnitude."""
+    width = 2.0 * np.pi / ANGLE_BINS
+    b = np.minimum((np.mod(tita, 2.0 * np.pi) / width).astype(int), ANGLE_BINS - 1)
+    counts = np.bincount(b, minlength=ANGLE_BINS)
+    kept = np.flatnonzero(counts >= ANGLE_BIN_MIN)
+    if kept.size < 4:
+        return None
+    res = _chi2_check(space, (b[:, None] == kept[None, :]).astype(float), "angle_profile",
+                      axis)
+    if res is None:
+        return None
+    stat, dof, coef, logp = res
+    i = int(np.argmax(np.abs(coef)))
+    lo = float(np.degrees(kept[i] * width))
+    size = float(abs(coef[i]))
+    return Check("angle_profile", axis, stat, logp, f"chi2({dof})", size, "m/s²",
+                 f"the reading on {axis} departs from the model in the θ bin {lo:.0f}–"
+                 f"{lo + np.degrees(width):.0f}° by {coef[i]:+.3g} m/s² (θ in {kept.size} bins "
+                 "of 10°): a disturbance tied to the table angle — a cable, a magnet or a "
+                 "contact at that angle")
 
 
 def _periodic(space: AxisSpace, run, axis: str) -> Check | None:
@@ -567,6 +602,7 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
         space = AxisSpace(ext, state, k) if spaces is None else spaces[k]
         found = [
             _harmonics(space, run.tita, axis),
+            _angle_profile(space, run.tita, axis),
             _periodic(space, run, axis),
             *((None, None) if coarse else (_outliers(z, scale, axis), _heavy_tails(z, axis))),
             None if st.q > 0 else _step(z, scale, run, axis),
