@@ -94,7 +94,8 @@ def test_true_k2_keeps_its_name_beside_the_asymmetry_shape():
     ``rival_shapes`` check fails in at most the 0.999 quantile of Binomial(8, 0.005)
     runs."""
     runs = [_run("k2", 0.01, s, d) for s in range(4) for d in ("stop_and_go", "full_turn")]
-    leans = sum(f["decision"] == "leans" for r in runs for f in r.adequacy["asymmetry"])
+    leans = sum(f["decision"] == "leans" for r in runs
+                for f in (*r.adequacy["asymmetry"], *r.adequacy["cubic"]))
     assert leans <= max_wrong(len(runs), K2_LEAN_RATE), leans
     named = sum(("nonlinearity_k2", "y") in r.named for r in runs)
     assert named + leans == len(runs), [r.named for r in runs]
@@ -102,15 +103,43 @@ def test_true_k2_keeps_its_name_beside_the_asymmetry_shape():
     assert failed <= max_wrong(len(runs), FAMILY_ALPHA), failed
 
 
+def test_a_k3_that_k2_and_the_lever_arm_follow_leaves_them_unnamed():
+    """K3 = 1.5e-4 (m/s²)⁻² on y of a back-and-forth oscillation (θ = 2.5 sin(2πt/10 s)),
+    where the lever arm's ω² and α are functions of θ: K2 with the lever arm would take it
+    with a consistent gap after; K3 alone fits better by more than ``LEAN_MARGIN`` after the
+    charges, so neither is named, the verdict is "unexplained" with K3 in words and the
+    pair is listed."""
+    rng = np.random.default_rng([33, 3])
+    n = 4001
+    t = np.arange(n) / 100.0
+    th = 2.5 * np.sin(2.0 * np.pi * t / 10.0)
+    a = np.column_stack([-G * np.sin(th), -G * np.cos(th)])
+    y = a * np.array([1.01, 0.99]) + np.array([0.05, -0.02])
+    y[:, 1] += 1.5e-4 * a[:, 1] ** 3
+    y += rng.standard_normal((n, 2)) * 0.2
+    res = analyze_gap(Ensayo(th, y, t), (0.04, 0.04))
+    found = [f for f in res.adequacy["cubic"] if f["axis"] == "y"]
+    assert len(found) == 1 and found[0]["decision"] == "leans", res.adequacy["cubic"]
+    assert found[0]["gain"] > LEAN_MARGIN and "nonlinearity_k2" in found[0]["names"]
+    assert found[0]["k3"] == pytest.approx(1.5e-4, rel=0.15)
+    assert res.verdict == "unexplained" and not res.named, res.summary()
+    said = [u for u in res.unexplained if u["signature"] == "nonlinearity_k3"]
+    assert len(said) == 1 and "third-order term on y" in said[0]["description"]
+    pair = [d for d in res.not_identifiable if d["names"][-1] == "nonlinearity_k3"]
+    assert len(pair) == 1 and pair[0]["names"][:-1] == found[0]["names"]
+    assert missing_units(res.to_dict()) == []
+
+
 def test_the_asymmetry_study_counts_its_runs(capsys):
     """``python -m validation.asymmetry.score``: every run counted once under its kind."""
     from validation.asymmetry.score import main
 
-    assert main(["--k2", "2", "--asymmetry", "2", "--seed", "5", "--jobs", "1"]) == 0
+    assert main(["--k2", "2", "--asymmetry", "2", "--k3", "1", "--seed", "5",
+                 "--jobs", "1"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    for kind in ("k2", "asymmetry"):
+    for kind, runs in (("k2", 2), ("asymmetry", 2), ("k3", 1)):
         line = next(x for x in lines if x.startswith(kind + " "))
-        assert int(line.split()[1]) == 2, line
+        assert int(line.split()[1]) == runs, line
 
 
 def test_weighted_bonferroni_levels_sum_to_the_family_alpha():

@@ -17,6 +17,8 @@ from calib.gap.asymmetry import K2, k2_or_asymmetry
 from calib.gap.asymmetry import PAIR as ASYMMETRY
 from calib.gap.asymmetry import signature as asymmetry_signature
 from calib.gap.confusions import merge_tilt, not_identifiable, prefer_less_assuming
+from calib.gap.cubic import K3, named_or_k3
+from calib.gap.cubic import signature as cubic_signature
 from calib.gap.drive_state import drive_checks
 from calib.gap.estimates import Reporter
 from calib.gap.mechanisms import drive_scans, mechanism_checks
@@ -156,6 +158,13 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     shaped = {c.axis for c in battery.failed if c.name == "rival_shapes"}
     unexplained += [asymmetry_signature(f) for f in asymmetry
                     if f["axis"] in leaning and f["axis"] not in shaped]
+    # the same for the structured effects named on an axis that a K3 alone fits better
+    cubic = [f for k in range(2)
+             if (f := named_or_k3(ext, state, k, [e.name for e in effects
+                                                  if e.axis == AXES[k]])) is not None]
+    dropped = {(n, f["axis"]) for f in cubic if f["decision"] == "leans" for n in f["names"]}
+    effects = [e for e in effects if (e.name, e.axis) not in dropped]
+    unexplained += [cubic_signature(f) for f in cubic if f["decision"] == "leans"]
     unexplained += _never_worse(effects, before, after)
     verdict = ("unexplained" if unexplained else "explained" if effects
                else "nothing_detected")
@@ -173,7 +182,9 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         not_identifiable=tuple(not_identifiable(ext, state, sel.candidates, sel.untestable))
         + tuple(_walk_or_cycle(reviews))
         + tuple({"names": [K2, ASYMMETRY], "axis": f["axis"], "reason": f["reason"]}
-                for f in asymmetry),
+                for f in asymmetry)
+        + tuple({"names": [*f["names"], K3], "axis": f["axis"], "reason": f["reason"]}
+                for f in cubic),
         gap_before=before, gap_after_fit=after, nominal=nominal, final=final,
         residuals_before=resid_before, residuals_after=resid_after, fitted=fitted,
         needs_timing=tuple(needs_timing), criterion=criterion, steps=tuple(steps), g=float(g),
@@ -181,7 +192,8 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         unexplained=tuple(unexplained), reported=tuple(reported),
         adequacy={**_adequacy(battery, drifting, reviews), "sponges": sponges,
                   "asymmetry": [{k: v for k, v in f.items() if k != "reason"}
-                                for f in asymmetry]})
+                                for f in asymmetry],
+                  "cubic": [{k: v for k, v in f.items() if k != "reason"} for f in cubic]})
 
 
 def _practical(ext: Extensions, rep: Reporter, state: ModelState,

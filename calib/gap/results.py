@@ -101,6 +101,8 @@ def gap_units() -> dict[str, str]:
         "adequacy.sponges.statistic": "1", "adequacy.sponges.p_value": "1",
         "adequacy.asymmetry.gain": "1", "adequacy.asymmetry.asymmetry": "1",
         "adequacy.asymmetry.size": "m/s²",
+        "adequacy.cubic.gain": "1", "adequacy.cubic.k3": "1/(m/s²)²",
+        "adequacy.cubic.size": "m/s²",
         "reported.change": "σ", **{f"reported.*.{k}": u for k, u in effect_units().items()},
         "criterion.profile.rate_random_walk.*.value": "m/s²/√s",
         "criterion.profile.rate_random_walk.*.interval": "m/s²/√s",

@@ -9,7 +9,8 @@ m/s² per axis; on one axis the effect, sized by z, the norm of its centred colu
 stds (``coef·‖c − c̄‖ = z·σ``):
 
 * ``k2``: ``K2·A_r²`` (the catalog's second-order term);
-* ``asymmetry``: ``κ·max(A_r, 0)`` (a gain that differs by the sign of the input).
+* ``asymmetry``: ``κ·max(A_r, 0)`` (a gain that differs by the sign of the input);
+* ``k3``: ``K3·A_r³`` (IEEE Std 1293's third-order term, not in the catalog).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ def motion(rng: np.random.Generator, n: int, dt: float) -> tuple[np.ndarray, np.
 
 
 def make_run(rng: np.random.Generator, kind: str, z_range: tuple[float, float]) -> dict:
-    """One run with ``kind`` ("k2" or "asymmetry") of z drawn in ``z_range``: ``{"tita" rad,
+    """One run with ``kind`` ("k2", "asymmetry" or "k3") of z drawn in ``z_range``: ``{"tita" rad,
     "datos" (N, 2) m/s², "t" s, "noise_var" (m/s²)², "info"}``."""
     n = int(rng.choice([3001, 4001, 6001]))
     dt = 1.0 / float(rng.choice([50.0, 100.0, 200.0]))
@@ -54,7 +55,8 @@ def make_run(rng: np.random.Generator, kind: str, z_range: tuple[float, float]) 
     ref = np.column_stack([-G * np.sin(theta), -G * np.cos(theta)])
     k = int(rng.integers(0, 2))
     z = float(rng.uniform(*z_range))
-    col = np.maximum(ref[:, k], 0.0) if kind == "asymmetry" else ref[:, k] ** 2
+    col = {"asymmetry": np.maximum(ref[:, k], 0.0), "k2": ref[:, k] ** 2,
+           "k3": ref[:, k] ** 3}[kind]
     spread = float(np.linalg.norm(col - col.mean()))
     coef = z * float(sigma[k]) / spread if spread > 0.0 else 0.0
     datos = ref + rng.normal(0.0, 1.0, (n, 2)) * sigma

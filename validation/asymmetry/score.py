@@ -1,18 +1,20 @@
 """K2 or a scale asymmetry, through the whole analysis: the study behind the asymmetry tier of
 :mod:`calib.gap.asymmetry`.
 
-    python -m validation.asymmetry.score                     # 200 K2 runs, 100 asymmetries
-    python -m validation.asymmetry.score --k2 40 --asymmetry 20 --seed 7 --jobs 1
+    python -m validation.asymmetry.score             # 200 K2, 100 asymmetries, 100 K3 runs
+    python -m validation.asymmetry.score --k2 40 --asymmetry 20 --k3 0 --seed 7 --jobs 1
 
 Each run is made with numpy alone (:mod:`validation.asymmetry.runs`): a true K2 (half of the
-runs sized z = 3–15, faint ones near detection; half z = 10–60) or a true scale asymmetry
-(z = 10–60), on one axis of a stop-and-go, constant-rate or back-and-forth run.
-:func:`calib.gap.analyze_gap` is run on each (σ² stated as made), and the table gives per
-kind: the runs, the verdicts, how often K2 is named on the effect's axis, the decision of the
-asymmetry against K2 there (``"describes"``: K2 named, the pair listed; ``"leans"``: beyond
-:data:`calib.gap.walk.LEAN_MARGIN`, K2 not named) and the largest gain of each. A K2 named
-on a true asymmetry with the verdict "explained" is the answer the tier exists to avoid; a
-"leans" on a true K2 is its cost.
+runs sized z = 3–15, faint ones near detection; half z = 10–60), a true scale asymmetry or a
+true third-order term K3 (z = 10–60), on one axis of a stop-and-go, constant-rate or
+back-and-forth run. :func:`calib.gap.analyze_gap` is run on each (σ² stated as made), and
+the table gives per kind: the runs, the verdicts, how often K2 is named on the effect's
+axis, the decision of the asymmetry against K2 there (:mod:`calib.gap.asymmetry`) and of K3
+against the named set (:mod:`calib.gap.cubic`) — ``"describes"``: the catalog's effects
+named, the pair listed; ``"leans"``: beyond :data:`calib.gap.walk.LEAN_MARGIN`, not named —
+and the largest gain of each. A catalog effect named on a true asymmetry or K3 with the
+verdict "explained" is the answer the tiers exist to avoid; a "leans" on a true K2 is their
+cost.
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ import numpy as np
 
 from validation.asymmetry.runs import make_run
 
-Z_RANGES = {"k2": ((3.0, 15.0), (10.0, 60.0)), "asymmetry": ((10.0, 60.0), (10.0, 60.0))}
+Z_RANGES = {"k2": ((3.0, 15.0), (10.0, 60.0)), "asymmetry": ((10.0, 60.0), (10.0, 60.0)),
+            "k3": ((10.0, 60.0), (10.0, 60.0))}
 """z ranges of the even and the odd runs of each kind."""
 
 
@@ -41,31 +44,44 @@ def analysed(job: tuple[int, str]) -> dict:
         res = analyze_gap(Ensayo(run["tita"], run["datos"], run["t"]), run["noise_var"])
     except ValueError as exc:  # the front door refuses the run (said, counted apart)
         return {**run["info"], "verdict": "refused", "k2_named": False, "decision": None,
-                "gain": None, "error": str(exc)[:120]}
+                "gain": None, "k3_decision": None, "k3_gain": None, "error": str(exc)[:120]}
     found = [f for f in res.adequacy.get("asymmetry", []) if f["axis"] == axis]
+    cubic = [f for f in res.adequacy.get("cubic", []) if f["axis"] == axis]
     return {**run["info"], "verdict": res.verdict,
             "k2_named": ("nonlinearity_k2", axis) in res.named,
             "decision": found[0]["decision"] if found else None,
-            "gain": float(found[0]["gain"]) if found else None}
+            "gain": float(found[0]["gain"]) if found else None,
+            "k3_decision": cubic[0]["decision"] if cubic else None,
+            "k3_gain": float(cubic[0]["gain"]) if cubic else None}
+
+
+def _largest(rows: list[dict], key: str, decision: str) -> float:
+    """The largest gain among ``rows`` whose ``key + "decision"`` is ``decision`` (0 if none)."""
+    return max((r[key + "gain"] for r in rows if r[key + "decision"] == decision), default=0.0)
 
 
 def table(rows: list[dict], seed: int) -> str:
     """The study's table (module docstring)."""
     out = [f"whole analysis (seed {seed}): runs | verdict explained / unexplained / nothing / "
            "refused | K2 named on the effect's axis (of them with the verdict explained) | "
-           "asymmetry against K2: describes / leans | largest gain of each"]
-    for kind in ("k2", "asymmetry"):
+           "asymmetry against K2: describes / leans, largest gain of each | K3 against the "
+           "named set: describes / leans, largest gain of each"]
+    for kind in ("k2", "asymmetry", "k3"):
         rs = [r for r in rows if r["kind"] == kind]
+        if not rs:
+            continue
         verdicts = " / ".join(str(sum(r["verdict"] == v for r in rs)) for v in
                               ("explained", "unexplained", "nothing_detected", "refused"))
         named = sum(r["k2_named"] for r in rs)
         named_explained = sum(r["k2_named"] and r["verdict"] == "explained" for r in rs)
-        tiers = " / ".join(str(sum(r["decision"] == d for r in rs))
-                           for d in ("describes", "leans"))
-        top = ", ".join(f"{d} {max((r['gain'] for r in rs if r['decision'] == d), default=0):.1f}"
-                        for d in ("describes", "leans"))
+        cells = []
+        for key in ("", "k3_"):
+            tiers = " / ".join(str(sum(r[key + "decision"] == d for r in rs))
+                               for d in ("describes", "leans"))
+            top = ", ".join(f"{d} {_largest(rs, key, d):.1f}" for d in ("describes", "leans"))
+            cells.append(f"{tiers}, {top}")
         out.append(f"{kind:<10s} {len(rs):>4d} | {verdicts} | {named} ({named_explained}) | "
-                   f"{tiers} | {top}")
+                   f"{cells[0]} | {cells[1]}")
     return "\n".join(out)
 
 
@@ -73,6 +89,8 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--k2", type=int, default=200, help="runs with a true K2")
     p.add_argument("--asymmetry", type=int, default=100, help="runs with a true asymmetry")
+    p.add_argument("--k3", type=int, default=100,
+                   help="runs with a true third-order term (not in the catalog)")
     p.add_argument("--seed", type=int, default=2034)
     p.add_argument("--jobs", type=int, default=2, help="processes")
     a = p.parse_args(argv)
@@ -80,6 +98,7 @@ def main(argv: list[str] | None = None) -> int:
 
     work = [(a.seed + i, "k2") for i in range(a.k2)]
     work += [(a.seed + a.k2 + i, "asymmetry") for i in range(a.asymmetry)]
+    work += [(a.seed + a.k2 + a.asymmetry + i, "k3") for i in range(a.k3)]
     rows = []
     with get_context("spawn").Pool(max(1, a.jobs)) as pool:
         for i, r in enumerate(pool.imap(analysed, work, chunksize=4)):

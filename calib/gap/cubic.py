@@ -1,0 +1,95 @@
+"""The named effects of an axis or a third-order term K3? Told apart when the run can.
+
+IEEE Std 1293's accelerometer model has a third-order term ``K3·A_r³`` beside K2; the catalog
+does not. On a turn ``sin³ θ = (3 sin θ − sin 3θ)/4``: the scale takes the first part and a
+3rd harmonic of θ remains, which the ``harmonics`` check sees — unless catalog effects bend
+to follow it first. On a back-and-forth oscillation ``θ = θ₀ sin Ωt`` the lever arm's
+columns (ω², α) are functions of θ too, and K2 with the lever arm (on y), or the cross-axis
+term with the lever arm (on x), take a true K3 with a consistent gap after; on a few held
+poses K2 or the cross-axis term alone can.
+
+So the structured effects named on axis k (:data:`SWAPPED`: those whose columns follow the
+table's angle or motion; not the bias' path, the noise or the lattice) are swapped, all
+together, for the one column ``A_r³`` (m/s², the axis' reference, the course signs), in the
+whitened space of the model without them (:class:`calib.gap.space.AxisSpace`: every other
+parameter refitted). K3 costs one parameter and no search, the named set its parameters
+``p``, so the AIC gain of K3 is ``D = (LR_K3 − 2) − (LR_named − 2p)`` (``−2 log L``), read as
+the walk's steps are (:data:`calib.gap.walk.LEAN_MARGIN`):
+
+* ``D ≤ 0``: nothing to say;
+* ``0 < D ≤ LEAN_MARGIN`` (``"describes"``): the effects stay named and ``not_identifiable``
+  lists them beside ``nonlinearity_k3``;
+* ``D > LEAN_MARGIN`` (``"leans"``): K3 fits better by a likelihood ratio beyond e³ ≈ 20 after
+  the charges, so the effects are **not named** and the verdict is "unexplained" with K3 in
+  words; the pair is listed.
+
+Measured through the whole analysis on runs made with numpy (``python -m
+validation.asymmetry.score --k3``, ``docs/gap.md`` "The named effects or a K3").
+
+Why by hand: a swap of columns in this model's own whitened space; no library knows it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from calib.conventions import AXES
+from calib.effects import Extensions, ModelState, effect
+from calib.gap.space import AxisSpace
+from calib.gap.walk import LEAN_MARGIN
+
+K3 = "nonlinearity_k3"
+"""The name beside the swapped effects in ``not_identifiable`` (not a catalog effect)."""
+
+SWAPPED = ("nonlinearity_k2", "cross_axis", "misalignment", "lever_arm", "saturation",
+           "lowpass_lag")
+"""Named per-axis effects whose columns follow the table's angle or motion: those a K3 may
+stand for."""
+
+
+def named_or_k3(ext: Extensions, state: ModelState, k: int, named: list[str]) -> dict | None:
+    """The effects of :data:`SWAPPED` in ``named`` (named on axis k) against K3 in their
+    place (module docstring).
+
+    Returns ``{"axis", "names", "decision": "describes" | "leans", "gain" (D, 1), "k3"
+    (m/s² per (m/s²)³), "size" (|K3|·max|A_r|³, m/s²), "description", "reason"}``, or None
+    when none of them is named on axis k, or ``D ≤ 0``.
+    """
+    axis = AXES[k]
+    names = [n for n in SWAPPED if n in named and (n, axis) in state.effects()]
+    if not names:
+        return None
+    reduced = state
+    for n in names:
+        reduced = reduced.without(n, axis)
+    lr_named = float(ext.nll(reduced) - ext.nll(state))
+    cost = float(sum(effect(n).n_free for n in names))
+    a = np.asarray(ext.run.a_ref[:, k], dtype=float)
+    fit = AxisSpace(ext, reduced, k).test((a**3)[:, None])
+    if fit is None:
+        return None
+    gain = (float(fit[0]) - 2.0) - (lr_named - 2.0 * cost)
+    if gain <= 0.0:
+        return None
+    k3 = float(fit[2][0])
+    size = abs(k3) * float(np.max(np.abs(a))) ** 3
+    them = " + ".join(names)
+    shape = (f"a third-order term on {axis}, K3 = {k3:+.3g} (m/s²)⁻² ({size:.3g} m/s² at "
+             "full scale; IEEE Std 1293's K3, not in the catalog)")
+    decision = "leans" if gain > LEAN_MARGIN else "describes"
+    reason = (f"cannot tell {them} from {shape} on this run: K3 alone fits "
+              f"{'better' if decision == 'leans' else 'as well'} (AIC gain {gain:.3g} over "
+              f"their {cost:g} parameter(s)); a run that turns through whole turns at a "
+              "steady rate separates them")
+    description = (f"{shape} explains the response better than {them} by {gain:.3g} after "
+                   f"their charges (more than {LEAN_MARGIN:g}: the named set has considerably "
+                   "less support; the catalog has no K3, so they are not named)")
+    return {"axis": axis, "names": names, "decision": decision, "gain": gain, "k3": k3,
+            "size": size, "description": description, "reason": reason}
+
+
+def signature(found: dict) -> dict:
+    """The ``unexplained`` entry of effects K3 leans against."""
+    return {"axis": found["axis"], "signature": K3, "reason": "third-order term",
+            "size": float(found["size"]), "unit": "m/s²", "statistic": float(found["gain"]),
+            "p_value": None, "description": found["description"]}
