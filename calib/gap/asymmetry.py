@@ -10,9 +10,9 @@ dimensionless), whose even part ``κ·|A_r|/2`` K2's ``K2·A_r²`` follows close
 of the amplitude). A true asymmetry is therefore named K2, and the gap after the fit is
 consistent, unless the battery's ``rival_shapes`` check sees it beyond its Bonferroni level.
 
-With K2 in the final model of axis k, its column is swapped for ``max(A_r, 0)`` in the
-whitened space of the model without K2 (:class:`calib.gap.space.AxisSpace`: every other
-parameter refitted). One parameter each, no search, so the AIC gain of the asymmetry is the
+With K2 in the final model of axis k, its column is swapped for ``max(A_r, 0)``
+(:func:`calib.gap.swaps.swap_gain`: in the whitened space of the model without K2, every
+other parameter refitted). One parameter each, no search, so the AIC gain of the asymmetry is the
 difference of their likelihood ratios, ``D = LR_asym − LR_K2`` (``−2 log L``), and it is read
 as the walk's steps are (:data:`calib.gap.walk.LEAN_MARGIN`):
 
@@ -35,7 +35,8 @@ import numpy as np
 
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
-from calib.gap.space import AxisSpace
+from calib.gap import swaps
+from calib.gap.swaps import lean, swap_gain
 from calib.gap.walk import LEAN_MARGIN
 
 K2 = "nonlinearity_k2"
@@ -56,20 +57,15 @@ def k2_or_asymmetry(ext: Extensions, state: ModelState, k: int) -> dict | None:
     a = np.asarray(ext.run.a_ref[:, k], dtype=float)
     if not (np.min(a) < 0.0 < np.max(a)):
         return None
-    reduced = state.without(K2, axis)
-    lr_k2 = float(ext.nll(reduced) - ext.nll(state))
-    fit = AxisSpace(ext, reduced, k).test(np.maximum(a, 0.0)[:, None])
-    if fit is None:
+    found = swap_gain(ext, state, k, [K2], np.maximum(a, 0.0))
+    if found is None or found[0] <= 0.0:
         return None
-    gain = float(fit[0]) - lr_k2
-    if gain <= 0.0:
-        return None
-    kappa = float(fit[2][0])
+    gain, kappa = found
     size = abs(kappa) * float(np.max(np.abs(a)))
     shape = (f"a gain on {axis} that differs for positive and negative specific force by "
              f"{kappa:+.3g} ({100 * kappa:+.3g} %; {size:.3g} m/s² at full scale: a scale "
              "asymmetry, IEEE Std 1293)")
-    decision = "leans" if gain > LEAN_MARGIN else "describes"
+    decision = lean(gain)
     reason = (f"cannot tell K2 from a scale asymmetry on {axis}: {shape} fits "
               f"{'better' if decision == 'leans' else 'as well'} (AIC gain {gain:.3g} over "
               f"K2, one parameter each); a run whose specific force reaches both signs at "
@@ -84,6 +80,4 @@ def k2_or_asymmetry(ext: Extensions, state: ModelState, k: int) -> dict | None:
 
 def signature(found: dict) -> dict:
     """The ``unexplained`` entry of a K2 the asymmetry leans against."""
-    return {"axis": found["axis"], "signature": PAIR, "reason": "scale asymmetry",
-            "size": float(found["size"]), "unit": "m/s²", "statistic": float(found["gain"]),
-            "p_value": None, "description": found["description"]}
+    return swaps.signature(found, PAIR, "scale asymmetry")

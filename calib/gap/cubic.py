@@ -10,9 +10,9 @@ poses K2 or the cross-axis term alone can.
 
 So the structured effects named on axis k (:data:`SWAPPED`: those whose columns follow the
 table's angle or motion; not the bias' path, the noise or the lattice) are swapped, all
-together, for the one column ``A_r³`` (m/s², the axis' reference, the course signs), in the
-whitened space of the model without them (:class:`calib.gap.space.AxisSpace`: every other
-parameter refitted). K3 costs one parameter and no search, the named set its parameters
+together, for the one column ``A_r³`` (m/s², the axis' reference, the course signs;
+:func:`calib.gap.swaps.swap_gain`: in the whitened space of the model without them, every
+other parameter refitted). K3 costs one parameter and no search, the named set its parameters
 ``p``, so the AIC gain of K3 is ``D = (LR_K3 − 2) − (LR_named − 2p)`` (``−2 log L``), read as
 the walk's steps are (:data:`calib.gap.walk.LEAN_MARGIN`):
 
@@ -35,7 +35,8 @@ import numpy as np
 
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState, effect
-from calib.gap.space import AxisSpace
+from calib.gap import swaps
+from calib.gap.swaps import lean, swap_gain
 from calib.gap.walk import LEAN_MARGIN
 
 K3 = "nonlinearity_k3"
@@ -59,24 +60,17 @@ def named_or_k3(ext: Extensions, state: ModelState, k: int, named: list[str]) ->
     names = [n for n in SWAPPED if n in named and (n, axis) in state.effects()]
     if not names:
         return None
-    reduced = state
-    for n in names:
-        reduced = reduced.without(n, axis)
-    lr_named = float(ext.nll(reduced) - ext.nll(state))
-    cost = float(sum(effect(n).n_free for n in names))
     a = np.asarray(ext.run.a_ref[:, k], dtype=float)
-    fit = AxisSpace(ext, reduced, k).test((a**3)[:, None])
-    if fit is None:
+    found = swap_gain(ext, state, k, names, a**3)
+    if found is None or found[0] <= 0.0:
         return None
-    gain = (float(fit[0]) - 2.0) - (lr_named - 2.0 * cost)
-    if gain <= 0.0:
-        return None
-    k3 = float(fit[2][0])
+    gain, k3 = found
+    cost = float(sum(effect(n).n_free for n in names))
     size = abs(k3) * float(np.max(np.abs(a))) ** 3
     them = " + ".join(names)
     shape = (f"a third-order term on {axis}, K3 = {k3:+.3g} (m/s²)⁻² ({size:.3g} m/s² at "
              "full scale; IEEE Std 1293's K3, not in the catalog)")
-    decision = "leans" if gain > LEAN_MARGIN else "describes"
+    decision = lean(gain)
     reason = (f"cannot tell {them} from {shape} on this run: K3 alone fits "
               f"{'better' if decision == 'leans' else 'as well'} (AIC gain {gain:.3g} over "
               f"their {cost:g} parameter(s)); a run that turns through whole turns at a "
@@ -90,6 +84,4 @@ def named_or_k3(ext: Extensions, state: ModelState, k: int, named: list[str]) ->
 
 def signature(found: dict) -> dict:
     """The ``unexplained`` entry of effects K3 leans against."""
-    return {"axis": found["axis"], "signature": K3, "reason": "third-order term",
-            "size": float(found["size"]), "unit": "m/s²", "statistic": float(found["gain"]),
-            "p_value": None, "description": found["description"]}
+    return swaps.signature(found, K3, "third-order term")

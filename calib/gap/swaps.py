@@ -1,0 +1,47 @@
+"""One column in place of named effects: the AIC gain that the scale-asymmetry and the K3
+reviews read (:mod:`calib.gap.asymmetry`, :mod:`calib.gap.cubic`).
+
+The effects ``names`` named on axis k are removed from the final model and the column ``c``
+(m/s² per unit of its coefficient) is fitted in their place, in the whitened space of the
+model without them (:class:`calib.gap.space.AxisSpace`: every other parameter refitted). The
+column costs one parameter and no search, the effects their parameters ``p``:
+``D = (LR_c − 2) − (LR_named − 2p)`` (``−2 log L``). Beyond :data:`calib.gap.walk.LEAN_MARGIN`
+the column "leans" (the effects are not named), above 0 it "describes" (the pair is listed).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from calib.conventions import AXES
+from calib.effects import Extensions, ModelState, effect
+from calib.gap.space import AxisSpace
+from calib.gap.walk import LEAN_MARGIN
+
+
+def swap_gain(ext: Extensions, state: ModelState, k: int, names: list[str],
+              column: np.ndarray) -> tuple[float, float] | None:
+    """(D, the column's coefficient) of the module docstring, or None when the column is in
+    the model's span without the effects."""
+    axis = AXES[k]
+    reduced = state
+    for n in names:
+        reduced = reduced.without(n, axis)
+    lr_named = float(ext.nll(reduced) - ext.nll(state))
+    cost = float(sum(effect(n).n_free for n in names))
+    fit = AxisSpace(ext, reduced, k).test(np.asarray(column, dtype=float)[:, None])
+    if fit is None:
+        return None
+    return (float(fit[0]) - 2.0) - (lr_named - 2.0 * cost), float(fit[2][0])
+
+
+def lean(gain: float) -> str:
+    """``"leans"`` beyond :data:`LEAN_MARGIN` (the effects not named), else ``"describes"``."""
+    return "leans" if gain > LEAN_MARGIN else "describes"
+
+
+def signature(found: dict, name: str, reason: str) -> dict:
+    """The ``unexplained`` entry of a column that leans against named effects."""
+    return {"axis": found["axis"], "signature": name, "reason": reason,
+            "size": float(found["size"]), "unit": "m/s²", "statistic": float(found["gain"]),
+            "p_value": None, "description": found["description"]}
