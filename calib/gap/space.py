@@ -171,11 +171,34 @@ class AxisSpace:
 
     def test(self, z: np.ndarray) -> tuple[float, int, np.ndarray] | None:
         """(ΔRSS, rank, coefficients of the columns of z in their own units) or None."""
+        zp, keep = self._projected(z)
+        return self._joint(zp, keep)
+
+    def test_each(self, z: np.ndarray) -> tuple[tuple[float, int, np.ndarray] | None,
+                                                 np.ndarray, np.ndarray]:
+        """:meth:`test` of the columns of z together, and of each column alone, from one
+        whitening: (the joint result, ΔRSS (k,) and coefficient (k,) of each column added
+        alone; 0 for a column in the model's span). Each alone is unique where the joint
+        coefficients of collinear columns are not (their split is rounding's choice)."""
+        zp, keep = self._projected(z)
+        sq = np.einsum("ij,ij->j", zp, zp)
+        dot = zp.T @ self.rw
+        alone = np.where(keep, dot / np.where(keep, sq, 1.0), 0.0)
+        return self._joint(zp, keep), np.where(keep, dot * alone, 0.0), alone
+
+    def _projected(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The whitened columns of z orthogonal to the model's basis, and which of them are
+        not in its span (beyond :data:`COLLINEAR_TOL` of their norm)."""
         z = np.asarray(z, dtype=float).reshape(z.shape[0], -1)
         zw = self.ext.whiten(self.st, z)
         zp = zw - self.qh @ (self.qh.T @ zw)
         norms = np.linalg.norm(zw, axis=0)
         keep = np.linalg.norm(zp, axis=0) > COLLINEAR_TOL * np.maximum(norms, 1e-300)
+        return zp, keep
+
+    def _joint(self, zp: np.ndarray, keep: np.ndarray
+               ) -> tuple[float, int, np.ndarray] | None:
+        """:meth:`test` on the projected columns."""
         if not np.any(keep):
             return None
         q, r, piv = sla.qr(zp[:, keep], mode="economic", pivoting=True)
@@ -185,7 +208,7 @@ class AxisSpace:
             return None
         proj = q[:, :rank].T @ self.rw
         cols = np.flatnonzero(keep)[piv[:rank]]
-        coef = np.zeros(z.shape[1])
+        coef = np.zeros(zp.shape[1])
         coef[cols] = np.linalg.lstsq(zp[:, cols], self.rw, rcond=None)[0]
         return float(proj @ proj), rank, coef
 
