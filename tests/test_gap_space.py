@@ -129,3 +129,25 @@ def test_ring_columns_by_filter_equal_the_sum_over_stops():
         slow = _ring_columns(replace(run, h_uniform=None), hold, f, zeta)
         np.testing.assert_allclose(fast, slow, atol=1e-6)  # RING_FLOOR: the loop's cut
         assert np.max(np.abs(fast)) > 0.9
+
+
+@pytest.mark.parametrize("q", [0.0, 0.05])
+def test_each_column_alone_is_its_own_test_and_the_joint_is_test(q):
+    """``AxisSpace.test_each``: the joint result is :meth:`test`'s; each column alone gives
+    the ΔRSS and coefficient of :meth:`test` on that column alone (0 for a column in the
+    model's span: here the constant, which the bias already is)."""
+    space, run = _space(q)
+    th = run.tita
+    z = np.column_stack([np.cos(7.3 * th), np.sin(7.3 * th), np.ones(th.size),
+                         (np.mod(th, 2 * np.pi) < 1.0).astype(float)])
+    joint, drss, alone = space.test_each(z)
+    ref = space.test(z)
+    assert joint[0] == pytest.approx(ref[0], rel=1e-12) and joint[1] == ref[1] == 3
+    for j in range(z.shape[1]):
+        one = space.test(z[:, j:j + 1])
+        if one is None:
+            assert drss[j] == 0.0 and alone[j] == 0.0
+            continue
+        assert drss[j] == pytest.approx(one[0], rel=1e-9)
+        assert alone[j] == pytest.approx(one[2][0], rel=1e-9)
+    assert drss[2] == 0.0 and drss[0] > 0.0
