@@ -199,7 +199,7 @@ def _angle_profile(space: AxisSpace, tita: np.ndarray, axis: str) -> Check | Non
     joint, drss, alone = space.test_each((b[:, None] == kept[None, :]).astype(float))
     if joint is None:
         return None
-    stat, dof, _ = joint
+    stat, dof = joint
     # where: the bin that alone explains most (the joint coefficients of the bins are not
     # unique: with the bias and the scale in the model their split is rounding's choice)
     i = int(np.argmax(drss))

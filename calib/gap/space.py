@@ -169,36 +169,39 @@ class AxisSpace:
                 out[a:a + len(part)] = _blocks_drss(zw, qh, rw, c)
         return outs
 
+    def test_each(self, z: np.ndarray) -> tuple[tuple[float, int] | None, np.ndarray,
+                                                 np.ndarray]:
+        """The columns of z together — (ΔRSS, rank) as :meth:`test` gives them, or None —
+        and each column alone: ΔRSS (k,) and coefficient (k,) in its own units, 0 for a
+        column in the model's span. Each alone is unique where the joint coefficients of
+        columns collinear with the model are not (their split is rounding's choice).
+
+        From inner products only, in the image the scans use (:meth:`_scan_system`; cheap
+        with q = 0): ``A = qhᵀ zw``, ``G = zwᵀ zw − AᵀA`` (the projected columns' Gram),
+        ``b = zwᵀ rw``; alone ``ΔRSS_j = b_j²/G_jj``, ``coef_j = b_j/G_jj``; together the
+        R factor of G column by column (:func:`_gram_drss`: the rule of
+        :func:`_blocks_drss`, a column below :data:`COLLINEAR_TOL` of its norm not
+        counted)."""
+        z = np.asarray(z, dtype=float).reshape(z.shape[0], -1)
+        qh, rw = self._scan_system()
+        zw = self.ext.white(self.st, z)
+        a = qh.T @ zw
+        nw = np.einsum("ij,ij->j", zw, zw)
+        g = zw.T @ zw - a.T @ a
+        b = zw.T @ rw
+        d = np.diag(g)
+        keep = d > COLLINEAR_TOL**2 * nw
+        alone = np.where(keep, b / np.where(keep, d, 1.0), 0.0)
+        drss, rank = _gram_drss(g, b, nw)
+        return (None if rank == 0 else (drss, rank)), np.where(keep, b * alone, 0.0), alone
+
     def test(self, z: np.ndarray) -> tuple[float, int, np.ndarray] | None:
         """(ΔRSS, rank, coefficients of the columns of z in their own units) or None."""
-        zp, keep = self._projected(z)
-        return self._joint(zp, keep)
-
-    def test_each(self, z: np.ndarray) -> tuple[tuple[float, int, np.ndarray] | None,
-                                                 np.ndarray, np.ndarray]:
-        """:meth:`test` of the columns of z together, and of each column alone, from one
-        whitening: (the joint result, ΔRSS (k,) and coefficient (k,) of each column added
-        alone; 0 for a column in the model's span). Each alone is unique where the joint
-        coefficients of collinear columns are not (their split is rounding's choice)."""
-        zp, keep = self._projected(z)
-        sq = np.einsum("ij,ij->j", zp, zp)
-        dot = zp.T @ self.rw
-        alone = np.where(keep, dot / np.where(keep, sq, 1.0), 0.0)
-        return self._joint(zp, keep), np.where(keep, dot * alone, 0.0), alone
-
-    def _projected(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The whitened columns of z orthogonal to the model's basis, and which of them are
-        not in its span (beyond :data:`COLLINEAR_TOL` of their norm)."""
         z = np.asarray(z, dtype=float).reshape(z.shape[0], -1)
         zw = self.ext.whiten(self.st, z)
         zp = zw - self.qh @ (self.qh.T @ zw)
         norms = np.linalg.norm(zw, axis=0)
         keep = np.linalg.norm(zp, axis=0) > COLLINEAR_TOL * np.maximum(norms, 1e-300)
-        return zp, keep
-
-    def _joint(self, zp: np.ndarray, keep: np.ndarray
-               ) -> tuple[float, int, np.ndarray] | None:
-        """:meth:`test` on the projected columns."""
         if not np.any(keep):
             return None
         q, r, piv = sla.qr(zp[:, keep], mode="economic", pivoting=True)
@@ -208,7 +211,7 @@ class AxisSpace:
             return None
         proj = q[:, :rank].T @ self.rw
         cols = np.flatnonzero(keep)[piv[:rank]]
-        coef = np.zeros(zp.shape[1])
+        coef = np.zeros(z.shape[1])
         coef[cols] = np.linalg.lstsq(zp[:, cols], self.rw, rcond=None)[0]
         return float(proj @ proj), rank, coef
 
@@ -248,6 +251,28 @@ def _blocks_drss(zw: np.ndarray, qh: np.ndarray, rw: np.ndarray, c: int) -> np.n
         r[j, j] = np.sqrt(np.where(ok[j], d2, 1.0))
         x[j] = np.where(ok[j], (b[:, j] - np.sum(r[:j, j] * x[:j], axis=0)) / r[j, j], 0.0)
     return np.sum(x * x, axis=0)
+
+
+def _gram_drss(g: np.ndarray, b: np.ndarray, nw: np.ndarray) -> tuple[float, int]:
+    """ΔRSS and rank of columns with projected Gram matrix g (k, k), inner products with the
+    residual b (k,) and whitened squared norms nw (k,): the R factor of g column by column,
+    a column whose ``R_jj² ≤ COLLINEAR_TOL²·nw_j`` not counted: the rule of
+    :func:`_blocks_drss` for one wide block whose Gram matrix is one matrix product (the
+    scans' blocks are many and narrow, each Gram entry a vectorised sum over them; for one
+    block of 36 columns at N = 60001 this is 11 ms against 270 ms)."""
+    k = b.size
+    r = np.zeros((k, k))
+    x = np.zeros(k)
+    ok = np.zeros(k, dtype=bool)
+    for j in range(k):
+        for m in np.flatnonzero(ok[:j]):
+            r[m, j] = (g[m, j] - r[:m, m] @ r[:m, j]) / r[m, m]
+        d2 = g[j, j] - r[:j, j] @ r[:j, j]
+        if d2 > COLLINEAR_TOL**2 * nw[j]:
+            ok[j] = True
+            r[j, j] = np.sqrt(d2)
+            x[j] = (b[j] - r[:j, j] @ x[:j]) / r[j, j]
+    return float(x @ x), int(ok.sum())
 
 
 def _project(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
