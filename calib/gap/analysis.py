@@ -148,23 +148,8 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     unexplained = [r.signature() for r in drifting] + [
         c.signature() for c in battery.failed
         if not (c.axis in stepped and c.name in WALK_CHECKS and c.name != "walk_rivals")]
-    # a named K2 that a scale asymmetry fits better than by LEAN_MARGIN is not named (it
-    # stays in the model meanwhile); said once: not again when rival_shapes already failed
-    asymmetry = [f for k in range(2)
-                 if any(e.name == K2 and e.axis == AXES[k] for e in effects)
-                 and (f := k2_or_asymmetry(ext, state, k)) is not None]
-    leaning = {f["axis"] for f in asymmetry if f["decision"] == "leans"}
-    effects = [e for e in effects if not (e.name == K2 and e.axis in leaning)]
-    shaped = {c.axis for c in battery.failed if c.name == "rival_shapes"}
-    unexplained += [asymmetry_signature(f) for f in asymmetry
-                    if f["axis"] in leaning and f["axis"] not in shaped]
-    # the same for the structured effects named on an axis that a K3 alone fits better
-    cubic = [f for k in range(2)
-             if (f := named_or_k3(ext, state, k, [e.name for e in effects
-                                                  if e.axis == AXES[k]])) is not None]
-    dropped = {(n, f["axis"]) for f in cubic if f["decision"] == "leans" for n in f["names"]}
-    effects = [e for e in effects if (e.name, e.axis) not in dropped]
-    unexplained += [cubic_signature(f) for f in cubic if f["decision"] == "leans"]
+    effects, said, pairs, terms = _outside_terms(ext, state, effects, battery)
+    unexplained += said
     unexplained += _never_worse(effects, before, after)
     verdict = ("unexplained" if unexplained else "explained" if effects
                else "nothing_detected")
@@ -180,20 +165,45 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     return GapAnalysis(
         effects=tuple(effects),
         not_identifiable=tuple(not_identifiable(ext, state, sel.candidates, sel.untestable))
-        + tuple(_walk_or_cycle(reviews))
-        + tuple({"names": [K2, ASYMMETRY], "axis": f["axis"], "reason": f["reason"]}
-                for f in asymmetry)
-        + tuple({"names": [*f["names"], K3], "axis": f["axis"], "reason": f["reason"]}
-                for f in cubic),
+        + tuple(_walk_or_cycle(reviews)) + tuple(pairs),
         gap_before=before, gap_after_fit=after, nominal=nominal, final=final,
         residuals_before=resid_before, residuals_after=resid_after, fitted=fitted,
         needs_timing=tuple(needs_timing), criterion=criterion, steps=tuple(steps), g=float(g),
         noise_var=(float(stated[0]), float(stated[1])), verdict=verdict,
         unexplained=tuple(unexplained), reported=tuple(reported),
-        adequacy={**_adequacy(battery, drifting, reviews), "sponges": sponges,
-                  "asymmetry": [{k: v for k, v in f.items() if k != "reason"}
-                                for f in asymmetry],
-                  "cubic": [{k: v for k, v in f.items() if k != "reason"} for f in cubic]})
+        adequacy={**_adequacy(battery, drifting, reviews), "sponges": sponges, **terms})
+
+
+def _outside_terms(ext: Extensions, state: ModelState, effects: list[EffectEstimate],
+                   battery: Battery) -> tuple[list[EffectEstimate], list[dict], list[dict],
+                                              dict]:
+    """IEEE 1293 terms outside the catalog against the named effects: a scale asymmetry in
+    place of a named K2 (:mod:`calib.gap.asymmetry`), a K3 in place of the structured effects
+    of an axis (:mod:`calib.gap.cubic`). Effects a term leans against are not named (they
+    stay in the model meanwhile). Returns the effects still named, the ``unexplained``
+    entries (the asymmetry's not again where ``rival_shapes`` already failed), the
+    ``not_identifiable`` pairs and the ``adequacy`` entries ``asymmetry`` and ``cubic``."""
+    asymmetry = [f for k in range(2)
+                 if any(e.name == K2 and e.axis == AXES[k] for e in effects)
+                 and (f := k2_or_asymmetry(ext, state, k)) is not None]
+    leaning = {f["axis"] for f in asymmetry if f["decision"] == "leans"}
+    effects = [e for e in effects if not (e.name == K2 and e.axis in leaning)]
+    shaped = {c.axis for c in battery.failed if c.name == "rival_shapes"}
+    said = [asymmetry_signature(f) for f in asymmetry
+            if f["axis"] in leaning and f["axis"] not in shaped]
+    cubic = [f for k in range(2)
+             if (f := named_or_k3(ext, state, k, [e.name for e in effects
+                                                  if e.axis == AXES[k]])) is not None]
+    dropped = {(n, f["axis"]) for f in cubic if f["decision"] == "leans" for n in f["names"]}
+    effects = [e for e in effects if (e.name, e.axis) not in dropped]
+    said += [cubic_signature(f) for f in cubic if f["decision"] == "leans"]
+    pairs = ([{"names": [K2, ASYMMETRY], "axis": f["axis"], "reason": f["reason"]}
+              for f in asymmetry]
+             + [{"names": [*f["names"], K3], "axis": f["axis"], "reason": f["reason"]}
+                for f in cubic])
+    terms = {"asymmetry": [{k: v for k, v in f.items() if k != "reason"} for f in asymmetry],
+             "cubic": [{k: v for k, v in f.items() if k != "reason"} for f in cubic]}
+    return effects, said, pairs, terms
 
 
 def _practical(ext: Extensions, rep: Reporter, state: ModelState,
