@@ -60,7 +60,7 @@ def k2_or_asymmetry(ext: Extensions, state: ModelState, k: int) -> dict | None:
     found = swap_gain(ext, state, k, [K2], np.maximum(a, 0.0))
     if found is None or found[0] <= 0.0:
         return None
-    gain, kappa = found
+    gain, kappa, _ = found
     size = abs(kappa) * float(np.max(np.abs(a)))
     shape = (f"a gain on {axis} that differs for positive and negative specific force by "
              f"{kappa:+.3g} ({100 * kappa:+.3g} %; {size:.3g} m/s² at full scale: a scale "

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from calib.conventions import AXES
-from calib.effects import Extensions, ModelState, effect
+from calib.effects import Extensions, ModelState
 from calib.gap import swaps
 from calib.gap.swaps import lean, swap_gain
 from calib.gap.walk import LEAN_MARGIN
@@ -64,8 +64,7 @@ def named_or_k3(ext: Extensions, state: ModelState, k: int, named: list[str]) ->
     found = swap_gain(ext, state, k, names, a**3)
     if found is None or found[0] <= 0.0:
         return None
-    gain, k3 = found
-    cost = float(sum(effect(n).n_free for n in names))
+    gain, k3, cost = found
     size = abs(k3) * float(np.max(np.abs(a))) ** 3
     them = " + ".join(names)
     shape = (f"a third-order term on {axis}, K3 = {k3:+.3g} (m/s²)⁻² ({size:.3g} m/s² at "

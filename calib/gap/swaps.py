@@ -20,9 +20,9 @@ from calib.gap.walk import LEAN_MARGIN
 
 
 def swap_gain(ext: Extensions, state: ModelState, k: int, names: list[str],
-              column: np.ndarray) -> tuple[float, float] | None:
-    """(D, the column's coefficient) of the module docstring, or None when the column is in
-    the model's span without the effects."""
+              column: np.ndarray) -> tuple[float, float, float] | None:
+    """(D, the column's coefficient, the effects' parameters p) of the module docstring, or
+    None when the column is in the model's span without the effects."""
     axis = AXES[k]
     reduced = state
     for n in names:
@@ -32,7 +32,7 @@ def swap_gain(ext: Extensions, state: ModelState, k: int, names: list[str],
     fit = AxisSpace(ext, reduced, k).test(np.asarray(column, dtype=float)[:, None])
     if fit is None:
         return None
-    return (float(fit[0]) - 2.0) - (lr_named - 2.0 * cost), float(fit[2][0])
+    return (float(fit[0]) - 2.0) - (lr_named - 2.0 * cost), float(fit[2][0]), cost
 
 
 def lean(gain: float) -> str:
