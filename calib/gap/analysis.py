@@ -19,7 +19,9 @@ from calib.gap.asymmetry import signature as asymmetry_signature
 from calib.gap.confusions import merge_tilt, not_identifiable, prefer_less_assuming
 from calib.gap.cubic import K3, named_or_k3
 from calib.gap.cubic import signature as cubic_signature
-from calib.gap.drive_state import drive_checks
+from calib.gap.drive_bias import LEVER, lever_or_drive_bias
+from calib.gap.drive_bias import signature as drive_bias_signature
+from calib.gap.drive_state import drive_checks, joint_tone
 from calib.gap.estimates import Reporter
 from calib.gap.mechanisms import drive_scans, mechanism_checks
 from calib.gap.practical import (
@@ -132,7 +134,10 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
                           + [c for k in range(2) for c in drive_checks(
                               ext, state, k, resid_after[:, k], drive_torque,
                               coarse=state.axes[k].lsb > np.sqrt(state.axes[k].sigma2),
-                              space=spaces[k])],
+                              space=spaces[k])]
+                          + [c for c in [joint_tone(ext, state, resid_after, coarse=any(
+                              st.lsb > np.sqrt(st.sigma2) for st in state.axes))]
+                             if c is not None],
                           spaces=spaces)
     reviews = {k: r.with_failed(tuple(c.name for c in battery.failed
                                       if c.axis == r.axis and c.name in WALK_CHECKS))
@@ -177,12 +182,13 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
 def _outside_terms(ext: Extensions, state: ModelState, effects: list[EffectEstimate],
                    battery: Battery) -> tuple[list[EffectEstimate], list[dict], list[dict],
                                               dict]:
-    """IEEE 1293 terms outside the catalog against the named effects: a scale asymmetry in
-    place of a named K2 (:mod:`calib.gap.asymmetry`), a K3 in place of the structured effects
-    of an axis (:mod:`calib.gap.cubic`). Effects a term leans against are not named (they
-    stay in the model meanwhile). Returns the effects still named, the ``unexplained``
-    entries (the asymmetry's not again where ``rival_shapes`` already failed), the
-    ``not_identifiable`` pairs and the ``adequacy`` entries ``asymmetry`` and ``cubic``."""
+    """Terms outside the catalog against the named effects: a scale asymmetry in place of a
+    named K2 (:mod:`calib.gap.asymmetry`), a K3 in place of the structured effects of an axis
+    (:mod:`calib.gap.cubic`; IEEE 1293), a bias tied to the drive in place of a lever arm
+    (:mod:`calib.gap.drive_bias`). Effects a term leans against are not named (they stay in
+    the model meanwhile). Returns the effects still named, the ``unexplained`` entries (the
+    asymmetry's not again where ``rival_shapes`` already failed), the ``not_identifiable``
+    pairs and the ``adequacy`` entries ``asymmetry``, ``cubic`` and ``drive_bias``."""
     asymmetry = [f for k in range(2)
                  if any(e.name == K2 and e.axis == AXES[k] for e in effects)
                  and (f := k2_or_asymmetry(ext, state, k)) is not None]
@@ -197,12 +203,21 @@ def _outside_terms(ext: Extensions, state: ModelState, effects: list[EffectEstim
     dropped = {(n, f["axis"]) for f in cubic if f["decision"] == "leans" for n in f["names"]}
     effects = [e for e in effects if (e.name, e.axis) not in dropped]
     said += [cubic_signature(f) for f in cubic if f["decision"] == "leans"]
+    drive = [f for k in range(2)
+             if any(e.name == LEVER and e.axis == AXES[k] for e in effects)
+             and (f := lever_or_drive_bias(ext, state, k)) is not None]
+    dropped = {f["axis"] for f in drive if f["decision"] == "leans"}
+    effects = [e for e in effects if not (e.name == LEVER and e.axis in dropped)]
+    said += [drive_bias_signature(f) for f in drive if f["decision"] == "leans"]
     pairs = ([{"names": [K2, ASYMMETRY], "axis": f["axis"], "reason": f["reason"]}
               for f in asymmetry]
              + [{"names": [*f["names"], K3], "axis": f["axis"], "reason": f["reason"]}
-                for f in cubic])
+                for f in cubic]
+             + [{"names": [LEVER, f["bias"]], "axis": f["axis"], "reason": f["reason"]}
+                for f in drive])
     terms = {"asymmetry": [{k: v for k, v in f.items() if k != "reason"} for f in asymmetry],
-             "cubic": [{k: v for k, v in f.items() if k != "reason"} for f in cubic]}
+             "cubic": [{k: v for k, v in f.items() if k != "reason"} for f in cubic],
+             "drive_bias": [{k: v for k, v in f.items() if k != "reason"} for f in drive]}
     return effects, said, pairs, terms
 
 

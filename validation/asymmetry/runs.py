@@ -10,7 +10,13 @@ stds (``coef·‖c − c̄‖ = z·σ``):
 
 * ``k2``: ``K2·A_r²`` (the catalog's second-order term);
 * ``asymmetry``: ``κ·max(A_r, 0)`` (a gain that differs by the sign of the input);
-* ``k3``: ``K3·A_r³`` (IEEE Std 1293's third-order term, not in the catalog).
+* ``k3``: ``K3·A_r³`` (IEEE Std 1293's third-order term, not in the catalog);
+* ``lever``: ``−r·cos β·ω² + r·sin β·α`` with β uniform (a site off the hinge at radius r,
+  angle β from the sensitive axis: the catalog's lever arm);
+* ``speed``: ``c·|ω|`` (a bias that grows with the rotation rate, not in the catalog).
+
+The last two need a varying rate: their runs are stop and go or back and forth; ω and α are
+numpy's central differences of θ.
 """
 
 from __future__ import annotations
@@ -21,10 +27,12 @@ G = 9.80665
 """Gravity of the runs, m/s² (the analysis' default)."""
 
 
-def motion(rng: np.random.Generator, n: int, dt: float) -> tuple[np.ndarray, np.ndarray, str]:
-    """(t s, θ rad, design name) of one run (module docstring)."""
+def motion(rng: np.random.Generator, n: int, dt: float, varying: bool = False
+           ) -> tuple[np.ndarray, np.ndarray, str]:
+    """(t s, θ rad, design name) of one run (module docstring); ``varying``: not the constant
+    rate."""
     t = np.arange(n) * dt
-    kind = int(rng.integers(0, 3))
+    kind = int(rng.choice([0, 2])) if varying else int(rng.integers(0, 3))
     if kind == 0:
         theta = np.zeros(n)
         here, i = float(rng.uniform(-np.pi, np.pi)), 0
@@ -46,17 +54,24 @@ def motion(rng: np.random.Generator, n: int, dt: float) -> tuple[np.ndarray, np.
 
 
 def make_run(rng: np.random.Generator, kind: str, z_range: tuple[float, float]) -> dict:
-    """One run with ``kind`` ("k2", "asymmetry" or "k3") of z drawn in ``z_range``: ``{"tita" rad,
-    "datos" (N, 2) m/s², "t" s, "noise_var" (m/s²)², "info"}``."""
+    """One run with ``kind`` ("k2", "asymmetry", "k3", "lever" or "speed") of z drawn in
+    ``z_range``: ``{"tita" rad, "datos" (N, 2) m/s², "t" s, "noise_var" (m/s²)², "info"}``."""
     n = int(rng.choice([3001, 4001, 6001]))
     dt = 1.0 / float(rng.choice([50.0, 100.0, 200.0]))
-    t, theta, name = motion(rng, n, dt)
+    t, theta, name = motion(rng, n, dt, varying=kind in ("lever", "speed"))
     sigma = rng.uniform(0.05, 0.5, 2)
     ref = np.column_stack([-G * np.sin(theta), -G * np.cos(theta)])
     k = int(rng.integers(0, 2))
     z = float(rng.uniform(*z_range))
-    col = {"asymmetry": np.maximum(ref[:, k], 0.0), "k2": ref[:, k] ** 2,
-           "k3": ref[:, k] ** 3}[kind]
+    omega = np.gradient(theta, t)
+    if kind == "lever":
+        beta = float(rng.uniform(0.0, 2.0 * np.pi))
+        col = -np.cos(beta) * omega**2 + np.sin(beta) * np.gradient(omega, t)
+    elif kind == "speed":
+        col = np.abs(omega)
+    else:
+        col = {"asymmetry": np.maximum(ref[:, k], 0.0), "k2": ref[:, k] ** 2,
+               "k3": ref[:, k] ** 3}[kind]
     spread = float(np.linalg.norm(col - col.mean()))
     coef = z * float(sigma[k]) / spread if spread > 0.0 else 0.0
     datos = ref + rng.normal(0.0, 1.0, (n, 2)) * sigma

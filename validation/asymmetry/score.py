@@ -27,7 +27,11 @@ import numpy as np
 from validation.asymmetry.runs import make_run
 
 Z_RANGES = {"k2": ((3.0, 15.0), (10.0, 60.0)), "asymmetry": ((10.0, 60.0), (10.0, 60.0)),
-            "k3": ((10.0, 60.0), (10.0, 60.0))}
+            "k3": ((10.0, 60.0), (10.0, 60.0)), "lever": ((3.0, 15.0), (10.0, 60.0)),
+            "speed": ((10.0, 60.0), (10.0, 60.0))}
+NAMED = {"k2": "nonlinearity_k2", "asymmetry": "nonlinearity_k2", "k3": "nonlinearity_k2",
+         "lever": "lever_arm", "speed": "lever_arm"}
+"""The catalog effect each kind is read against: K2, or the lever arm for the drive kinds."""
 """z ranges of the even and the odd runs of each kind."""
 
 
@@ -44,15 +48,14 @@ def analysed(job: tuple[int, str]) -> dict:
         res = analyze_gap(Ensayo(run["tita"], run["datos"], run["t"]), run["noise_var"])
     except ValueError as exc:  # the front door refuses the run (said, counted apart)
         return {**run["info"], "verdict": "refused", "k2_named": False, "decision": None,
-                "gain": None, "k3_decision": None, "k3_gain": None, "error": str(exc)[:120]}
-    found = [f for f in res.adequacy.get("asymmetry", []) if f["axis"] == axis]
-    cubic = [f for f in res.adequacy.get("cubic", []) if f["axis"] == axis]
-    return {**run["info"], "verdict": res.verdict,
-            "k2_named": ("nonlinearity_k2", axis) in res.named,
-            "decision": found[0]["decision"] if found else None,
-            "gain": float(found[0]["gain"]) if found else None,
-            "k3_decision": cubic[0]["decision"] if cubic else None,
-            "k3_gain": float(cubic[0]["gain"]) if cubic else None}
+                "gain": None, "k3_decision": None, "k3_gain": None, "drive_decision": None,
+                "drive_gain": None, "error": str(exc)[:120]}
+    out = {**run["info"], "verdict": res.verdict, "k2_named": (NAMED[kind], axis) in res.named}
+    for key, entry in (("", "asymmetry"), ("k3_", "cubic"), ("drive_", "drive_bias")):
+        found = [f for f in res.adequacy.get(entry, []) if f["axis"] == axis]
+        out[key + "decision"] = found[0]["decision"] if found else None
+        out[key + "gain"] = float(found[0]["gain"]) if found else None
+    return out
 
 
 def _largest(rows: list[dict], key: str, decision: str) -> float:
@@ -63,10 +66,11 @@ def _largest(rows: list[dict], key: str, decision: str) -> float:
 def table(rows: list[dict], seed: int) -> str:
     """The study's table (module docstring)."""
     out = [f"whole analysis (seed {seed}): runs | verdict explained / unexplained / nothing / "
-           "refused | K2 named on the effect's axis (of them with the verdict explained) | "
-           "asymmetry against K2: describes / leans, largest gain of each | K3 against the "
-           "named set: describes / leans, largest gain of each"]
-    for kind in ("k2", "asymmetry", "k3"):
+           "refused | K2 (lever arm for lever, speed) named on the effect's axis (of them with "
+           "the verdict explained) | asymmetry against K2: describes / leans, largest gain of "
+           "each | K3 against the named set: describes / leans, largest gain of each | a "
+           "drive-state bias against the lever arm: describes / leans, largest gain of each"]
+    for kind in ("k2", "asymmetry", "k3", "lever", "speed"):
         rs = [r for r in rows if r["kind"] == kind]
         if not rs:
             continue
@@ -75,13 +79,13 @@ def table(rows: list[dict], seed: int) -> str:
         named = sum(r["k2_named"] for r in rs)
         named_explained = sum(r["k2_named"] and r["verdict"] == "explained" for r in rs)
         cells = []
-        for key in ("", "k3_"):
+        for key in ("", "k3_", "drive_"):
             tiers = " / ".join(str(sum(r[key + "decision"] == d for r in rs))
                                for d in ("describes", "leans"))
             top = ", ".join(f"{d} {_largest(rs, key, d):.1f}" for d in ("describes", "leans"))
             cells.append(f"{tiers}, {top}")
         out.append(f"{kind:<10s} {len(rs):>4d} | {verdicts} | {named} ({named_explained}) | "
-                   f"{cells[0]} | {cells[1]}")
+                   f"{' | '.join(cells)}")
     return "\n".join(out)
 
 
@@ -91,6 +95,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--asymmetry", type=int, default=100, help="runs with a true asymmetry")
     p.add_argument("--k3", type=int, default=100,
                    help="runs with a true third-order term (not in the catalog)")
+    p.add_argument("--lever", type=int, default=0,
+                   help="runs with a true lever arm (half faint: z = 3–15)")
+    p.add_argument("--speed", type=int, default=0,
+                   help="runs with a true bias that grows with |ω| (not in the catalog)")
     p.add_argument("--seed", type=int, default=2034)
     p.add_argument("--jobs", type=int, default=2, help="processes")
     a = p.parse_args(argv)
@@ -99,6 +107,9 @@ def main(argv: list[str] | None = None) -> int:
     work = [(a.seed + i, "k2") for i in range(a.k2)]
     work += [(a.seed + a.k2 + i, "asymmetry") for i in range(a.asymmetry)]
     work += [(a.seed + a.k2 + a.asymmetry + i, "k3") for i in range(a.k3)]
+    first = a.seed + a.k2 + a.asymmetry + a.k3
+    work += [(first + i, "lever") for i in range(a.lever)]
+    work += [(first + a.lever + i, "speed") for i in range(a.speed)]
     rows = []
     with get_context("spawn").Pool(max(1, a.jobs)) as pool:
         for i, r in enumerate(pool.imap(analysed, work, chunksize=4)):

@@ -1,0 +1,122 @@
+"""The lever arm or a bias tied to the drive? Told apart when the run can.
+
+The lever arm (catalog) adds the centripetal and tangential accelerations of a site off the
+hinge: columns ``ω²`` and ``α`` (:mod:`calib.effects.linear`). A bias that the drive adds
+while the table moves (not in the catalog) follows the motion too: one that grows with the
+speed (``c·|ω|``, m/s² per rad/s: a rate-sensitive sensor, the motor's field growing with its
+current), one present while moving (``b·m``, m the moving indicator of
+:func:`calib.gap.drive_state.drive_state`) or one that follows the acceleration's size
+(``c·|α|``). On stop-and-go moves at one cruise speed ``ω²`` is nearly ``ω_max·|ω|``, and the
+lever arm takes such a bias with a consistent gap after: the drive-state checks of the battery
+then see only what is left.
+
+So a lever arm named on axis k is swapped for each of the three columns in turn
+(:func:`calib.gap.swaps.swap_gain`: in the whitened space of the model without it, every other
+parameter refitted). The column costs one parameter, the choice of the best of three
+``2·ln 3``, the lever arm its two, so the AIC gain is
+``D = max_c (LR_c − 2) − 2·ln 3 − (LR_lever − 4)`` (``−2 log L``), read as the walk's steps are
+(:data:`calib.gap.walk.LEAN_MARGIN`):
+
+* ``D ≤ 0``: nothing to say;
+* ``0 < D ≤ LEAN_MARGIN`` (``"describes"``): the lever arm stays named and
+  ``not_identifiable`` lists it beside the bias (``speed_bias``, ``move_bias``,
+  ``accel_bias``);
+* ``D > LEAN_MARGIN`` (``"leans"``): the bias fits better by a likelihood ratio beyond e³ ≈ 20
+  after the charges, so the lever arm is **not named** and the verdict is "unexplained: … while
+  the table moves" with the bias in words; the pair is listed.
+
+A true lever arm has a tangential part ``α`` that is odd in the acceleration, which none of
+the three even columns follows, and a centripetal part that differs from ``|ω|`` wherever the
+speed varies: it keeps its name unless the run has neither.
+
+Why by hand: a swap of columns in this model's own whitened space; no library knows it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from calib.conventions import AXES
+from calib.effects import Extensions, ModelState
+from calib.gap import swaps
+from calib.gap.drive_state import drive_state, where_moving
+from calib.gap.swaps import lean, swap_gain
+from calib.gap.walk import LEAN_MARGIN
+
+LEVER = "lever_arm"
+BIASES = ("speed_bias", "move_bias", "accel_bias")
+"""The names beside the lever arm in ``not_identifiable`` (not catalog effects), in the order
+of :func:`_columns`."""
+
+
+def _columns(run) -> dict[str, np.ndarray]:
+    """The drive-state bias columns of a timed run: ``|ω|`` (rad/s), the moving indicator (when
+    the run has moving and held stretches) and ``|α|`` (rad/s²)."""
+    cols = {"speed_bias": np.abs(run.omega)}
+    moving = drive_state(run.tita)
+    if moving is not None:
+        cols["move_bias"] = moving.astype(float)
+    cols["accel_bias"] = np.abs(run.alpha)
+    return cols
+
+
+def _shape(name: str, axis: str, coef: float, run) -> tuple[str, float]:
+    """The bias in words and its largest size, m/s²."""
+    if name == "speed_bias":
+        top = float(np.max(np.abs(run.omega)))
+        size = abs(coef) * top
+        return (f"a bias on {axis} that grows with the rotation rate while the table moves: "
+                f"{coef:+.3g} m/s² per rad/s of |ω| ({coef * top:+.3g} m/s² at the top speed "
+                f"{top:.3g} rad/s; a rate-sensitive sensor or the drive's field)"), size
+    if name == "move_bias":
+        where = where_moving(run, drive_state(run.tita))
+        return (f"a bias on {axis} of {coef:+.3g} m/s² while the table moves, {where} "
+                "(the drive's field or a cable pulling the sensor)"), abs(coef)
+    top = float(np.max(np.abs(run.alpha)))
+    size = abs(coef) * top
+    return (f"a bias on {axis} that follows the size of the acceleration while the table "
+            f"moves: {coef:+.3g} m/s² per rad/s² of |α| ({coef * top:+.3g} m/s² at "
+            f"{top:.3g} rad/s²; the drive's current, whichever the direction)"), size
+
+
+def lever_or_drive_bias(ext: Extensions, state: ModelState, k: int) -> dict | None:
+    """A lever arm named on axis k against a bias tied to the drive in its place (module
+    docstring).
+
+    Returns ``{"axis", "names": ["lever_arm"], "bias" (the name of the best column),
+    "decision": "describes" | "leans", "gain" (D, 1), "coefficient" (m/s² per rad/s, per 1
+    or per rad/s² as ``bias`` is speed_bias, move_bias or accel_bias), "size" (its largest
+    effect, m/s²), "description", "reason"}``, or None when no lever arm is named on axis k,
+    the run has no sample times, or ``D ≤ 0``.
+    """
+    axis = AXES[k]
+    run = ext.run
+    if (LEVER, axis) not in state.effects() or run.omega is None or run.alpha is None:
+        return None
+    cols = _columns(run)
+    found = {name: f for name, c in cols.items()
+             if np.ptp(c) > 0.0 and (f := swap_gain(ext, state, k, [LEVER], c)) is not None}
+    if not found:
+        return None
+    best = max(found, key=lambda name: found[name][0])
+    gain = found[best][0] - 2.0 * float(np.log(len(cols)))
+    if gain <= 0.0:
+        return None
+    coef = found[best][1]
+    shape, size = _shape(best, axis, coef, run)
+    decision = lean(gain)
+    reason = (f"cannot tell the lever arm on {axis} from {shape}: the bias fits "
+              f"{'better' if decision == 'leans' else 'as well'} (AIC gain {gain:.3g} over "
+              f"the lever arm's 2 parameters, the best of {len(cols)} drive-state columns); "
+              "moves at several speeds, each way, separate them")
+    description = (f"{shape} explains the reading better than a lever arm by {gain:.3g} after "
+                   f"their charges (more than {LEAN_MARGIN:g}: the lever arm has considerably "
+                   "less support; the catalog has no bias tied to the drive, so the lever arm "
+                   "is not named)")
+    return {"axis": axis, "names": [LEVER], "bias": best, "decision": decision, "gain": gain,
+            "coefficient": coef, "size": size, "description": description, "reason": reason}
+
+
+def signature(found: dict) -> dict:
+    """The ``unexplained`` entry of a lever arm a drive-state bias leans against."""
+    return swaps.signature(found, found["bias"], "a bias tied to the drive")
