@@ -161,6 +161,25 @@ def test_lowpass_at_constant_rate_is_reported_as_confused_with_an_offset():
     assert confused and confused[0] & {"misalignment", "tilt_offset"}, res.not_identifiable
 
 
+def test_a_slight_clip_of_the_top_pose_is_found_as_saturation():
+    """Held poses, one of them clipped by a little: the limit lies between the top pose's
+    |A_r| and the grid's top level (half-way to the next pose), where Brent reaches it only
+    with |A_r|max as its upper bracket. Before, the profile stopped at the top level, which
+    clips more than the data do: LR 0, and a walk and K2 took the clip (drive set, seed 2)."""
+    rng = np.random.default_rng([SEED, 12])
+    poses = np.array([-3.1, -2.9, -1.94, -1.408, -1.12, -0.5, 0.38, 2.1, 2.99])
+    tita = np.repeat(poses, 300)
+    a = np.column_stack([-G * np.sin(tita), -G * np.cos(tita)])
+    limit = 9.57  # the top pose reads |A_x| = 9.67: clipped by 0.1 m/s² (1 σ) only there
+    y = np.column_stack([0.03 + np.clip(a[:, 0], -limit, limit), -0.02 + a[:, 1]])
+    stated = (0.01, 0.01)
+    y = y + rng.normal(0.0, 1.0, y.shape) * np.sqrt(stated)
+    res = analyze_gap(Ensayo(tita, y), stated)
+    assert res.named == [("saturation", "x")], res.summary()
+    est = next(e for e in res.effects if e.name == "saturation")
+    assert abs(est.params["limit"] - limit) < 4.0 * est.std["limit"] + 1e-3, est
+
+
 def test_partial_sweep_names_the_truth_or_says_it_cannot_tell():
     """On part of a turn the misalignment (A_p) and cross-axis (A_r·A_p) columns are nearly
     collinear: either the truth is named, or the named one is reported as confused with it."""

@@ -130,6 +130,11 @@ class LowpassLag(BoundaryEffect):
         return True
 
 
+LIMIT_BELOW_TOP = 1e-9
+"""A refined saturation limit stays this fraction below the largest ``|A_r|`` (where it would
+clip nothing and its Gauss-Newton column would vanish)."""
+
+
 @base.register
 class Saturation(ProfiledEffect):
     """True specific force clipped to ±L."""
@@ -170,22 +175,37 @@ class Saturation(ProfiledEffect):
 
     def profile(self, ext: base.Likelihood, state: base.ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:
-        """ML of the saturation limit L (m/s²) of axis k (others fixed): (L, nll)."""
+        """ML of the saturation limit L (m/s²) of axis k (others fixed): (L, nll).
+
+        The grid (:meth:`levels`, half-way between distinct ``|A_r|``) is searched up to the
+        largest ``|A_r|`` itself: a limit that clips only the largest values a little lies
+        above the top level (on held poses, between the top pose's ``|A_r|`` and the level
+        half-way to the next), and Brent reaches it only with that point as its upper
+        bracket. A limit at or above every ``|A_r|`` clips nothing (the effect would vanish and
+        its column be 0): the refinement stays just below it, and when no clip fits best the
+        top level is returned as before (with its own ``-2 log L``)."""
         st = state.axes[k]
+        top = float(np.max(np.abs(ext.run.a_ref[:, k])))
+        levels = self.levels(ext, k)
 
         def f(lim: float) -> float:
             return ext.safe_nll(state.with_axis(k, replace(st, limit=float(lim))))
 
         if window is None:
-            grid = np.sort(self.levels(ext, k))
+            grid = np.sort(np.r_[levels, top]) if levels.size else levels
         else:
             grid = st.limit * np.linspace(1 - window, 1 + window, 7)
-            levels = self.levels(ext, k)
-            if levels.size:  # a limit above every |A_r| clips nothing: the effect would vanish
-                grid = np.unique(np.minimum(grid, float(np.max(levels))))  # and its column be 0
+            if levels.size:
+                grid = np.unique(np.minimum(grid, top * (1.0 - LIMIT_BELOW_TOP)))
         if grid.size == 0:
             return float("inf"), ext.nll(state)
         lim, val = base.minimise(f, grid)
+        if lim >= top * (1.0 - LIMIT_BELOW_TOP):
+            if window is None:  # nothing clipped fits best: the top level, as before
+                lim = float(np.max(levels))
+                return lim, f(lim)
+            lim = top * (1.0 - LIMIT_BELOW_TOP)
+            return lim, f(lim)
         return lim, val
 
     def gn_column(self, ext: base.Likelihood, k: int, st: base.AxisState, gain: float
