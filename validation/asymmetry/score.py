@@ -3,18 +3,23 @@
 
     python -m validation.asymmetry.score             # 200 K2, 100 asymmetries, 100 K3 runs
     python -m validation.asymmetry.score --k2 40 --asymmetry 20 --k3 0 --seed 7 --jobs 1
+    python -m validation.asymmetry.score --k2 0 --asymmetry 0 --k3 0 --lever 200 --speed 100 \
+        --seed 2036                                  # the lever arm or a drive-state bias
 
 Each run is made with numpy alone (:mod:`validation.asymmetry.runs`): a true K2 (half of the
 runs sized z = 3–15, faint ones near detection; half z = 10–60), a true scale asymmetry or a
 true third-order term K3 (z = 10–60), on one axis of a stop-and-go, constant-rate or
-back-and-forth run. :func:`calib.gap.analyze_gap` is run on each (σ² stated as made), and
-the table gives per kind: the runs, the verdicts, how often K2 is named on the effect's
-axis, the decision of the asymmetry against K2 there (:mod:`calib.gap.asymmetry`) and of K3
-against the named set (:mod:`calib.gap.cubic`) — ``"describes"``: the catalog's effects
-named, the pair listed; ``"leans"``: beyond :data:`calib.gap.walk.LEAN_MARGIN`, not named —
-and the largest gain of each. A catalog effect named on a true asymmetry or K3 with the
-verdict "explained" is the answer the tiers exist to avoid; a "leans" on a true K2 is their
-cost.
+back-and-forth run; with ``--lever`` / ``--speed``, a true lever arm (half faint) or a bias
+that grows with |ω| (z = 10–60) on a stop-and-go or back-and-forth run.
+:func:`calib.gap.analyze_gap` is run on each (σ² stated as made), and the table gives per
+kind: the runs, the verdicts, how often K2 (the lever arm for the drive kinds) is named on
+the effect's axis, and the decisions of the asymmetry against K2 there
+(:mod:`calib.gap.asymmetry`), of K3 against the named set (:mod:`calib.gap.cubic`) and of a
+drive-state bias against the lever arm (:mod:`calib.gap.drive_bias`) — ``"describes"``: the
+catalog's effects named, the pair listed; ``"leans"``: beyond
+:data:`calib.gap.walk.LEAN_MARGIN`, not named — with the largest gain of each. A catalog
+effect named on a true asymmetry, K3 or speed bias with the verdict "explained" is the answer
+the tiers exist to avoid; a "leans" on a true K2 or lever arm is their cost.
 """
 
 from __future__ import annotations
