@@ -134,10 +134,10 @@ def test_the_asymmetry_study_counts_its_runs(capsys):
     """``python -m validation.asymmetry.score``: every run counted once under its kind."""
     from validation.asymmetry.score import main
 
-    assert main(["--k2", "2", "--asymmetry", "2", "--k3", "1", "--seed", "5",
-                 "--jobs", "1"]) == 0
+    assert main(["--k2", "2", "--asymmetry", "2", "--k3", "1", "--lever", "1", "--speed", "1",
+                 "--seed", "5", "--jobs", "1"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    for kind, runs in (("k2", 2), ("asymmetry", 2), ("k3", 1)):
+    for kind, runs in (("k2", 2), ("asymmetry", 2), ("k3", 1), ("lever", 1), ("speed", 1)):
         line = next(x for x in lines if x.startswith(kind + " "))
         assert int(line.split()[1]) == runs, line
 
