@@ -5,10 +5,10 @@ the sensor, a vibration of the drive, a cable that pulls while the table turns, 
 changes with the speed, the acceleration or the drive torque — is present while the table
 moves and gone while it holds. The catalog has none of these; the selection never looks at
 the drive state. So the final model's residuals are compared between the **moving** and the
-**held** stretches of a run, by five checks of the adequacy battery (:mod:`calib.gap.adequacy`,
-each at the battery's Bonferroni level; a failure makes the verdict "unexplained" with the
-words "present while moving …", where — the moving stretches and their share of the run — and
-how big, in m/s²).
+**held** stretches of a run, by five checks of the adequacy battery per axis and the tone on
+both axes at once (:mod:`calib.gap.adequacy`, each at the battery's Bonferroni level; a
+failure makes the verdict "unexplained" with the words "present while moving …", where — the
+moving stretches and their share of the run — and how big, in m/s²).
 
 Held samples are those in a run of at least :data:`calib.gap.mechanisms.MIN_HOLD` equal
 consecutive encoder angles; the rest move (:func:`drive_state`). The checks run when both
@@ -40,7 +40,8 @@ check                     statistic and reference distribution under the model
                           ``P_j`` the pairs at lag j (each r_j ≈ N(0, 1/P_j) for white noise,
                           independent across lags). A vibration while moving.
 ``drive_tone``            the periodogram of z on the moving samples alone (held ones set
-                          to 0): at each Fourier frequency f of the run the pair
+                          to 0): at frequencies a quarter of a Fourier bin apart
+                          (:data:`TONE_OVERSAMPLE`; zero-padded DFT) the pair
                           ``(Σ_M z cos ωk, Σ_M z sin ωk)`` with its exact covariance under
                           the model, ``C(f) = [[Σ_M cos², Σ_M cos·sin], [·, Σ_M sin²]]``
                           (from the mask's DFT at 2f), gives ``S(f) = uᵀC⁻¹u ~ χ²(2)``;
@@ -49,6 +50,8 @@ check                     statistic and reference distribution under the model
                           while moving — a vibration of the drive — which ``drive_spectrum``
                           (ten lags) and ``drive_variance`` (the whole noise) dilute: a tone
                           of amplitude A over n_m moving samples gives ``S ≈ n_m·A²/(2σ²)``.
+                          On both axes at once (:func:`joint_tone`, axis ``both``):
+                          ``S_x(f) + S_y(f) ~ χ²(4)``, ``P ≤ m·e^{−S/2}(1 + S/2)``.
 ========================  ==================================================================
 
 Why by hand: these are tests of this bench's drive states; no library conditions a
