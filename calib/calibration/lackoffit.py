@@ -32,11 +32,11 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from scipy import stats
 
 from calib.conventions import AXES
 from calib.numerics import lagged_sums
 from calib.results import ResultMixin
+from calib.stats import dist as stats
 from calib.units import format_p
 
 LOF_ALPHA = 0.01

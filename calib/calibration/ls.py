@@ -25,12 +25,12 @@ from typing import Literal
 
 import numpy as np
 from scipy import linalg as sla
-from scipy import stats
 from scipy.linalg import blas
 
 from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G, reference_accel
 from calib.numerics import design_cond, r_factor
 from calib.results import ResultMixin
+from calib.stats import dist as stats
 
 Sigma2Source = Literal["given", "estimated"]
 

@@ -18,10 +18,10 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy import stats
 
 from calib.conventions import AXES, EFFECT_NAMES
 from calib.effects import base
+from calib.stats import dist as stats
 
 
 def ratio(c: float, s: float, cov2: np.ndarray) -> tuple[float, float]:

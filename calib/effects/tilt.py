@@ -10,9 +10,9 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy import stats
 
 from calib.effects import base
+from calib.stats import dist as stats
 
 
 @base.register

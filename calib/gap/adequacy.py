@@ -75,7 +75,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState, effect
@@ -91,6 +90,7 @@ from calib.gap.space import (
     spectral_peak,
 )
 from calib.gap.steps import describe, find_steps
+from calib.stats import dist as stats
 from calib.stats.diagnostics import GapMeasure, Lattice, chi2_two_sided_logp, ljung_box_logp
 
 ADEQUACY_ALPHA = 0.005

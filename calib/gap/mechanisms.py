@@ -48,18 +48,12 @@ stops of a measured encoder or a frozen output against a rounded Gaussian's repe
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
+from calib.filters import constant_recursion
 from calib.gap.space import AxisSpace, Check, order_columns
-
-
-def _signal():
-    """``scipy.signal``, imported where it is used (a heavy module: ≈ 0.5 s)."""
-    from scipy import signal
-
-    return signal
+from calib.stats import dist as stats
 
 RING_FREQS = np.geomspace(0.5, 25.0, 24)
 """Frequencies (Hz) of the ringing grid (those below the Nyquist frequency / 2 are used)."""
@@ -143,7 +137,7 @@ def _ring_columns(run, hold: list[tuple[int, int, float]], f: float, zeta: float
         for i, _, s in hold:
             kicks[0, i - 1] += s
             kicks[1, i - 1] += 1.0
-        rings = _signal().lfilter([1.0], [1.0, -pole], kicks, axis=1)
+        rings = constant_recursion(pole, kicks.T).T
         return np.column_stack([rings[0].real, rings[0].imag, rings[1].real, rings[1].imag])
     z = np.zeros((run.n, 4))
     # the mode rings on through the next moves until it has decayed (to RING_FLOOR)

@@ -4,12 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def _stats():
-    """``scipy.stats``, imported where it is used (a heavy module: ≈ 0.5 s)."""
-    from scipy import stats
-
-    return stats
+from calib.stats import dist as stats
 
 SHEPPARD_RATIO = 2.0
 """σ/lsb from which Sheppard's moments are exact to double precision (see
@@ -39,8 +34,8 @@ def quantized_moments(mu: np.ndarray, sigma2: float, lsb: float
     m2 = np.zeros_like(mu)
     for j in range(-span, span + 1):
         level = (base + j) * lsb
-        p = (_stats().norm.cdf((level + lsb / 2 - mu) / s)
-             - _stats().norm.cdf((level - lsb / 2 - mu) / s))
+        p = (stats.norm.cdf((level + lsb / 2 - mu) / s)
+             - stats.norm.cdf((level - lsb / 2 - mu) / s))
         m1 += p * level
         m2 += p * level * level
     return m1, np.maximum(m2 - m1 * m1, 1e-300)
@@ -59,8 +54,8 @@ def clipped_moments(mu: np.ndarray, sigma2: float, lo: float, hi: float
     s = float(np.sqrt(sigma2))
     mu = np.asarray(mu, dtype=float)
     a, b = (lo - mu) / s, (hi - mu) / s
-    pa, pb = _stats().norm.cdf(a), _stats().norm.sf(b)
-    da, db = _stats().norm.pdf(a), _stats().norm.pdf(b)
+    pa, pb = stats.norm.cdf(a), stats.norm.sf(b)
+    da, db = stats.norm.pdf(a), stats.norm.pdf(b)
     mid = 1.0 - pa - pb
     m1 = lo * pa + hi * pb + mu * mid + s * (da - db)
     m2 = (lo * lo * pa + hi * hi * pb + mu * mu * mid + 2.0 * mu * s * (da - db)

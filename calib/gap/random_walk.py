@@ -8,13 +8,7 @@ import numpy as np
 from scipy import optimize
 
 from calib.effects import Extensions, ModelState
-
-
-def _stats():
-    """``scipy.stats``, imported where it is used (a heavy module: ≈ 0.5 s)."""
-    from scipy import stats
-
-    return stats
+from calib.stats import dist as stats
 
 Q_LEVEL = 0.95
 """Level of the profile-likelihood interval reported for the random-walk intensity q."""
@@ -55,7 +49,7 @@ def q_profile_interval(ext: Extensions, state: ModelState, k: int, level: float 
     """
     st = state.axes[k]
     q_hat = st.q
-    crit = float(_stats().chi2.ppf(level, 1))
+    crit = float(stats.chi2.ppf(level, 1))
     f0 = ext.nll(state, reml=True)
 
     def dev(q: float) -> float:
@@ -110,7 +104,7 @@ def q_uncertainty(ext: Extensions, state: ModelState, k: int
     Falls back to the curvature std if an end of the interval is not finite.
     """
     lo, hi = q_profile_interval(ext, state, k)
-    std = (hi - lo) / (2.0 * float(_stats().norm.ppf(0.5 + Q_LEVEL / 2.0)))
+    std = (hi - lo) / (2.0 * float(stats.norm.ppf(0.5 + Q_LEVEL / 2.0)))
     if not np.isfinite(std):
         std = q_curvature_std(ext, state, k)
     return float(std), (lo, hi)

@@ -34,14 +34,8 @@ from calib.effects import Extensions, ModelState
 from calib.gap.estimates import Reporter
 from calib.gap.quantization import quantized_moments, rails
 from calib.gap.walk import gls_nll, walk_nll
+from calib.stats import dist as stats
 from calib.stats.diagnostics import Lattice, chi2_two_sided_logp
-
-
-def _stats():
-    """``scipy.stats``, imported where it is used (a heavy module: ≈ 0.5 s)."""
-    from scipy import stats
-
-    return stats
 
 SPONGES = ("noise_level", "bias_random_walk")
 LN2 = float(np.log(2.0))
@@ -117,7 +111,7 @@ def review_sponges(ext: Extensions, state: ModelState, lattice: list[Lattice],
                 lr = max(gls_nll(dz, base, 1.0, 0.0 * dt) - walk_nll(dz, base, 1.0, dt, q0),
                          0.0)
                 stat = lr
-                logp = float(-LN2 + _stats().chi2.logsf(lr, 1)) if lr > 0 else 0.0
+                logp = float(-LN2 + stats.chi2.logsf(lr, 1)) if lr > 0 else 0.0
                 what = f"LR = {lr:.4g} (½χ²₀ + ½χ²₁)"
             wins = logp < log_alpha
             notes.append({"name": n, "axis": axis, "beside": structured, "named": bool(wins),

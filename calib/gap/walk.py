@@ -78,7 +78,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import linalg as sla
-from scipy import optimize, stats
+from scipy import optimize
 
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
@@ -108,6 +108,7 @@ from calib.gap.steps import describe, find_steps, two_level
 from calib.gap.switching import SWITCH_CHARGE, block_means, block_size, fit_switching
 from calib.input_rules import DataError
 from calib.noise.allan import MAX_FIT_SAMPLES, AxisNoise, fit_axis_noise
+from calib.stats import dist as stats
 
 GRID = 120
 """Places on the grid of the step, two-step and bump rivals."""

@@ -60,9 +60,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy import stats
 
 from calib.results import ResultMixin, readonly
+from calib.stats import dist as stats
 from calib.vehicle.trajectory import Trajectory
 
 if TYPE_CHECKING:
