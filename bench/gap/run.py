@@ -24,8 +24,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 # The replay's modules only (MuJoCo, numpy, scipy.interpolate): the nominal re-simulation
-# starts on its thread before the analysis side is imported (scipy.stats and the catalog take
-# ≈ 0.5 s to import, GIL-bound; MuJoCo's rollout runs without the GIL meanwhile). The other
+# starts on its thread before the analysis side is imported (the catalog and the checks take
+# ≈ 0.3 s to import, GIL-bound; MuJoCo's rollout runs without the GIL meanwhile). The other
 # modules are imported where they are used.
 from bench.gap.readout import accel_field
 from bench.gap.replay import (

@@ -244,10 +244,11 @@ def _outliers(z: np.ndarray, scale: float, axis: str) -> Check:
 
 KURTOSIS_TAIL_FACTOR = 2.0
 """The kurtosis test's p is multiplied by this. Anscombe & Glynn's normal approximation
-(``scipy.stats.kurtosistest``) is liberal in the far upper tail, where the battery judges it
-(α_check ≈ 1e-4): measured on 2×10⁵ Gaussian samples each, P(p < 1e-4) was 1.5e-4 (N = 300),
-1.4e-4 (600), 1.55e-4 (1200), 1.85e-4 (2000), 0.8e-4 (4001); at 1e-3 within 1.18×, at 1e-2
-exact. Doubling keeps the stated per-check α an upper bound (``tests/test_gap_adequacy.py``)."""
+(:func:`calib.stats.dist.kurtosistest`, ``scipy.stats.kurtosistest``'s formula) is liberal in
+the far upper tail, where the battery judges it (α_check ≈ 1e-4): measured on 2×10⁵ Gaussian
+samples each, P(p < 1e-4) was 1.5e-4 (N = 300), 1.4e-4 (600), 1.55e-4 (1200), 1.85e-4 (2000),
+0.8e-4 (4001); at 1e-3 within 1.18×, at 1e-2 exact. Doubling keeps the stated per-check α an
+upper bound (``tests/test_gap_adequacy.py``)."""
 
 
 def _heavy_tails(z: np.ndarray, axis: str) -> Check | None:
