@@ -60,7 +60,8 @@ Layout (wings by job; each wing's docstring lists its modules)
 --------------------------------------------------------------
 Ground (this folder)  ``conventions`` (G, signs, effect vocabulary), ``numerics``, ``filters``,
                       ``results``, ``units``, ``input_rules`` (reader errors and limits),
-                      ``exports`` (lazy exports)
+                      ``exports`` (lazy exports), ``distributions`` (χ², normal, … and
+                      normality tests from ``scipy.special``)
 ``stats/``        Monte Carlo runs, NEES/coverage bands, proportions, residual diagnostics
 ``files/``        course files read strictly, atomic writes
 ``logs/``         measured logs: readers per format, held poses, θ from the gyro, checks

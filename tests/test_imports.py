@@ -288,7 +288,7 @@ def check_independent_imports(mods: dict[str, Module], root: Path,
 
 
 CALIB_GROUND = frozenset({"conventions", "numerics", "filters", "results", "units", "exports",
-                          "input_rules"})
+                          "input_rules", "distributions"})
 """The ground of ``calib``: modules at its top level that every wing may use."""
 
 WING_USES: dict[str, frozenset[str]] = {

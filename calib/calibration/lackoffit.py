@@ -33,10 +33,10 @@ from typing import Literal
 
 import numpy as np
 
+from calib import distributions as stats
 from calib.conventions import AXES
 from calib.numerics import lagged_sums
 from calib.results import ResultMixin
-from calib.stats import dist as stats
 from calib.units import format_p
 
 LOF_ALPHA = 0.01

@@ -27,10 +27,10 @@ import numpy as np
 from scipy import linalg as sla
 from scipy.linalg import blas
 
+from calib import distributions as stats
 from calib.conventions import AXES, JOINT_PARAM_NAMES, PARAM_NAMES, G, reference_accel
 from calib.numerics import design_cond, r_factor
 from calib.results import ResultMixin
-from calib.stats import dist as stats
 
 Sigma2Source = Literal["given", "estimated"]
 

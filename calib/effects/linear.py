@@ -19,9 +19,9 @@ from dataclasses import replace
 
 import numpy as np
 
+from calib import distributions as stats
 from calib.conventions import AXES, EFFECT_NAMES
 from calib.effects import base
-from calib.stats import dist as stats
 
 
 def ratio(c: float, s: float, cov2: np.ndarray) -> tuple[float, float]:

@@ -15,10 +15,10 @@ from dataclasses import replace
 
 import numpy as np
 
+from calib import distributions as stats
 from calib.conventions import AXES
 from calib.effects import base
 from calib.effects.response import BoundaryEffect, ProfiledEffect
-from calib.stats import dist as stats
 from calib.stats.diagnostics import chi2_two_sided_logp
 
 

@@ -16,9 +16,9 @@ from typing import ClassVar
 
 import numpy as np
 
+from calib import distributions as stats
 from calib.conventions import AXES
 from calib.effects import base
-from calib.stats import dist as stats
 from calib.stats.diagnostics import LN2, flat_top_score, hinge_columns, hinge_levels
 
 

@@ -11,8 +11,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from calib import distributions as stats
 from calib.effects import base
-from calib.stats import dist as stats
 
 
 @base.register

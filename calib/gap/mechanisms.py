@@ -49,11 +49,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from calib import distributions as stats
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.filters import constant_recursion
 from calib.gap.space import AxisSpace, Check, order_columns
-from calib.stats import dist as stats
 
 RING_FREQS = np.geomspace(0.5, 25.0, 24)
 """Frequencies (Hz) of the ringing grid (those below the Nyquist frequency / 2 are used)."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from calib.stats import dist as stats
+from calib import distributions as stats
 
 SHEPPARD_RATIO = 2.0
 """σ/lsb from which Sheppard's moments are exact to double precision (see

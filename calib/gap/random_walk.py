@@ -7,8 +7,8 @@ from dataclasses import replace
 import numpy as np
 from scipy import optimize
 
+from calib import distributions as stats
 from calib.effects import Extensions, ModelState
-from calib.stats import dist as stats
 
 Q_LEVEL = 0.95
 """Level of the profile-likelihood interval reported for the random-walk intensity q."""

@@ -28,13 +28,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from calib import distributions as stats
 from calib.calibration.ls import NotIdentifiableError
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap.estimates import Reporter
 from calib.gap.quantization import quantized_moments, rails
 from calib.gap.walk import gls_nll, walk_nll
-from calib.stats import dist as stats
 from calib.stats.diagnostics import Lattice, chi2_two_sided_logp
 
 SPONGES = ("noise_level", "bias_random_walk")

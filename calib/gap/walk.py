@@ -80,6 +80,7 @@ import numpy as np
 from scipy import linalg as sla
 from scipy import optimize
 
+from calib import distributions as stats
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap.flexibility import tridiagonal_inverse_diagonal
@@ -108,7 +109,6 @@ from calib.gap.steps import describe, find_steps, two_level
 from calib.gap.switching import SWITCH_CHARGE, block_means, block_size, fit_switching
 from calib.input_rules import DataError
 from calib.noise.allan import MAX_FIT_SAMPLES, AxisNoise, fit_axis_noise
-from calib.stats import dist as stats
 
 GRID = 120
 """Places on the grid of the step, two-step and bump rivals."""

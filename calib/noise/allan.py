@@ -81,6 +81,7 @@ from typing import Any
 
 import numpy as np
 
+from calib import distributions as stats
 from calib.input_rules import DataError
 from calib.logs.static_log import check_static, quantization_step, sample_rate_of
 from calib.noise.allan_fit import (
@@ -117,7 +118,6 @@ from calib.noise.shaping import (
 )
 from calib.noise.term_units import KINDS, SI_UNITS, datasheet, si_unit
 from calib.results import ResultMixin, readonly
-from calib.stats import dist as stats
 
 TERM_UNITS = {k: SI_UNITS["accelerometer"][k] for k in ALL_TERM_NAMES}
 """SI unit of each term of an accelerometer axis (a gyro's: :data:`SI_UNITS`)."""

@@ -72,8 +72,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from calib import distributions as stats
 from calib.noise.allan_model import ALL_TERM_NAMES, N_PROCESSES, AllanMoments
-from calib.stats import dist as stats
 
 LACK_OF_FIT_P = 0.01
 """p below which a model is said not to describe the Allan curve (GLS residual χ²)."""

@@ -8,6 +8,4 @@ One job per module:
 * :mod:`calib.stats.proportion`  — exact (Clopper–Pearson) intervals for a proportion.
 * :mod:`calib.stats.diagnostics` — residual diagnostics: the gap workflow's yardstick.
 * :mod:`calib.stats.binning`     — binned means of a scattered signal.
-* :mod:`calib.stats.dist`        — the distributions and normality tests the analysis needs,
-  without importing ``scipy.stats``.
 """

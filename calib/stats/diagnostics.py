@@ -39,8 +39,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import log_ndtr, ndtri_exp
 
+from calib import distributions as stats
 from calib.numerics import equilibrated_cond
-from calib.stats import dist as stats
 
 LN2 = float(np.log(2.0))
 LOGP_FLOOR = -1.0e4

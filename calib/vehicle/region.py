@@ -61,8 +61,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from calib import distributions as stats
 from calib.results import ResultMixin, readonly
-from calib.stats import dist as stats
 from calib.vehicle.trajectory import Trajectory
 
 if TYPE_CHECKING:

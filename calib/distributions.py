@@ -3,13 +3,13 @@
 Importing ``scipy.stats`` costs ≈ 0.55 s (its hundred distributions, ``scipy.ndimage`` and
 the array-API machinery) on the 2-core machine, GIL-bound, ahead of every analysis; the
 modules on the ``tiltbench gap`` path use a handful of its functions. This module gives them
-with the same names and call forms (``dist.chi2.logsf(x, k)``, ``dist.norm.ppf(q)``,
-``dist.kurtosistest(z, alternative="greater")``), computed by the same special functions
+with the same names and call forms (``chi2.logsf(x, k)``, ``norm.ppf(q)``,
+``kurtosistest(z, alternative="greater")``), computed by the same special functions
 ``scipy.stats`` calls (``scipy/stats/_continuous_distns.py``: ``chdtrc``, ``chdtri``,
 ``gammaincinv``, ``ndtr``, ``log_ndtr``, ``ndtri``, ``stdtrit``, ``fdtrc``, ``kolmogorov``)
 and the same formulas for the tests (D'Agostino 1970; Anscombe & Glynn 1983; D'Agostino &
 Pearson 1973; Bartlett 1937, as in ``scipy/stats/_stats_py.py`` and ``_morestats.py``), so the
-values agree with ``scipy.stats`` to rounding (``tests/test_stats_dist.py``).
+values agree with ``scipy.stats`` to rounding (``tests/test_distributions.py``).
 
 Support rules as in ``scipy.stats`` (standard location and scale): below the support the
 survival function is 1 (log 0) and the distribution function 0; NaN stays NaN. Scalars in,

@@ -1,4 +1,4 @@
-"""``calib.stats.dist`` against ``scipy.stats``: the same values (to rounding) on grids that
+"""``calib.distributions`` against ``scipy.stats``: the same values (to rounding) on grids that
 reach the tails, the support's edges and NaN, and the same tests on Gaussian, heavy-tailed and
 uneven samples. The module exists only to keep ``scipy.stats`` (≈ 0.55 s to import) off the
 analysis' import path, so every value it gives must be the library's."""
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy import stats as ref
 
-from calib.stats import dist
+from calib import distributions as dist
 
 X = np.array([-1.0, 0.0, 1e-12, 0.3, 1.0, 3.84, 10.0, 50.0, 300.0, 2000.0, np.inf, np.nan])
 Q = np.array([0.0, 1e-300, 1e-12, 1e-4, 0.025, 0.5, 0.975, 1 - 1e-9, 1.0, np.nan])
