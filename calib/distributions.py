@@ -42,6 +42,15 @@ def _log(x: np.ndarray) -> np.ndarray:
         return np.log(x)
 
 
+def _quantile(q, df, inside, at0: float, at1: float):
+    """A quantile function with ``scipy.stats``' edges: ``inside(q, df)`` for 0 < q < 1, the
+    support's ends ``at0`` at q = 0 and ``at1`` at q = 1, NaN elsewhere."""
+    q, df = np.broadcast_arrays(_arr(q), _arr(df))
+    within = (q > 0) & (q < 1)
+    val = inside(np.where(within, q, 0.5), df)
+    return _out(np.where(within, val, np.where(q == 0, at0, np.where(q == 1, at1, np.nan))))
+
+
 class _Chi2:
     """χ²(k) on [0, ∞)."""
 
@@ -77,19 +86,11 @@ class _Chi2:
 
     @staticmethod
     def ppf(q, df):
-        q, df = np.broadcast_arrays(_arr(q), _arr(df))
-        inside = (q > 0) & (q < 1)
-        val = 2.0 * sc.gammaincinv(df / 2.0, np.where(inside, q, 0.5))
-        return _out(np.where(inside, val, np.where(q == 0, 0.0,
-                                                    np.where(q == 1, np.inf, np.nan))))
+        return _quantile(q, df, lambda p, k: 2.0 * sc.gammaincinv(k / 2.0, p), 0.0, np.inf)
 
     @staticmethod
     def isf(q, df):
-        q, df = np.broadcast_arrays(_arr(q), _arr(df))
-        inside = (q > 0) & (q < 1)
-        val = sc.chdtri(df, np.where(inside, q, 0.5))
-        return _out(np.where(inside, val, np.where(q == 1, 0.0,
-                                                    np.where(q == 0, np.inf, np.nan))))
+        return _quantile(q, df, lambda p, k: sc.chdtri(k, p), np.inf, 0.0)
 
 
 class _Norm:
@@ -130,11 +131,7 @@ class _T:
 
     @staticmethod
     def ppf(q, df):
-        q, df = np.broadcast_arrays(_arr(q), _arr(df))
-        inside = (q > 0) & (q < 1)
-        val = sc.stdtrit(df, np.where(inside, q, 0.5))
-        return _out(np.where(inside, val, np.where(q == 0, -np.inf,
-                                                    np.where(q == 1, np.inf, np.nan))))
+        return _quantile(q, df, lambda p, k: sc.stdtrit(k, p), -np.inf, np.inf)
 
 
 class _F:

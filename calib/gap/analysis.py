@@ -21,7 +21,7 @@ from calib.gap.cubic import K3, named_or_k3
 from calib.gap.cubic import signature as cubic_signature
 from calib.gap.drive_bias import LEVER, lever_or_drive_bias
 from calib.gap.drive_bias import signature as drive_bias_signature
-from calib.gap.drive_state import drive_checks, joint_tone
+from calib.gap.drive_state import drive_checks, joint_tone, tone_scans
 from calib.gap.estimates import Reporter
 from calib.gap.mechanisms import drive_scans, mechanism_checks
 from calib.gap.practical import (
@@ -125,6 +125,7 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         drive_torque = _torque(drive_torque(), run.n)
     spaces = [AxisSpace(ext, state, k) for k in range(2)]  # shared by the checks below
     drive = drive_scans(spaces, run)
+    tones = tone_scans(ext, state, resid_after)  # both axes' drive_tone scan, made once
     battery = run_battery(ext, state, resid_after, lattice, rep.innov, adequacy_alpha,
                           gaps=_battery_gaps(ext, state, after, resid_after),
                           extra=[c for r in reviews.values() for c in r.checks]
@@ -134,9 +135,9 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
                           + [c for k in range(2) for c in drive_checks(
                               ext, state, k, resid_after[:, k], drive_torque,
                               coarse=state.axes[k].lsb > np.sqrt(state.axes[k].sigma2),
-                              space=spaces[k])]
+                              space=spaces[k], scans=tones)]
                           + [c for c in [joint_tone(ext, state, resid_after, coarse=any(
-                              st.lsb > np.sqrt(st.sigma2) for st in state.axes))]
+                              st.lsb > np.sqrt(st.sigma2) for st in state.axes), scans=tones)]
                              if c is not None],
                           spaces=spaces)
     reviews = {k: r.with_failed(tuple(c.name for c in battery.failed

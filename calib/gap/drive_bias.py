@@ -49,18 +49,18 @@ BIASES = ("speed_bias", "move_bias", "accel_bias")
 of :func:`_columns`."""
 
 
-def _columns(run) -> dict[str, np.ndarray]:
-    """The drive-state bias columns of a timed run: ``|ω|`` (rad/s), the moving indicator (when
-    the run has moving and held stretches) and ``|α|`` (rad/s²)."""
+def _columns(run, moving: np.ndarray | None) -> dict[str, np.ndarray]:
+    """The drive-state bias columns of a timed run: ``|ω|`` (rad/s), the moving indicator
+    ``moving`` (when the run has moving and held stretches) and ``|α|`` (rad/s²)."""
     cols = {"speed_bias": np.abs(run.omega)}
-    moving = drive_state(run.tita)
     if moving is not None:
         cols["move_bias"] = moving.astype(float)
     cols["accel_bias"] = np.abs(run.alpha)
     return cols
 
 
-def _shape(name: str, axis: str, coef: float, run) -> tuple[str, float]:
+def _shape(name: str, axis: str, coef: float, run, moving: np.ndarray | None
+           ) -> tuple[str, float]:
     """The bias in words and its largest size, m/s²."""
     if name == "speed_bias":
         top = float(np.max(np.abs(run.omega)))
@@ -69,7 +69,7 @@ def _shape(name: str, axis: str, coef: float, run) -> tuple[str, float]:
                 f"{coef:+.3g} m/s² per rad/s of |ω| ({coef * top:+.3g} m/s² at the top speed "
                 f"{top:.3g} rad/s; a rate-sensitive sensor or the drive's field)"), size
     if name == "move_bias":
-        where = where_moving(run, drive_state(run.tita))
+        where = where_moving(run, moving)
         return (f"a bias on {axis} of {coef:+.3g} m/s² while the table moves, {where} "
                 "(the drive's field or a cable pulling the sensor)"), abs(coef)
     top = float(np.max(np.abs(run.alpha)))
@@ -93,7 +93,8 @@ def lever_or_drive_bias(ext: Extensions, state: ModelState, k: int) -> dict | No
     run = ext.run
     if (LEVER, axis) not in state.effects() or run.omega is None or run.alpha is None:
         return None
-    cols = _columns(run)
+    moving = drive_state(run.tita)
+    cols = _columns(run, moving)
     found = {name: f for name, c in cols.items()
              if np.ptp(c) > 0.0 and (f := swap_gain(ext, state, k, [LEVER], c)) is not None}
     if not found:
@@ -103,7 +104,7 @@ def lever_or_drive_bias(ext: Extensions, state: ModelState, k: int) -> dict | No
     if gain <= 0.0:
         return None
     coef = found[best][1]
-    shape, size = _shape(best, axis, coef, run)
+    shape, size = _shape(best, axis, coef, run, moving)
     decision = lean(gain)
     reason = (f"cannot tell the lever arm on {axis} from {shape}: the bias fits "
               f"{'better' if decision == 'leans' else 'as well'} (AIC gain {gain:.3g} over "

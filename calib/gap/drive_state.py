@@ -62,6 +62,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy import special
+from scipy.fft import next_fast_len
 
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
@@ -80,10 +81,11 @@ columns apart: ``det C(f) ≥ TONE_CONDITION·(n_m/2)²`` (near 0, the Nyquist f
 mask period's half, cos and sin sampled on the mask are nearly one column)."""
 
 TONE_OVERSAMPLE = 4
-"""``drive_tone`` scans frequencies 1/4 of a Fourier bin apart (the moving samples' DFT zero-padded
-to 4 N): a tone between two Fourier frequencies of the run loses up to 60 % of its statistic
-on the run's own grid (sinc² of half a bin), 5 % at a quarter bin. The Bonferroni count is
-the number of frequencies scanned, 4 per bin (conservative: neighbours are correlated)."""
+"""``drive_tone`` scans frequencies 1/4 of a Fourier bin apart or closer (the moving samples'
+DFT zero-padded to at least 4 N, :func:`_scan_size`): a tone between two Fourier frequencies of
+the run loses up to 60 % of its statistic on the run's own grid (sinc² of half a bin), 5 % at
+a quarter bin. The Bonferroni count is the number of frequencies scanned, about 4 per bin
+(conservative: neighbours are correlated)."""
 
 MIN_PAIRS = 30
 """Fewest lagged pairs within the stretches of a state for a lag to be used."""
@@ -276,21 +278,26 @@ def _spectrum(z: np.ndarray, run, moving: np.ndarray, scale: float, axis: str, w
                  "the drive)")
 
 
-def _tone_scan(z: np.ndarray, moving: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """``(j, S)``: the frequencies scanned (``j / (TONE_OVERSAMPLE·N)`` cycles per sample) and
-    the tone statistic ``S(f) = uᵀC⁻¹u ~ χ²(2)`` of z's moving samples at each (module
-    docstring; 0 where ``C(f)`` is too close to singular), or None when none is scanned."""
-    n, nm = z.size, int(moving.sum())
-    size = TONE_OVERSAMPLE * n  # zero-padded: frequencies j / size cycles per sample
-    x = np.where(moving, z - float(np.mean(z[moving])), 0.0)
-    spec = np.fft.rfft(x, size)  # Σ_M x e^{−iωk}, ω = 2πj/size
-    mask = np.fft.fft(moving.astype(float), size)  # Σ_M e^{−iωk}: 2ω is index 2j
+def _scan_size(n: int) -> int:
+    """Length of the zero-padded DFT of ``drive_tone``: at least :data:`TONE_OVERSAMPLE`·N,
+    rounded up to a length the FFT factors fast (a prime-rich 4N is ten times slower)."""
+    return next_fast_len(TONE_OVERSAMPLE * n)
+
+
+def _tone_scan(zs: list[np.ndarray], moving: np.ndarray
+               ) -> tuple[np.ndarray, list[np.ndarray]] | None:
+    """``(j, [S, …])``: the frequencies scanned (``j / size`` cycles per sample, size
+    :func:`_scan_size`) and, for each of ``zs``, the tone statistic ``S(f) = uᵀC⁻¹u ~ χ²(2)``
+    of its moving samples at each (module docstring); the mask's terms C(f) are the same for
+    every z. None when no frequency is scanned (C too close to singular everywhere)."""
+    n, nm = moving.size, int(moving.sum())
+    size = _scan_size(n)
+    mask = np.fft.fft(moving.astype(float), size)  # Σ_M e^{−iωk}, ω = 2πj/size: 2ω is 2j
     parts = stretches(moving)
     lowest = int(np.ceil(size / max(float(np.median([b - a for a, b in parts])), 1.0)))
     j = np.arange(max(lowest, 1), (size - 1) // 2 + 1)
     if j.size == 0:
         return None
-    a, b = spec[j].real, -spec[j].imag  # Σ x cos ωk, Σ x sin ωk
     w2 = mask[(2 * j) % size]
     cc, ss = 0.5 * (nm + w2.real), 0.5 * (nm - w2.real)
     cs = -0.5 * w2.imag  # Σ cos·sin = ½ Σ sin 2ωk
@@ -298,13 +305,33 @@ def _tone_scan(z: np.ndarray, moving: np.ndarray) -> tuple[np.ndarray, np.ndarra
     ok = det >= TONE_CONDITION * (0.5 * nm) ** 2
     if not np.any(ok):
         return None
-    return j[ok], (ss * a * a - 2.0 * cs * a * b + cc * b * b)[ok] / det[ok]
+    j, cc, ss, cs, det = j[ok], cc[ok], ss[ok], cs[ok], det[ok]
+    stats = []
+    for z in zs:
+        x = np.where(moving, z - float(np.mean(z[moving])), 0.0)
+        spec = np.fft.rfft(x, size)[j]  # Σ_M x e^{−iωk}
+        a, b = spec.real, -spec.imag  # Σ x cos ωk, Σ x sin ωk
+        stats.append((ss * a * a - 2.0 * cs * a * b + cc * b * b) / det)
+    return j, stats
+
+
+def tone_scans(ext: Extensions, state: ModelState, residuals: np.ndarray
+               ) -> tuple[np.ndarray, list[np.ndarray]] | None:
+    """The ``drive_tone`` scan of both axes' standardised residuals (N, 2) of ``state`` at
+    once (:func:`_tone_scan`), for :func:`drive_checks` and :func:`joint_tone`; None when the
+    run has no moving and held stretches of :data:`MIN_STATE` samples or nothing to scan."""
+    moving = drive_state(ext.run.tita)
+    if moving is None:
+        return None
+    zs = [np.asarray(residuals[:, k], dtype=float) / np.sqrt(state.axes[k].sigma2_eff)
+          for k in range(2)]
+    return _tone_scan(zs, moving)
 
 
 def _tone_words(z: np.ndarray, run, moving: np.ndarray, j: int, scale: float) -> tuple[str, float]:
     """The frequency of scan index ``j`` in words, and z's amplitude there on the held
     samples × ``scale`` (m/s²)."""
-    size = TONE_OVERSAMPLE * z.size
+    size = _scan_size(z.size)
     kk = np.flatnonzero(~moving)
     om = 2.0 * np.pi * j / size
     zh = z[kk] - float(np.mean(z[kk]))
@@ -314,15 +341,13 @@ def _tone_words(z: np.ndarray, run, moving: np.ndarray, j: int, scale: float) ->
     return f"{j / size:.4g} cycles per sample", amp_h
 
 
-def _tone(z: np.ndarray, run, moving: np.ndarray, scale: float, axis: str, where: str
-          ) -> Check | None:
-    nm = int(moving.sum())
-    if nm < MIN_STATE or z.size - nm < MIN_STATE:
-        return None
-    scan = _tone_scan(z, moving)
+def _tone(z: np.ndarray, run, moving: np.ndarray, scale: float, axis: str, where: str,
+          scan: tuple[np.ndarray, np.ndarray] | None) -> Check | None:
+    """``drive_tone`` of one axis from its scan ``(j, S)`` (:func:`_tone_scan`)."""
     if scan is None:
         return None
     j, stat_all = scan
+    nm = int(moving.sum())
     i = int(np.argmax(stat_all))
     stat, m = float(stat_all[i]), int(j.size)
     logp = float(min(0.0, np.log(m) - 0.5 * stat))
@@ -336,33 +361,32 @@ def _tone(z: np.ndarray, run, moving: np.ndarray, scale: float, axis: str, where
 
 
 def joint_tone(ext: Extensions, state: ModelState, residuals: np.ndarray,
-               coarse: bool = False) -> Check | None:
+               coarse: bool = False,
+               scans: tuple[np.ndarray, list[np.ndarray]] | None = None) -> Check | None:
     """``drive_tone`` on both axes at once: a vibration of the drive shakes the whole sensor
     block, so both axes see the same frequency (in different amounts). With z_x, z_y the two
     axes' standardised residuals (independent under the model), ``S_x(f) + S_y(f) ~ χ²(4)``
     at each frequency scanned, and the largest over the m frequencies has
     ``P ≤ m·P(χ²(4) > S) = m·e^{−S/2}(1 + S/2)`` (Bonferroni). A tone of amplitudes A_x, A_y
     gives ``S ≈ n_m·(A_x²/σ_x² + A_y²/σ_y²)/2 + 4``: on both axes it is found where each
-    axis alone stays within its level. None when either axis is coarse (rounding above the
-    noise) or the run has no moving and held stretches."""
+    axis alone stays within its level. ``scans``: :func:`tone_scans` of ``state``, when
+    already made. None when either axis is coarse (rounding above the noise) or the run has no
+    moving and held stretches."""
     run = ext.run
     moving = drive_state(run.tita)
-    nm = 0 if moving is None else int(moving.sum())
-    if coarse or moving is None or nm < MIN_STATE or run.n - nm < MIN_STATE:
+    scans = tone_scans(ext, state, residuals) if scans is None else scans
+    if coarse or moving is None or scans is None:
         return None
-    scales = [float(np.sqrt(state.axes[k].sigma2_eff)) for k in range(2)]
-    zs = [np.asarray(residuals[:, k], dtype=float) / scales[k] for k in range(2)]
-    scans = [_tone_scan(z, moving) for z in zs]
-    if scans[0] is None or scans[1] is None:
-        return None
-    j = scans[0][0]  # the same mask: the same frequencies on both axes
-    total = scans[0][1] + scans[1][1]
+    j, (sx, sy) = scans
+    total = sx + sy
     i = int(np.argmax(total))
-    stat, m = float(total[i]), int(j.size)
+    stat, m, nm = float(total[i]), int(j.size), int(moving.sum())
     logp = float(min(0.0, np.log(m) - 0.5 * stat + np.log1p(0.5 * stat)))
-    amps = [float(np.sqrt(max(2.0 * (sc[1][i] - 2.0) / nm, 0.0))) * s
-            for sc, s in zip(scans, scales, strict=True)]
-    at, _ = _tone_words(zs[0], run, moving, int(j[i]), scales[0])
+    scales = [float(np.sqrt(state.axes[k].sigma2_eff)) for k in range(2)]
+    amps = [float(np.sqrt(max(2.0 * (sc[i] - 2.0) / nm, 0.0))) * s
+            for sc, s in zip((sx, sy), scales, strict=True)]
+    at, _ = _tone_words(np.asarray(residuals[:, 0], dtype=float) / scales[0], run, moving,
+                        int(j[i]), scales[0])
     return Check("drive_tone", "both", stat, logp,
                  f"max χ²(4) over {m} frequencies, both axes", max(amps), "m/s²",
                  f"present while moving on both axes: a tone of {at}, about {amps[0]:.2g} m/s² "
@@ -372,7 +396,8 @@ def joint_tone(ext: Extensions, state: ModelState, residuals: np.ndarray,
 
 def drive_checks(ext: Extensions, state: ModelState, k: int, residual: np.ndarray,
                  torque: np.ndarray | None = None, coarse: bool = False,
-                 space: AxisSpace | None = None) -> list[Check]:
+                 space: AxisSpace | None = None,
+                 scans: tuple[np.ndarray, list[np.ndarray]] | None = None) -> list[Check]:
     """The five drive-state checks on axis k of the final model (those that apply).
 
     residual : (N,) the final model's residuals of axis k, m/s², white with the model's
@@ -382,6 +407,7 @@ def drive_checks(ext: Extensions, state: ModelState, k: int, residual: np.ndarra
     coarse : the rounding is coarser than the noise: the variance and spectrum checks (which
         assume a continuous Gaussian residual) are left out, as the battery's tail checks are.
     space : the axis' :class:`AxisSpace` of ``state``, when already built.
+    scans : :func:`tone_scans` of ``state`` (both axes), when already made.
     """
     run = ext.run
     moving = drive_state(run.tita)
@@ -397,7 +423,12 @@ def drive_checks(ext: Extensions, state: ModelState, k: int, residual: np.ndarra
     found = [_level(space, run, moving, tq, axis, where),
              _gain(space, run, k, moving, tq, axis, where)]
     if not coarse:
+        if scans is None:
+            scan = _tone_scan([z], moving)
+            scan = None if scan is None else (scan[0], scan[1][0])
+        else:
+            scan = (scans[0], scans[1][k])
         found += [_variance(z, moving, scale, axis, where),
                   _spectrum(z, run, moving, scale, axis, where),
-                  _tone(z, run, moving, scale, axis, where)]
+                  _tone(z, run, moving, scale, axis, where, scan)]
     return [c for c in found if c is not None]
