@@ -118,7 +118,11 @@ def console() -> int:
     leaves it out of the exit's collections: the exit takes ≈ 0.03 s. atexit handlers (a
     recording's flush) and the flush of stdout and stderr run as before; the commands close
     their own files (atomic writes). Library callers of :func:`main` (tests, scripts) keep
-    their process's collector untouched."""
+    their process's collector untouched.
+
+    No command draws with MuJoCo's OpenGL, so its GL loader (glfw: ≈ 0.05 s of the import of
+    ``mujoco``) is switched off unless the environment chose one (``MUJOCO_GL``)."""
+    os.environ.setdefault("MUJOCO_GL", "disable")
     code = main()
     gc.collect()
     gc.freeze()

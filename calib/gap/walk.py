@@ -105,7 +105,7 @@ from calib.gap.space import (
     spectral_peak,
     tilt_drift_columns,
 )
-from calib.gap.steps import describe, find_steps, two_level
+from calib.gap.steps import describe, optimal_steps, two_level
 from calib.gap.switching import SWITCH_CHARGE, block_means, block_size, fit_switching
 from calib.input_rules import DataError
 from calib.noise.allan import MAX_FIT_SAMPLES, AxisNoise, fit_axis_noise
@@ -1084,8 +1084,9 @@ def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
                ) -> dict | None:
     """Steps of the bias, not a walk? (:mod:`calib.gap.steps`).
 
-    The steps of the walk's path ``e`` (:func:`calib.gap.steps.find_steps`, change points at
-    the family level ``STEP_ALPHA``) are fitted in place of the walk (their columns in the
+    The steps of the walk's path ``e`` (:func:`calib.gap.steps.optimal_steps`: the
+    segmentation that maximises the path's gain less :func:`step_charge` per step, the charge
+    D makes) are fitted in place of the walk (their columns in the
     reduced model's whitened system, :class:`calib.gap.space.AxisSpace`), charged
     :func:`step_charge` each: AIC gain ``D = (LR_s − 2·c_s·K) − (LR_w − 2·c_w)``. When D > 0 and
     a walk adds nothing beyond the steps (:func:`walk_beyond_refit`, every linear parameter
@@ -1105,7 +1106,7 @@ def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
     if fixed_q:
         return None
     run = ext.run
-    fit = find_steps(e, sigma2)
+    fit = optimal_steps(e, sigma2, 2.0 * step_charge(run.n))
     if fit.count == 0:
         return None
     cols = fit.columns(run.n)

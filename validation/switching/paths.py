@@ -1,5 +1,6 @@
 """Paths for the switching study (:mod:`validation.switching.score`), made with numpy alone:
-white noise plus a random walk or a telegraph (two levels, switches at uniform random times).
+white noise plus a random walk, a telegraph (two levels, switches at uniform random times) or
+a staircase (2–6 steps of one sign and size, 0.25–0.6 σ, at uniform random times).
 Nothing here imports the detector (``bench``, ``calib``) or the scorer."""
 
 from __future__ import annotations
@@ -9,7 +10,7 @@ import numpy as np
 
 def make_path(rng: np.random.Generator, kind: str, faint: bool) -> tuple[np.ndarray, float,
                                                                         float, dict]:
-    """(path, σ², Δt, what was made) of one walk or telegraph (module docstring)."""
+    """(path, σ², Δt, what was made) of one walk, telegraph or staircase (module docstring)."""
     n = int(rng.choice([2001, 4001, 6001, 12001]))
     dt = 1.0 / float(rng.choice([50.0, 100.0, 200.0]))
     sigma = float(rng.uniform(0.05, 1.0))
@@ -19,6 +20,12 @@ def make_path(rng: np.random.Generator, kind: str, faint: bool) -> tuple[np.ndar
         q = qt * sigma / np.sqrt(t[-1])
         drift = np.cumsum(rng.normal(0.0, q * np.sqrt(dt), n))
         info = {"q_sqrt_T_over_sigma": qt}
+    elif kind == "staircase":
+        k = int(rng.integers(2, 7))
+        times = np.sort(rng.uniform(0.05, 0.95, k) * t[-1])
+        h = float(rng.uniform(0.25, 0.6)) * float(rng.choice([-1.0, 1.0]))
+        drift = h * sigma * np.searchsorted(times, t, "right")
+        info = {"h_over_sigma": h, "steps": k}
     else:
         k = int(rng.integers(4, 31))
         times = np.sort(rng.uniform(0.05, 0.95, k) * t[-1])

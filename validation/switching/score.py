@@ -19,12 +19,14 @@ A walk above the margin would be a walk the review stops naming (with the walk-b
 of :func:`calib.gap.walk.switching_drift` as a second guard, not counted here).
 
     python -m validation.switching.score --analysis            # 400 walks, 160 telegraphs
+    python -m validation.switching.score --analysis --walks 0 --telegraphs 0 --staircases 150
 
 ``--analysis`` runs the whole analysis (:func:`calib.gap.analyze_gap`) on calibration runs
 built around such paths (:func:`validation.switching.paths.make_run`: the path on x, a
 constant-rate or stop-and-go table, N ≤ 6001; longer paths are skipped) and counts, for
 walks and telegraphs, the verdicts, whether the walk on x is named, and the decision of the
-steps or switching against it (``"describes"``: the pair listed, the walk named; ``"leans"``:
+steps or switching against it (``--staircases K`` adds K staircases of 2–6 steps of one
+sign and size, 0.25–0.6 σ; ``"describes"``: the pair listed, the walk named; ``"leans"``:
 beyond :data:`calib.gap.walk.LEAN_MARGIN`, the walk not named; ``"steps"``: beyond the
 margin) with the largest gain of each kind. Two processes by default (``--jobs``).
 """
@@ -74,12 +76,14 @@ def analysed(job: tuple[int, str, bool]) -> dict | None:
             "gain": None if steps is None else float(steps["gain"]), **run["info"]}
 
 
-def analysis_study(walks: int, telegraphs: int, seed: int, jobs: int) -> int:
+def analysis_study(walks: int, telegraphs: int, seed: int, jobs: int, staircases: int = 0
+                   ) -> int:
     """``--analysis`` of the module docstring: the table on stdout."""
     from multiprocessing import get_context
 
     work = [(seed + i, "walk", i % 2 == 0) for i in range(walks)]
     work += [(seed + walks + i, "telegraph", True) for i in range(telegraphs)]
+    work += [(seed + walks + telegraphs + i, "staircase", True) for i in range(staircases)]
     rows = []
     with get_context("spawn").Pool(max(1, jobs)) as pool:
         for i, r in enumerate(pool.imap(analysed, work, chunksize=4)):
@@ -90,8 +94,10 @@ def analysis_study(walks: int, telegraphs: int, seed: int, jobs: int) -> int:
     print(f"whole analysis (seed {seed}, N ≤ 6001): runs | verdict explained / unexplained / "
           "nothing | walk on x named | steps or switching against it: describes (pair, walk "
           "named) / leans (walk not named) / steps (replaced) | largest gain of each")
-    for kind in ("walk", "telegraph"):
+    for kind in ("walk", "telegraph", "staircase"):
         rs = [r for r in rows if r["kind"] == kind]
+        if not rs:
+            continue
         verdicts = "/".join(str(sum(r["verdict"] == v for r in rs))
                             for v in ("explained", "unexplained", "nothing_detected"))
         tiers = "/".join(str(sum(r["decision"] == d for r in rs))
@@ -111,11 +117,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seed", type=int, default=2033)
     p.add_argument("--analysis", action="store_true",
                    help="run the whole analysis on runs built around the paths")
+    p.add_argument("--staircases", type=int, default=0,
+                   help="--analysis: also this many staircases (2–6 steps of 0.25–0.6 σ)")
     p.add_argument("--jobs", type=int, default=2, help="processes of --analysis")
     a = p.parse_args(argv)
     if a.analysis:
         return analysis_study(a.walks, 160 if a.telegraphs is None else a.telegraphs,
-                              a.seed, a.jobs)
+                              a.seed, a.jobs, a.staircases)
     a.telegraphs = 150 if a.telegraphs is None else a.telegraphs
     rng = np.random.default_rng(a.seed)
     walks, tele, sizes = [], [], []
