@@ -185,3 +185,22 @@ def test_the_whole_analysis_study_counts_its_runs(capsys):
         runs = sum(r is not None and r["kind"] == kind for r in made)
         line = next(x for x in out.splitlines() if x.startswith(label))
         assert int(line.split()[1]) == runs, (line, made)
+
+
+def test_a_staircase_path_rises_by_its_steps_and_the_study_counts_it(capsys):
+    """``make_path(…, "staircase", …)``: 2–6 steps of one sign, each 0.25–0.6 σ, at times
+    within 5–95 % of the run, so the last 5 % of the path sits ``steps·h·σ`` above the first
+    5 % (checked within 5 standard errors of the two means); ``--staircases`` counts them."""
+    from validation.switching.paths import make_path
+    from validation.switching.score import main
+
+    for seed in range(6):
+        e, s2, dt, info = make_path(np.random.default_rng(seed), "staircase", True)
+        assert 2 <= info["steps"] <= 6 and 0.25 <= abs(info["h_over_sigma"]) <= 0.6
+        m = int(0.05 * e.size)
+        rise = (e[-m:].mean() - e[:m].mean()) / np.sqrt(s2)
+        assert abs(rise - info["steps"] * info["h_over_sigma"]) < 5.0 * np.sqrt(2.0 / m)
+    assert main(["--analysis", "--walks", "0", "--telegraphs", "0", "--staircases", "2",
+                 "--seed", "5", "--jobs", "1"]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("staircases"))
+    assert 1 <= int(line.split()[1]) <= 2, line
