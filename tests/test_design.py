@@ -51,10 +51,14 @@ def _rss(h: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.sum((y - h @ beta) ** 2, axis=0)
 
 
+ALPHA = 0.005
+"""The family α the sizes were chosen for (p in 30–90 %); the design's default is the gap's."""
+
+
 @pytest.fixture(scope="module")
 def analytic():
     exps = [Experiment(d, N, 0.314) for d in DESIGNS]
-    return analyze_design(exps, list(SIZES), SIZES, NV, runs=0)
+    return analyze_design(exps, list(SIZES), SIZES, NV, family_alpha=ALPHA, runs=0)
 
 
 @pytest.mark.parametrize("name", list(SIZES))
@@ -79,7 +83,8 @@ def test_size_for_80_percent_has_80_percent_power(analytic):
     for name, e in analytic.effects.items():
         for i, row in enumerate(e["per_experiment"]):
             exp = Experiment(DESIGNS[i], N, 0.314)
-            one = analyze_design([exp], [name], {name: row["size_80"]}, NV, runs=0)
+            one = analyze_design([exp], [name], {name: row["size_80"]}, NV, family_alpha=ALPHA,
+                                 runs=0)
             assert abs(one.effects[name]["per_experiment"][0]["power"] - 0.80) < 1e-6
 
 
@@ -114,6 +119,8 @@ def test_cli_json_has_units_and_plot_writes_png(tmp_path, capsys):
     from calib.units import missing_units
     assert missing_units(d) == []
     assert d["units"]["effects.misalignment.size"] == "rad"
+    from calib.gap.selection import FAMILY_ALPHA  # the design's default level is the gap's
+    assert d["settings"]["family_alpha"] == FAMILY_ALPHA
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["design", "--plot", str(png), "--runs", "0"]) == 2  # exists, no --force
 

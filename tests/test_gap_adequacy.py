@@ -9,6 +9,7 @@ over many clean runs in tests/test_validation_score.py.
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -175,8 +176,12 @@ def test_periodic_bias_is_not_taken_for_a_random_walk():
     y[:, 0] += 0.2 * np.sin(2 * np.pi * t / 17.0)
     res = _analyse(th, y, t)
     assert res.verdict == "unexplained", res.summary()
-    hits = [u for u in res.unexplained if u["axis"] == "x" and "period 1" in u["description"]]
-    assert hits, res.unexplained  # "… with period 17 s …"
+    assert ("bias_random_walk", "x") not in res.named, res.summary()
+    # at a constant rate a period in time is one in θ too: "… with period 17 s …" or "order
+    # 2.5 of θ" (2.35 cycles a turn), whichever check speaks first
+    hits = [u for u in res.unexplained if u["axis"] == "x"
+            and re.search(r"period 1[67]|order 2\.[345] of θ", u["description"])]
+    assert hits, res.unexplained
 
 
 # -------------------------------------------------------------------------- ties
@@ -212,7 +217,7 @@ def test_clean_run_says_nothing_detected_at_alpha():
     res = _analyse(th, _readings(th, rng), t)
     assert res.verdict == "nothing_detected" and res.effects == ()
     line = res.summary().splitlines()[0]
-    assert "nothing detected at α = 0.01" in line
+    assert "nothing detected at α = 0.0035" in line  # selection 0.001 + battery 0.0025
     assert "nothing is missing" not in res.summary()
     d = res.to_dict()
     assert d["verdict"] == "nothing_detected" and d["unexplained"] == []

@@ -6,12 +6,12 @@ other parameters (bias, scale) drawn at random; the workflow is not told which e
 there. Checks, with their derivations:
 
 * the right name and axis are named, nothing else (``gravity_mismatch``: nothing named, and
-  ``not_identifiable`` says why) — the selection's family false-alarm rate is 0.005;
+  ``not_identifiable`` says why) — the selection's family false-alarm rate is 0.001;
 * the estimate is within 4σ of the truth (σ = the reported std; a correct Gaussian estimate
   misses that with probability 6e-5);
 * the gap after adding the effect is consistent with noise alone: χ²/dof inside its
   two-sided (1 - α) band and the largest signature z below its Bonferroni threshold, at the
-  workflow's family α = 0.005 (``GapMeasure.consistent``);
+  workflow's family α = 0.001 (``GapMeasure.consistent``);
 * the gap before is NOT consistent on an affected axis (the effect was visible at all).
 
 Clean datasets (no effect): at most 1 % of 120 runs (60 static, 60 sweep, six θ designs) name
@@ -204,7 +204,7 @@ def _clean_named(seed: int) -> tuple[int, list, bool]:
 @pytest.mark.slow
 def test_clean_bench_datasets_rarely_name_an_effect(monkeypatch):
     """≤ 1 % of clean runs name an effect (at most 1 of 120; the selection's family α is
-    0.005, so 0.6 false alarms are expected). Runs in two processes, one BLAS thread each."""
+    0.001, so 0.12 false alarms are expected). Runs in two processes, one BLAS thread each."""
     monkeypatch.setenv("OPENBLAS_NUM_THREADS", "1")
     monkeypatch.setenv("OMP_NUM_THREADS", "1")
     ctx = multiprocessing.get_context("spawn")

@@ -16,7 +16,7 @@ random bias U(-0.3, 0.3) m/s² and scale U(-0.03, 0.03) on both axes, white nois
 (σ² = 0.25, 0.64 (m/s²)², the stated values), and ONE effect. Per-axis effects alternate
 between x (even replicates) and y (odd ones). Sizes: ``|estimate - null|/std`` ≈ 10 on each
 axis (null = 0, or the stated σ² for noise_level), far above the selection threshold (per-step
-α = 0.005/17 ≈ 2.9e-4, |z| ≈ 3.6), so the workflow names the effect in essentially every run.
+α = 0.001/17 ≈ 5.9e-5, |z| ≈ 4.0), so the workflow names the effect in essentially every run.
 The drift is ≈ 20 std: a ramp is also fitted by a random walk (the documented drift / walk
 confusion), and at 10 std the walk's p-value beat the drift's in 1-4 % of y runs (log-p margin
 3.5 ± 1.5; at 20 std 6.9 ± 1.6, none of 150 runs below 0.4). The std of a linear coefficient
@@ -55,11 +55,11 @@ noise_level's std is σ̂²·sqrt(2/dof) (a skew of order sqrt(2/N) ≈ 0.045 in
 by N - 1 instead of dof (a bias of ≈ 0.02 std).
 
 Naming: a run is right when it names exactly the true effect on the true axis. A correct
-selector errs when it adds a spurious effect (P ≤ family_alpha = 0.005 per run, Bonferroni;
+selector errs when it adds a spurious effect (P ≤ family_alpha = 0.001 per run, Bonferroni;
 measured ≈ 0.2 % on clean runs in ``tests/test_gap_calib.py``) or misses the effect or names
 another one in its place (at ≥ 10 std P(miss) ≈ Φ(3.6 - 10) < 1e-9; swaps: see the drift
-above). With p = 0.005 the wrong runs K ~ Binomial(R, p) and the test asserts
-``K ≤ binom.ppf(0.999, R, 0.005)`` (3 at R = 80; a correct selector fails with P ≤ 0.001 per
+above). With p = 0.001 the wrong runs K ~ Binomial(R, p) and the test asserts
+``K ≤ binom.ppf(0.999, R, 0.001)`` (2 at R = 80; a correct selector fails with P ≤ 0.001 per
 effect) and lists the wrong runs (replicate, axis, what was named) in the message. The z
 statistics use every run that names the true effect (a spurious extra effect only adds a
 column, and the std accounts for it).
@@ -77,13 +77,13 @@ from scipy import stats
 
 from calib.files.course import Ensayo
 from calib.gap import analyze_gap
+from calib.gap.selection import FAMILY_ALPHA  # analyze_gap's default false-alarm rate
 from tests.gap_synthetic import STATED, synth
 
 SEED = 20240617
 N = 1000
 R_PER_EFFECT = 80
 Z95 = float(stats.norm.ppf(0.975))
-FAMILY_ALPHA = 0.005  # analyze_gap's default false-alarm rate per run
 
 # (effect, printed key = its parameter, {axis: true value}): about 10 printed std on each
 # axis at N = 1000, 20 for the drift (module docstring)
@@ -150,7 +150,7 @@ def _line(label: str, s: dict[str, float]) -> str:
 def test_linear_effect_std_has_its_coverage():
     """Per effect (R = 80) and pooled (R = 480): coverage of ``estimate ± 1.96 std``, mean z²
     and mean z within their binomial / χ² bands; the true effect and axis (alone) named in all
-    but ``binom.ppf(0.999, R, 0.005)`` runs (module docstring)."""
+    but ``binom.ppf(0.999, R, FAMILY_ALPHA)`` runs (module docstring)."""
     jobs = [(c, i) for i in range(R_PER_EFFECT) for c in range(len(CASES))]
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # inherited by the spawned workers
     with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as ex:

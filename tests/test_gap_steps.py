@@ -23,7 +23,7 @@ from calib.gap.steps import (
     step_threshold,
     two_level,
 )
-from calib.gap.walk import CYCLE_MARGIN, LEAN_MARGIN, steps_decision
+from calib.gap.walk import CYCLE_MARGIN, WALK_LEAN_MARGIN, steps_decision
 from tests.test_gap_drive_state import STATED, course_readings, stop_and_go
 
 SIGMA_X = float(np.sqrt(STATED[0]))
@@ -163,7 +163,7 @@ def test_optimal_steps_finds_close_steps_that_binary_segmentation_merges():
 
 def test_a_faint_staircase_ahead_of_the_walk_is_not_told_apart_and_the_walk_not_named():
     """Three steps of 0.33 σ (two of them 1.2 s apart) beat a walk after their charges by
-    more than ``LEAN_MARGIN`` but within ``CYCLE_MARGIN``, and a walk adds nothing beyond
+    more than ``WALK_LEAN_MARGIN`` but within ``CYCLE_MARGIN``, and a walk adds nothing beyond
     them: this run cannot tell them apart, so the pair is listed under ``not_identifiable``
     with the steps' shape in words, the walk is not presented as the explanation and the
     verdict is "unexplained" — never a silent walk."""
@@ -175,7 +175,7 @@ def test_a_faint_staircase_ahead_of_the_walk_is_not_told_apart_and_the_walk_not_
     res = analyze_gap(validate_ensayo(th, y, t), STATED)
     walk = [w for w in res.adequacy["walk"] if w["axis"] == "x"][0]
     assert walk["steps"]["decision"] == "leans", walk["steps"]
-    assert LEAN_MARGIN < walk["steps"]["gain"] <= CYCLE_MARGIN
+    assert WALK_LEAN_MARGIN < walk["steps"]["gain"] <= CYCLE_MARGIN
     pair = [d for d in res.not_identifiable if d["names"] == ["bias_random_walk", "bias_steps"]]
     assert len(pair) == 1 and pair[0]["axis"] == "x", res.not_identifiable
     assert pair[0]["reason"].startswith("cannot tell a walk from steps on x: a staircase of")
@@ -185,10 +185,12 @@ def test_a_faint_staircase_ahead_of_the_walk_is_not_told_apart_and_the_walk_not_
 
 
 def test_the_tiers_of_steps_against_the_walk():
-    """``steps_decision``: replaced beyond the margin, not named beyond ``LEAN_MARGIN``,
-    named with the pair listed below it."""
+    """``steps_decision``: replaced beyond the margin, not named beyond
+    ``WALK_LEAN_MARGIN`` (2: beyond "about as well supported"), named with the pair listed
+    below it."""
+    assert WALK_LEAN_MARGIN == 2.0
     assert steps_decision(CYCLE_MARGIN + 0.1, CYCLE_MARGIN) == "steps"
     assert steps_decision(CYCLE_MARGIN, CYCLE_MARGIN) == "leans"
-    assert steps_decision(LEAN_MARGIN + 0.1, CYCLE_MARGIN) == "leans"
-    assert steps_decision(LEAN_MARGIN, CYCLE_MARGIN) == "describes"
+    assert steps_decision(WALK_LEAN_MARGIN + 0.1, CYCLE_MARGIN) == "leans"
+    assert steps_decision(WALK_LEAN_MARGIN, CYCLE_MARGIN) == "describes"
     assert steps_decision(0.5, CYCLE_MARGIN) == "describes"

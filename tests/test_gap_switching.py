@@ -14,7 +14,7 @@ from calib.files.course import validate_ensayo
 from calib.gap import analyze_gap
 from calib.gap.confusions import design_hint
 from calib.gap.switching import block_means, fit_switching, two_level_m2ll, viterbi
-from calib.gap.walk import LEAN_MARGIN, SWITCH_MARGIN
+from calib.gap.walk import SWITCH_MARGIN, WALK_LEAN_MARGIN
 from calib.units import missing_units
 from tests.test_gap_drive_state import STATED, course_readings, stop_and_go
 
@@ -139,16 +139,16 @@ def test_faint_telegraph_noise_is_said_as_switching_not_named_a_walk():
             continue
         pair = [d for d in res.not_identifiable
                 if d["names"] == ["bias_random_walk", "bias_switching"]]
-        if steps["decision"] in ("steps", "leans"):  # beyond LEAN_MARGIN: not named
+        if steps["decision"] in ("steps", "leans"):  # beyond WALK_LEAN_MARGIN: not named
             assert steps["gain"] > (SWITCH_MARGIN if steps["decision"] == "steps"
-                                    else LEAN_MARGIN)
+                                    else WALK_LEAN_MARGIN)
             assert res.verdict == "unexplained", res.summary()
             assert ("bias_random_walk", "x") not in res.named
             assert "the bias on x switches between two levels" in said, said
             assert len(pair) == (steps["decision"] == "leans"), pair
             said_as_switching += 1
         else:
-            assert 0.0 < steps["gain"] <= LEAN_MARGIN
+            assert 0.0 < steps["gain"] <= WALK_LEAN_MARGIN
             assert ("bias_random_walk", "x") in res.named
             assert len(pair) == 1 and pair[0]["reason"].startswith(
                 "cannot tell a walk from two-level switching on x (AIC gain"), pair

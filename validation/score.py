@@ -22,9 +22,9 @@ Rules
   analysis' own per-axis consistency (:func:`contradictions`, issue 20, item 3).
 
 Error rates, for a test that must not tune thresholds to files: the analysis states its
-family false-alarm probability α (``criterion["family_alpha"]``, 0.005 by default) for a clean
-run, so among R clean runs the wrong ones are Binomial(R, α); :func:`max_wrong` gives the
-count a test may allow at a stated confidence.
+family false-alarm probability α (``criterion["family_alpha"]``, 0.001 by default; 0.005
+until stop 44) for a clean run, so among R clean runs the wrong ones are Binomial(R, α);
+:func:`max_wrong` gives the count a test may allow at a stated confidence.
 
 ``analysis.verdict`` is read with ``getattr(…, "verdict", None)`` (older results have none).
 """

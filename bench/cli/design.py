@@ -143,8 +143,8 @@ def register(sub) -> None:
     add_option(q, "--size", action="append", help="effect size in its unit (repeatable)")
     add_option(q, "--noise-var", default="0.25,0.64", help="stated σx², σy², (m/s²)²")
     add_option(q, "--axis", choices=("x", "y"), default="x")
-    add_option(q, "--alpha", type=float, default=0.005,
-               help="the gap's family false-alarm probability")
+    add_option(q, "--alpha", type=float, default=0.001,
+               help="the gap's family false-alarm probability (its default: 0.001)")
     add_option(q, "--runs", type=integer, default=10,
                help="Monte Carlo runs per cell (0: analytic only)")
     add_option(q, "--seed", type=int, default=0, help="seed of the Monte Carlo runs")

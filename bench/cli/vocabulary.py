@@ -204,7 +204,7 @@ VOCABULARY: tuple[Term, ...] = (
     Term("--level", "confidence level of every interval, region or test the command reports",
          "1", metavar="L", defaults=_LEVEL_DEFAULTS),
     Term("--alpha", "significance (false-alarm probability) of the command's test", "1",
-         defaults="design: 0.005, the gap's family α; noise: 0.05, one-sided, per term"),
+         defaults="design: 0.001, the gap's family α; noise: 0.05, one-sided, per term"),
     Term("--gate-alpha", "innovation gate's false-rejection probability per fix", "1",
          metavar="A"),
     Term("--consistency-alpha", "false-alarm probability of the windowed NIS test", "1",

@@ -58,7 +58,7 @@ Progress = Callable[[str], None] | None
 def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = G,
             rate: float | None = None, report_dir: PathLike | None = None,
             rrd: PathLike | None = None, force: bool = False, *,
-            family_alpha: float = 0.005, progress: Progress = None,
+            family_alpha: float | None = None, progress: Progress = None,
             sensor: SensorProfile | None = None) -> GapReport:
     """Run the discrepancy workflow on a measured calibration run.
 
@@ -71,7 +71,8 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
     report_dir : write ``gap.json``, ``gap.md``, ``gap.png``, ``gap.svg`` and
         ``model_after.xml`` there (refuses to overwrite unless ``force``).
     rrd : write a rerun recording there.
-    family_alpha : family-wise level of the detection and of "consistent with noise".
+    family_alpha : family-wise level of the detection and of "consistent with noise" (None:
+        the analysis' default, :data:`calib.gap.selection.FAMILY_ALPHA`).
     progress : called with one line per step and its duration (e.g. a function printing to
         stderr); None: silent.
     sensor : a sensor profile: the bias random walk's q comes from it
@@ -101,9 +102,9 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
         from calib.gap import analyze_gap
 
         with _step(progress, f"analysing {ensayo.n} samples (calib.gap)…", "analysis done"):
-            analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate,
-                                   family_alpha=family_alpha, sensor=sensor,
-                                   drive_torque=lambda: first.result()[1])
+            level = {} if family_alpha is None else {"family_alpha": family_alpha}
+            analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate, sensor=sensor,
+                                   drive_torque=lambda: first.result()[1], **level)
         if _needs_sysid(analysis):
             # the refinement's import (≈ 0.4 s, GIL-bound) while the re-simulation still runs
             # on the other thread, and only when the analysis named a physical effect
@@ -130,7 +131,8 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
                        after=after.predictions, table_after=table_after,
                        sensor_after=after.sensor, gap_before=nominal.gap,
                        gap_after=after.gap, residual_before=nominal.residual,
-                       residual_after=after.residual, family_alpha=float(family_alpha),
+                       residual_after=after.residual,
+                       family_alpha=float(analysis.criterion["family_alpha"]),
                        chi2_after_stated=after.chi2_stated, readings_change=after.change)
     files = _write_outputs(report, report_dir, rrd, force, progress)
     return replace(report, files=files)

@@ -23,7 +23,7 @@ from calib.design.result import DesignResult
 from calib.design.signals import LINEAR, SIMULATED, coefficients, size_of, size_unit
 from calib.effects import AxisState, Extensions, ModelState, RunData, effect, stated_variances
 from calib.gap.confusions import AMBIGUITY_LR
-from calib.gap.selection import LATTICE_TESTS, candidate_list, first_step
+from calib.gap.selection import FAMILY_ALPHA, LATTICE_TESTS, candidate_list, first_step
 from calib.stats.proportion import clopper_pearson
 from calib.stats.runs import Mapper
 
@@ -162,7 +162,7 @@ whose χ² quantile is finite (a denormal α gives an infinite critical value)."
 
 def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
                    sizes: Mapping[str, float] | None = None, noise_var=(0.25, 0.64),
-                   family_alpha: float = 0.005, axis: str = "x", runs: int = 20,
+                   family_alpha: float = FAMILY_ALPHA, axis: str = "x", runs: int = 20,
                    seed: int = 0, g: float = G, mapper: Mapper | None = None,
                    progress: Callable[[str], None] | None = None,
                    mc_grid: int = 0, gain: float = 1.0) -> DesignResult:
@@ -202,7 +202,7 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
     >>> res = analyze_design([Experiment("uniform", 2001, 0.314),
     ...                       Experiment("reversal", 2001, 0.314)], ["misalignment"])
     >>> [round(r["power"], 2) for r in res.effects["misalignment"]["per_experiment"]]
-    [0.3, 0.28]
+    [0.18, 0.17]
     """
     say = progress or (lambda _msg: None)
     sizes = {**DEFAULT_SIZES, **dict(sizes or {})}

@@ -35,7 +35,7 @@ from calib.gap.practical import (
     worse_signature,
 )
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
-from calib.gap.selection import candidate_list, initial_state, select, try_test
+from calib.gap.selection import FAMILY_ALPHA, candidate_list, initial_state, select, try_test
 from calib.gap.space import AxisSpace
 from calib.gap.sponges import review_sponges
 from calib.gap.walk import WALK_CHECKS, WalkReview, review_walk
@@ -44,7 +44,7 @@ from calib.stats.diagnostics import GapMeasure, Lattice, detect_lattice, gap_mea
 
 
 def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = None,
-                family_alpha: float = 0.005, adequacy_alpha: float = ADEQUACY_ALPHA,
+                family_alpha: float = FAMILY_ALPHA, adequacy_alpha: float = ADEQUACY_ALPHA,
                 sensor: SensorProfile | None = None,
                 drive_torque: np.ndarray | Callable[[], np.ndarray | None] | None = None
                 ) -> GapAnalysis:
