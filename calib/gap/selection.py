@@ -90,7 +90,7 @@ battery's :data:`calib.gap.adequacy.ADEQUACY_ALPHA`, 0.35 % nominal in all). Why
 tool that names nothing on ≥ 300 clean runs needs a false-alarm rate near 0.1 % (P(none in
 300) = e^{−300 p}: 74 % at 0.1 %, 22 % at 0.5 %). At 0.005 + 0.005 the drive part's clean runs
 (seeds 0, 2, 3, 4) alarmed in 7 of 1280 (0.55 %; the Bonferroni levels run at about half
-their nominal rate), 4 of them by the selection, each at p within 0.4–0.8 of its per-step
+their nominal rate), 4 of them by the selection, each at p within 0.4–0.85 of its per-step
 level; the catalog effects of those seeds (z 6–12) were named at p at most 0.01 of that
 level, so a level five times lower costs them nothing (one degree of freedom at z = 5: power
 91 % → 83 %; at z = 6: 99 % → 97 %)."""
