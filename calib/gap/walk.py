@@ -165,8 +165,8 @@ supported (Burnham & Anderson 2002, §2.6: ΔAIC 0–2) and the walk, the catalo
 with the pair listed (``"describes"``). Narrower than :data:`LEAN_MARGIN`: a true walk rarely
 fits worse than steps after their place charges (``python -m validation.switching.score
 --analysis``, ``docs/gap.md``, "Steps or switching ahead of the walk"), while faint
-telegraphs and staircases land between 2 and 6 often (seeds 3 and 4 of the drive part: 6 of
-24 step-like runs named a walk there)."""
+telegraphs and staircases land between 2 and 6 often (seeds 3 and 4 of the drive part: 5 of
+their 24 step-like runs were named a walk at gains 2.6–5.9)."""
 
 NESTED_TOP = 3
 """Rivals (those beating the walk by AIC, best first) tested on top of it."""
