@@ -100,11 +100,13 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
         job = pool.submit(_nominal_run, first, base, datos, noise_var)
         from bench.gap.report import GapReport
         from calib.gap import analyze_gap
+        from calib.gap.selection import FAMILY_ALPHA
+
+        alpha = FAMILY_ALPHA if family_alpha is None else float(family_alpha)
 
         with _step(progress, f"analysing {ensayo.n} samples (calib.gap)…", "analysis done"):
-            level = {} if family_alpha is None else {"family_alpha": family_alpha}
-            analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate, sensor=sensor,
-                                   drive_torque=lambda: first.result()[1], **level)
+            analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate, family_alpha=alpha,
+                                   sensor=sensor, drive_torque=lambda: first.result()[1])
         if _needs_sysid(analysis):
             # the refinement's import (≈ 0.4 s, GIL-bound) while the re-simulation still runs
             # on the other thread, and only when the analysis named a physical effect
@@ -131,8 +133,7 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
                        after=after.predictions, table_after=table_after,
                        sensor_after=after.sensor, gap_before=nominal.gap,
                        gap_after=after.gap, residual_before=nominal.residual,
-                       residual_after=after.residual,
-                       family_alpha=float(analysis.criterion["family_alpha"]),
+                       residual_after=after.residual, family_alpha=alpha,
                        chi2_after_stated=after.chi2_stated, readings_change=after.change)
     files = _write_outputs(report, report_dir, rrd, force, progress)
     return replace(report, files=files)

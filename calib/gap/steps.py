@@ -2,9 +2,10 @@
 
 A bias that jumps (a loose connector, a supply that switches, a relay, random telegraph
 noise of a bistable defect) is not a random walk and not 1/f noise: it is piecewise
-constant. This module finds the steps of a path and says what they look like; the walk review
-(:mod:`calib.gap.walk`) uses it to tell such a drift from a walk, and the battery's ``step``
-check (:mod:`calib.gap.adequacy`) uses it for its words.
+constant. This module finds the steps of a path and says what they look like: the battery's
+``step`` check (:mod:`calib.gap.adequacy`) finds them at a family level for its words
+(:func:`find_steps`, below), the walk review (:mod:`calib.gap.walk`) at the charge its
+comparison with the walk makes (:func:`optimal_steps`, the exact optimum).
 
 Change points (binary segmentation, known noise)
 ------------------------------------------------
@@ -222,7 +223,8 @@ def optimal_steps(e: np.ndarray, sigma2: float, penalty: float) -> StepFit:
                        np.zeros(0), 0.0, float(np.sqrt(sigma2)), n)
     m = max(1, -(-n // MAX_DP_POINTS))
     edges = np.r_[np.arange(0, n, m), n]  # sample index of each point's start, and n
-    cs = np.concatenate([[0.0], np.cumsum(e)])[edges]  # S at the point edges
+    csum = np.concatenate([[0.0], np.cumsum(e)])
+    cs = csum[edges]  # S at the point edges
     cw = edges.astype(float)  # samples before each edge
     npts = edges.size - 1
     seg = max(1, -(-MIN_SEGMENT // m))  # fewest points a segment holds
@@ -243,7 +245,6 @@ def optimal_steps(e: np.ndarray, sigma2: float, penalty: float) -> StepFit:
     while bounds[-1] > 0:
         bounds.append(int(last[bounds[-1]]))
     bounds = edges[np.array(bounds[::-1])]
-    csum = np.concatenate([[0.0], np.cumsum(e)])
     levels = np.diff(csum[bounds]) / np.diff(bounds)
     fitted = np.repeat(levels, np.diff(bounds))
     lr = (float(np.sum((e - e.mean()) ** 2)) - float(np.sum((e - fitted) ** 2))) / sigma2
