@@ -171,6 +171,10 @@ their 24 step-like runs were named a walk at gains 2.6–5.9)."""
 NESTED_TOP = 3
 """Rivals (those beating the walk by AIC, best first) tested on top of it."""
 
+TIE_LOGP = 1e-9
+"""Relative difference of two rivals' log p on top of the walk within which they fit alike
+(the same shape in this run): ``walk_rivals`` says both."""
+
 DRIVE_ORDERS = (0.5, 12.0)
 """Range of the orders ν of the drive-angle grid, spaced by half a cycle over the run's
 angle range (``0.5/turns``, between 0.02 and 0.25); the integers are excluded (harmonics of
@@ -919,20 +923,27 @@ def rival_check(ext: Extensions, e: np.ndarray, sigma2: float, q: float, k: int,
         def nll(dx):
             return walk_nll(de, dx, sigma2, dt, q)
     nll0 = nll(base)
-    best = None
+    tested = []
     for r in winners[:NESTED_TOP]:
         dz = np.diff(r.cols, axis=0)
         lr = max(nll0 - nll(np.column_stack([base, dz])), 0.0)
         logp = min(0.0, float(np.log(len(found) * r.searched)
                               + stats.chi2.logsf(lr, r.cols.shape[1])))
-        if best is None or logp < best[0]:
-            best = (logp, lr, r)
-    logp, lr, r = best
+        tested.append((logp, lr, r))
+    logp, lr, r = min(tested, key=lambda x: x[0])
+    # Two shapes the run cannot tell apart (e.g. a bias step and a gain step where the
+    # specific force is constant) fit alike to the last bits, and which comes first would
+    # move with the CPU's float kernels: both are said, in a fixed order.
+    same = sorted((x[2] for x in tested if abs(x[0] - logp) <= TIE_LOGP * max(1.0, abs(logp))),
+                  key=lambda x: x.name)
+    words = " — or, fitting alike, ".join(x.description for x in same)
     return Check("walk_rivals", AXES[k], lr, logp,
-                 f"LR of {r.name} on top of the walk, chi2({r.cols.shape[1]}) × "
-                 f"{len(found)}·{r.searched} shapes", r.size, "m/s²",
-                 f"{r.description}: it beats the random walk on {AXES[k]} by AIC in its place "
-                 f"and adds to it beyond chance (LR {lr:.4g} on top of the walk)")
+                 f"LR of {'/'.join(x.name for x in same)} on top of the walk, "
+                 f"chi2({r.cols.shape[1]}) × {len(found)}·{r.searched} shapes", r.size, "m/s²",
+                 f"{words}: {'they beat' if len(same) > 1 else 'it beats'} the random walk on "
+                 f"{AXES[k]} by AIC in {'their' if len(same) > 1 else 'its'} place and "
+                 f"{'add' if len(same) > 1 else 'adds'} to it beyond chance (LR {lr:.4g} on "
+                 "top of the walk)")
 
 
 def walk_beyond(ext: Extensions, e: np.ndarray, sigma2: float, q: float, k: int,
