@@ -23,7 +23,13 @@ from calib.gap.steps import (
     step_threshold,
     two_level,
 )
-from calib.gap.walk import CYCLE_MARGIN, WALK_LEAN_MARGIN, steps_decision
+from calib.gap.walk import (
+    CYCLE_MARGIN,
+    NEAR_STEPS_MARGIN,
+    NOTHING_BEYOND_LR,
+    WALK_LEAN_MARGIN,
+    steps_decision,
+)
 from tests.test_gap_drive_state import STATED, course_readings, stop_and_go
 
 SIGMA_X = float(np.sqrt(STATED[0]))
@@ -182,6 +188,27 @@ def test_a_faint_staircase_ahead_of_the_walk_is_not_told_apart_and_the_walk_not_
     assert ("bias_random_walk", "x") not in res.named and res.verdict == "unexplained"
     said = _said(res)
     assert "a staircase of" in said and "cannot tell them apart" in said, said
+
+
+def test_steps_just_short_of_the_walk_with_nothing_beyond_them_are_not_told_apart():
+    """Four 0.3 σ steps, three of them close: after their place charges the steps fall short
+    of the walk (gain ≤ 0, within ``NEAR_STEPS_MARGIN``), but a walk adds nothing at all beyond
+    them (its q fits 0). The near tier: the walk is not named, the verdict is "unexplained"
+    and the words say the steps and that the run cannot tell them from a walk."""
+    n = 4001
+    t, th, _ = stop_and_go(n, seed=0, moves=24, turns=3.0)
+    _, y = course_readings(th, 0)
+    for c in (0.3, 0.5, 0.55, 0.6):
+        y[int(c * n):, 0] += 0.3 * SIGMA_X
+    res = analyze_gap(validate_ensayo(th, y, t), STATED)
+    steps = [w for w in res.adequacy["walk"] if w["axis"] == "x"][0]["steps"]
+    assert -NEAR_STEPS_MARGIN < steps["gain"] <= 0.0, steps
+    assert steps["walk_beyond_lr"] <= NOTHING_BEYOND_LR
+    assert steps["decision"] == "leans" and steps["near"] is True
+    assert ("bias_random_walk", "x") not in res.named and res.verdict == "unexplained"
+    said = _said(res)
+    assert "a staircase of" in said and "cannot tell them apart" in said, said
+    assert "adds nothing at all beyond them" in said, said
 
 
 def test_the_tiers_of_steps_against_the_walk():
