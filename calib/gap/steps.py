@@ -285,6 +285,21 @@ def two_level(fit: StepFit) -> bool:
     return fit.count >= MIN_SWITCHES and _two_level(fit, fit.lengths) is not None
 
 
+MIN_STAIRCASE = 3
+"""Fewest steps of one sign that :func:`walk_unlike` counts as a staircase."""
+
+
+def walk_unlike(fit: StepFit) -> bool:
+    """Whether the steps have a shape a random walk has no reason to make: at least
+    :data:`MIN_STAIRCASE` steps all of one sign (a staircase), or two-level switching
+    (:func:`two_level`). A walk segmented into steps gives one or two steps, or steps of
+    both signs that do not return to two levels (validation set's true walks, 8–20 σ: the
+    four that came near their steps had 1, 2, or 3 of mixed signs)."""
+    if fit.count >= MIN_STAIRCASE and bool(np.all(np.sign(fit.sizes) == np.sign(fit.sizes[0]))):
+        return True
+    return two_level(fit)
+
+
 def describe(fit: StepFit, tcol: np.ndarray, time_unit: str, axis: str) -> str:
     """The steps in words (module docstring); "" when there is none."""
     k = fit.count

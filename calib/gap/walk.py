@@ -105,7 +105,7 @@ from calib.gap.space import (
     spectral_peak,
     tilt_drift_columns,
 )
-from calib.gap.steps import describe, optimal_steps, two_level
+from calib.gap.steps import describe, optimal_steps, two_level, walk_unlike
 from calib.gap.switching import SWITCH_CHARGE, block_means, block_size, fit_switching
 from calib.input_rules import DataError
 from calib.noise.allan import MAX_FIT_SAMPLES, AxisNoise, fit_axis_noise
@@ -168,16 +168,19 @@ fits worse than steps after their place charges (``python -m validation.switchin
 telegraphs and staircases land between 2 and 6 often (seeds 3 and 4 of the drive part: 5 of
 their 24 step-like runs were named a walk at gains 2.6–5.9)."""
 
-NEAR_STEPS_MARGIN = 10.0
+NEAR_STEPS_MARGIN = 15.0
 """How far (AIC units, after their place charges) steps may fall short of the walk and still
 stand beside it (decision ``"leans"``: the walk not named, the verdict says the two are not
 told apart) — only when a walk adds **nothing** beyond the steps (its q fits 0 once they are in
-the model: LR ≤ :data:`NOTHING_BEYOND_LR`). Each step pays ``2·(1 + ln N)`` for its size and
-place (18.6 at N = 4001), so a staircase of four 0.3 σ steps that the path shows plainly can
-fall 5–10 short of a walk that follows it. A true walk leaves a walk beyond its steps: on 222
-walks of the switching study (seed 2033, ``python -m validation.switching.score --analysis``)
-q fitted 0 beyond the steps within 10 of the walk in 5 (two of them already beyond
-:data:`WALK_LEAN_MARGIN`), against 67 of 118 staircases (38 before this tier)."""
+the model: LR ≤ :data:`NOTHING_BEYOND_LR`) and the steps have a shape a walk has no reason to
+make (:func:`calib.gap.steps.walk_unlike`: three or more of one sign, or two-level
+switching). Each step pays ``2·(1 + ln N)`` for its size and place (18.6 at N = 4001), so a
+staircase of four 0.4 σ steps that the path shows plainly fell 9.4 short of the walk that
+follows it (seed 5 of the drive part). On the switching study's paths (``docs/gap.md``, *The
+near tier*; seeds 2033 and 7033, N ≤ 6001) the tier took 0 + 1 more of 446 true walks at any
+margin from 6 to 15 — 1, 2 or 3 steps of mixed signs are what a walk's path is cut into —
+and 27 + 22 more of 237 staircases at 15 (20 + 16 at 10). Without the shape condition, 10
+would have taken 11 walks; the validation set's 60 true walks (8–20 σ) lost 4."""
 
 NOTHING_BEYOND_LR = 1e-6
 """LR of a walk beyond the steps at or below which it adds nothing (its q at the boundary, 0;
@@ -1164,7 +1167,7 @@ def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
         return None
     two = two_level(fit)
     lr, logp = walk_beyond_refit(ext, state, reduced, k, cols)
-    nothing_beyond = lr <= NOTHING_BEYOND_LR
+    nothing_beyond = lr <= NOTHING_BEYOND_LR and walk_unlike(fit)
     if gain <= 0 and not nothing_beyond:
         return None
     if logp < np.log(WALK_BEYOND_ALPHA) and not two:
