@@ -22,6 +22,7 @@ from calib.gap.steps import (
     optimal_steps,
     step_threshold,
     two_level,
+    walk_unlike,
 )
 from calib.gap.walk import (
     CYCLE_MARGIN,
@@ -209,6 +210,20 @@ def test_steps_just_short_of_the_walk_with_nothing_beyond_them_are_not_told_apar
     said = _said(res)
     assert "a staircase of" in said and "cannot tell them apart" in said, said
     assert "adds nothing at all beyond them" in said, said
+
+
+def test_a_walk_unlike_shape_is_a_one_signed_staircase_of_three_or_switching():
+    """``walk_unlike``: three or more steps of one sign, or two levels revisited; not one or
+    two steps, nor steps of both signs that wander (what a walk's path is cut into)."""
+    def fit(levels):
+        return optimal_steps(np.repeat(np.asarray(levels, dtype=float), 100), 1e-6, 1.0)
+
+    assert walk_unlike(fit([0.0, 1.0, 2.0, 3.0]))
+    assert walk_unlike(fit([0.0, -1.0, -1.5, -3.0]))
+    assert walk_unlike(fit([0.0, 1.0, 0.0, 1.0, 0.0]))  # two levels: switching
+    assert not walk_unlike(fit([0.0, 1.0]))
+    assert not walk_unlike(fit([0.0, 1.0, 2.0]))  # two steps
+    assert not walk_unlike(fit([0.0, 1.0, 2.5, 1.2]))  # both signs, no two levels
 
 
 def test_the_tiers_of_steps_against_the_walk():
