@@ -1144,7 +1144,10 @@ def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
     (``"steps"``: the walk is not named); within them but beyond :data:`WALK_LEAN_MARGIN`
     (``"leans"``) the walk is not named either and the verdict says the two are not told
     apart; below (``"describes"``) the walk is named and
-    the pair is listed under ``not_identifiable`` (``"cannot_tell"``): on weak true walks of
+    the pair is listed under ``not_identifiable`` (``"cannot_tell"``). The near tier: steps
+    within :data:`NEAR_STEPS_MARGIN` of the walk (D > −15, D ≤ 2 included) lean too when a walk
+    adds nothing at all beyond them (LR ≤ :data:`NOTHING_BEYOND_LR`) and they have a shape a
+    walk does not make (:func:`calib.gap.steps.walk_unlike`; ``"near"`` true). On weak true walks of
     4001 samples a walk adds nothing beyond one to three steps that fit about as well in a
     few runs of fifty, as on faint staircases, so such a run cannot tell them apart. A
     Brownian path segmented so leaves its walk inside
@@ -1167,15 +1170,16 @@ def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
         return None
     two = two_level(fit)
     lr, logp = walk_beyond_refit(ext, state, reduced, k, cols)
-    nothing_beyond = lr <= NOTHING_BEYOND_LR and walk_unlike(fit)
-    if gain <= 0 and not nothing_beyond:
+    # the near tier: nothing at all beyond the steps, and a shape a walk does not make
+    near = lr <= NOTHING_BEYOND_LR and walk_unlike(fit)
+    if gain <= 0 and not near:
         return None
     if logp < np.log(WALK_BEYOND_ALPHA) and not two:
         return None
     share = gain / max(walk_criterion, 1e-300)
     decision = steps_decision(gain, CYCLE_MARGIN)
-    if decision == "describes" and nothing_beyond:
-        decision = "leans"  # the near tier (NEAR_STEPS_MARGIN)
+    if decision == "describes" and near:
+        decision = "leans"
     words = describe(fit, run.tcol, run.time_unit, AXES[k])
     fits = ("better" if gain > WALK_LEAN_MARGIN else "as well" if gain > 0
             else "nearly as well")
