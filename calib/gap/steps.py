@@ -292,12 +292,15 @@ MIN_STAIRCASE = 3
 def walk_unlike(fit: StepFit) -> bool:
     """Whether the steps have a shape a random walk has no reason to make: at least
     :data:`MIN_STAIRCASE` steps all of one sign (a staircase), or two-level switching
-    (:func:`two_level`). A walk segmented into steps gives one or two steps, or steps of
-    both signs that do not return to two levels (validation set's true walks, 8–20 σ: the
-    four that came near their steps had 1, 2, or 3 of mixed signs)."""
-    if fit.count >= MIN_STAIRCASE and bool(np.all(np.sign(fit.sizes) == np.sign(fit.sizes[0]))):
-        return True
-    return two_level(fit)
+    (:func:`two_level`). A walk's path cut into steps mostly gives one or two, or steps of both
+    signs that do not return to two levels (the validation set's true walks, 8–20 σ: the four
+    that came near their steps had 1, 2, and 3 of mixed signs twice)."""
+    return (fit.count >= MIN_STAIRCASE and _one_sign(fit.sizes)) or two_level(fit)
+
+
+def _one_sign(sizes: np.ndarray) -> bool:
+    """Every step of the same sign (a staircase, in :func:`describe`'s words)."""
+    return bool(np.all(np.sign(sizes) == np.sign(sizes[0])))
 
 
 def describe(fit: StepFit, tcol: np.ndarray, time_unit: str, axis: str) -> str:
@@ -328,7 +331,7 @@ def describe(fit: StepFit, tcol: np.ndarray, time_unit: str, axis: str) -> str:
                 "telegraph noise: a bistable contact, defect or supply, not a drift")
     places = ", ".join(_at(tcol, time_unit, int(i)) for i in fit.places[:8]) + (
         ", …" if k > 8 else "")
-    if np.all(np.sign(fit.sizes) == np.sign(fit.sizes[0])):
+    if _one_sign(fit.sizes):
         total = float(np.sum(fit.sizes))
         return (f"a staircase of {k} steps of about {total / k:+.3g} m/s² each "
                 f"({total:+.3g} m/s², {total / s:+.2g} σ in all) in the bias on {axis} at "

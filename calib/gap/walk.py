@@ -1166,26 +1166,28 @@ def step_drift(ext: Extensions, state: ModelState, reduced: ModelState, k: int,
         return None
     crit = float(res[0] - 2.0 * step_charge(run.n) * fit.count)
     gain = crit - walk_criterion
-    if gain <= -NEAR_STEPS_MARGIN:
+    # below 0 only the near tier is left: a shape a walk does not make, nothing beyond it
+    shaped = walk_unlike(fit)
+    if gain <= -NEAR_STEPS_MARGIN or (gain <= 0 and not shaped):
         return None
     two = two_level(fit)
     lr, logp = walk_beyond_refit(ext, state, reduced, k, cols)
-    # the near tier: nothing at all beyond the steps, and a shape a walk does not make
-    near = lr <= NOTHING_BEYOND_LR and walk_unlike(fit)
+    near = shaped and lr <= NOTHING_BEYOND_LR
     if gain <= 0 and not near:
         return None
     if logp < np.log(WALK_BEYOND_ALPHA) and not two:
         return None
     share = gain / max(walk_criterion, 1e-300)
     decision = steps_decision(gain, CYCLE_MARGIN)
-    if decision == "describes" and near:
+    near = near and decision == "describes"  # the tier it moves: "describes" to "leans"
+    if near:
         decision = "leans"
     words = describe(fit, run.tcol, run.time_unit, AXES[k])
     fits = ("better" if gain > WALK_LEAN_MARGIN else "as well" if gain > 0
             else "nearly as well")
     return {"decision": decision, "pair": "bias_steps", "margin": CYCLE_MARGIN,
             "count": fit.count, "two_level": bool(two),
-            "gain": float(gain), "near": bool(decision == "leans" and gain <= WALK_LEAN_MARGIN),
+            "gain": float(gain), "near": bool(near),
             "share": float(share), "walk_beyond_lr": float(lr),
             "walk_beyond_p": float(np.exp(logp)), "size": float(np.max(np.abs(fit.sizes))),
             "description": words,
