@@ -392,13 +392,12 @@ def _figures(out: Path, ana: CourseAnalysis, truth: _Truth, formats: tuple[str, 
              files: dict[str, Path], nmin: dict) -> None:
     from bench import figures
 
-    fdir = out / "figures"
-    for fmt in formats:
-        files.update({f"figures/{p.name}": p for p in figures.write_calibration_figures(
-            fdir, ana.cal, ana.ensayo, truth.manifest, 0.95, fmt, True).values()})
-        files.update({f"figures/{p.name}": p for p in figures.write_vehicle_figures(
-            fdir, ana.traj, ana.region, ana.cal, ana.ensayo.n, truth.final, truth.path,
-            truth.acc, fmt, True, nmin.get("fixed_run")).values()})
+    fdir = out / "figures"  # each figure built once, written in every format
+    files.update({f"figures/{p.name}": p for p in figures.write_calibration_figures(
+        fdir, ana.cal, ana.ensayo, truth.manifest, 0.95, formats, True).values()})
+    files.update({f"figures/{p.name}": p for p in figures.write_vehicle_figures(
+        fdir, ana.traj, ana.region, ana.cal, ana.ensayo.n, truth.final, truth.path,
+        truth.acc, formats, True, nmin.get("fixed_run")).values()})
 
 
 def _recording(out: Path, ana: CourseAnalysis, truth: _Truth, est: dict, tj: dict,

@@ -82,10 +82,11 @@ def test_demo_from_a_fresh_directory(tmp_path, capsys):
 
 
 def test_demo_library_truth_beside_estimates(tmp_path):
-    """run_demo on a small budget: decision, validation and recovered recording reported."""
+    """run_demo on a small budget (20 coverage runs, PNG figures only: both formats are the
+    fresh-directory test's): decision, validation and recovered recording reported."""
     from bench.demo import run_demo
 
-    res = run_demo(tmp_path / "d", seed=3, coverage_runs=20)
+    res = run_demo(tmp_path / "d", seed=3, coverage_runs=20, formats=("png",))
     text = res.summary()
     assert res.recovered is True
     assert res.truth is not None and res.validation is not None
@@ -102,8 +103,8 @@ def test_demo_library_truth_beside_estimates(tmp_path):
 
 
 def test_demo_on_course_data(tmp_path, course_dir):
-    res = run_cli(["demo", "--course-data", str(course_dir), "--out", "cd", "--quiet"],
-                  tmp_path)
+    res = run_cli(["demo", "--course-data", str(course_dir), "--out", "cd", "--quiet",
+                   "--figures", "png"], tmp_path)
     assert res.returncode == 0, res.stderr[-2000:]
     assert "course files in" in res.stdout
     files = listed_files(res.stdout, tmp_path)

@@ -78,6 +78,22 @@ def test_same_data_same_bytes(tmp_path, small_cal):
         assert a[k].read_bytes() == b[k].read_bytes()
 
 
+def test_both_formats_from_one_figure_are_the_bytes_of_each_alone(tmp_path, small_cal):
+    """A figure wanted as PNG and SVG is built and laid out once (``save_figure_as``): each
+    file is byte for byte the one a single-format write gives, keyed ``name.fmt``."""
+    cal, ensayo, truth = small_cal
+    both = write_calibration_figures(tmp_path / "both", cal, ensayo, truth, fmt=("png", "svg"))
+    assert set(both) == {f"{n}.{f}" for n in ("calibration_x", "calibration_y", "parameters")
+                         for f in ("png", "svg")}
+    for fmt in ("png", "svg"):
+        alone = write_calibration_figures(tmp_path / fmt, cal, ensayo, truth, fmt=fmt)
+        for name, p in alone.items():
+            assert both[f"{name}.{fmt}"].read_bytes() == p.read_bytes(), (name, fmt)
+    with pytest.raises(FileExistsError):  # every path checked before any is written
+        write_calibration_figures(tmp_path / "both", cal, ensayo, truth, fmt=("png", "svg"))
+    assert plt.get_fignums() == []
+
+
 def test_course_data_figures(tmp_path, course_dir):
     """All figures of the demo, produced from the real course files."""
     from bench.demo import analyze_course_dir

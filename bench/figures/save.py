@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -21,21 +22,38 @@ def save_figure(fig: Figure, path: str | Path, force: bool = False) -> Path:
     Raises ``ValueError`` for another extension and ``FileExistsError`` if ``path`` exists
     and not ``force``.
     """
-    path = Path(path)
-    fmt = FORMATS.get(path.suffix.lower())
-    if fmt is None:
-        plt.close(fig)
-        raise ValueError(f"{path}: figure format must be .png or .svg")
-    if path.exists() and not force:
-        plt.close(fig)
-        raise FileExistsError(f"{path}: exists; pass --force to overwrite")
+    return save_figure_as(fig, [path], force)[0]
+
+
+def save_figure_as(fig: Figure, paths: Sequence[str | Path], force: bool = False
+                   ) -> list[Path]:
+    """Write ``fig`` to each of ``paths`` (PNG or SVG by extension) atomically, then close it.
+
+    Every path is checked (extension; exists and not ``force``) before any is written. The
+    layout is solved once for all of them (:func:`_freeze_layout`, the costly part of a
+    save after the drawing itself), so a figure wanted in two formats is built and laid out
+    once, not twice. Raises like :func:`save_figure`.
+    """
+    paths = [Path(p) for p in paths]
+    for path in paths:
+        if FORMATS.get(path.suffix.lower()) is None:
+            plt.close(fig)
+            raise ValueError(f"{path}: figure format must be .png or .svg")
+        if path.exists() and not force:
+            plt.close(fig)
+            raise FileExistsError(f"{path}: exists; pass --force to overwrite")
     _freeze_layout(fig)
-    buf = io.BytesIO()
-    metadata = {"Date": None} if fmt == "svg" else {"Software": None}
-    with plt.rc_context({"svg.hashsalt": "tiltbench"}):  # SVG ids without random salt
-        fig.savefig(buf, format=fmt, dpi=DPI, metadata=metadata)
+    blobs = []
+    for path in paths:
+        fmt = FORMATS[path.suffix.lower()]
+        buf = io.BytesIO()
+        metadata = {"Date": None} if fmt == "svg" else {"Software": None}
+        with plt.rc_context({"svg.hashsalt": "tiltbench"}):  # SVG ids without random salt
+            fig.savefig(buf, format=fmt, dpi=DPI, metadata=metadata)
+        blobs.append(buf.getvalue())
     plt.close(fig)
-    return atomic_write_bytes(path, buf.getvalue(), force=force)
+    return [atomic_write_bytes(path, blob, force=force)
+            for path, blob in zip(paths, blobs, strict=True)]
 
 
 def _freeze_layout(fig: Figure) -> None:
