@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.linalg import lapack
 
 
 def uniform_step(t: np.ndarray) -> float | None:
@@ -56,8 +57,18 @@ def lowpass(u: np.ndarray, t: np.ndarray, tau: float, h_uniform: float | None = 
     return u + e
 
 
-RECURSION_BLOCK = 16
-"""Block length of :func:`constant_recursion` (each level runs this many vector steps)."""
+def _bidiagonal_solve(sub: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``x_k = -sub_{k-1}·x_{k-1} + d_k`` (``x_{-1} = 0``) for every column of ``d`` (n, m):
+    forward substitution with the unit lower bidiagonal matrix whose subdiagonal is ``sub``
+    (n-1,), LAPACK ``?tbtrs`` (the sequential recursion, in one compiled call)."""
+    n = d.shape[0]
+    band = np.ones((2, n), dtype=d.dtype)
+    band[1, :n - 1] = sub
+    solve = lapack.ztbtrs if np.iscomplexobj(d) else lapack.dtbtrs
+    x, info = solve(band, d, uplo="L", diag="U", overwrite_b=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"tbtrs failed (info = {info})")
+    return x
 
 
 def constant_recursion(a: float | complex, d: np.ndarray) -> np.ndarray:
@@ -65,41 +76,19 @@ def constant_recursion(a: float | complex, d: np.ndarray) -> np.ndarray:
     or complex, |a| ≤ 1): the one-pole filter ``scipy.signal.lfilter([1], [1, -a], d, axis=0)``
     without importing ``scipy.signal`` (≈ 0.7 s with the ``scipy.stats`` it pulls in).
 
-    Notes
-    -----
-    Blocks of B = :data:`RECURSION_BLOCK`: each block's recursion from zero, all blocks at
-    once (B vector steps); the values at the blocks' ends obey the same recursion with
-    coefficient ``a^B`` (solved the same way, one level down), and
-    ``x = local + a^{j+1}·x_end(previous block)``. About B·log_B(n) vector steps; the same
-    terms as the sequential filter summed in another order (differences of a few ulps of the
-    largest term).
+    Why by hand: numpy has no recursive filter. The recursion is forward substitution with
+    a unit lower bidiagonal matrix (``-a`` below the diagonal), which LAPACK's banded
+    triangular solve (``dtbtrs``/``ztbtrs``, already loaded with ``scipy.linalg``) runs in
+    the filter's own order: the same operations as the sequential filter.
     """
     d = np.asarray(d)
     dtype = np.result_type(d.dtype, np.asarray(a).dtype, float)
-    d = d.astype(dtype, copy=False)
-    n, b = d.shape[0], RECURSION_BLOCK
-    if n <= b:
-        x = np.empty_like(d)
-        acc = np.zeros(d.shape[1:], dtype=dtype)
-        for k in range(n):
-            acc = a * acc + d[k]
-            x[k] = acc
-        return x
-    nb = -(-n // b)
-    rest = d.shape[1:]
-    dd = np.zeros((nb * b, *rest), dtype=dtype)
-    dd[:n] = d
-    dd = dd.reshape(nb, b, *rest)
-    loc = np.empty_like(dd)
-    loc[:, 0] = dd[:, 0]
-    for j in range(1, b):
-        loc[:, j] = a * loc[:, j - 1] + dd[:, j]
-    ends = constant_recursion(a**b, loc[:, -1])  # x at the end of each block
-    carry = np.zeros((nb, *rest), dtype=dtype)
-    carry[1:] = ends[:-1]
-    powers = np.asarray(a, dtype=dtype) ** np.arange(1, b + 1)
-    powers = powers.reshape((1, b) + (1,) * len(rest))
-    return (loc + powers * carry[:, None]).reshape(nb * b, *rest)[:n]
+    n, rest = d.shape[0], d.shape[1:]
+    if n == 0:
+        return d.astype(dtype, copy=True)
+    rhs = np.array(d.reshape(n, -1), dtype=dtype, order="F", copy=True)
+    sub = np.full(max(n - 1, 0), -a, dtype=dtype)
+    return _bidiagonal_solve(sub, rhs).reshape(n, *rest)
 
 
 def first_order_recursion(a: np.ndarray, d: np.ndarray) -> np.ndarray:
@@ -108,40 +97,29 @@ def first_order_recursion(a: np.ndarray, d: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    a, d : (n, …) coefficients (|a_k| ≤ 1 here: ``e^{-h_k/τ}``) and inputs.
+    a, d : (n, …) coefficients (|a_k| ≤ 1 here: ``e^{-h_k/τ}``) and inputs; ``a`` may be
+        (n,) or broadcast along the other axes (one coefficient per step for every column).
 
     Notes
     -----
-    Blocks of B ≈ √n steps: every block runs its own recursion from zero, all blocks at once
-    (B vector steps), with the product ``P_k = Π a`` since the block start; then the value at
-    each block's end is carried to the next (n/B steps) and ``x = local + P·carry``. About
-    2√n numpy steps instead of n Python steps; the same terms summed in another order
-    (differences of a few ulps of the largest term).
+    Forward substitution with the unit lower bidiagonal matrix ``-a_k`` below the diagonal
+    (LAPACK ``dtbtrs``, as :func:`constant_recursion`): the sequential recursion's operations.
+    Coefficients that differ between columns are solved column by column.
     """
-    a = np.asarray(a, dtype=float)
     d = np.asarray(d, dtype=float)
-    n = d.shape[0]
+    n, rest = d.shape[0], d.shape[1:]
     if n == 0:
         return d.copy()
-    b = max(1, int(np.sqrt(n)))
-    nb = -(-n // b)
-    rest = d.shape[1:]
-    aa = np.ones((nb * b, *rest))
-    dd = np.zeros((nb * b, *rest))
-    aa[:n], dd[:n] = a, d
-    aa = aa.reshape(nb, b, *rest)
-    dd = dd.reshape(nb, b, *rest)
-    loc = np.empty_like(dd)
-    prod = np.empty_like(aa)
-    loc[:, 0], prod[:, 0] = dd[:, 0], aa[:, 0]
-    for j in range(1, b):
-        loc[:, j] = aa[:, j] * loc[:, j - 1] + dd[:, j]
-        prod[:, j] = aa[:, j] * prod[:, j - 1]
-    carry = np.zeros((nb, *rest))
-    for i in range(1, nb):
-        carry[i] = loc[i - 1, -1] + prod[i - 1, -1] * carry[i - 1]
-    x = loc + prod * carry[:, None]
-    return x.reshape(nb * b, *rest)[:n]
+    a = np.broadcast_to(np.asarray(a, dtype=float).reshape((n,) + (1,) * (d.ndim - 1))
+                        if np.ndim(a) == 1 else np.asarray(a, dtype=float), d.shape)
+    rhs = np.array(d.reshape(n, -1), dtype=float, order="F", copy=True)
+    coef = a.reshape(n, -1)
+    if np.all(coef == coef[:, :1]):  # one coefficient per step: one solve for every column
+        return _bidiagonal_solve(-coef[1:, 0], rhs).reshape(n, *rest)
+    out = np.empty_like(rhs)
+    for j in range(rhs.shape[1]):
+        out[:, j] = _bidiagonal_solve(-coef[1:, j], rhs[:, j:j + 1])[:, 0]
+    return out.reshape(n, *rest)
 
 
 def walk_filter(z: np.ndarray, sigma2: float, qk: np.ndarray

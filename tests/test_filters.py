@@ -3,7 +3,7 @@
 It replaces ``scipy.signal.lfilter([1], [1, -a], d, axis=0)`` in the lag filter and the
 ringing columns (importing ``scipy.signal`` pulls in ``scipy.stats``, ≈ 0.7 s), so it must give
 the library's values to rounding: real and complex poles, 1-D and 2-D inputs, lengths around
-the block size and long runs."""
+a few samples and long runs."""
 
 from __future__ import annotations
 
@@ -11,11 +11,10 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from calib.filters import RECURSION_BLOCK, constant_recursion, lowpass
+from calib.filters import constant_recursion, first_order_recursion, lowpass
 
 
-@pytest.mark.parametrize("n", [1, 2, RECURSION_BLOCK - 1, RECURSION_BLOCK,
-                               RECURSION_BLOCK + 1, 257, 4001, 60001])
+@pytest.mark.parametrize("n", [1, 2, 15, 16, 17, 257, 4001, 60001])
 def test_constant_recursion_is_the_one_pole_filter(n):
     rng = np.random.default_rng([5, n])
     d = rng.standard_normal((n, 3))
@@ -43,3 +42,27 @@ def test_the_uniform_lowpass_agrees_with_its_general_form():
     fast = lowpass(u, t, 0.05, h_uniform=1.0 / 200.0)
     general = lowpass(u, t, 0.05)
     np.testing.assert_allclose(fast, general, rtol=0.0, atol=1e-13)
+
+
+def test_first_order_recursion_is_the_sequential_recursion():
+    """A coefficient per step, shared by the columns (one solve) or not (column by column),
+    and 1-D: the loop ``x_k = a_k·x_{k-1} + d_k`` from ``x_{-1} = 0``."""
+    rng = np.random.default_rng(11)
+    n = 3001
+    d = rng.standard_normal((n, 3))
+    a_step = rng.uniform(0.2, 1.0, n)
+    a_cols = rng.uniform(0.2, 1.0, (n, 3))
+
+    def loop(a, d):
+        x, acc = np.empty_like(d), np.zeros(d.shape[1:])
+        for k in range(d.shape[0]):
+            acc = a[k] * acc + d[k]
+            x[k] = acc
+        return x
+
+    shared = np.broadcast_to(a_step[:, None], d.shape)
+    for a, dd in ((shared, d), (a_cols, d), (a_step, d[:, 0])):
+        ref = loop(a, dd)
+        np.testing.assert_allclose(first_order_recursion(a, dd), ref, rtol=0.0,
+                                   atol=1e-13 * max(1.0, float(np.max(np.abs(ref)))))
+    assert first_order_recursion(a_step[:0], d[:0]).shape == (0, 3)

@@ -65,6 +65,7 @@ from calib.effects.catalog import CATALOG, REFINED, SHARED
 from calib.effects.run import RunData
 from calib.filters import lowpass
 from calib.numerics import equilibrated_cond as _equilibrated_cond
+from calib.numerics import equilibrated_cond_within as _cond_within
 from calib.numerics import r_factor as _r_factor
 
 COND_MAX = 1e10
@@ -402,8 +403,10 @@ class Extensions:
     def _axis_factor(self, k: int, st: AxisState, tilt: bool
                      ) -> tuple[np.ndarray, list[str], float] | None:
         """R of axis k's whitened ``[H | z | y]`` (module docstring), the names of H and the
-        equilibrated condition number of H alone (without tilt); None when the rows cannot
-        identify the columns."""
+        equilibrated condition number of H alone (without tilt; exact where it may exceed
+        :data:`COND_MAX`, below it possibly a bound that is too:
+        :func:`calib.numerics.equilibrated_cond_within`); None when the rows cannot identify
+        the columns."""
         if st.q == 0:
             key = ("c", k, st.linear, st.tau, st.limit, tilt)
         else:
@@ -413,9 +416,9 @@ class Extensions:
             a, names = self._white_system(k, st, tilt)
             if a.shape[0] <= a.shape[1]:
                 return None
-            r = _r_factor(a)
+            r = _r_factor(a, overwrite=True)  # a is built here and not used again
             p = len(names)
-            return r, names, (np.nan if tilt else _equilibrated_cond(r[:p, :p]))
+            return r, names, (np.nan if tilt else _cond_within(r[:p, :p], COND_MAX))
 
         got = self._axis_cache.get_or(key, make)
         if got is None:
@@ -512,7 +515,7 @@ class Extensions:
             j[px + 1:px + 1 + py, px:px + py], j[px + 1:px + 1 + py, -1] = ry[:py, :py], ry[:py, py]
             j[-1, -1] = ay
             cond = _equilibrated_cond(j)
-        if not np.isfinite(cond) or cond > COND_MAX or not np.all([np.all(d > 0) for d in tri]):
+        if not np.isfinite(cond) or cond > COND_MAX or not all((d > 0).all() for d in tri):
             self._full_fit(state)  # raises the named error (rank or condition)
             raise UntestableError(f"columns {', '.join(names)} are (nearly) collinear here "
                                   f"(condition number {cond:.3g})")
