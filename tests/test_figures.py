@@ -12,11 +12,13 @@ import pytest
 
 from bench.figures import (
     calibration_axis_figure,
+    parameters_figure,
     save_calibration_plot,
     save_figure,
     write_calibration_figures,
     write_vehicle_figures,
 )
+from bench.figures.save import save_figure_as
 from bench.tilt import CalibrationConfig, ThetaDesign, generate_calibration
 from calib.calibration.tilt_plane import calibrate
 
@@ -45,15 +47,30 @@ def small_cal():
     return calibrate(run.ensayo(), [0.25, 0.64]), run.ensayo(), truth
 
 
-@pytest.mark.parametrize("fmt", ["png", "svg"])
-def test_calibration_figures_png_and_svg(tmp_path, small_cal, fmt):
+def test_calibration_figures_png_and_svg(tmp_path, small_cal):
+    """Both formats from one build of each figure (keys ``name.fmt``), every file whole."""
     cal, ensayo, truth = small_cal
-    paths = write_calibration_figures(tmp_path, cal, ensayo, truth, fmt=fmt)
-    assert set(paths) == {"calibration_x", "calibration_y", "parameters"}
-    for p in paths.values():
+    paths = write_calibration_figures(tmp_path, cal, ensayo, truth, fmt=("png", "svg"))
+    assert set(paths) == {f"{n}.{f}" for n in ("calibration_x", "calibration_y", "parameters")
+                          for f in ("png", "svg")}
+    for key, p in paths.items():
+        fmt = key.rsplit(".", 1)[1]
         assert p.suffix == f".{fmt}" and p.stat().st_size > 10_000
         (assert_png if fmt == "png" else assert_svg)(p)
     assert not list(tmp_path.glob(".*.tmp"))  # atomic writes leave nothing behind
+    with pytest.raises(FileExistsError):  # every path checked before any is written
+        write_calibration_figures(tmp_path, cal, ensayo, truth, fmt=("png", "svg"))
+    assert plt.get_fignums() == []
+
+
+def test_one_figure_in_two_formats_is_the_bytes_of_each_alone(tmp_path, small_cal):
+    """``save_figure_as`` lays the figure out once for every path: each file is byte for byte
+    what a single-format ``save_figure`` of the same figure writes."""
+    cal, _, truth = small_cal
+    both = save_figure_as(parameters_figure(cal, truth), [tmp_path / "b.png", tmp_path / "b.svg"])
+    for p in both:
+        alone = save_figure(parameters_figure(cal, truth), tmp_path / f"a{p.suffix}")
+        assert alone.read_bytes() == p.read_bytes(), p.suffix
 
 
 def test_save_figure_checks_extension_and_overwrite(tmp_path, small_cal):
@@ -76,22 +93,6 @@ def test_same_data_same_bytes(tmp_path, small_cal):
     b = write_calibration_figures(tmp_path / "b", cal, ensayo, truth, fmt="svg")
     for k in a:
         assert a[k].read_bytes() == b[k].read_bytes()
-
-
-def test_both_formats_from_one_figure_are_the_bytes_of_each_alone(tmp_path, small_cal):
-    """A figure wanted as PNG and SVG is built and laid out once (``save_figure_as``): each
-    file is byte for byte the one a single-format write gives, keyed ``name.fmt``."""
-    cal, ensayo, truth = small_cal
-    both = write_calibration_figures(tmp_path / "both", cal, ensayo, truth, fmt=("png", "svg"))
-    assert set(both) == {f"{n}.{f}" for n in ("calibration_x", "calibration_y", "parameters")
-                         for f in ("png", "svg")}
-    for fmt in ("png", "svg"):
-        alone = write_calibration_figures(tmp_path / fmt, cal, ensayo, truth, fmt=fmt)
-        for name, p in alone.items():
-            assert both[f"{name}.{fmt}"].read_bytes() == p.read_bytes(), (name, fmt)
-    with pytest.raises(FileExistsError):  # every path checked before any is written
-        write_calibration_figures(tmp_path / "both", cal, ensayo, truth, fmt=("png", "svg"))
-    assert plt.get_fignums() == []
 
 
 def test_course_data_figures(tmp_path, course_dir):
