@@ -16,9 +16,10 @@ Tolerances (derived, not tuned)
   ``max_signature_z`` below its Bonferroni threshold at α = 0.001 (each fails with P ≤ 0.001
   under a correct model).
 * Naming: exactly the true effects. A correct selector adds a spurious one with P ≤
-  ``family_alpha`` = 0.005 per run (Bonferroni; measured ≈ 0.2 % on clean runs).
-* False-alarm rate: R clean runs, K runs that name anything, K ~ Binomial(R, p) with p ≤ 0.005;
-  assert ``K ≤ binom.ppf(0.999, R, 0.005)`` (a selector with p = 0.005 fails with P ≤ 0.001).
+  ``family_alpha`` = :data:`calib.gap.selection.FAMILY_ALPHA` (0.001) per run (Bonferroni).
+* False-alarm rate: R clean runs, K runs that name anything, K ~ Binomial(R, p) with
+  p ≤ FAMILY_ALPHA; assert ``K ≤ binom.ppf(0.999, R, FAMILY_ALPHA)`` (a selector at its stated
+  level fails with P ≤ 0.001).
 All randomness is seeded; seeds are fixed per case (``SEED``, case index), never searched.
 """
 
@@ -40,6 +41,7 @@ from calib.conventions import AXES
 from calib.effects import Extensions, ModelState, RunData, lowpass
 from calib.files.course import Ensayo, read_ensayo
 from calib.gap import analyze_gap, predict, q_uncertainty
+from calib.gap.selection import FAMILY_ALPHA
 from calib.stats.diagnostics import detect_lattice, gap_measure, hinge_levels
 from tests.gap_synthetic import RATE, STATED, TWO_PI, G, design, lowpass_loop, synth
 
@@ -251,7 +253,8 @@ def _clean_run(job: tuple[str, int]) -> tuple[str, int, list, list]:
 @pytest.mark.slow
 def test_false_alarm_rate_on_clean_runs():
     """R = 504 clean runs (six θ designs, N = 2000) name anything in at most
-    ``binom.ppf(0.999, R, 0.005)`` = 9 runs (module docstring). On the same runs each of
+    ``binom.ppf(0.999, R, FAMILY_ALPHA)`` = 4 runs (module docstring; the selection's level,
+    0.001 since stop 44). On the same runs each of
     :data:`LEVEL_CHECKS` keeps its level: the count of p < 0.05 lies in the 0.9999 band of
     Binomial(n, 0.05) (a check whose null law were wrong — autocorrelated series, a column
     the model spans — would fall outside; hysteresis runs where θ moves both ways)."""
@@ -261,7 +264,7 @@ def test_false_alarm_rate_on_clean_runs():
     with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as ex:
         results = list(ex.map(_clean_run, jobs, chunksize=8))
     alarms = [(k, i, named) for k, i, named, _ in results if named]
-    k_max = int(stats.binom.ppf(0.999, r, 0.005))
+    k_max = int(stats.binom.ppf(0.999, r, FAMILY_ALPHA))
     assert len(alarms) <= k_max, alarms
     for name in LEVEL_CHECKS:
         p = np.array([v for *_, ps in results for n, v in ps if n == name])
