@@ -52,8 +52,8 @@ def lowpass(u: np.ndarray, t: np.ndarray, tau: float, h_uniform: float | None = 
         y[1:] += constant_recursion(a, -tau * (1.0 - a) * c)
         return y
     e = np.zeros_like(u)
-    a = np.exp(-h / tau).reshape(shape)
-    e[1:] = first_order_recursion(np.broadcast_to(a, c.shape), -tau * (1.0 - a) * c)
+    a = np.exp(-h / tau)
+    e[1:] = first_order_recursion(a, -tau * (1.0 - a.reshape(shape)) * c)
     return u + e
 
 
@@ -110,11 +110,11 @@ def first_order_recursion(a: np.ndarray, d: np.ndarray) -> np.ndarray:
     n, rest = d.shape[0], d.shape[1:]
     if n == 0:
         return d.copy()
-    a = np.broadcast_to(np.asarray(a, dtype=float).reshape((n,) + (1,) * (d.ndim - 1))
-                        if np.ndim(a) == 1 else np.asarray(a, dtype=float), d.shape)
     rhs = np.array(d.reshape(n, -1), dtype=float, order="F", copy=True)
-    coef = a.reshape(n, -1)
-    if np.all(coef == coef[:, :1]):  # one coefficient per step: one solve for every column
+    if np.ndim(a) == 1:  # one coefficient per step for every column: one solve
+        return _bidiagonal_solve(-np.asarray(a, dtype=float)[1:], rhs).reshape(n, *rest)
+    coef = np.broadcast_to(np.asarray(a, dtype=float), d.shape).reshape(n, -1)
+    if np.all(coef == coef[:, :1]):
         return _bidiagonal_solve(-coef[1:, 0], rhs).reshape(n, *rest)
     out = np.empty_like(rhs)
     for j in range(rhs.shape[1]):

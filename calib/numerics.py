@@ -41,16 +41,27 @@ def _strictly_lower(c: int) -> np.ndarray:
     return mask
 
 
+def _unit_columns(r: np.ndarray) -> np.ndarray | None:
+    """``r`` with each column scaled to unit norm; None for an empty, zero-column or
+    non-finite input (its condition number is infinite)."""
+    norms = np.sqrt(np.add.reduce(r * r, axis=0))  # np.linalg.norm(r, axis=0), its operations
+    if r.size == 0 or (norms == 0).any() or not np.isfinite(r).all():
+        return None
+    return r / norms
+
+
+def _svd_cond(u: np.ndarray | None) -> float:
+    if u is None:
+        return float("inf")
+    s = np.linalg.svd(u, compute_uv=False)
+    return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
+
+
 def equilibrated_cond(r: np.ndarray) -> float:
     """2-norm condition number of a design with unit-norm columns, from the design itself or
     any matrix with its Gram matrix (its R factor): the column norms and the singular values
     are the same. ``inf`` for an empty, singular, zero-column or non-finite input."""
-    r = np.asarray(r, dtype=float)
-    norms = np.sqrt(np.add.reduce(r * r, axis=0))  # np.linalg.norm(r, axis=0), its operations
-    if r.size == 0 or (norms == 0).any() or not np.isfinite(r).all():
-        return float("inf")
-    s = np.linalg.svd(r / norms, compute_uv=False)
-    return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
+    return _svd_cond(_unit_columns(np.asarray(r, dtype=float)))
 
 
 def equilibrated_cond_within(r: np.ndarray, limit: float) -> float:
@@ -63,16 +74,14 @@ def equilibrated_cond_within(r: np.ndarray, limit: float) -> float:
     design a profile search visits — needs no more; the SVD runs only where the bound does
     not clear the limit, so "exceeds ``limit``" is decided exactly as with the SVD alone."""
     r = np.asarray(r, dtype=float)
-    c = r.shape[1] if r.ndim == 2 else 0
-    if r.ndim == 2 and r.shape[0] == c and c > 0 and np.isfinite(r).all():
-        norms = np.sqrt(np.add.reduce(r * r, axis=0))
-        if (norms > 0).all():
-            inv, info = lapack.dtrtri(r / norms, lower=0)
-            if info == 0:
-                bound = float(np.sqrt(c * np.add.reduce((inv * inv).ravel())))
-                if np.isfinite(bound) and bound <= limit:
-                    return bound
-    return equilibrated_cond(r)
+    u = _unit_columns(r)
+    if u is not None and r.ndim == 2 and r.shape[0] == r.shape[1]:
+        inv, info = lapack.dtrtri(u, lower=0)
+        if info == 0:
+            bound = float(np.sqrt(r.shape[1] * np.add.reduce((inv * inv).ravel())))
+            if np.isfinite(bound) and bound <= limit:
+                return bound
+    return _svd_cond(u)
 
 
 def design_cond(h: np.ndarray) -> float:
