@@ -32,6 +32,7 @@ The package holds one job per module (none imports from this ``__init__``):
 :mod:`bench.gap.run`            :func:`run_gap`, the workflow in steps
 :mod:`bench.gap.writers`        :func:`gap_markdown`, :func:`write_report`,
                                 :func:`write_model_after`
+:mod:`bench.gap.files`          ``REPORT_FILES``, the names ``--report DIR`` holds
 :mod:`bench.gap.figure`         :func:`gap_figure` (matplotlib, imported when drawing)
 :mod:`bench.gap.recording`      :func:`write_recording` and its blueprint (rerun, imported when
                                 logging)
@@ -58,7 +59,7 @@ _HOMES = {
     "Motion": "bench.gap.replay",
     "Piece": "bench.gap.replay",
     "READOUT_TOL": "bench.gap.readout",
-    "REPORT_FILES": "bench.gap.writers",
+    "REPORT_FILES": "bench.gap.files",
     "Replay": "bench.gap.replay",
     "ReplayMode": "bench.gap.replay",
     "SYSID_EFFECTS": "bench.gap.sysid",
@@ -95,6 +96,8 @@ def _module(home: str):
     """The submodule ``bench.gap.<home>`` (static imports: the import-rule checks see them)."""
     if home == "bench.gap.figure":
         from bench.gap import figure as mod
+    elif home == "bench.gap.files":
+        from bench.gap import files as mod
     elif home == "bench.gap.prediction":
         from bench.gap import prediction as mod
     elif home == "bench.gap.readout":

@@ -4,6 +4,7 @@ verdict, the unexplained signatures and why each axis' gap shrank or did not."""
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -210,8 +211,10 @@ def _mark_unexplained(ax: Axes, signatures: list[dict]) -> None:
                   "edgecolor": UNEXPLAINED_EDGE})
 
 
-def save_gap_figure(report: GapReport, path: str | os.PathLike) -> Path:
-    """Draw :func:`gap_figure` and write it to ``path`` (format from the suffix; overwrites)."""
-    from bench.figures import save_figure  # matplotlib: imported with the figure, not before
+def save_gap_figure(report: GapReport, paths: Sequence[str | os.PathLike]) -> list[Path]:
+    """Draw :func:`gap_figure` once and write it to each of ``paths`` (format from the suffix;
+    overwrites): the figure and its layout are built once for every format
+    (:func:`bench.figures.save.save_figure_as`)."""
+    from bench.figures.save import save_figure_as  # matplotlib: with the figure, not before
 
-    return save_figure(gap_figure(report), path, force=True)
+    return save_figure_as(gap_figure(report), list(paths), force=True)

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from bench.dataset import write_json
 from bench.gap.figure import save_gap_figure
+from bench.gap.files import REPORT_FILES
 from bench.gap.report import GapReport, shrink_word
 from bench.model import edit_tilt_table, load_spec
 from calib.conventions import AXES
@@ -17,10 +18,6 @@ from calib.gap.confusions import design_hint
 from calib.units import format_p, format_stat
 
 PathLike = str | os.PathLike
-
-REPORT_FILES = ("gap.json", "gap.md", "gap.png", "gap.svg", "model_after.xml")
-"""What :func:`write_report` writes into the report directory."""
-
 
 def check_outputs(report_dir: PathLike, rrd: PathLike | None) -> None:
     """Refuse to overwrite: raise :class:`FileExistsError` naming every output that exists."""
@@ -147,8 +144,7 @@ def write_report(report: GapReport, out_dir: PathLike, force: bool = False) -> d
              "model_after": str(out / "model_after.xml")}
     with atomic_dir(out, force, owned=REPORT_FILES) as tmp:
         write_model_after(report, tmp / "model_after.xml", force=True)
-        save_gap_figure(report, tmp / "gap.png")
-        save_gap_figure(report, tmp / "gap.svg")
+        save_gap_figure(report, [tmp / "gap.png", tmp / "gap.svg"])
         write_text(tmp / "gap.md", gap_markdown(report), force=True)
         write_json(tmp / "gap.json", replace(report, files=files).to_dict(), force=True)
     return files
