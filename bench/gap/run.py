@@ -93,15 +93,26 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
     # second thread (mujoco.rollout and numpy's large operations release the GIL). The
     # replay and its drive torque come first; the analysis asks for the torque when its
     # drive-state checks need it.
+    #
+    # The worker thread never imports a module: two threads importing into one package's
+    # import cycle at once can deadlock (Python then raises _DeadlockError in one of them:
+    # 2 of 822 drive-validation runs, seeds 7 and 8, before this rule). Its first jobs (replay,
+    # torque, motion) use only the modules this module imports at its top; the nominal gap,
+    # which uses the analysis side's modules, is queued only once this thread has imported
+    # them (tests/test_gap_threads.py checks that no import happens off the main thread).
     with ThreadPoolExecutor(max_workers=1) as pool:
         if progress is not None:
             progress("simulating the nominal bench alongside the analysis…")
         first = pool.submit(_replay_and_torque, tita, t)
-        job = pool.submit(_nominal_run, first, base, datos, noise_var)
+        motion = pool.submit(_motion_run, first, base)
+        import bench.gap.prediction  # noqa: F401  (the nominal gap's, on the worker)
         from bench.gap.report import GapReport
         from calib.gap import analyze_gap
+        from calib.gap.practical import lattice_matters  # noqa: F401  (the worker's too)
         from calib.gap.selection import FAMILY_ALPHA
+        from calib.stats.diagnostics import gap_measure  # noqa: F401  (the worker's too)
 
+        job = pool.submit(_nominal_run, motion, datos, noise_var)
         alpha = FAMILY_ALPHA if family_alpha is None else float(family_alpha)
 
         with _step(progress, f"analysing {ensayo.n} samples (calib.gap)…", "analysis done"):
@@ -164,15 +175,25 @@ def _replay_and_torque(tita: np.ndarray, t: np.ndarray | None
     return replay, sample_torque(replay), time.perf_counter() - clock
 
 
-def _nominal_run(first, base: TableEdits, datos: np.ndarray, noise_var: np.ndarray
-                 ) -> tuple[Replay, _Nominal, float]:
-    """The nominal gap of the replay (:func:`_nominal_gap`; ``first`` the future of
-    :func:`_replay_and_torque`) and the seconds replay and gap took."""
+def _motion_run(first, base: TableEdits) -> tuple[Replay, AccelField, float]:
+    """The replay (``first``: the future of :func:`_replay_and_torque`), its motion simulated
+    once on ``base``'s table and read as an acceleration field
+    (:func:`bench.gap.replay.record_motion`, :func:`bench.gap.readout.accel_field`), and the
+    seconds replay and motion took."""
     replay, _, seconds = first.result()
     clock = time.perf_counter()
-    nominal = _nominal_gap(replay, base, datos, noise_var)
-    seconds += time.perf_counter() - clock
-    return replay, nominal, seconds
+    accel = accel_field(record_motion(replay, base), base)
+    return replay, accel, seconds + time.perf_counter() - clock
+
+
+def _nominal_run(motion, datos: np.ndarray, noise_var: np.ndarray
+                 ) -> tuple[Replay, _Nominal, float]:
+    """The nominal gap (:func:`_nominal_gap`) of the motion (``motion``: the future of
+    :func:`_motion_run`) and the seconds replay, motion and gap took."""
+    replay, accel, seconds = motion.result()
+    clock = time.perf_counter()
+    nominal = _nominal_gap(replay, accel, datos, noise_var)
+    return replay, nominal, seconds + time.perf_counter() - clock
 
 
 def _needs_sysid(analysis: GapAnalysis) -> bool:
@@ -210,19 +231,19 @@ class _Nominal:
     accel: AccelField
 
 
-def _nominal_gap(replay: Replay, base: TableEdits, datos: np.ndarray, noise_var: np.ndarray
+def _nominal_gap(replay: Replay, accel: AccelField, datos: np.ndarray, noise_var: np.ndarray
                  ) -> _Nominal:
-    """Simulate the nominal bench, fit bias and scale per axis, measure the gap.
+    """The nominal bench's readings, bias and scale fitted per axis, and the gap.
 
-    The replay is simulated once (:func:`bench.gap.replay.record_motion`); the nominal
-    readings are MuJoCo's sensors along it, read together with the probe accelerometers
-    that later give any edited table's readout (:func:`bench.gap.readout.accel_field`).
+    The replay was simulated once (:func:`_motion_run`); the nominal readings are MuJoCo's
+    sensors along it, read together with the probe accelerometers that later give any edited
+    table's readout (``accel``, :func:`bench.gap.readout.accel_field`). Runs on the worker
+    thread: its modules are imported by :func:`run_gap` before it is queued.
     """
     from bench.gap.prediction import fit_bias_scale
     from calib.stats.diagnostics import gap_measure
 
     tita, t = replay.tita, replay.t
-    accel = accel_field(record_motion(replay, base), base)
     a_nom = np.column_stack([accel.column(ACC_SENSORS[a])[:, 0] for a in AXES])
     enc = accel.column(ENCODER)[:, 0]
     tracking = float(np.max(np.abs(enc - tita))) if replay.mode == "sweep" else 0.0
