@@ -105,13 +105,11 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
             progress("simulating the nominal bench alongside the analysis…")
         first = pool.submit(_replay_and_torque, tita, t)
         motion = pool.submit(_motion_run, first, base)
-        import bench.gap.prediction  # noqa: F401  (the nominal gap's, on the worker)
         from bench.gap.report import GapReport
         from calib.gap import analyze_gap
-        from calib.gap.practical import lattice_matters  # noqa: F401  (the worker's too)
         from calib.gap.selection import FAMILY_ALPHA
-        from calib.stats.diagnostics import gap_measure  # noqa: F401  (the worker's too)
 
+        _import_nominal_gap_modules()
         job = pool.submit(_nominal_run, motion, datos, noise_var)
         alpha = FAMILY_ALPHA if family_alpha is None else float(family_alpha)
 
@@ -231,6 +229,14 @@ class _Nominal:
     accel: AccelField
 
 
+def _import_nominal_gap_modules() -> None:
+    """Import, on the calling (main) thread, the modules :func:`_nominal_gap` uses on the
+    worker thread, which never imports (:func:`run_gap`)."""
+    import bench.gap.prediction  # noqa: F401
+    import calib.gap.practical  # noqa: F401
+    import calib.stats.diagnostics  # noqa: F401
+
+
 def _nominal_gap(replay: Replay, accel: AccelField, datos: np.ndarray, noise_var: np.ndarray
                  ) -> _Nominal:
     """The nominal bench's readings, bias and scale fitted per axis, and the gap.
@@ -238,7 +244,8 @@ def _nominal_gap(replay: Replay, accel: AccelField, datos: np.ndarray, noise_var
     The replay was simulated once (:func:`_motion_run`); the nominal readings are MuJoCo's
     sensors along it, read together with the probe accelerometers that later give any edited
     table's readout (``accel``, :func:`bench.gap.readout.accel_field`). Runs on the worker
-    thread: its modules are imported by :func:`run_gap` before it is queued.
+    thread: what it imports here and in :func:`_known_lattice` is imported beforehand
+    (:func:`_import_nominal_gap_modules`).
     """
     from bench.gap.prediction import fit_bias_scale
     from calib.stats.diagnostics import gap_measure

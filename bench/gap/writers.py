@@ -19,6 +19,7 @@ from calib.units import format_p, format_stat
 
 PathLike = str | os.PathLike
 
+
 def check_outputs(report_dir: PathLike, rrd: PathLike | None) -> None:
     """Refuse to overwrite: raise :class:`FileExistsError` naming every output that exists."""
     clash = [str(Path(report_dir) / n) for n in REPORT_FILES if (Path(report_dir) / n).exists()]
