@@ -21,6 +21,8 @@ from calib.conventions import G
 from calib.files.course import Ensayo
 from calib.gap import analyze_gap
 from calib.gap.adequacy import CHECK_WEIGHTS
+from calib.gap.confusions import AMBIGUITY_LR
+from calib.gap.swaps import FITS, tier
 from calib.gap.walk import LEAN_MARGIN
 from calib.units import missing_units
 from validation import designs
@@ -156,3 +158,17 @@ def test_weighted_bonferroni_levels_sum_to_the_family_alpha():
     for c in checks:
         assert c["passed"] == (c["p_value"] >= CHECK_WEIGHTS.get(c["name"], 1.0) * a) or \
             np.isclose(c["p_value"], CHECK_WEIGHTS.get(c["name"], 1.0) * a), c
+
+
+def test_the_swaps_tiers_share_the_catalog_pairs_rule():
+    """``calib.gap.swaps.tier``: a one-column rival is said ("ties") when the named effects fit
+    better by less than the catalog pairs' likelihood ratio of 10 (2 ln 10 after the charges),
+    "describes" when it fits better, "leans" beyond ``LEAN_MARGIN``; nothing at or below
+    −2 ln 10. Every tier has its words in the reason."""
+    eps = 1e-9
+    assert AMBIGUITY_LR == pytest.approx(2.0 * np.log(10.0))
+    assert tier(-AMBIGUITY_LR) is None and tier(-AMBIGUITY_LR - 1.0) is None
+    assert tier(-AMBIGUITY_LR + eps) == "ties" and tier(0.0) == "ties"
+    assert tier(eps) == "describes" and tier(LEAN_MARGIN) == "describes"
+    assert tier(LEAN_MARGIN + eps) == "leans"
+    assert set(FITS) == {"ties", "describes", "leans"}

@@ -16,7 +16,10 @@ other parameter refitted). One parameter each, no search, so the AIC gain of the
 difference of their likelihood ratios, ``D = LR_asym − LR_K2`` (``−2 log L``), and it is read
 as the walk's steps are (:data:`calib.gap.walk.LEAN_MARGIN`):
 
-* ``D ≤ 0``: K2 fits as well or better; nothing to say;
+* ``D ≤ −AMBIGUITY_LR`` (2 ln 10, :mod:`calib.gap.confusions`): nothing to say;
+* ``−AMBIGUITY_LR < D ≤ 0`` (``"ties"``, since stop 47): K2 fits better, but
+  within the likelihood ratio of 10 under which two catalog explanations are listed as not
+  told apart; the pair is listed as for ``"describes"``;
 * ``0 < D ≤ LEAN_MARGIN`` (``"describes"``): K2 stays named and ``not_identifiable`` lists
   ``nonlinearity_k2`` / ``scale_asymmetry``;
 * ``D > LEAN_MARGIN`` (``"leans"``): the asymmetry fits better by a likelihood ratio beyond
@@ -36,7 +39,7 @@ import numpy as np
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap import swaps
-from calib.gap.swaps import lean, swap_gain
+from calib.gap.swaps import FITS, swap_gain, tier
 from calib.gap.walk import LEAN_MARGIN
 
 K2 = "nonlinearity_k2"
@@ -47,9 +50,10 @@ PAIR = "scale_asymmetry"
 def k2_or_asymmetry(ext: Extensions, state: ModelState, k: int) -> dict | None:
     """K2 of axis k against a scale asymmetry in its place (module docstring).
 
-    Returns ``{"axis", "decision": "describes" | "leans", "gain" (D, 1), "asymmetry"
+    Returns ``{"axis", "decision": "ties" | "describes" | "leans", "gain" (D, 1), "asymmetry"
     (κ, 1), "size" (κ·max|A_r|, m/s²), "description", "reason"}``, or None when K2 is not in
-    the model of axis k, the reference keeps one sign (no asymmetry to see) or ``D ≤ 0``.
+    the model of axis k, the reference keeps one sign (no asymmetry to see) or
+    ``D ≤ −AMBIGUITY_LR``.
     """
     axis = AXES[k]
     if (K2, axis) not in state.effects():
@@ -58,16 +62,16 @@ def k2_or_asymmetry(ext: Extensions, state: ModelState, k: int) -> dict | None:
     if not (np.min(a) < 0.0 < np.max(a)):
         return None
     found = swap_gain(ext, state, k, [K2], np.maximum(a, 0.0))
-    if found is None or found[0] <= 0.0:
+    decision = None if found is None else tier(found[0])
+    if decision is None:
         return None
     gain, kappa, _ = found
     size = abs(kappa) * float(np.max(np.abs(a)))
     shape = (f"a gain on {axis} that differs for positive and negative specific force by "
              f"{kappa:+.3g} ({100 * kappa:+.3g} %; {size:.3g} m/s² at full scale: a scale "
              "asymmetry, IEEE Std 1293)")
-    decision = lean(gain)
     reason = (f"cannot tell K2 from a scale asymmetry on {axis}: {shape} fits "
-              f"{'better' if decision == 'leans' else 'as well'} (AIC gain {gain:.3g} over "
+              f"{FITS[decision]} (AIC gain {gain:.3g} over "
               f"K2, one parameter each); a run whose specific force reaches both signs at "
               "more levels (poses spread over the whole turn) separates them")
     description = (f"{shape} fits the even part of the response better than K2 by "

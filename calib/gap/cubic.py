@@ -16,7 +16,10 @@ other parameter refitted). K3 costs one parameter and no search, the named set i
 ``p``, so the AIC gain of K3 is ``D = (LR_K3 − 2) − (LR_named − 2p)`` (``−2 log L``), read as
 the walk's steps are (:data:`calib.gap.walk.LEAN_MARGIN`):
 
-* ``D ≤ 0``: nothing to say;
+* ``D ≤ −AMBIGUITY_LR`` (2 ln 10, :mod:`calib.gap.confusions`): nothing to say;
+* ``−AMBIGUITY_LR < D ≤ 0`` (``"ties"``, since stop 47): the named set fits better, but
+  within the likelihood ratio of 10 under which two catalog explanations are listed as not
+  told apart; the pair is listed as for ``"describes"``;
 * ``0 < D ≤ LEAN_MARGIN`` (``"describes"``): the effects stay named and ``not_identifiable``
   lists them beside ``nonlinearity_k3``;
 * ``D > LEAN_MARGIN`` (``"leans"``): K3 fits better by a likelihood ratio beyond e³ ≈ 20 after
@@ -36,7 +39,7 @@ import numpy as np
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap import swaps
-from calib.gap.swaps import lean, swap_gain
+from calib.gap.swaps import FITS, swap_gain, tier
 from calib.gap.walk import LEAN_MARGIN
 
 K3 = "nonlinearity_k3"
@@ -52,9 +55,9 @@ def named_or_k3(ext: Extensions, state: ModelState, k: int, named: list[str]) ->
     """The effects of :data:`SWAPPED` in ``named`` (named on axis k) against K3 in their
     place (module docstring).
 
-    Returns ``{"axis", "names", "decision": "describes" | "leans", "gain" (D, 1), "k3"
-    (m/s² per (m/s²)³), "size" (|K3|·max|A_r|³, m/s²), "description", "reason"}``, or None
-    when none of them is named on axis k, or ``D ≤ 0``.
+    Returns ``{"axis", "names", "decision": "ties" | "describes" | "leans", "gain" (D, 1),
+    "k3" (m/s² per (m/s²)³), "size" (|K3|·max|A_r|³, m/s²), "description", "reason"}``, or
+    None when none of them is named on axis k, or ``D ≤ −AMBIGUITY_LR``.
     """
     axis = AXES[k]
     names = [n for n in SWAPPED if n in named and (n, axis) in state.effects()]
@@ -62,16 +65,16 @@ def named_or_k3(ext: Extensions, state: ModelState, k: int, named: list[str]) ->
         return None
     a = np.asarray(ext.run.a_ref[:, k], dtype=float)
     found = swap_gain(ext, state, k, names, a**3)
-    if found is None or found[0] <= 0.0:
+    decision = None if found is None else tier(found[0])
+    if decision is None:
         return None
     gain, k3, cost = found
     size = abs(k3) * float(np.max(np.abs(a))) ** 3
     them = " + ".join(names)
     shape = (f"a third-order term on {axis}, K3 = {k3:+.3g} (m/s²)⁻² ({size:.3g} m/s² at "
              "full scale; IEEE Std 1293's K3, not in the catalog)")
-    decision = lean(gain)
     reason = (f"cannot tell {them} from {shape} on this run: K3 alone fits "
-              f"{'better' if decision == 'leans' else 'as well'} (AIC gain {gain:.3g} over "
+              f"{FITS[decision]} (AIC gain {gain:.3g} over "
               f"their {cost:g} parameter(s)); a run that turns through whole turns at a "
               "steady rate separates them")
     description = (f"{shape} explains the response better than {them} by {gain:.3g} after "

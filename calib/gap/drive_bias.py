@@ -17,7 +17,10 @@ parameter refitted). The column costs one parameter, the choice of the best of t
 ``D = max_c (LR_c − 2) − 2·ln 3 − (LR_lever − 4)`` (``−2 log L``), read as the walk's steps are
 (:data:`calib.gap.walk.LEAN_MARGIN`):
 
-* ``D ≤ 0``: nothing to say;
+* ``D ≤ −AMBIGUITY_LR`` (2 ln 10, :mod:`calib.gap.confusions`): nothing to say;
+* ``−AMBIGUITY_LR < D ≤ 0`` (``"ties"``, since stop 47): the lever arm fits better, but
+  within the likelihood ratio of 10 under which two catalog explanations are listed as not
+  told apart; the pair is listed as for ``"describes"``;
 * ``0 < D ≤ LEAN_MARGIN`` (``"describes"``): the lever arm stays named and
   ``not_identifiable`` lists it beside the bias (``speed_bias``, ``move_bias``,
   ``accel_bias``);
@@ -40,7 +43,7 @@ from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap import swaps
 from calib.gap.drive_state import drive_state, where_moving
-from calib.gap.swaps import lean, swap_gain
+from calib.gap.swaps import FITS, swap_gain, tier
 from calib.gap.walk import LEAN_MARGIN
 
 LEVER = "lever_arm"
@@ -84,10 +87,10 @@ def lever_or_drive_bias(ext: Extensions, state: ModelState, k: int) -> dict | No
     docstring).
 
     Returns ``{"axis", "names": ["lever_arm"], "bias" (the name of the best column),
-    "decision": "describes" | "leans", "gain" (D, 1), "coefficient" (m/s² per rad/s, per 1
-    or per rad/s² as ``bias`` is speed_bias, move_bias or accel_bias), "size" (its largest
-    effect, m/s²), "description", "reason"}``, or None when no lever arm is named on axis k,
-    the run has no sample times, or ``D ≤ 0``.
+    "decision": "ties" | "describes" | "leans", "gain" (D, 1), "coefficient" (m/s² per rad/s,
+    per 1 or per rad/s² as ``bias`` is speed_bias, move_bias or accel_bias), "size" (its
+    largest effect, m/s²), "description", "reason"}``, or None when no lever arm is named on
+    axis k, the run has no sample times, or ``D ≤ −AMBIGUITY_LR``.
     """
     axis = AXES[k]
     run = ext.run
@@ -101,13 +104,13 @@ def lever_or_drive_bias(ext: Extensions, state: ModelState, k: int) -> dict | No
         return None
     best = max(found, key=lambda name: found[name][0])
     gain = found[best][0] - 2.0 * float(np.log(len(cols)))
-    if gain <= 0.0:
+    decision = tier(gain)
+    if decision is None:
         return None
     coef = found[best][1]
     shape, size = _shape(best, axis, coef, run, moving)
-    decision = lean(gain)
     reason = (f"cannot tell the lever arm on {axis} from {shape}: the bias fits "
-              f"{'better' if decision == 'leans' else 'as well'} (AIC gain {gain:.3g} over "
+              f"{FITS[decision]} (AIC gain {gain:.3g} over "
               f"the lever arm's 2 parameters, the best of {len(cols)} drive-state columns); "
               "moves at several speeds, each way, separate them")
     description = (f"{shape} explains the reading better than a lever arm by {gain:.3g} after "

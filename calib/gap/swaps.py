@@ -5,8 +5,10 @@ The effects ``names`` named on axis k are removed from the final model and the c
 (m/s² per unit of its coefficient) is fitted in their place, in the whitened space of the
 model without them (:class:`calib.gap.space.AxisSpace`: every other parameter refitted). The
 column costs one parameter and no search, the effects their parameters ``p``:
-``D = (LR_c − 2) − (LR_named − 2p)`` (``−2 log L``). Beyond :data:`calib.gap.walk.LEAN_MARGIN`
-the column "leans" (the effects are not named), above 0 it "describes" (the pair is listed).
+``D = (LR_c − 2) − (LR_named − 2p)`` (``−2 log L``). Read by :func:`tier`: beyond
+:data:`calib.gap.walk.LEAN_MARGIN` the column "leans" (the effects are not named), above 0 it
+"describes" and above ``−AMBIGUITY_LR`` it "ties" (either way the pair is listed in
+``not_identifiable``); at or below ``−AMBIGUITY_LR`` there is nothing to say.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import numpy as np
 
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState, effect
+from calib.gap.confusions import AMBIGUITY_LR
 from calib.gap.space import AxisSpace
 from calib.gap.walk import LEAN_MARGIN
 
@@ -35,9 +38,26 @@ def swap_gain(ext: Extensions, state: ModelState, k: int, names: list[str],
     return (float(fit[0]) - 2.0) - (lr_named - 2.0 * cost), float(fit[2][0]), cost
 
 
-def lean(gain: float) -> str:
-    """``"leans"`` beyond :data:`LEAN_MARGIN` (the effects not named), else ``"describes"``."""
-    return "leans" if gain > LEAN_MARGIN else "describes"
+def tier(gain: float) -> str | None:
+    """What a column's AIC gain D over the named effects says (module docstring):
+
+    * ``"leans"`` beyond :data:`LEAN_MARGIN`: the effects are not named;
+    * ``"describes"`` above 0: the column fits better, not by enough to drop them;
+    * ``"ties"`` above ``−AMBIGUITY_LR``: the effects fit better, but within the likelihood
+      ratio of 10 under which :mod:`calib.gap.confusions` lists two catalog explanations as
+      not told apart (the same rule, for a term outside the catalog);
+    * None at or below ``−AMBIGUITY_LR``: nothing to say.
+
+    The pair is listed for the three tiers."""
+    if gain > LEAN_MARGIN:
+        return "leans"
+    if gain > 0.0:
+        return "describes"
+    return "ties" if gain > -AMBIGUITY_LR else None
+
+
+FITS = {"leans": "better", "describes": "as well", "ties": "nearly as well"}
+"""How the column fits beside the named effects, in the ``not_identifiable`` reason."""
 
 
 def signature(found: dict, name: str, reason: str) -> dict:

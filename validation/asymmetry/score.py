@@ -15,8 +15,8 @@ that grows with |ω| (z = 10–60) on a stop-and-go or back-and-forth run.
 kind: the runs, the verdicts, how often K2 (the lever arm for the drive kinds) is named on
 the effect's axis, and the decisions of the asymmetry against K2 there
 (:mod:`calib.gap.asymmetry`), of K3 against the named set (:mod:`calib.gap.cubic`) and of a
-drive-state bias against the lever arm (:mod:`calib.gap.drive_bias`) — ``"describes"``: the
-catalog's effects named, the pair listed; ``"leans"``: beyond
+drive-state bias against the lever arm (:mod:`calib.gap.drive_bias`) — ``"ties"`` (since
+stop 47) and ``"describes"``: the catalog's effects named, the pair listed; ``"leans"``: beyond
 :data:`calib.gap.walk.LEAN_MARGIN`, not named — with the largest gain of each. A catalog
 effect named on a true asymmetry, K3 or speed bias with the verdict "explained" is the answer
 the tiers exist to avoid; a "leans" on a true K2 or lever arm is their cost.
@@ -72,9 +72,9 @@ def table(rows: list[dict], seed: int) -> str:
     """The study's table (module docstring)."""
     out = [f"whole analysis (seed {seed}): runs | verdict explained / unexplained / nothing / "
            "refused | K2 (lever arm for lever, speed) named on the effect's axis (of them with "
-           "the verdict explained) | asymmetry against K2: describes / leans, largest gain of "
-           "each | K3 against the named set: describes / leans, largest gain of each | a "
-           "drive-state bias against the lever arm: describes / leans, largest gain of each"]
+           "the verdict explained) | asymmetry against K2: ties / describes / leans, largest "
+           "gain of the last two | K3 against the named set: the same | a drive-state bias "
+           "against the lever arm: the same"]
     for kind in ("k2", "asymmetry", "k3", "lever", "speed"):
         rs = [r for r in rows if r["kind"] == kind]
         if not rs:
@@ -86,7 +86,7 @@ def table(rows: list[dict], seed: int) -> str:
         cells = []
         for key in ("", "k3_", "drive_"):
             tiers = " / ".join(str(sum(r[key + "decision"] == d for r in rs))
-                               for d in ("describes", "leans"))
+                               for d in ("ties", "describes", "leans"))
             top = ", ".join(f"{d} {_largest(rs, key, d):.1f}" for d in ("describes", "leans"))
             cells.append(f"{tiers}, {top}")
         out.append(f"{kind:<10s} {len(rs):>4d} | {verdicts} | {named} ({named_explained}) | "
