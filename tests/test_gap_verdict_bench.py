@@ -443,3 +443,21 @@ def test_gap_figure_shares_y_and_speaks_in_words(misaligned_report, verdict):
         assert "(± 1 std)" in box
     finally:
         plt.close(fig)
+
+
+def test_figure_box_names_the_pairs_the_run_cannot_tell_apart(misaligned_report):
+    """The verdict box lists every ``not_identifiable`` entry of two names or more (the reason
+    stays in gap.md), and says nothing of the kind when there is none."""
+    from bench.gap.figure import verdict_box_text
+
+    pair = {"names": ["lever_arm", "move_bias"], "axis": "y",
+            "reason": "cannot tell the lever arm on y from a bias on y while the table moves"}
+    a = misaligned_report.analysis
+    report = replace(misaligned_report, analysis=replace(
+        a, not_identifiable=(*a.not_identifiable, pair)))
+    box = verdict_box_text(report).replace("\n", " ")
+    assert "not told apart on this run:" in box and "lever_arm / move_bias" in box
+    assert "gravity_mismatch /" not in box  # one name: not a pair
+    alone = replace(misaligned_report, analysis=replace(a, not_identifiable=tuple(
+        i for i in a.not_identifiable if len(i["names"]) < 2)))
+    assert "not told apart" not in verdict_box_text(alone)

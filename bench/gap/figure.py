@@ -87,13 +87,27 @@ def effects_label(report: GapReport) -> str:
 
 def verdict_box_text(report: GapReport) -> str:
     """The figure's bottom box: the effects added with their estimates, the verdict (and each
-    unexplained signature), then per axis whether the gap shrank and why not."""
+    unexplained signature), per axis whether the gap shrank and why not, then the pairs this
+    run cannot tell apart."""
     d = report.to_dict()
     lines = [f"added: {effects_label(report)} (± 1 std)", *report.verdict_lines()]
     lines += [f"{ax}: gap {shrink_word(sh)} — {sh['reason']}" for ax, sh in d["shrink"].items()]
+    lines += _untold_line(d)
     wrapped = [w for line in lines for w in _wrap(signature_words(line), 150).split("\n")]
     # the box holds about a dozen lines below the caption: the rest is in gap.md
     return "\n".join(_capped(wrapped, BOX_LINES, "lines (the whole text: gap.md, or --json)"))
+
+
+def _untold_line(d: dict) -> list[str]:
+    """One line naming the pairs this run cannot tell apart (``not_identifiable`` entries of
+    two names or more, e.g. a lever arm and a bias while moving), or none: the figure says
+    that the named effect has a rival; the reasons and what separates them are in gap.md."""
+    pairs = [" / ".join(i["names"]) for i in d.get("not_identifiable", ())
+             if len(i["names"]) > 1]
+    if not pairs:
+        return []
+    return [f"not told apart on this run: {'; '.join(pairs)} (why, and what separates "
+            "them: gap.md)"]
 
 
 def _shorten(text: str, width: int) -> str:
