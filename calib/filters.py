@@ -104,7 +104,8 @@ def first_order_recursion(a: np.ndarray, d: np.ndarray) -> np.ndarray:
     -----
     Forward substitution with the unit lower bidiagonal matrix ``-a_k`` below the diagonal
     (LAPACK ``dtbtrs``, as :func:`constant_recursion`): the sequential recursion's operations.
-    Coefficients that differ between columns are solved column by column.
+    A 1-D ``a`` (the callers' case) is one solve for every column; a broadcast ``a`` is solved
+    column by column.
     """
     d = np.asarray(d, dtype=float)
     n, rest = d.shape[0], d.shape[1:]
@@ -114,8 +115,6 @@ def first_order_recursion(a: np.ndarray, d: np.ndarray) -> np.ndarray:
     if np.ndim(a) == 1:  # one coefficient per step for every column: one solve
         return _bidiagonal_solve(-np.asarray(a, dtype=float)[1:], rhs).reshape(n, *rest)
     coef = np.broadcast_to(np.asarray(a, dtype=float), d.shape).reshape(n, -1)
-    if np.all(coef == coef[:, :1]):
-        return _bidiagonal_solve(-coef[1:, 0], rhs).reshape(n, *rest)
     out = np.empty_like(rhs)
     for j in range(rhs.shape[1]):
         out[:, j] = _bidiagonal_solve(-coef[1:, j], rhs[:, j:j + 1])[:, 0]
