@@ -22,9 +22,6 @@ is consistent with noise.
 from __future__ import annotations
 
 import json
-import multiprocessing
-import os
-from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 import pytest
@@ -68,6 +65,7 @@ from bench.tilt import (
 )
 from calib.conventions import AXES, reference_accel
 from calib.files.course import read_ensayo
+from tests.pools import process_pool
 
 NOISE = (0.25, 0.64)
 Z = 4.0
@@ -202,13 +200,10 @@ def _clean_named(seed: int) -> tuple[int, list, bool]:
 
 
 @pytest.mark.slow
-def test_clean_bench_datasets_rarely_name_an_effect(monkeypatch):
+def test_clean_bench_datasets_rarely_name_an_effect():
     """≤ 1 % of clean runs name an effect (at most 1 of 120; the selection's family α is
     0.001, so 0.12 false alarms are expected). Runs in two processes, one BLAS thread each."""
-    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "1")
-    monkeypatch.setenv("OMP_NUM_THREADS", "1")
-    ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1), mp_context=ctx) as pool:
+    with process_pool(2) as pool:
         results = list(pool.map(_clean_named, range(CLEAN_RUNS)))
     alarms = [(seed, named) for seed, named, _ in results if named]
     assert len(alarms) <= CLEAN_RUNS // 100, alarms

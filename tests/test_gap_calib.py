@@ -26,11 +26,8 @@ All randomness is seeded; seeds are fixed per case (``SEED``, case index), never
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
-from concurrent.futures import ProcessPoolExecutor
-from multiprocessing import get_context
 
 import numpy as np
 import pytest
@@ -44,6 +41,7 @@ from calib.gap import analyze_gap, predict, q_uncertainty
 from calib.gap.selection import FAMILY_ALPHA
 from calib.stats.diagnostics import detect_lattice, gap_measure, hinge_levels
 from tests.gap_synthetic import RATE, STATED, TWO_PI, G, design, lowpass_loop, synth
+from tests.pools import process_pool
 
 SEED = 20240605
 ALPHA_TEST = 0.001
@@ -260,8 +258,7 @@ def test_false_alarm_rate_on_clean_runs():
     the model spans — would fall outside; hysteresis runs where θ moves both ways)."""
     jobs = [(k, i) for k in CLEAN_DESIGNS for i in range(CLEAN_PER_DESIGN)]
     r = len(jobs)
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # inherited by the spawned workers
-    with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as ex:
+    with process_pool(2) as ex:
         results = list(ex.map(_clean_run, jobs, chunksize=8))
     alarms = [(k, i, named) for k, i, named, _ in results if named]
     k_max = int(stats.binom.ppf(0.999, r, FAMILY_ALPHA))
@@ -315,8 +312,7 @@ def test_random_walk_interval_and_std_are_honest():
     th, y, _ = _walk_run(0)
     res = analyze_gap(Ensayo(th, y), STATED)
     assert res.named == [("bias_random_walk", "x")], res.summary()
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # inherited by the spawned workers
-    with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as ex:
+    with process_pool(2) as ex:
         out = np.array(list(ex.map(_walk_replicate, range(WALK_R), chunksize=20)))
     q_hat, std, lo, hi = out.T
     est = res.effect("bias_random_walk", "x")

@@ -24,7 +24,7 @@ does not depend on the size, so the larger size changes nothing in what is check
 also asserts this premise (median size ≥ 8 on each axis). ``analyze_gap`` runs end to end and
 ``z = (estimate - truth)/std`` is taken from the printed ``params`` / ``std``.
 
-R = 80 replicates per effect (40 per axis), R_tot = 480 in all, on two spawned workers with
+R = 80 replicates per effect (40 per axis), R_tot = 480 in all, on two pool workers with
 one BLAS thread each (≈ 0.23 s of CPU per run, ≈ 115 s of CPU in all: ≈ 60 s wall on two idle
 cores, ~70 s on a loaded machine; hence ``slow``). Seeds:
 ``np.random.default_rng([SEED, effect index, replicate])``, fixed, never searched. The
@@ -67,10 +67,6 @@ column, and the std accounts for it).
 
 from __future__ import annotations
 
-import os
-from concurrent.futures import ProcessPoolExecutor
-from multiprocessing import get_context
-
 import numpy as np
 import pytest
 from scipy import stats
@@ -79,6 +75,7 @@ from calib.files.course import Ensayo
 from calib.gap import analyze_gap
 from calib.gap.selection import FAMILY_ALPHA  # analyze_gap's default false-alarm rate
 from tests.gap_synthetic import STATED, synth
+from tests.pools import process_pool
 
 SEED = 20240617
 N = 1000
@@ -152,8 +149,7 @@ def test_linear_effect_std_has_its_coverage():
     and mean z within their binomial / χ² bands; the true effect and axis (alone) named in all
     but ``binom.ppf(0.999, R, FAMILY_ALPHA)`` runs (module docstring)."""
     jobs = [(c, i) for i in range(R_PER_EFFECT) for c in range(len(CASES))]
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # inherited by the spawned workers
-    with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as ex:
+    with process_pool(2) as ex:
         results = list(ex.map(_replicate, jobs, chunksize=10))
 
     k_max = int(stats.binom.ppf(0.999, R_PER_EFFECT, FAMILY_ALPHA))

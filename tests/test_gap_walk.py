@@ -17,9 +17,6 @@
 from __future__ import annotations
 
 import json
-import os
-from concurrent.futures import ProcessPoolExecutor
-from multiprocessing import get_context
 
 import numpy as np
 import pytest
@@ -30,6 +27,7 @@ from calib.gap.mechanisms import LAST_HARMONIC, RING_FREQS, drive_orders
 from calib.gap.walk import allan_slope, flicker_test
 from calib.noise.sensor_profile import NoiseTerm, SensorProfile, save_profile
 from tests.cli import run
+from tests.pools import process_pool
 from validation import designs
 from validation.cases import build_case, mechanism_cases
 from validation.effects import G
@@ -40,8 +38,7 @@ FAMILY_ALPHA = 0.005
 
 
 def _pmap(f, items):
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as ex:
+    with process_pool(2) as ex:
         return list(ex.map(f, items, chunksize=2))
 
 

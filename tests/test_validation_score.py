@@ -19,14 +19,11 @@ error rates, never from individual files:
 
 from __future__ import annotations
 
-import os
-from concurrent.futures import ProcessPoolExecutor
-from multiprocessing import get_context
-
 import pytest
 
 from calib.gap.adequacy import ADEQUACY_ALPHA
 from calib.gap.selection import FAMILY_ALPHA
+from tests.pools import process_pool
 from validation.cases import clean_cases, validation_set
 from validation.score import default_analyze, judge, max_wrong
 
@@ -40,8 +37,7 @@ def _judge(case):
 
 
 def _score(cases) -> list[dict]:
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # inherited by the spawned workers
-    with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as ex:
+    with process_pool(2) as ex:
         return list(ex.map(_judge, cases, chunksize=4))
 
 
