@@ -21,6 +21,9 @@ from calib.gap.cubic import K3, named_or_k3
 from calib.gap.cubic import signature as cubic_signature
 from calib.gap.drive_bias import LEVER, lever_or_drive_bias
 from calib.gap.drive_bias import signature as drive_bias_signature
+from calib.gap.drive_noise import LEVEL as NOISE_LEVEL
+from calib.gap.drive_noise import level_or_drive_noise
+from calib.gap.drive_noise import signature as drive_noise_signature
 from calib.gap.drive_state import drive_checks, joint_tone, tone_scans
 from calib.gap.estimates import Reporter
 from calib.gap.mechanisms import drive_scans, mechanism_checks
@@ -154,7 +157,7 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     unexplained = [r.signature() for r in drifting] + [
         c.signature() for c in battery.failed
         if not (c.axis in stepped and c.name in WALK_CHECKS and c.name != "walk_rivals")]
-    effects, said, pairs, terms = _outside_terms(ext, state, effects, battery)
+    effects, said, pairs, terms = _outside_terms(ext, state, effects, battery, resid_after)
     unexplained += said
     unexplained += _never_worse(effects, before, after)
     verdict = ("unexplained" if unexplained else "explained" if effects
@@ -181,15 +184,17 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
 
 
 def _outside_terms(ext: Extensions, state: ModelState, effects: list[EffectEstimate],
-                   battery: Battery) -> tuple[list[EffectEstimate], list[dict], list[dict],
-                                              dict]:
+                   battery: Battery, resid: np.ndarray
+                   ) -> tuple[list[EffectEstimate], list[dict], list[dict], dict]:
     """Terms outside the catalog against the named effects: a scale asymmetry in place of a
     named K2 (:mod:`calib.gap.asymmetry`), a K3 in place of the structured effects of an axis
     (:mod:`calib.gap.cubic`; IEEE 1293), a bias tied to the drive in place of a lever arm
-    (:mod:`calib.gap.drive_bias`). Effects a term leans against are not named (they stay in
-    the model meanwhile). Returns the effects still named, the ``unexplained`` entries (the
-    asymmetry's not again where ``rival_shapes`` already failed), the ``not_identifiable``
-    pairs and the ``adequacy`` entries ``asymmetry``, ``cubic`` and ``drive_bias``."""
+    (:mod:`calib.gap.drive_bias`), noise added while the table moves in place of a noise level
+    (:mod:`calib.gap.drive_noise`; ``resid`` the final model's residuals, (N, 2) m/s²).
+    Effects a term leans against are not named (they stay in the model meanwhile). Returns the
+    effects still named, the ``unexplained`` entries (the asymmetry's not again where
+    ``rival_shapes`` already failed), the ``not_identifiable`` pairs and the ``adequacy``
+    entries ``asymmetry``, ``cubic``, ``drive_bias`` and ``drive_noise``."""
     asymmetry = [f for k in range(2)
                  if any(e.name == K2 and e.axis == AXES[k] for e in effects)
                  and (f := k2_or_asymmetry(ext, state, k)) is not None]
@@ -210,15 +215,24 @@ def _outside_terms(ext: Extensions, state: ModelState, effects: list[EffectEstim
     dropped = {f["axis"] for f in drive if f["decision"] == "leans"}
     effects = [e for e in effects if not (e.name == LEVER and e.axis in dropped)]
     said += [drive_bias_signature(f) for f in drive if f["decision"] == "leans"]
+    noise = [f for k in range(2)
+             if any(e.name == NOISE_LEVEL and e.axis == AXES[k] for e in effects)
+             and (f := level_or_drive_noise(ext, state, k, resid[:, k])) is not None]
+    dropped = {f["axis"] for f in noise if f["decision"] == "leans"}
+    effects = [e for e in effects if not (e.name == NOISE_LEVEL and e.axis in dropped)]
+    said += [drive_noise_signature(f) for f in noise if f["decision"] == "leans"]
     pairs = ([{"names": [K2, ASYMMETRY], "axis": f["axis"], "reason": f["reason"]}
               for f in asymmetry]
              + [{"names": [*f["names"], K3], "axis": f["axis"], "reason": f["reason"]}
                 for f in cubic]
              + [{"names": [LEVER, f["bias"]], "axis": f["axis"], "reason": f["reason"]}
-                for f in drive])
+                for f in drive]
+             + [{"names": [NOISE_LEVEL, f["rival"]], "axis": f["axis"], "reason": f["reason"]}
+                for f in noise])
     terms = {"asymmetry": [{k: v for k, v in f.items() if k != "reason"} for f in asymmetry],
              "cubic": [{k: v for k, v in f.items() if k != "reason"} for f in cubic],
-             "drive_bias": [{k: v for k, v in f.items() if k != "reason"} for f in drive]}
+             "drive_bias": [{k: v for k, v in f.items() if k != "reason"} for f in drive],
+             "drive_noise": [{k: v for k, v in f.items() if k != "reason"} for f in noise]}
     return effects, said, pairs, terms
 
 

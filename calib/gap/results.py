@@ -106,6 +106,8 @@ def gap_units() -> dict[str, str]:
         "adequacy.drive_bias.gain": "1", "adequacy.drive_bias.size": "m/s²",
         "adequacy.drive_bias.coefficient": "m/s² per unit of the column: rad/s (speed_bias), "
                                            "1 (move_bias), rad/s² (accel_bias)",
+        "adequacy.drive_noise.gain": "1", "adequacy.drive_noise.size": "m/s²",
+        "adequacy.drive_noise.moving_std": "m/s²", "adequacy.drive_noise.stated_std": "m/s²",
         "reported.change": "σ", **{f"reported.*.{k}": u for k, u in effect_units().items()},
         "criterion.profile.rate_random_walk.*.value": "m/s²/√s",
         "criterion.profile.rate_random_walk.*.interval": "m/s²/√s",
