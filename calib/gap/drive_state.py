@@ -5,7 +5,7 @@ the sensor, a vibration of the drive, a cable that pulls while the table turns, 
 changes with the speed, the acceleration or the drive torque — is present while the table
 moves and gone while it holds. The catalog has none of these; the selection never looks at
 the drive state. So the final model's residuals are compared between the **moving** and the
-**held** stretches of a run, by five checks of the adequacy battery per axis and the tone on
+**held** stretches of a run, by six checks of the adequacy battery per axis and the tone on
 both axes at once (:mod:`calib.gap.adequacy`, each at the battery's Bonferroni level; a
 failure makes the verdict "unexplained" with the words "present while moving …", where — the
 moving stretches and their share of the run — and how big, in m/s²).
@@ -34,6 +34,17 @@ check                     statistic and reference distribution under the model
 ``drive_variance``        ``F = s²_moving / s²_held`` of z (each about its own mean):
                           ``F(n_m − 1, n_h − 1)``, two-sided. Noise that changes while
                           moving.
+``drive_excess``          ``Σ_moving z²`` against the model's variance, one-sided: under
+                          the model each z² has mean 1 (a little less after the fit) and
+                          variance κ = 2 for Gaussian noise, so the sum is compared with
+                          ``c·χ²(ν)``, ``c = κ/2``, ``ν = 2 n_m/κ`` (Satterthwaite: its mean
+                          and variance), κ = max(2, var(z²) over the run) so that heavier
+                          tails than Gaussian widen it and a chance-small estimate never
+                          narrows it; left out on a walk axis. Noise that the drive adds
+                          (never removes) while moving: where the held stretches are short,
+                          ``drive_variance`` must estimate their variance too and loses most
+                          of its power (for an excess of z standard deviations of the moving
+                          χ², F's statistic is about z/√2 when n_h ≈ n_m).
 ``drive_spectrum``        autocorrelations ``r_j`` (j = 1 … h) of z within the moving
                           stretches against those within the held ones (pairs never cross a
                           stretch): ``Σ_j (r_j^m − r_j^h)² / (1/P_j^m + 1/P_j^h) ~ χ²(h)``,
@@ -147,8 +158,8 @@ def _normalised(x: np.ndarray | None) -> np.ndarray | None:
     return None if not top > NORM_FLOOR else x / top
 
 
-def _chi2_logsf(stat: float, dof: int) -> float:
-    """log P(χ²(dof) > stat) (the regularised upper incomplete gamma)."""
+def _chi2_logsf(stat: float, dof: float) -> float:
+    """log P(χ²(dof) > stat) (the regularised upper incomplete gamma; any dof > 0)."""
     return float(np.log(max(special.gammaincc(0.5 * dof, 0.5 * max(stat, 0.0)), 1e-300)))
 
 
@@ -224,6 +235,27 @@ def _variance(z: np.ndarray, moving: np.ndarray, scale: float, axis: str, where:
                  float(abs(sm - sh)), "m/s²",
                  f"present while moving on {axis}: the noise changes {where} — std "
                  f"{sm:.3g} m/s² while moving against {sh:.3g} m/s² held (a vibration or "
+                 "electrical noise of the drive)")
+
+
+def _excess(z: np.ndarray, moving: np.ndarray, scale: float, axis: str, where: str
+            ) -> Check | None:
+    """``drive_excess`` (module docstring): Σ_moving z² against the model's variance, upper
+    tail of ``c·χ²(ν)`` with ``c = κ/2``, ``ν = 2 n_m/κ``, ``κ = max(2, var(z²))``."""
+    zm = z[moving]
+    if zm.size < MIN_STATE:
+        return None
+    kappa = max(2.0, float(np.var(z * z)))
+    c, nu = 0.5 * kappa, 2.0 * zm.size / kappa
+    stat = float(zm @ zm)
+    logp = _chi2_logsf(stat / c, nu)
+    ratio = stat / zm.size
+    added = scale * float(np.sqrt(max(ratio - 1.0, 0.0)))
+    return Check("drive_excess", axis, stat, logp, f"{c:.3g}·chi2({nu:.4g}), upper tail",
+                 added, "m/s²",
+                 f"present while moving on {axis}: the noise is larger {where} — std "
+                 f"{scale * np.sqrt(ratio):.3g} m/s² while moving against the model's "
+                 f"{scale:.3g} m/s² (an added noise of std {added:.3g} m/s²: a vibration or "
                  "electrical noise of the drive)")
 
 
@@ -398,7 +430,7 @@ def drive_checks(ext: Extensions, state: ModelState, k: int, residual: np.ndarra
                  torque: np.ndarray | None = None, coarse: bool = False,
                  space: AxisSpace | None = None,
                  scans: tuple[np.ndarray, list[np.ndarray]] | None = None) -> list[Check]:
-    """The five drive-state checks on axis k of the final model (those that apply).
+    """The six drive-state checks on axis k of the final model (those that apply).
 
     residual : (N,) the final model's residuals of axis k, m/s², white with the model's
         variance σ²_eff under the model (:func:`calib.gap.adequacy.run_battery`'s input).
@@ -429,6 +461,7 @@ def drive_checks(ext: Extensions, state: ModelState, k: int, residual: np.ndarra
         else:
             scan = (scans[0], scans[1][k])
         found += [_variance(z, moving, scale, axis, where),
+                  None if st.q > 0 else _excess(z, moving, scale, axis, where),
                   _spectrum(z, run, moving, scale, axis, where),
                   _tone(z, run, moving, scale, axis, where, scan)]
     return [c for c in found if c is not None]
