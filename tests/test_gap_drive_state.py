@@ -137,12 +137,17 @@ def test_a_gain_change_while_moving_is_unexplained():
     assert "present while moving on y: the gain changes" in gain[0]["description"]
 
 
+def _noisier_while_moving(seed: int, std: float):
+    """A stop-and-go run whose x reading gets white noise of ``std`` m/s² while moving."""
+    t, th, moving = stop_and_go(seed=seed)
+    _, y = course_readings(th, seed)
+    rng = np.random.default_rng(seed)
+    y[moving, 0] += std * rng.standard_normal(int(moving.sum()))
+    return _analyse(t, th, y)
+
+
 def test_more_noise_while_moving_is_unexplained():
-    t, th, moving = stop_and_go(seed=4)
-    _, y = course_readings(th, 4)
-    rng = np.random.default_rng(4)
-    y[moving, 0] += 0.35 * rng.standard_normal(int(moving.sum()))
-    res = _analyse(t, th, y)
+    res = _noisier_while_moving(4, 0.35)
     var = [u for u in res.unexplained if u["signature"] == "drive_variance"]
     assert res.verdict == "unexplained" and var, _words(res)
     assert "std" in var[0]["description"] and "while moving" in var[0]["description"]
@@ -154,11 +159,7 @@ def test_a_small_noise_excess_while_moving_is_found_against_the_model():
     3.5 of ``drive_variance``'s F, which must estimate the held variance too; too little
     over the whole run for a noise level to be named): ``drive_excess`` reports it, with the
     added std to within its sampling spread, where ``drive_variance`` does not (p = 0.007)."""
-    t, th, moving = stop_and_go(seed=6)
-    _, y = course_readings(th, 6)
-    rng = np.random.default_rng(6)
-    y[moving, 0] += 0.2 * rng.standard_normal(int(moving.sum()))
-    res = _analyse(t, th, y)
+    res = _noisier_while_moving(6, 0.2)
     ex = [u for u in res.unexplained if u["signature"] == "drive_excess"]
     assert res.verdict == "unexplained" and ex and ex[0]["axis"] == "x", _words(res)
     assert 0.12 < ex[0]["size"] < 0.28 and "while moving" in ex[0]["description"]

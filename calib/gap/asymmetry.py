@@ -39,8 +39,7 @@ import numpy as np
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap import swaps
-from calib.gap.swaps import FITS, swap_gain, tier
-from calib.gap.walk import LEAN_MARGIN
+from calib.gap.swaps import FITS, leaning, swap_gain, tier
 
 K2 = "nonlinearity_k2"
 PAIR = "scale_asymmetry"
@@ -74,10 +73,8 @@ def k2_or_asymmetry(ext: Extensions, state: ModelState, k: int) -> dict | None:
               f"{FITS[decision]} (AIC gain {gain:.3g} over "
               f"K2, one parameter each); a run whose specific force reaches both signs at "
               "more levels (poses spread over the whole turn) separates them")
-    description = (f"{shape} fits the even part of the response better than K2 by "
-                   f"{gain:.3g} after their charges (more than {LEAN_MARGIN:g}: K2 has "
-                   "considerably less support; the catalog has no asymmetry, so K2 is not "
-                   "named)")
+    description = leaning(shape, "fits the even part of the response", "K2", gain, "K2",
+                          "asymmetry", "K2 is")
     return {"axis": axis, "decision": decision, "gain": gain, "asymmetry": kappa,
             "size": size, "description": description, "reason": reason}
 

@@ -39,8 +39,7 @@ import numpy as np
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap import swaps
-from calib.gap.swaps import FITS, swap_gain, tier
-from calib.gap.walk import LEAN_MARGIN
+from calib.gap.swaps import FITS, leaning, swap_gain, tier
 
 K3 = "nonlinearity_k3"
 """The name beside the swapped effects in ``not_identifiable`` (not a catalog effect)."""
@@ -77,9 +76,8 @@ def named_or_k3(ext: Extensions, state: ModelState, k: int, named: list[str]) ->
               f"{FITS[decision]} (AIC gain {gain:.3g} over "
               f"their {cost:g} parameter(s)); a run that turns through whole turns at a "
               "steady rate separates them")
-    description = (f"{shape} explains the response better than {them} by {gain:.3g} after "
-                   f"their charges (more than {LEAN_MARGIN:g}: the named set has considerably "
-                   "less support; the catalog has no K3, so they are not named)")
+    description = leaning(shape, "explains the response", them, gain, "the named set", "K3",
+                          "they are")
     return {"axis": axis, "names": names, "decision": decision, "gain": gain, "k3": k3,
             "size": size, "description": description, "reason": reason}
 

@@ -43,8 +43,7 @@ from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap import swaps
 from calib.gap.drive_state import drive_state, where_moving
-from calib.gap.swaps import FITS, swap_gain, tier
-from calib.gap.walk import LEAN_MARGIN
+from calib.gap.swaps import FITS, leaning, swap_gain, tier
 
 LEVER = "lever_arm"
 BIASES = ("speed_bias", "move_bias", "accel_bias")
@@ -113,10 +112,8 @@ def lever_or_drive_bias(ext: Extensions, state: ModelState, k: int) -> dict | No
               f"{FITS[decision]} (AIC gain {gain:.3g} over "
               f"the lever arm's 2 parameters, the best of {len(cols)} drive-state columns); "
               "moves at several speeds, each way, separate them")
-    description = (f"{shape} explains the reading better than a lever arm by {gain:.3g} after "
-                   f"their charges (more than {LEAN_MARGIN:g}: the lever arm has considerably "
-                   "less support; the catalog has no bias tied to the drive, so the lever arm "
-                   "is not named)")
+    description = leaning(shape, "explains the reading", "a lever arm", gain, "the lever arm",
+                          "bias tied to the drive", "the lever arm is")
     return {"axis": axis, "names": [LEVER], "bias": best, "decision": decision, "gain": gain,
             "coefficient": coef, "size": size, "description": description, "reason": reason}
 

@@ -40,8 +40,7 @@ from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap import swaps
 from calib.gap.drive_state import drive_state, where_moving
-from calib.gap.swaps import FITS, tier
-from calib.gap.walk import LEAN_MARGIN
+from calib.gap.swaps import FITS, leaning, tier
 
 LEVEL = "noise_level"
 RIVAL = "move_noise"
@@ -94,10 +93,8 @@ def level_or_drive_noise(ext: Extensions, state: ModelState, k: int, resid: np.n
     reason = (f"cannot tell a noise level on {axis} from {shape}: the moving-only noise fits "
               f"{FITS[decision]} (AIC gain {d:.3g}, one variance each); longer holds between "
               "the moves separate them")
-    description = (f"{shape} explains the residuals better than one noise level by {d:.3g} "
-                   f"(more than {LEAN_MARGIN:g}: the noise level has considerably less "
-                   "support; the catalog has no noise tied to the drive, so the noise level is "
-                   "not named)")
+    description = leaning(shape, "explains the residuals", "one noise level", d,
+                          "the noise level", "noise tied to the drive", "the noise level is")
     return {"axis": axis, "names": [LEVEL], "rival": RIVAL, "decision": decision, "gain": d,
             "moving_std": float(np.sqrt(v)), "stated_std": float(np.sqrt(s2)), "size": added,
             "description": description, "reason": reason}

@@ -56,6 +56,17 @@ def tier(gain: float) -> str | None:
     return "ties" if gain > -AMBIGUITY_LR else None
 
 
+def leaning(shape: str, fits: str, named: str, gain: float, holder: str, missing: str,
+            dropped: str) -> str:
+    """The ``description`` of a column that leans against named effects, one sentence for
+    every review: "{shape} {fits} better than {named} by D after their charges (more than
+    LEAN_MARGIN: {holder} has considerably less support; the catalog has no {missing}, so
+    {dropped} not named)"."""
+    return (f"{shape} {fits} better than {named} by {gain:.3g} after their charges (more than "
+            f"{LEAN_MARGIN:g}: {holder} has considerably less support; the catalog has no "
+            f"{missing}, so {dropped} not named)")
+
+
 FITS = {"leans": "better", "describes": "as well", "ties": "nearly as well"}
 """How the column fits beside the named effects, in the ``not_identifiable`` reason."""
 
