@@ -195,31 +195,20 @@ def _outside_terms(ext: Extensions, state: ModelState, effects: list[EffectEstim
     effects still named, the ``unexplained`` entries (the asymmetry's not again where
     ``rival_shapes`` already failed), the ``not_identifiable`` pairs and the ``adequacy``
     entries ``asymmetry``, ``cubic``, ``drive_bias`` and ``drive_noise``."""
-    asymmetry = [f for k in range(2)
-                 if any(e.name == K2 and e.axis == AXES[k] for e in effects)
-                 and (f := k2_or_asymmetry(ext, state, k)) is not None]
-    leaning = {f["axis"] for f in asymmetry if f["decision"] == "leans"}
-    effects = [e for e in effects if not (e.name == K2 and e.axis in leaning)]
+    effects, asymmetry = _swap_one(effects, K2, lambda k: k2_or_asymmetry(ext, state, k))
     shaped = {c.axis for c in battery.failed if c.name == "rival_shapes"}
     said = [asymmetry_signature(f) for f in asymmetry
-            if f["axis"] in leaning and f["axis"] not in shaped]
+            if f["decision"] == "leans" and f["axis"] not in shaped]
     cubic = [f for k in range(2)
              if (f := named_or_k3(ext, state, k, [e.name for e in effects
                                                   if e.axis == AXES[k]])) is not None]
     dropped = {(n, f["axis"]) for f in cubic if f["decision"] == "leans" for n in f["names"]}
     effects = [e for e in effects if (e.name, e.axis) not in dropped]
     said += [cubic_signature(f) for f in cubic if f["decision"] == "leans"]
-    drive = [f for k in range(2)
-             if any(e.name == LEVER and e.axis == AXES[k] for e in effects)
-             and (f := lever_or_drive_bias(ext, state, k)) is not None]
-    dropped = {f["axis"] for f in drive if f["decision"] == "leans"}
-    effects = [e for e in effects if not (e.name == LEVER and e.axis in dropped)]
+    effects, drive = _swap_one(effects, LEVER, lambda k: lever_or_drive_bias(ext, state, k))
     said += [drive_bias_signature(f) for f in drive if f["decision"] == "leans"]
-    noise = [f for k in range(2)
-             if any(e.name == NOISE_LEVEL and e.axis == AXES[k] for e in effects)
-             and (f := level_or_drive_noise(ext, state, k, resid[:, k])) is not None]
-    dropped = {f["axis"] for f in noise if f["decision"] == "leans"}
-    effects = [e for e in effects if not (e.name == NOISE_LEVEL and e.axis in dropped)]
+    effects, noise = _swap_one(effects, NOISE_LEVEL,
+                               lambda k: level_or_drive_noise(ext, state, k, resid[:, k]))
     said += [drive_noise_signature(f) for f in noise if f["decision"] == "leans"]
     pairs = ([{"names": [K2, ASYMMETRY], "axis": f["axis"], "reason": f["reason"]}
               for f in asymmetry]
@@ -229,11 +218,21 @@ def _outside_terms(ext: Extensions, state: ModelState, effects: list[EffectEstim
                 for f in drive]
              + [{"names": [NOISE_LEVEL, f["rival"]], "axis": f["axis"], "reason": f["reason"]}
                 for f in noise])
-    terms = {"asymmetry": [{k: v for k, v in f.items() if k != "reason"} for f in asymmetry],
-             "cubic": [{k: v for k, v in f.items() if k != "reason"} for f in cubic],
-             "drive_bias": [{k: v for k, v in f.items() if k != "reason"} for f in drive],
-             "drive_noise": [{k: v for k, v in f.items() if k != "reason"} for f in noise]}
+    terms = {key: [{k: v for k, v in f.items() if k != "reason"} for f in found]
+             for key, found in (("asymmetry", asymmetry), ("cubic", cubic),
+                                ("drive_bias", drive), ("drive_noise", noise))}
     return effects, said, pairs, terms
+
+
+def _swap_one(effects: list[EffectEstimate], name: str, review: Callable[[int], dict | None]
+              ) -> tuple[list[EffectEstimate], list[dict]]:
+    """``review(k)`` on each axis k where ``name`` is named (a one-effect swap: asymmetry,
+    drive bias, drive noise); the effects without ``name`` where its review leans, and the
+    reviews found."""
+    found = [f for k in range(2) if any(e.name == name and e.axis == AXES[k] for e in effects)
+             and (f := review(k)) is not None]
+    leaning = {f["axis"] for f in found if f["decision"] == "leans"}
+    return [e for e in effects if not (e.name == name and e.axis in leaning)], found
 
 
 def _practical(ext: Extensions, rep: Reporter, state: ModelState,
