@@ -5,8 +5,9 @@ the sensor, a vibration of the drive, a cable that pulls while the table turns, 
 changes with the speed, the acceleration or the drive torque — is present while the table
 moves and gone while it holds. The catalog has none of these; the selection never looks at
 the drive state. So the final model's residuals are compared between the **moving** and the
-**held** stretches of a run, by six checks of the adequacy battery per axis and the tone on
-both axes at once (:mod:`calib.gap.adequacy`, each at the battery's Bonferroni level; a
+**held** stretches of a run, by six checks of the adequacy battery per axis and four on
+both axes at once (the tone, :func:`joint_tone`; the level, the gain and the excess,
+:func:`joint_drive`) (:mod:`calib.gap.adequacy`, each at the battery's Bonferroni level; a
 failure makes the verdict "unexplained" with the words "present while moving …", where — the
 moving stretches and their share of the run — and how big, in m/s²).
 
@@ -163,22 +164,24 @@ def _chi2_logsf(stat: float, dof: float) -> float:
     return float(np.log(max(special.gammaincc(0.5 * dof, 0.5 * max(stat, 0.0)), 1e-300)))
 
 
-def _level(space: AxisSpace, run, moving: np.ndarray, torque: np.ndarray | None,
-           axis: str, where: str) -> Check | None:
+def _level_columns(moving: np.ndarray, torque: np.ndarray | None
+                   ) -> tuple[np.ndarray, np.ndarray | None]:
+    """``drive_level``'s columns ``[m, τₙ, |τ|ₙ]`` (the torque's only when given) and τₙ."""
     cols = [moving.astype(float)]
-    names = ["moving"]
     tn = _normalised(torque)
     if tn is not None:
         cols += [tn, np.abs(tn)]
-        names += ["torque", "|torque|"]
-    z = np.column_stack(cols)
+    return np.column_stack(cols), tn
+
+
+def _level(space: AxisSpace, run, moving: np.ndarray, torque: np.ndarray | None,
+           axis: str, where: str) -> Check | None:
+    z, tn = _level_columns(moving, torque)
     fit = space.test(z)
     if fit is None:
         return None
     stat, dof, coef = fit
-    shift = z @ coef
-    size = float(np.max(np.abs(shift[moving])) if np.any(moving) else 0.0)
-    mean_m = float(np.mean(shift[moving]) - np.mean(shift[~moving]))
+    size, mean_m = _level_size(z, coef, moving)
     follows = (" (it follows the drive torque)" if tn is not None
                and abs(coef[1]) + abs(coef[2]) > abs(coef[0]) else "")
     return Check("drive_level", axis, stat, _chi2_logsf(stat, dof), f"chi2({dof})", size,
@@ -189,8 +192,16 @@ def _level(space: AxisSpace, run, moving: np.ndarray, torque: np.ndarray | None,
                  "mount that pulls while the table turns")
 
 
-def _gain(space: AxisSpace, run, k: int, moving: np.ndarray, torque: np.ndarray | None,
-          axis: str, where: str) -> Check | None:
+def _level_size(z: np.ndarray, coef: np.ndarray, moving: np.ndarray) -> tuple[float, float]:
+    """The fitted shift's largest magnitude while moving and its mean moving − held, m/s²."""
+    shift = z @ coef
+    size = float(np.max(np.abs(shift[moving])) if np.any(moving) else 0.0)
+    return size, float(np.mean(shift[moving]) - np.mean(shift[~moving]))
+
+
+def _gain_columns(run, k: int, moving: np.ndarray, torque: np.ndarray | None) -> np.ndarray:
+    """``drive_gain``'s columns ``A_r·m`` and, with timing, ``A_r·|ω|ₙ``, ``A_r·αₙ``,
+    ``A_r·τₙ``."""
     a = run.a_ref[:, k]
     cols = [a * moving]
     if run.omega is not None:
@@ -198,15 +209,19 @@ def _gain(space: AxisSpace, run, k: int, moving: np.ndarray, torque: np.ndarray 
                   _normalised(torque)):
             if x is not None:
                 cols.append(a * x)
-    z = np.column_stack(cols)
+    return np.column_stack(cols)
+
+
+def _gain(space: AxisSpace, run, k: int, moving: np.ndarray, torque: np.ndarray | None,
+          axis: str, where: str) -> Check | None:
+    z = _gain_columns(run, k, moving, torque)
     fit = space.test(z)
     if fit is None:
         return None
     stat, dof, coef = fit
-    change = z @ coef
-    size = float(np.max(np.abs(change)))
+    size = float(np.max(np.abs(z @ coef)))
     gain = float(coef[0])
-    top = float(np.max(np.abs(a))) or 1.0
+    top = float(np.max(np.abs(run.a_ref[:, k]))) or 1.0
     return Check("drive_gain", axis, stat, _chi2_logsf(stat, dof), f"chi2({dof})", size,
                  "m/s²",
                  f"present while moving on {axis}: the gain changes {where} — by "
@@ -238,18 +253,26 @@ def _variance(z: np.ndarray, moving: np.ndarray, scale: float, axis: str, where:
                  "electrical noise of the drive)")
 
 
-def _excess(z: np.ndarray, moving: np.ndarray, scale: float, axis: str, where: str
-            ) -> Check | None:
-    """``drive_excess`` (module docstring): Σ_moving z² against the model's variance, upper
-    tail of ``c·χ²(ν)`` with ``c = κ/2``, ``ν = 2 n_m/κ``, ``κ = max(2, var(z²))``."""
+def _excess_law(z: np.ndarray, moving: np.ndarray) -> tuple[float, float, float] | None:
+    """``drive_excess``'s ``Σ_moving z²`` and its reference ``c·χ²(ν)``: (sum, c, ν) with
+    ``c = κ/2``, ``ν = 2 n_m/κ``, ``κ = max(2, var(z²))``; None with too few moving samples."""
     zm = z[moving]
     if zm.size < MIN_STATE:
         return None
     kappa = max(2.0, float(np.var(z * z)))
-    c, nu = 0.5 * kappa, 2.0 * zm.size / kappa
-    stat = float(zm @ zm)
+    return float(zm @ zm), 0.5 * kappa, 2.0 * zm.size / kappa
+
+
+def _excess(z: np.ndarray, moving: np.ndarray, scale: float, axis: str, where: str
+            ) -> Check | None:
+    """``drive_excess`` (module docstring): Σ_moving z² against the model's variance, upper
+    tail of ``c·χ²(ν)`` with ``c = κ/2``, ``ν = 2 n_m/κ``, ``κ = max(2, var(z²))``."""
+    law = _excess_law(z, moving)
+    if law is None:
+        return None
+    stat, c, nu = law
     logp = _chi2_logsf(stat / c, nu)
-    ratio = stat / zm.size
+    ratio = stat / int(moving.sum())
     added = scale * float(np.sqrt(max(ratio - 1.0, 0.0)))
     return Check("drive_excess", axis, stat, logp, f"{c:.3g}·chi2({nu:.4g}), upper tail",
                  added, "m/s²",
@@ -424,6 +447,91 @@ def joint_tone(ext: Extensions, state: ModelState, residuals: np.ndarray,
                  f"present while moving on both axes: a tone of {at}, about {amps[0]:.2g} m/s² "
                  f"on x and {amps[1]:.2g} m/s² on y {where_moving(run, moving)} (a vibration "
                  "of the drive)")
+
+
+def joint_drive(ext: Extensions, state: ModelState, residuals: np.ndarray,
+                torque: np.ndarray | None = None, coarse: bool = False,
+                spaces: list[AxisSpace] | None = None) -> list[Check]:
+    """``drive_level``, ``drive_gain`` and ``drive_excess`` on both axes at once (axis
+    ``both``): the drive's field, current or vibration reaches the whole sensor block, so a
+    disturbance, a gain change or added noise while moving shows on both axes (in different
+    amounts), each of which may stay within its own level.
+
+    Each axis' statistic is the one of :func:`drive_checks` (its own columns, coefficients
+    free per axis); under the model the two axes' residuals are independent (each axis is
+    fitted on its own; a tilt offset shares one column, a weak dependence neglected here as
+    in :func:`joint_tone`), so
+
+    * ``drive_level``, ``drive_gain``: ``S_x + S_y ~ χ²(k_x + k_y)``;
+    * ``drive_excess``: ``Σ_M z_x² + Σ_M z_y²``, the sum of ``c_x·χ²(ν_x)`` and
+      ``c_y·χ²(ν_y)``, is compared with ``c·χ²(ν)`` of the same mean and variance
+      (Satterthwaite): ``μ = c_xν_x + c_yν_y``, ``V = 2(c_x²ν_x + c_y²ν_y)``, ``c = V/2μ``,
+      ``ν = 2μ²/V``; left out when either axis carries a walk or is coarse.
+
+    For a departure of z_x and z_y standard deviations the joint statistic sees
+    ``z_x² + z_y²``: a gain change of z ≈ 3.5 on each axis (each near p = 10⁻³, inside its
+    Bonferroni level) is z ≈ 5 together. ``residuals`` (N, 2) as :func:`drive_checks`' for
+    each axis; ``spaces`` the two axes' :class:`AxisSpace` of ``state``, when already built.
+    Empty when the run has no moving and held stretches."""
+    run = ext.run
+    moving = drive_state(run.tita)
+    if moving is None:
+        return []
+    where = where_moving(run, moving)
+    spaces = [AxisSpace(ext, state, k) for k in range(2)] if spaces is None else spaces
+    tq = None if torque is None or run.t is None else np.asarray(torque, dtype=float)
+    out: list[Check] = []
+
+    zl, _ = _level_columns(moving, tq)
+    fits = [sp.test(zl) for sp in spaces]
+    if fits[0] is not None and fits[1] is not None:
+        stat, dof = fits[0][0] + fits[1][0], fits[0][1] + fits[1][1]
+        (sx, mx), (sy, my) = (_level_size(zl, f[2], moving) for f in fits)
+        out.append(Check(
+            "drive_level", "both", stat, _chi2_logsf(stat, dof), f"chi2({dof}), both axes",
+            max(sx, sy), "m/s²",
+            f"present while moving on both axes: a disturbance of the reading {where}, "
+            f"{mx:+.3g} m/s² on x and {my:+.3g} m/s² on y on average against the held "
+            f"stretches, up to {max(sx, sy):.3g} m/s² — the drive's field or current, a cable "
+            "or a mount that pulls while the table turns"))
+
+    cols = [_gain_columns(run, k, moving, tq) for k in range(2)]
+    fits = [sp.test(z) for sp, z in zip(spaces, cols, strict=True)]
+    if fits[0] is not None and fits[1] is not None:
+        stat, dof = fits[0][0] + fits[1][0], fits[0][1] + fits[1][1]
+        size = max(float(np.max(np.abs(z @ f[2]))) for z, f in zip(cols, fits, strict=True))
+        gx, gy = (100.0 * float(f[2][0]) for f in fits)
+        out.append(Check(
+            "drive_gain", "both", stat, _chi2_logsf(stat, dof), f"chi2({dof}), both axes",
+            size, "m/s²",
+            f"present while moving on both axes: the gain changes {where} — by {gx:+.3g} % "
+            f"on x and {gy:+.3g} % on y while moving, up to {size:.3g} m/s² with the speed, "
+            "the acceleration or the drive torque"))
+
+    if coarse or any(st.q > 0 for st in state.axes):
+        return out
+    scales = [float(np.sqrt(st.sigma2_eff)) for st in state.axes]
+    laws = [_excess_law(np.asarray(residuals[:, k], dtype=float) / scales[k], moving)
+            for k in range(2)]
+    if laws[0] is None or laws[1] is None:
+        return out
+    stat = laws[0][0] + laws[1][0]
+    mean = sum(c * nu for _, c, nu in laws)
+    var = 2.0 * sum(c * c * nu for _, c, nu in laws)
+    c, nu = var / (2.0 * mean), 2.0 * mean * mean / var
+    n_m = int(moving.sum())
+    stds = [sc * float(np.sqrt(law[0] / n_m)) for sc, law in zip(scales, laws, strict=True)]
+    added = [sc * float(np.sqrt(max(law[0] / n_m - 1.0, 0.0)))
+             for sc, law in zip(scales, laws, strict=True)]
+    out.append(Check(
+        "drive_excess", "both", stat, _chi2_logsf(stat / c, nu),
+        f"{c:.3g}·chi2({nu:.4g}), upper tail, both axes", max(added), "m/s²",
+        f"present while moving on both axes: the noise is larger {where} — std "
+        f"{stds[0]:.3g} m/s² on x and {stds[1]:.3g} m/s² on y while moving against the "
+        f"model's {scales[0]:.3g} and {scales[1]:.3g} m/s² (added noise of std "
+        f"{added[0]:.3g} and {added[1]:.3g} m/s²: a vibration or electrical noise of the "
+        "drive)"))
+    return out
 
 
 def drive_checks(ext: Extensions, state: ModelState, k: int, residual: np.ndarray,
