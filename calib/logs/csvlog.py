@@ -718,14 +718,14 @@ def _keep_block_memory() -> None:
     mallopt(m_trim_threshold, HEAP_TRIM_BYTES)
 
 
-def read_csv(path: Path, columns: dict[str, str] | None = None, fmt: str = "auto", *,
+def read_csv(path: str | Path, columns: dict[str, str] | None = None, fmt: str = "auto", *,
              units: str | None = None, gyro_unit: str | None = None,
              time_unit: str | None = None, progress: Progress | None = None) -> RawLog:
     """Read a CSV/TSV log (module docstring) into a :class:`RawLog` (units as stated).
 
     Parameters
     ----------
-    path : the file.
+    path : the file (a path or its name).
     columns : role → column name (``--columns``), overriding recognition for that role.
     fmt : ``auto``/``csv``/``phyphox``/``sensorlogger`` (the last two only check that the
         header is that app's).
@@ -744,6 +744,7 @@ def read_csv(path: Path, columns: dict[str, str] | None = None, fmt: str = "auto
         (named by line), a non-numeric cell (named by line and column), a gravity-removed
         export, a unit not read here and not given by its option, a damaged gzip file.
     """
+    path = Path(path)
     columns = dict(columns or {})
     bad = sorted(set(columns) - set(ROLES) - {"topic"})
     if bad:
