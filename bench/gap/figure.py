@@ -175,10 +175,13 @@ def gap_figure(report: GapReport) -> Figure:
             ax.axhline(0.0, color="k", lw=0.6)
             ok = (report.consistent("before" if which == "before" else "after")[ax_name])
             chi2 = gm.chi2_dof if which == "before" else report.chi2_after(ax_name)
-            # a pattern is named only where the panel shows structure beyond noise: on a
-            # consistent panel the largest z is what noise alone gives, not a finding
-            worst = (f": {signature_words(str(gm.worst))}" if not ok
-                     else " (no pattern beyond noise)")
+            # a pattern is named only where it is itself beyond noise: on a consistent panel
+            # the largest z is what noise alone gives, and on a panel that a check of the
+            # battery flags (a drive-state or walk check, …) the check's words say what it is
+            beyond = gm.max_signature_z > gm.threshold_z(report.family_alpha)
+            worst = (" (no pattern beyond noise)" if ok
+                     else f": {signature_words(str(gm.worst))}" if beyond
+                     else " (within noise; the finding: in the red box)")
             ax.set_title(f"{ax_name}, {which}: χ²/dof = {chi2:.3f} — "
                          f"{'consistent with noise' if ok else 'GAP: structure beyond noise'}\n"
                          f"max |z| = {gm.max_signature_z:.1f}{worst}", fontsize=9)
