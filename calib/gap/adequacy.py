@@ -647,4 +647,15 @@ def run_battery(ext: Extensions, state: ModelState, residuals: np.ndarray,
     for c, w in zip(checks, weights, strict=True):
         failed = c.logp < float(np.log(w * alpha_check))
         out.append(Check(**{**c.__dict__, "failed": bool(failed)}))
-    return Battery(tuple(out), float(family_alpha), float(alpha_check))
+    return Battery(_without_redundant_joints(out), float(family_alpha), float(alpha_check))
+
+
+def _without_redundant_joints(checks: list[Check]) -> tuple[Check, ...]:
+    """The checks, less each check on both axes at once (axis ``both``) that failed where
+    the same check failed on a single axis: the joint checks are there for what neither axis
+    shows alone (:func:`calib.gap.drive_state.joint_drive`, ``joint_tone``); beside a
+    single-axis failure a joint one says nothing more, and would call the other axis
+    inconsistent too. It still counts in the Bonferroni level (conservative)."""
+    single = {c.name for c in checks if c.failed and c.axis in AXES}
+    return tuple(c for c in checks
+                 if not (c.axis == "both" and c.failed and c.name in single))

@@ -449,6 +449,12 @@ def joint_tone(ext: Extensions, state: ModelState, residuals: np.ndarray,
                  "of the drive)")
 
 
+def _shares(fits: list[tuple[float, int, np.ndarray]]) -> str:
+    """Each axis' part of a joint χ², in words: where the departure is."""
+    return (f"χ² {fits[0][0]:.3g} of {fits[0][1]} dof on x, {fits[1][0]:.3g} of {fits[1][1]} "
+            "on y")
+
+
 def joint_drive(ext: Extensions, state: ModelState, residuals: np.ndarray,
                 torque: np.ndarray | None = None, coarse: bool = False,
                 spaces: list[AxisSpace] | None = None) -> list[Check]:
@@ -492,8 +498,8 @@ def joint_drive(ext: Extensions, state: ModelState, residuals: np.ndarray,
             max(sx, sy), "m/s²",
             f"present while moving on both axes: a disturbance of the reading {where}, "
             f"{mx:+.3g} m/s² on x and {my:+.3g} m/s² on y on average against the held "
-            f"stretches, up to {max(sx, sy):.3g} m/s² — the drive's field or current, a cable "
-            "or a mount that pulls while the table turns"))
+            f"stretches, up to {max(sx, sy):.3g} m/s² ({_shares(fits)}) — the drive's field or "
+            "current, a cable or a mount that pulls while the table turns"))
 
     cols = [_gain_columns(run, k, moving, tq) for k in range(2)]
     fits = [sp.test(z) for sp, z in zip(spaces, cols, strict=True)]
@@ -506,7 +512,7 @@ def joint_drive(ext: Extensions, state: ModelState, residuals: np.ndarray,
             size, "m/s²",
             f"present while moving on both axes: the gain changes {where} — by {gx:+.3g} % "
             f"on x and {gy:+.3g} % on y while moving, up to {size:.3g} m/s² with the speed, "
-            "the acceleration or the drive torque"))
+            f"the acceleration or the drive torque ({_shares(fits)})"))
 
     if coarse or any(st.q > 0 for st in state.axes):
         return out
