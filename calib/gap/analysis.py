@@ -41,6 +41,8 @@ from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
 from calib.gap.selection import FAMILY_ALPHA, candidate_list, initial_state, select, try_test
 from calib.gap.space import AxisSpace
 from calib.gap.sponges import review_sponges
+from calib.gap.step_swap import STEP, named_or_step
+from calib.gap.step_swap import signature as step_signature
 from calib.gap.walk import WALK_CHECKS, WalkReview, review_walk
 from calib.noise.sensor_profile import SensorProfile
 from calib.stats.diagnostics import GapMeasure, Lattice, detect_lattice, gap_measure
@@ -191,23 +193,22 @@ def _outside_terms(ext: Extensions, state: ModelState, effects: list[EffectEstim
                    ) -> tuple[list[EffectEstimate], list[dict], list[dict], dict]:
     """Terms outside the catalog against the named effects: a scale asymmetry in place of a
     named K2 (:mod:`calib.gap.asymmetry`), a K3 in place of the structured effects of an axis
-    (:mod:`calib.gap.cubic`; IEEE 1293), a bias tied to the drive in place of a lever arm
+    (:mod:`calib.gap.cubic`; IEEE 1293), one step of the bias in place of them and the drift
+    (:mod:`calib.gap.step_swap`), a bias tied to the drive in place of a lever arm
     (:mod:`calib.gap.drive_bias`), noise added while the table moves in place of a noise level
     (:mod:`calib.gap.drive_noise`; ``resid`` the final model's residuals, (N, 2) m/s²).
     Effects a term leans against are not named (they stay in the model meanwhile). Returns the
     effects still named, the ``unexplained`` entries (the asymmetry's not again where
     ``rival_shapes`` already failed), the ``not_identifiable`` pairs and the ``adequacy``
-    entries ``asymmetry``, ``cubic``, ``drive_bias`` and ``drive_noise``."""
+    entries ``asymmetry``, ``cubic``, ``step``, ``drive_bias`` and ``drive_noise``."""
     effects, asymmetry = _swap_one(effects, K2, lambda k: k2_or_asymmetry(ext, state, k))
     shaped = {c.axis for c in battery.failed if c.name == "rival_shapes"}
     said = [asymmetry_signature(f) for f in asymmetry
             if f["decision"] == "leans" and f["axis"] not in shaped]
-    cubic = [f for k in range(2)
-             if (f := named_or_k3(ext, state, k, [e.name for e in effects
-                                                  if e.axis == AXES[k]])) is not None]
-    dropped = {(n, f["axis"]) for f in cubic if f["decision"] == "leans" for n in f["names"]}
-    effects = [e for e in effects if (e.name, e.axis) not in dropped]
+    effects, cubic = _swap_set(effects, lambda k, named: named_or_k3(ext, state, k, named))
     said += [cubic_signature(f) for f in cubic if f["decision"] == "leans"]
+    effects, steps = _swap_set(effects, lambda k, named: named_or_step(ext, state, k, named))
+    said += [step_signature(f) for f in steps if f["decision"] == "leans"]
     effects, drive = _swap_one(effects, LEVER, lambda k: lever_or_drive_bias(ext, state, k))
     said += [drive_bias_signature(f) for f in drive if f["decision"] == "leans"]
     effects, noise = _swap_one(effects, NOISE_LEVEL,
@@ -217,14 +218,28 @@ def _outside_terms(ext: Extensions, state: ModelState, effects: list[EffectEstim
               for f in asymmetry]
              + [{"names": [*f["names"], K3], "axis": f["axis"], "reason": f["reason"]}
                 for f in cubic]
+             + [{"names": [*f["names"], STEP], "axis": f["axis"], "reason": f["reason"]}
+                for f in steps]
              + [{"names": [LEVER, f["bias"]], "axis": f["axis"], "reason": f["reason"]}
                 for f in drive]
              + [{"names": [NOISE_LEVEL, f["rival"]], "axis": f["axis"], "reason": f["reason"]}
                 for f in noise])
     terms = {key: [{k: v for k, v in f.items() if k != "reason"} for f in found]
-             for key, found in (("asymmetry", asymmetry), ("cubic", cubic),
+             for key, found in (("asymmetry", asymmetry), ("cubic", cubic), ("step", steps),
                                 ("drive_bias", drive), ("drive_noise", noise))}
     return effects, said, pairs, terms
+
+
+def _swap_set(effects: list[EffectEstimate],
+              review: Callable[[int, list[str]], dict | None]
+              ) -> tuple[list[EffectEstimate], list[dict]]:
+    """``review(k, named)`` on each axis k with the names named there (a swap of a set of
+    effects: K3, a step of the bias); the effects without those a review leans against, and
+    the reviews found."""
+    found = [f for k in range(2)
+             if (f := review(k, [e.name for e in effects if e.axis == AXES[k]])) is not None]
+    dropped = {(n, f["axis"]) for f in found if f["decision"] == "leans" for n in f["names"]}
+    return [e for e in effects if (e.name, e.axis) not in dropped], found
 
 
 def _swap_one(effects: list[EffectEstimate], name: str, review: Callable[[int], dict | None]

@@ -103,6 +103,8 @@ def gap_units() -> dict[str, str]:
         "adequacy.asymmetry.size": "m/s²",
         "adequacy.cubic.gain": "1", "adequacy.cubic.k3": "1/(m/s²)²",
         "adequacy.cubic.size": "m/s²",
+        "adequacy.step.gain": "1", "adequacy.step.step": "m/s²", "adequacy.step.size": "m/s²",
+        "adequacy.step.at": "s (the sample index without timing)",
         "adequacy.drive_bias.gain": "1", "adequacy.drive_bias.size": "m/s²",
         "adequacy.drive_bias.coefficient": "m/s² per unit of the column: rad/s (speed_bias), "
                                            "1 (move_bias), rad/s² (accel_bias)",

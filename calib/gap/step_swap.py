@@ -1,0 +1,124 @@
+"""The named effects of an axis or one step of the bias? Told apart when the run can.
+
+On a run whose angle follows the clock — a stop-and-go tour that turns one way, a sweep, a
+pose tour in order — a function of time is a function of θ: a bias that jumps once (a
+connector, a supply that switches) at t₀ is ``[t ≥ t₀]``, and the catalog's columns that
+follow the angle (misalignment, K2, the cross-axis term, …) with a drift in time take it
+between them, with a consistent gap after (the drive part's seed 11: a step at z = 6 on a
+stop-and-go run named as a drift, K2, the cross-axis term and a misalignment of y). A walk
+named there is reviewed against steps by the walk's own review (:mod:`calib.gap.walk`); the
+structured effects are reviewed here.
+
+The structured effects named on axis k (:data:`SWAPPED`: :data:`calib.gap.cubic.SWAPPED` and
+the drift) are removed from the final model and one step column ``[k ≥ i]`` is fitted in
+their place (:class:`calib.gap.space.AxisSpace`: in the model's whitened space, every other
+parameter refitted), its place i the best of a grid of at most :data:`GRID` places at least
+:data:`calib.gap.steps.MIN_SEGMENT` samples from either end (:meth:`AxisSpace.scan`), then of
+every sample between the best one's neighbours on the grid, the best tested alone. The step
+is charged its size and its place, ``1 + ln N`` (:func:`calib.gap.walk.step_charge`, as the
+walk's steps are), the effects their parameters p:
+
+    D = (LR_step − 2·(1 + ln N)) − (LR_named − 2p)
+
+read by :func:`calib.gap.swaps.tier` as the other swaps: ``"leans"`` beyond
+:data:`calib.gap.walk.LEAN_MARGIN` (the effects are not named; the verdict is "unexplained"
+with the step in words), ``"describes"`` above 0 and ``"ties"`` above ``−AMBIGUITY_LR`` (the
+pair is listed in ``not_identifiable``). A true catalog effect is a column of the model
+itself; a step must then beat it by the place's charge, which a function of the angle on
+several poses does not give it. Not on an axis with a walk (its own review), nor with a
+sensor profile's fixed walk.
+
+Why by hand: a swap of columns in this model's own whitened space; no library knows it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from calib.conventions import AXES
+from calib.effects import Extensions, ModelState, effect
+from calib.gap import cubic, swaps
+from calib.gap.space import AxisSpace
+from calib.gap.steps import MIN_SEGMENT, StepFit, describe
+from calib.gap.swaps import FITS, leaning, tier
+from calib.gap.walk import step_charge
+
+STEP = "bias_step"
+"""The name beside the swapped effects in ``not_identifiable`` (not a catalog effect)."""
+
+SWAPPED = (*cubic.SWAPPED, "bias_drift")
+"""Named per-axis effects a step of the bias may stand for on a run whose angle follows the
+clock: those whose columns follow the angle or the motion, and the drift in time."""
+
+GRID = 400
+"""Most places scanned for the step (evenly spaced sample indices; every index when fewer)."""
+
+
+def _places(n: int) -> np.ndarray:
+    """The sample indices a step may start at: :data:`MIN_SEGMENT` from either end, at most
+    :data:`GRID` of them."""
+    lo, hi = MIN_SEGMENT, n - MIN_SEGMENT
+    if hi <= lo:
+        return np.zeros(0, dtype=int)
+    return np.unique(np.linspace(lo, hi, min(hi - lo + 1, GRID)).round().astype(int))
+
+
+def _step(n: int, i: int) -> np.ndarray:
+    return (np.arange(n) >= i).astype(float)
+
+
+def named_or_step(ext: Extensions, state: ModelState, k: int, named: list[str]
+                  ) -> dict | None:
+    """The effects of :data:`SWAPPED` in ``named`` (named on axis k) against one step of the
+    bias in their place (module docstring).
+
+    Returns ``{"axis", "names", "decision": "ties" | "describes" | "leans", "gain" (D, 1),
+    "step" (m/s²), "at" (s, or the sample index without timing), "size" (|step|, m/s²),
+    "description", "reason"}``, or None when none of them is named on axis k, the axis has a
+    walk, or ``D ≤ −AMBIGUITY_LR``.
+    """
+    axis = AXES[k]
+    names = [n for n in SWAPPED if n in named and (n, axis) in state.effects()]
+    if not names or state.axes[k].q > 0:
+        return None
+    run = ext.run
+    places = _places(run.n)
+    if places.size == 0:
+        return None
+    reduced = state
+    for name in names:
+        reduced = reduced.without(name, axis)
+    space = AxisSpace(ext, reduced, k)
+    j = int(np.argmax(space.scan(lambda i: _step(run.n, int(i)), places)))
+    near = np.arange(places[max(j - 1, 0)], places[min(j + 1, places.size - 1)] + 1)
+    best = int(near[int(np.argmax(space.scan(lambda i: _step(run.n, int(i)), near)))])
+    fit = space.test(_step(run.n, best)[:, None])
+    if fit is None:
+        return None
+    lr_named = float(ext.nll(reduced) - ext.nll(state))
+    cost = float(sum(effect(name).n_free for name in names))
+    gain = (float(fit[0]) - 2.0 * step_charge(run.n)) - (lr_named - 2.0 * cost)
+    decision = tier(gain)
+    if decision is None:
+        return None
+    size = float(fit[2][0])
+    sigma = float(np.sqrt(state.axes[k].sigma2_eff))
+    shape = describe(StepFit(np.array([best]), np.zeros(2), np.array([size]), float(fit[0]),
+                             sigma, run.n), run.tcol, run.time_unit, axis)
+    them = " + ".join(names)
+    reason = (f"cannot tell {them} from {shape} on this run: the step alone fits "
+              f"{FITS[decision]} (AIC gain {gain:.3g} over their {cost:g} parameter(s), the "
+              f"step charged its size and its place, 1 + ln N = {step_charge(run.n):.3g}); a "
+              "run whose angle does not follow the clock (back and forth, or the poses in "
+              "another order) separates them")
+    description = leaning(shape, "explains the reading", them, gain, "the named set",
+                          "step of the bias", "they are")
+    at = float(run.tcol[best]) if run.time_unit == "s" else float(best)
+    return {"axis": axis, "names": names, "decision": decision, "gain": float(gain),
+            "step": size, "at": at, "size": abs(size), "description": description,
+            "reason": reason}
+
+
+def signature(found: dict) -> dict:
+    """The ``unexplained`` entry of effects a step of the bias leans against."""
+    return swaps.signature(found, STEP, "step of the bias")
