@@ -13,6 +13,8 @@ import numpy as np
 import pytest
 
 from calib.conventions import G
+from calib.effects import Extensions, ModelState, RunData
+from calib.gap.space import AxisSpace
 from tests.test_gap_drive_state import STATED, _analyse, course_readings, stop_and_go
 
 
@@ -66,3 +68,20 @@ def test_a_true_misalignment_keeps_its_name_and_nothing_is_said(seed):
     res = _analyse(t, th, y)
     assert res.named == [("misalignment", "y")], res.summary()
     assert res.adequacy["step"] == []
+
+
+def test_the_step_scan_gives_the_test_of_every_place():
+    """:meth:`AxisSpace.step_scan` (cumulative sums, every place at once) equals
+    :meth:`AxisSpace.test` of the step column place by place, with a misalignment in the
+    model beside bias and scale."""
+    t, th, y, _ = _stepped(2, 0.5)
+    ext = Extensions(RunData.build(th, y, G, t), np.array([1.0, 1.0]))
+    nominal = ModelState.nominal(STATED)
+    state = nominal.with_axis(1, nominal.axes[1].add("misalignment"))
+    space = AxisSpace(ext, state, 1)
+    scan = space.step_scan()
+    n = th.size
+    assert scan.shape == (n - 1,)
+    for i in (1, 5, 700, 2237, n - 6, n - 1):
+        got = space.test((np.arange(n) >= i).astype(float)[:, None])[0]
+        assert scan[i - 1] == pytest.approx(got, rel=1e-9, abs=1e-9), i

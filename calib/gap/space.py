@@ -104,6 +104,31 @@ class AxisSpace:
             out._cheap = (q, _residual_without(q, r, self.ext.white(self.st, z)))
         return out
 
+    def step_scan(self) -> np.ndarray | None:
+        """ΔRSS of one step of the level, the column ``[k ≥ i]``, at every place i = 1 … N − 1
+        (entry i − 1), from sums in the centred image of :meth:`_scan_system` (q = 0): with
+        ``S(i)`` the sums from sample i to the end,
+
+            ΔRSS(i) = S_r(i)² / ((N − i)·i/N − ‖S_Q(i)‖²)
+
+        (the step's centred squared norm less its part in the model, whose basis Q and
+        residual r are centred: what :meth:`test` gives one place at a time, in O(N·p) for all
+        of them). A place whose column lies in the model's span, to :data:`COLLINEAR_TOL` of
+        its norm, gets 0. None with a walk (q > 0)."""
+        if self.st.q > 0:
+            return None
+        qh, rw = self._scan_system()
+        n = rw.size
+        tail_r = np.cumsum(rw[::-1])[::-1][1:]
+        tail_q = np.cumsum(qh[::-1], axis=0)[::-1][1:]
+        i = np.arange(1, n, dtype=float)
+        norm2 = (n - i) * i / n
+        den = norm2 - np.einsum("ij,ij->i", tail_q, tail_q)
+        out = np.zeros(n - 1)
+        ok = den > COLLINEAR_TOL**2 * norm2
+        out[ok] = tail_r[ok] ** 2 / den[ok]
+        return out
+
     def scan(self, make, grid) -> np.ndarray:
         """ΔRSS of each column block ``make(g)`` (N, c) of a grid, batched: the blocks are
         whitened together (with q = 0 in the centred image, :meth:`_scan_system`) and each

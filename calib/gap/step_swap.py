@@ -12,11 +12,11 @@ structured effects are reviewed here.
 The structured effects named on axis k (:data:`SWAPPED`: :data:`calib.gap.cubic.SWAPPED` and
 the drift) are removed from the final model and one step column ``[k ≥ i]`` is fitted in
 their place (:class:`calib.gap.space.AxisSpace`: in the model's whitened space, every other
-parameter refitted), its place i the best of a grid of at most :data:`GRID` places at least
-:data:`calib.gap.steps.MIN_SEGMENT` samples from either end (:meth:`AxisSpace.scan`), then of
-every sample between the best one's neighbours on the grid, the best tested alone. The step
-is charged its size and its place, ``1 + ln N`` (:func:`calib.gap.walk.step_charge`, as the
-walk's steps are), the effects their parameters p:
+parameter refitted), its place i the best of every place at least
+:data:`calib.gap.steps.MIN_SEGMENT` samples from either end (:meth:`AxisSpace.step_scan`:
+cumulative sums, O(N·p) for all of them), the best tested alone. The step is charged its
+size and its place, ``1 + ln N`` (:func:`calib.gap.walk.step_charge`, as the walk's steps
+are), the effects their parameters p:
 
     D = (LR_step − 2·(1 + ln N)) − (LR_named − 2p)
 
@@ -50,23 +50,6 @@ SWAPPED = (*cubic.SWAPPED, "bias_drift")
 """Named per-axis effects a step of the bias may stand for on a run whose angle follows the
 clock: those whose columns follow the angle or the motion, and the drift in time."""
 
-GRID = 400
-"""Most places scanned for the step (evenly spaced sample indices; every index when fewer)."""
-
-
-def _places(n: int) -> np.ndarray:
-    """The sample indices a step may start at: :data:`MIN_SEGMENT` from either end, at most
-    :data:`GRID` of them."""
-    lo, hi = MIN_SEGMENT, n - MIN_SEGMENT
-    if hi <= lo:
-        return np.zeros(0, dtype=int)
-    return np.unique(np.linspace(lo, hi, min(hi - lo + 1, GRID)).round().astype(int))
-
-
-def _step(n: int, i: int) -> np.ndarray:
-    return (np.arange(n) >= i).astype(float)
-
-
 def named_or_step(ext: Extensions, state: ModelState, k: int, named: list[str]
                   ) -> dict | None:
     """The effects of :data:`SWAPPED` in ``named`` (named on axis k) against one step of the
@@ -82,17 +65,17 @@ def named_or_step(ext: Extensions, state: ModelState, k: int, named: list[str]
     if not names or state.axes[k].q > 0:
         return None
     run = ext.run
-    places = _places(run.n)
-    if places.size == 0:
+    if run.n < 2 * MIN_SEGMENT + 1:
         return None
     reduced = state
     for name in names:
         reduced = reduced.without(name, axis)
     space = AxisSpace(ext, reduced, k)
-    j = int(np.argmax(space.scan(lambda i: _step(run.n, int(i)), places)))
-    near = np.arange(places[max(j - 1, 0)], places[min(j + 1, places.size - 1)] + 1)
-    best = int(near[int(np.argmax(space.scan(lambda i: _step(run.n, int(i)), near)))])
-    fit = space.test(_step(run.n, best)[:, None])
+    gains = space.step_scan()  # entry i − 1: the step at place i
+    if gains is None:
+        return None
+    best = MIN_SEGMENT + int(np.argmax(gains[MIN_SEGMENT - 1:run.n - MIN_SEGMENT]))
+    fit = space.test((np.arange(run.n) >= best).astype(float)[:, None])
     if fit is None:
         return None
     lr_named = float(ext.nll(reduced) - ext.nll(state))
