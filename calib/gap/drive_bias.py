@@ -41,7 +41,7 @@ import numpy as np
 
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
-from calib.gap import swaps
+from calib.gap import cubic, swaps
 from calib.gap.drive_state import drive_state, where_moving
 from calib.gap.swaps import FITS, leaning, swap_gain, tier
 
@@ -91,14 +91,42 @@ def lever_or_drive_bias(ext: Extensions, state: ModelState, k: int) -> dict | No
     largest effect, m/s²), "description", "reason"}``, or None when no lever arm is named on
     axis k, the run has no sample times, or ``D ≤ −AMBIGUITY_LR``.
     """
+    if (LEVER, AXES[k]) not in state.effects():
+        return None
+    return _against_drive_bias(ext, state, k, [LEVER])
+
+
+STRUCTURED = tuple(n for n in cubic.SWAPPED if n != LEVER)
+"""Named per-axis effects whose columns follow the table's angle (K2, the cross-axis term, a
+misalignment, saturation, low-pass lag): on a shuttle between two poses or a tour at one speed
+the moving indicator, |ω| and |α| are functions of θ too, and they take a bias tied to the
+drive as the lever arm does (the drive part's seed 12: a bias while moving at z = 5 on a
+one-speed shuttle named a misalignment of y; the bias fits better by D = 16.6)."""
+
+
+def structured_or_drive_bias(ext: Extensions, state: ModelState, k: int, named: list[str]
+                             ) -> dict | None:
+    """The effects of :data:`STRUCTURED` in ``named`` (named on axis k), all together, against
+    a bias tied to the drive in their place: the lever arm's review (module docstring) with
+    their parameters p, ``D = max_c (LR_c − 2) − 2·ln 3 − (LR_named − 2p)``, the same tiers.
+    Returns the dict of :func:`lever_or_drive_bias` with their names, or None when none of
+    them is named on axis k, the run has no sample times, or ``D ≤ −AMBIGUITY_LR``."""
+    names = [n for n in STRUCTURED if n in named and (n, AXES[k]) in state.effects()]
+    return _against_drive_bias(ext, state, k, names) if names else None
+
+
+def _against_drive_bias(ext: Extensions, state: ModelState, k: int, names: list[str]
+                        ) -> dict | None:
+    """The named effects ``names`` of axis k against each drive-state bias column in their
+    place, the best of them charged ``2·ln 3`` for the choice (module docstring)."""
     axis = AXES[k]
     run = ext.run
-    if (LEVER, axis) not in state.effects() or run.omega is None or run.alpha is None:
+    if run.omega is None or run.alpha is None:
         return None
     moving = drive_state(run.tita)
     cols = _columns(run, moving)
     found = {name: f for name, c in cols.items()
-             if np.ptp(c) > 0.0 and (f := swap_gain(ext, state, k, [LEVER], c)) is not None}
+             if np.ptp(c) > 0.0 and (f := swap_gain(ext, state, k, names, c)) is not None}
     if not found:
         return None
     best = max(found, key=lambda name: found[name][0])
@@ -106,16 +134,24 @@ def lever_or_drive_bias(ext: Extensions, state: ModelState, k: int) -> dict | No
     decision = tier(gain)
     if decision is None:
         return None
-    coef = found[best][1]
+    coef, cost = found[best][1], found[best][2]
     shape, size = _shape(best, axis, coef, run, moving)
-    reason = (f"cannot tell the lever arm on {axis} from {shape}: the bias fits "
-              f"{FITS[decision]} (AIC gain {gain:.3g} over "
-              f"the lever arm's 2 parameters, the best of {len(cols)} drive-state columns); "
-              "moves at several speeds, each way, separate them")
-    description = leaning(shape, "explains the reading", "a lever arm", gain, "the lever arm",
-                          "bias tied to the drive", "the lever arm is")
-    return {"axis": axis, "names": [LEVER], "bias": best, "decision": decision, "gain": gain,
-            "coefficient": coef, "size": size, "description": description, "reason": reason}
+    if names == [LEVER]:
+        them, held, dropped = "the lever arm", "the lever arm", "the lever arm is"
+        parts, split = "the lever arm's 2 parameters", "moves at several speeds, each way"
+    else:
+        them, held, dropped = " + ".join(names), "the named set", "they are"
+        parts = f"their {cost:g} parameter(s)"
+        split = "moves at several speeds, each way, and poses reached from both sides"
+    reason = (f"cannot tell {them} on {axis} from {shape}: the bias fits "
+              f"{FITS[decision]} (AIC gain {gain:.3g} over {parts}, the best of {len(cols)} "
+              f"drive-state columns); {split} separate them")
+    description = leaning(shape, "explains the reading",
+                          "a lever arm" if names == [LEVER] else them, gain, held,
+                          "bias tied to the drive", dropped)
+    return {"axis": axis, "names": list(names), "bias": best, "decision": decision,
+            "gain": gain, "coefficient": coef, "size": size, "description": description,
+            "reason": reason}
 
 
 def signature(found: dict) -> dict:
