@@ -24,7 +24,7 @@ from calib.gap.drive_bias import signature as drive_bias_signature
 from calib.gap.drive_noise import LEVEL as NOISE_LEVEL
 from calib.gap.drive_noise import level_or_drive_noise
 from calib.gap.drive_noise import signature as drive_noise_signature
-from calib.gap.drive_state import drive_checks, joint_drive, joint_tone, tone_scans
+from calib.gap.drive_state import drive_checks, drive_fits, joint_drive, joint_tone, tone_scans
 from calib.gap.estimates import Reporter
 from calib.gap.mechanisms import drive_scans, mechanism_checks
 from calib.gap.practical import (
@@ -131,6 +131,7 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     spaces = [AxisSpace(ext, state, k) for k in range(2)]  # shared by the checks below
     drive = drive_scans(spaces, run)
     tones = tone_scans(ext, state, resid_after)  # both axes' drive_tone scan, made once
+    fits = drive_fits(ext, state, drive_torque, spaces)  # the level and gain tests, once
     coarse = [st.lsb > np.sqrt(st.sigma2) for st in state.axes]  # rounding above the noise
     battery = run_battery(ext, state, resid_after, lattice, rep.innov, adequacy_alpha,
                           gaps=_battery_gaps(ext, state, after, resid_after),
@@ -140,13 +141,13 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
                               space=spaces[k], drive_gains=None if drive is None else drive[k])]
                           + [c for k in range(2) for c in drive_checks(
                               ext, state, k, resid_after[:, k], drive_torque,
-                              coarse=coarse[k],
-                              space=spaces[k], scans=tones)]
+                              coarse=coarse[k], fits=None if fits is None else fits[k],
+                              scans=tones)]
                           + [c for c in [joint_tone(ext, state, resid_after, coarse=any(coarse),
                                                     scans=tones)]
                              if c is not None]
                           + joint_drive(ext, state, resid_after, drive_torque, coarse=any(coarse),
-                                        spaces=spaces),
+                                        fits=fits),
                           spaces=spaces)
     reviews = {k: r.with_failed(tuple(c.name for c in battery.failed
                                       if c.axis == r.axis and c.name in WALK_CHECKS))

@@ -164,25 +164,62 @@ def _chi2_logsf(stat: float, dof: float) -> float:
     return float(np.log(max(special.gammaincc(0.5 * dof, 0.5 * max(stat, 0.0)), 1e-300)))
 
 
-def _level_columns(moving: np.ndarray, torque: np.ndarray | None
-                   ) -> tuple[np.ndarray, np.ndarray | None]:
-    """``drive_level``'s columns ``[m, τₙ, |τ|ₙ]`` (the torque's only when given) and τₙ."""
+Fit = tuple[np.ndarray, tuple[float, int, np.ndarray] | None]
+"""A drive check's columns (N, c) and their test in the axis' space (:meth:`AxisSpace.test`:
+ΔRSS, rank, coefficients), None when the columns lie in the model's span."""
+
+
+def _level_columns(moving: np.ndarray, torque: np.ndarray | None) -> np.ndarray:
+    """``drive_level``'s columns ``[m, τₙ, |τ|ₙ]`` (the torque's only when given)."""
     cols = [moving.astype(float)]
     tn = _normalised(torque)
     if tn is not None:
         cols += [tn, np.abs(tn)]
-    return np.column_stack(cols), tn
+    return np.column_stack(cols)
 
 
-def _level(space: AxisSpace, run, moving: np.ndarray, torque: np.ndarray | None,
-           axis: str, where: str) -> Check | None:
-    z, tn = _level_columns(moving, torque)
-    fit = space.test(z)
+def _gain_columns(run, k: int, moving: np.ndarray, torque: np.ndarray | None) -> np.ndarray:
+    """``drive_gain``'s columns ``A_r·m`` and, with timing, ``A_r·|ω|ₙ``, ``A_r·αₙ``,
+    ``A_r·τₙ``."""
+    a = run.a_ref[:, k]
+    cols = [a * moving]
+    if run.omega is not None:
+        for x in (_normalised(np.abs(run.omega)), _normalised(run.alpha),
+                  _normalised(torque)):
+            if x is not None:
+                cols.append(a * x)
+    return np.column_stack(cols)
+
+
+def drive_fits(ext: Extensions, state: ModelState, torque: np.ndarray | None = None,
+               spaces: list[AxisSpace] | None = None) -> list[dict[str, Fit]] | None:
+    """Per axis, the ``drive_level`` and ``drive_gain`` columns of ``state`` and their tests
+    (``{"level": Fit, "gain": Fit}``), made once for :func:`drive_checks` (each axis) and
+    :func:`joint_drive` (both at once); None when the run has no moving and held stretches.
+    ``torque`` as :func:`drive_checks`' (used with sample times only); ``spaces`` the two
+    axes' :class:`AxisSpace` of ``state``, when already built."""
+    moving = drive_state(ext.run.tita)
+    if moving is None:
+        return None
+    spaces = [AxisSpace(ext, state, k) for k in range(2)] if spaces is None else spaces
+    return [_axis_fits(space, ext.run, k, moving, torque) for k, space in enumerate(spaces)]
+
+
+def _axis_fits(space: AxisSpace, run, k: int, moving: np.ndarray,
+               torque: np.ndarray | None) -> dict[str, Fit]:
+    """Axis k's ``drive_level`` and ``drive_gain`` columns and their tests in ``space``."""
+    tq = None if torque is None or run.t is None else np.asarray(torque, dtype=float)
+    zl, zg = _level_columns(moving, tq), _gain_columns(run, k, moving, tq)
+    return {"level": (zl, space.test(zl)), "gain": (zg, space.test(zg))}
+
+
+def _level(fitted: Fit, moving: np.ndarray, axis: str, where: str) -> Check | None:
+    z, fit = fitted
     if fit is None:
         return None
     stat, dof, coef = fit
     size, mean_m = _level_size(z, coef, moving)
-    follows = (" (it follows the drive torque)" if tn is not None
+    follows = (" (it follows the drive torque)" if z.shape[1] == 3
                and abs(coef[1]) + abs(coef[2]) > abs(coef[0]) else "")
     return Check("drive_level", axis, stat, _chi2_logsf(stat, dof), f"chi2({dof})", size,
                  "m/s²",
@@ -199,23 +236,8 @@ def _level_size(z: np.ndarray, coef: np.ndarray, moving: np.ndarray) -> tuple[fl
     return size, float(np.mean(shift[moving]) - np.mean(shift[~moving]))
 
 
-def _gain_columns(run, k: int, moving: np.ndarray, torque: np.ndarray | None) -> np.ndarray:
-    """``drive_gain``'s columns ``A_r·m`` and, with timing, ``A_r·|ω|ₙ``, ``A_r·αₙ``,
-    ``A_r·τₙ``."""
-    a = run.a_ref[:, k]
-    cols = [a * moving]
-    if run.omega is not None:
-        for x in (_normalised(np.abs(run.omega)), _normalised(run.alpha),
-                  _normalised(torque)):
-            if x is not None:
-                cols.append(a * x)
-    return np.column_stack(cols)
-
-
-def _gain(space: AxisSpace, run, k: int, moving: np.ndarray, torque: np.ndarray | None,
-          axis: str, where: str) -> Check | None:
-    z = _gain_columns(run, k, moving, torque)
-    fit = space.test(z)
+def _gain(fitted: Fit, run, k: int, axis: str, where: str) -> Check | None:
+    z, fit = fitted
     if fit is None:
         return None
     stat, dof, coef = fit
@@ -457,7 +479,7 @@ def _shares(fits: list[tuple[float, int, np.ndarray]]) -> str:
 
 def joint_drive(ext: Extensions, state: ModelState, residuals: np.ndarray,
                 torque: np.ndarray | None = None, coarse: bool = False,
-                spaces: list[AxisSpace] | None = None) -> list[Check]:
+                fits: list[dict[str, Fit]] | None = None) -> list[Check]:
     """``drive_level``, ``drive_gain`` and ``drive_excess`` on both axes at once (axis
     ``both``): the drive's field, current or vibration reaches the whole sensor block, so a
     disturbance, a gain change or added noise while moving shows on both axes (in different
@@ -477,42 +499,39 @@ def joint_drive(ext: Extensions, state: ModelState, residuals: np.ndarray,
     For a departure of z_x and z_y standard deviations the joint statistic sees
     ``z_x² + z_y²``: a gain change of z ≈ 3.5 on each axis (each near p = 10⁻³, inside its
     Bonferroni level) is z ≈ 5 together. ``residuals`` (N, 2) as :func:`drive_checks`' for
-    each axis; ``spaces`` the two axes' :class:`AxisSpace` of ``state``, when already built.
-    Empty when the run has no moving and held stretches."""
+    each axis; ``fits`` the :func:`drive_fits` of ``state``, when already made (the per-axis
+    checks' own). Empty when the run has no moving and held stretches."""
     run = ext.run
     moving = drive_state(run.tita)
-    if moving is None:
+    fits = drive_fits(ext, state, torque) if fits is None else fits
+    if moving is None or fits is None:
         return []
     where = where_moving(run, moving)
-    spaces = [AxisSpace(ext, state, k) for k in range(2)] if spaces is None else spaces
-    tq = None if torque is None or run.t is None else np.asarray(torque, dtype=float)
     out: list[Check] = []
 
-    zl, _ = _level_columns(moving, tq)
-    fits = [sp.test(zl) for sp in spaces]
-    if fits[0] is not None and fits[1] is not None:
-        stat, dof = fits[0][0] + fits[1][0], fits[0][1] + fits[1][1]
-        (sx, mx), (sy, my) = (_level_size(zl, f[2], moving) for f in fits)
+    (zl, fx), (_, fy) = fits[0]["level"], fits[1]["level"]
+    if fx is not None and fy is not None:
+        stat, dof = fx[0] + fy[0], fx[1] + fy[1]
+        (sx, mx), (sy, my) = (_level_size(zl, f[2], moving) for f in (fx, fy))
         out.append(Check(
             "drive_level", "both", stat, _chi2_logsf(stat, dof), f"chi2({dof}), both axes",
             max(sx, sy), "m/s²",
             f"present while moving on both axes: a disturbance of the reading {where}, "
             f"{mx:+.3g} m/s² on x and {my:+.3g} m/s² on y on average against the held "
-            f"stretches, up to {max(sx, sy):.3g} m/s² ({_shares(fits)}) — the drive's field or "
-            "current, a cable or a mount that pulls while the table turns"))
+            f"stretches, up to {max(sx, sy):.3g} m/s² ({_shares([fx, fy])}) — the drive's "
+            "field or current, a cable or a mount that pulls while the table turns"))
 
-    cols = [_gain_columns(run, k, moving, tq) for k in range(2)]
-    fits = [sp.test(z) for sp, z in zip(spaces, cols, strict=True)]
-    if fits[0] is not None and fits[1] is not None:
-        stat, dof = fits[0][0] + fits[1][0], fits[0][1] + fits[1][1]
-        size = max(float(np.max(np.abs(z @ f[2]))) for z, f in zip(cols, fits, strict=True))
-        gx, gy = (100.0 * float(f[2][0]) for f in fits)
+    (zx, fx), (zy, fy) = fits[0]["gain"], fits[1]["gain"]
+    if fx is not None and fy is not None:
+        stat, dof = fx[0] + fy[0], fx[1] + fy[1]
+        size = max(float(np.max(np.abs(z @ f[2]))) for z, f in ((zx, fx), (zy, fy)))
+        gx, gy = (100.0 * float(f[2][0]) for f in (fx, fy))
         out.append(Check(
             "drive_gain", "both", stat, _chi2_logsf(stat, dof), f"chi2({dof}), both axes",
             size, "m/s²",
             f"present while moving on both axes: the gain changes {where} — by {gx:+.3g} % "
             f"on x and {gy:+.3g} % on y while moving, up to {size:.3g} m/s² with the speed, "
-            f"the acceleration or the drive torque ({_shares(fits)})"))
+            f"the acceleration or the drive torque ({_shares([fx, fy])})"))
 
     if coarse or any(st.q > 0 for st in state.axes):
         return out
@@ -542,7 +561,7 @@ def joint_drive(ext: Extensions, state: ModelState, residuals: np.ndarray,
 
 def drive_checks(ext: Extensions, state: ModelState, k: int, residual: np.ndarray,
                  torque: np.ndarray | None = None, coarse: bool = False,
-                 space: AxisSpace | None = None,
+                 fits: dict[str, Fit] | None = None,
                  scans: tuple[np.ndarray, list[np.ndarray]] | None = None) -> list[Check]:
     """The six drive-state checks on axis k of the final model (those that apply).
 
@@ -552,7 +571,7 @@ def drive_checks(ext: Extensions, state: ModelState, k: int, residual: np.ndarra
         dynamics of the replayed θ(t)), or None.
     coarse : the rounding is coarser than the noise: the variance and spectrum checks (which
         assume a continuous Gaussian residual) are left out, as the battery's tail checks are.
-    space : the axis' :class:`AxisSpace` of ``state``, when already built.
+    fits : axis k's entry of :func:`drive_fits` of ``state``, when already made.
     scans : :func:`tone_scans` of ``state`` (both axes), when already made.
     """
     run = ext.run
@@ -564,10 +583,10 @@ def drive_checks(ext: Extensions, state: ModelState, k: int, residual: np.ndarra
     scale = float(np.sqrt(st.sigma2_eff))
     z = np.asarray(residual, dtype=float) / scale
     where = where_moving(run, moving)
-    space = AxisSpace(ext, state, k) if space is None else space
-    tq = None if torque is None or run.t is None else np.asarray(torque, dtype=float)
-    found = [_level(space, run, moving, tq, axis, where),
-             _gain(space, run, k, moving, tq, axis, where)]
+    if fits is None:
+        fits = _axis_fits(AxisSpace(ext, state, k), run, k, moving, torque)
+    found = [_level(fits["level"], moving, axis, where),
+             _gain(fits["gain"], run, k, axis, where)]
     if not coarse:
         if scans is None:
             scan = _tone_scan([z], moving)

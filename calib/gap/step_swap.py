@@ -86,6 +86,7 @@ def named_or_step(ext: Extensions, state: ModelState, k: int, named: list[str]
         return None
     size = float(fit[2][0])
     sigma = float(np.sqrt(state.axes[k].sigma2_eff))
+    # one step's words read its place and size only (the levels are the model's, not a path's)
     shape = describe(StepFit(np.array([best]), np.zeros(2), np.array([size]), float(fit[0]),
                              sigma, run.n), run.tcol, run.time_unit, axis)
     them = " + ".join(names)
