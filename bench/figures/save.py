@@ -60,9 +60,14 @@ def _freeze_layout(fig: Figure) -> None:
     """Run the layout engine once, then fix every axes at its position rounded to 1e-9 of
     the figure. The constrained-layout solver can differ in the last bit between the first
     figure drawn in a process and later ones; SVG clip-path ids hash the full-precision clip
-    rectangle, so without rounding the same data would not always give the same bytes."""
+    rectangle, so without rounding the same data would not always give the same bytes.
+
+    The engine is then removed (None, not matplotlib's "none" placeholder): with any engine
+    set, ``savefig`` first draws the whole figure once more into a scratch file of its format
+    to let the engine run, which here would change nothing and cost as much as the save."""
     fig.set_dpi(DPI)  # the layout at the dpi it is saved with (text sizes move it)
     fig.draw_without_rendering()
-    fig.set_layout_engine("none")
+    with plt.rc_context({"figure.autolayout": False, "figure.constrained_layout.use": False}):
+        fig.set_layout_engine(None)
     for ax in fig.get_axes():
         ax.set_position([round(float(v), 9) for v in ax.get_position().bounds])
