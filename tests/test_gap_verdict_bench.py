@@ -360,8 +360,12 @@ def test_figure_shows_the_verdict_and_marks_the_unexplained_panels(misaligned_re
         joined = "\n".join(texts)
         assert all(u["description"] in joined for u in UNEXPLAINED)
         assert "tentative" in fig._suptitle.get_text()
-        after_panels = [ax for ax in fig.axes if "after" in ax.get_title()]
+        after_panels = [ax for ax in fig.axes if ax.get_title().startswith(("x, after",
+                                                                              "y, after"))]
         assert len(after_panels) == 2
+        in_time = [ax for ax in fig.axes if ", in time" in ax.get_title()]
+        assert len(in_time) == 2  # the residuals after in time order, framed red too
+        assert all(ax.spines["left"].get_linewidth() == 2.0 for ax in in_time)
         for ax in after_panels:  # each axis has a signature: framed red, labelled
             assert ax.spines["left"].get_linewidth() == 2.0
             assert any(t.get_text().startswith("unexplained:") for t in ax.texts)
@@ -372,6 +376,46 @@ def test_figure_shows_the_verdict_and_marks_the_unexplained_panels(misaligned_re
         assert fig._suptitle.get_text().startswith("verdict: explained")
         assert not any(t.get_text().startswith("unexplained:") for ax in fig.axes
                        for t in ax.texts)
+    finally:
+        plt.close(fig)
+
+
+def test_time_row_is_in_seconds_and_shades_the_moving_stretches(misaligned_report):
+    """The bottom row plots the residuals after in time order: against the sample index on a
+    run without times, against t (s) on a timed one, grey exactly where the table moves (a
+    hold is ≥ MIN_HOLD equal angles: calib.gap.drive_state), over the run's whole span."""
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+
+    from calib.gap.drive_state import MIN_HOLD
+
+    def time_panels(report):
+        fig = gap_figure(report)
+        return fig, [ax for ax in fig.axes if ", in time" in ax.get_title()]
+
+    fig, panels = time_panels(misaligned_report)
+    try:
+        assert misaligned_report.replay.t is None
+        assert all("sample index" in ax.get_xlabel() for ax in panels) and len(panels) == 2
+    finally:
+        plt.close(fig)
+    n = misaligned_report.replay.n
+    hold = max(MIN_HOLD, n // 8)  # held, moving, held, moving, …: eight stretches
+    tita = np.where((np.arange(n) // hold) % 2 == 0, np.arange(n) // (2 * hold) * 0.3,
+                    np.linspace(0.0, 1.0, n))
+    t = 0.01 * np.arange(n) + 2.0
+    timed = replace(misaligned_report, replay=replace(misaligned_report.replay, tita=tita, t=t))
+    fig, panels = time_panels(timed)
+    try:
+        for ax in panels:
+            assert ax.get_xlabel() == "sample time t (s)" and ax.get_xlim() == (t[0], t[-1])
+            assert "(grey: the table moves)" in ax.get_title()
+            grey = [c for c in ax.collections if isinstance(c, PolyCollection)
+                    and c.get_label() == "table moving"]
+            assert len(grey) == 1
+            moving_t = t[(np.arange(n) // hold) % 2 == 1]
+            x0 = min(p.vertices[:, 0].min() for p in grey[0].get_paths())
+            assert abs(x0 - moving_t[0]) <= 0.01  # the first moving stretch, half a step
     finally:
         plt.close(fig)
 
