@@ -35,39 +35,42 @@ figure, said in the legend (docs/python-api.md, section 6):
   (``MultiPositionFit``).
 
 One module per figure, ``save`` for writing and ``write`` for the figure sets; this package
-selects the Agg backend and re-exports their public names (no module here imports from it).
+selects the Agg backend and re-exports their public names on first use (PEP 562
+``__getattr__``; the first use imports every figure module): together they pull in most of
+``calib`` and scipy.stats (≈ 1.5 s), and a command that draws one figure (``gap --report``:
+:mod:`bench.figures.save` alone) should not wait for the others. No module here imports from
+this package.
 Binned means come from :func:`calib.stats.binning.binned_mean`, the covariance along the run from
 :func:`calib.vehicle.propagation.position_cov_along`.
 """
 
 from __future__ import annotations
 
+import sys
+from typing import Any
+
 import matplotlib
 
 matplotlib.use("Agg")  # before any module of this package imports pyplot
 
-from bench.figures.acceleration import acceleration_figure  # noqa: E402
-from bench.figures.allan import allan_figure, save_allan_plot  # noqa: E402
-from bench.figures.calibration import (  # noqa: E402
-    AXIS_LABEL,
-    FIGURE_BINS,
-    calibration_axis_figure,
-    calibration_figure,
-    save_calibration_plot,
-)
-from bench.figures.design import design_figure  # noqa: E402
-from bench.figures.fusion import fusion_figure, save_fusion_plot  # noqa: E402
-from bench.figures.fusion_study import fusion_study_figure, save_fusion_study_plot  # noqa: E402
-from bench.figures.multiposition import (  # noqa: E402
-    multiposition_figure,
-    save_multiposition_plot,
-)
-from bench.figures.nmin import nmin_figure  # noqa: E402
-from bench.figures.parameters import parameters_figure  # noqa: E402
-from bench.figures.save import DPI, FORMATS, save_figure  # noqa: E402
-from bench.figures.trajectory import save_trajectory_plot, trajectory_figure  # noqa: E402
-from bench.figures.uncertainty import uncertainty_growth_figure  # noqa: E402
-from bench.figures.write import write_calibration_figures, write_vehicle_figures  # noqa: E402
+_HOME: dict[str, str] = {
+    "acceleration_figure": "acceleration",
+    "allan_figure": "allan", "save_allan_plot": "allan",
+    "AXIS_LABEL": "calibration", "FIGURE_BINS": "calibration",
+    "calibration_axis_figure": "calibration", "calibration_figure": "calibration",
+    "save_calibration_plot": "calibration",
+    "design_figure": "design",
+    "fusion_figure": "fusion", "save_fusion_plot": "fusion",
+    "fusion_study_figure": "fusion_study", "save_fusion_study_plot": "fusion_study",
+    "multiposition_figure": "multiposition", "save_multiposition_plot": "multiposition",
+    "nmin_figure": "nmin",
+    "parameters_figure": "parameters",
+    "DPI": "save", "FORMATS": "save", "save_figure": "save",
+    "save_trajectory_plot": "trajectory", "trajectory_figure": "trajectory",
+    "uncertainty_growth_figure": "uncertainty",
+    "write_calibration_figures": "write", "write_vehicle_figures": "write",
+}
+"""Each public name → the module of this package that defines it."""
 
 #: every figure function: result object(s) in, :class:`matplotlib.figure.Figure` out.
 FIGURES = ("acceleration_figure", "allan_figure", "calibration_axis_figure",
@@ -75,10 +78,36 @@ FIGURES = ("acceleration_figure", "allan_figure", "calibration_axis_figure",
            "multiposition_figure", "nmin_figure", "parameters_figure", "trajectory_figure",
            "uncertainty_growth_figure")
 
-__all__ = ["AXIS_LABEL", "DPI", "FIGURES", "FIGURE_BINS", "FORMATS", "acceleration_figure",
-           "allan_figure", "calibration_axis_figure", "calibration_figure", "design_figure",
-           "fusion_figure", "fusion_study_figure", "multiposition_figure", "nmin_figure",
-           "parameters_figure", "save_allan_plot", "save_calibration_plot", "save_figure",
-           "save_fusion_plot", "save_fusion_study_plot", "save_multiposition_plot",
-           "save_trajectory_plot", "trajectory_figure", "uncertainty_growth_figure",
-           "write_calibration_figures", "write_vehicle_figures"]
+__all__ = ["FIGURES", *sorted(_HOME)]
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, taken from its module on first use (then kept here). The first such use
+    imports every figure module, as importing this package once did; importing one module of
+    it (``bench.figures.save``) does not. Static imports, so the import rules see them."""
+    home = _HOME.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from bench.figures import (  # noqa: F401  (each one registered in sys.modules)
+        acceleration,
+        allan,
+        calibration,
+        design,
+        fusion,
+        fusion_study,
+        multiposition,
+        nmin,
+        parameters,
+        save,
+        trajectory,
+        uncertainty,
+        write,
+    )
+
+    value = getattr(sys.modules[f"{__name__}.{home}"], name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_HOME})
