@@ -364,7 +364,7 @@ def test_figure_shows_the_verdict_and_marks_the_unexplained_panels(misaligned_re
                                                                               "y, after"))]
         assert len(after_panels) == 2
         in_time = [ax for ax in fig.axes if ", in time" in ax.get_title()]
-        assert len(in_time) == 2  # the residuals after in time order, framed red too
+        assert len(in_time) == 2  # the residuals in time order, framed red too
         assert all(ax.spines["left"].get_linewidth() == 2.0 for ax in in_time)
         for ax in after_panels:  # each axis has a signature: framed red, labelled
             assert ax.spines["left"].get_linewidth() == 2.0
@@ -381,9 +381,10 @@ def test_figure_shows_the_verdict_and_marks_the_unexplained_panels(misaligned_re
 
 
 def test_time_row_is_in_seconds_and_shades_the_moving_stretches(misaligned_report):
-    """The bottom row plots the residuals after in time order: against the sample index on a
-    run without times, against t (s) on a timed one, grey exactly where the table moves (a
-    hold is ≥ MIN_HOLD equal angles: calib.gap.drive_state), over the run's whole span."""
+    """The bottom row plots the residuals in time order, with the binned means before and
+    after: against the sample index on a run without times, against t (s) on a timed one,
+    grey exactly where the table moves (a hold is ≥ MIN_HOLD equal angles:
+    calib.gap.drive_state), over the run's whole span."""
     import matplotlib.pyplot as plt
     from matplotlib.collections import PolyCollection
 
@@ -410,6 +411,8 @@ def test_time_row_is_in_seconds_and_shades_the_moving_stretches(misaligned_repor
         for ax in panels:
             assert ax.get_xlabel() == "sample time t (s)" and ax.get_xlim() == (t[0], t[-1])
             assert "(grey: the table moves)" in ax.get_title()
+            means = [ln.get_label() for ln in ax.get_lines()]
+            assert {"binned mean before", "binned mean after"} <= set(means)
             grey = [c for c in ax.collections if isinstance(c, PolyCollection)
                     and c.get_label() == "table moving"]
             assert len(grey) == 1

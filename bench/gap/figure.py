@@ -1,6 +1,6 @@
 """The gap figure: residuals against θ before and after adding the named effects, the residuals
-after in time order with the table's moving stretches shaded, the verdict, the unexplained
-signatures and why each axis' gap shrank or did not."""
+in time order (binned means before and after) with the table's moving stretches shaded, the
+verdict, the unexplained signatures and why each axis' gap shrank or did not."""
 
 from __future__ import annotations
 
@@ -54,8 +54,9 @@ CAPTION = ("Every ± in this figure is 1 std. Dots: residual data − simulation
            "per-sample noise (before: the stated σ; after: the σ of the model with the "
            "effects). χ²/dof ≈ 1 and max |z| small mean noise only; max |z| is the largest "
            "z-score among the patterns tested, named after it only where it is beyond noise. "
-           "Bottom row: the residuals after in time order (what drifts, steps or switches in "
-           "time, or only while the table moves), grey where the table moves.")
+           "Bottom row: in time order (what drifts, steps or switches, or comes only while "
+           "the table moves, grey), the residuals before and the binned means before "
+           "(black) and after (red).")
 """The figure's caption: what the marks and numbers in the panel titles are."""
 
 
@@ -135,11 +136,12 @@ def _wrap(line: str, width: int) -> str:
 
 def gap_figure(report: GapReport) -> Figure:
     """Residuals against θ before and after, per axis, with the ±σ band and binned means;
-    the residuals after against time (:func:`_time_panel`); the verdict in the title and in
+    the residuals and their binned means before and after against time
+    (:func:`_time_panel`); the verdict in the title and in
     a box below, panels with unexplained structure framed in red and labelled.
 
     Returns a :class:`matplotlib.figure.Figure` (rows x, y: columns before, after against θ;
-    a row of the residuals after in time, x and y; a text row with the verdict, the
+    a row of the residuals in time, x and y; a text row with the verdict, the
     unexplained signatures and the shrink per axis).
     """
     import matplotlib
@@ -196,7 +198,7 @@ def gap_figure(report: GapReport) -> Figure:
             if k == 0 and j == 0:
                 ax.legend(loc="upper right", fontsize=7, markerscale=4)
         mine = [u for u in unexplained if u.get("axis") in (ax_name, "both")]
-        timed = fig.add_subplot(grid[2, k], sharey=axs[k, 1])
+        timed = fig.add_subplot(grid[2, k], sharey=axs[k, 0])
         _time_panel(timed, report, k)
         if mine:
             _mark_unexplained(axs[k, 1], mine)
@@ -222,36 +224,39 @@ def gap_figure(report: GapReport) -> Figure:
 
 
 def _time_panel(ax: Axes, report: GapReport, k: int) -> None:
-    """Axis k's residuals after (m/s²) against the sample time (s; the sample index when the
-    run has no times: its samples are in time order), with the ±σ band of the model after and
-    the binned mean (equal sample counts) ±σ/√n; shaded where the table moves
-    (:func:`calib.gap.drive_state.drive_state`: not in a hold), when the run has both
-    states. Against θ a step, a switching bias or an effect present only while moving is
-    spread over every angle; in time it stands where it happened."""
+    """Axis k's residuals (m/s²) against the sample time (s; the sample index when the run has
+    no times: its samples are in time order): the residuals before as dots, the binned means
+    (equal sample counts) before and after, each ±σ/√n, and the ±σ band of the model after;
+    shaded where the table moves (:func:`calib.gap.drive_state.drive_state`: not in a hold),
+    when the run has both states. Against θ a step, a switching bias or an effect present
+    only while moving is spread over every angle; in time it stands where it happened, and
+    the mean after shows whether the named effects took it."""
     ax_name = AXES[k]
-    res = report.residual_after[:, k]
     t = report.replay.t
-    x = np.arange(res.size, dtype=float) if t is None else np.asarray(t, dtype=float)
+    n = report.residual_before.shape[0]
+    x = np.arange(n, dtype=float) if t is None else np.asarray(t, dtype=float)
     sigma = float(np.sqrt(report.after[ax_name].sigma2))
     moving = drive_state(report.replay.tita)
     if moving is not None:
-        ax.fill_between(x, 0.0, 1.0, where=moving, step="mid", color="0.82", lw=0,
+        ax.fill_between(x, 0.0, 1.0, where=moving, step="mid", color="0.85", lw=0,
                         transform=ax.get_xaxis_transform(), zorder=0,
                         label="table moving")
-    ax.plot(x, res, ".", ms=1.5, color=(0.35, 0.55, 0.85), alpha=0.6, rasterized=True,
-            label="data − simulation (after)")
-    cx, cy, _ = binned_mean(x, res, BINS)
-    half = sigma / np.sqrt(max(1, res.size // BINS))
-    ax.fill_between(cx, cy - half, cy + half, color=(0.85, 0.2, 0.15), alpha=0.3, lw=0,
-                    zorder=3.5)
-    ax.plot(cx, cy, "-", color=(0.85, 0.2, 0.15), lw=1.5, zorder=4, label="binned mean")
+    ax.plot(x, report.residual_before[:, k], ".", ms=1.5, color=(0.55, 0.55, 0.55), alpha=0.5,
+            rasterized=True, label="data − simulation (before)")
+    for which, res, s_k, color in (
+            ("before", report.residual_before, float(np.sqrt(report.noise_var[k])), "k"),
+            ("after", report.residual_after, sigma, (0.85, 0.2, 0.15))):
+        cx, cy, _ = binned_mean(x, res[:, k], BINS)
+        half = s_k / np.sqrt(max(1, n // BINS))
+        ax.fill_between(cx, cy - half, cy + half, color=color, alpha=0.25, lw=0, zorder=3.5)
+        ax.plot(cx, cy, "-", color=color, lw=1.3, zorder=4, label=f"binned mean {which}")
     ax.axhspan(-sigma, sigma, color=(0.95, 0.7, 0.2), alpha=0.25, zorder=1)
     for sign in (-1.0, 1.0):
         ax.axhline(sign * sigma, color=(0.85, 0.55, 0.1), lw=1.0, ls="--", zorder=3)
     ax.axhline(0.0, color="k", lw=0.6)
     ax.set_xlim(x[0], x[-1])
-    ax.set_title(f"{ax_name}, in time: residuals after"
-                 + ("" if moving is None else " (grey: the table moves)"), fontsize=9)
+    ax.set_title(f"{ax_name}, in time: residuals before, binned means before and after"
+                 + ("" if moving is None else "\n(grey: the table moves)"), fontsize=9)
     ax.set_xlabel("sample time t (s)" if t is not None
                   else "sample index (time order; the run has no sample times)")
     ax.set_ylabel(f"residual {ax_name} (m/s²)")
