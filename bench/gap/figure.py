@@ -24,6 +24,8 @@ if TYPE_CHECKING:  # pragma: no cover
 VERDICT_COLORS = {"explained": (0.85, 0.95, 0.85), "unexplained": (1.0, 0.87, 0.85),
                   "nothing_detected": (0.92, 0.92, 0.92)}
 """Background of the verdict box (green-ish, red-ish, grey)."""
+MEAN_COLOR = (0.85, 0.2, 0.15)
+"""Colour of the binned means (after, in the row in time)."""
 UNEXPLAINED_EDGE = (0.8, 0.1, 0.1)
 """Frame and text colour of a panel with unexplained structure."""
 SIGNATURE_WORDS = {
@@ -169,17 +171,9 @@ def gap_figure(report: GapReport) -> Figure:
                             else report.after[ax_name].sigma2)
             ax.plot(theta, res[:, k], ".", ms=1.5, color=(0.35, 0.55, 0.85) if j else
                     (0.55, 0.55, 0.55), alpha=0.6, rasterized=True, label="data − simulation")
-            cx, cy, _ = binned_mean(theta, res[:, k], BINS)
-            n_bin = max(1, res.shape[0] // BINS)
-            half = sigma / np.sqrt(n_bin)  # 1 std of a bin's mean, the figure's one level
-            ax.fill_between(cx, cy - half, cy + half, color=(0.85, 0.2, 0.15), alpha=0.3, lw=0,
-                            zorder=3.5, label=f"binned mean ±σ/√n (n = {n_bin})")
-            ax.plot(cx, cy, "-", color=(0.85, 0.2, 0.15), lw=1.5, zorder=4,
-                    label="binned mean")
-            ax.axhspan(-sigma, sigma, color=(0.95, 0.7, 0.2), alpha=0.25, label="±σ")
-            for sign in (-1.0, 1.0):
-                ax.axhline(sign * sigma, color=(0.85, 0.55, 0.1), lw=1.0, ls="--", zorder=3)
-            ax.axhline(0.0, color="k", lw=0.6)
+            _binned_line(ax, theta, res[:, k], sigma, MEAN_COLOR, 0.3, 1.5, "binned mean",
+                         band_label="binned mean ±σ/√n (n = {n})")
+            _sigma_band(ax, sigma, "±σ")
             ok = (report.consistent("before" if which == "before" else "after")[ax_name])
             chi2 = gm.chi2_dof if which == "before" else report.chi2_after(ax_name)
             # a pattern is named only where it is itself beyond noise: on a consistent panel
@@ -245,15 +239,9 @@ def _time_panel(ax: Axes, report: GapReport, k: int) -> None:
             rasterized=True, label="data − simulation (before)")
     for which, res, s_k, color in (
             ("before", report.residual_before, float(np.sqrt(report.noise_var[k])), "k"),
-            ("after", report.residual_after, sigma, (0.85, 0.2, 0.15))):
-        cx, cy, _ = binned_mean(x, res[:, k], BINS)
-        half = s_k / np.sqrt(max(1, n // BINS))
-        ax.fill_between(cx, cy - half, cy + half, color=color, alpha=0.25, lw=0, zorder=3.5)
-        ax.plot(cx, cy, "-", color=color, lw=1.3, zorder=4, label=f"binned mean {which}")
-    ax.axhspan(-sigma, sigma, color=(0.95, 0.7, 0.2), alpha=0.25, zorder=1)
-    for sign in (-1.0, 1.0):
-        ax.axhline(sign * sigma, color=(0.85, 0.55, 0.1), lw=1.0, ls="--", zorder=3)
-    ax.axhline(0.0, color="k", lw=0.6)
+            ("after", report.residual_after, sigma, MEAN_COLOR)):
+        _binned_line(ax, x, res[:, k], s_k, color, 0.25, 1.3, f"binned mean {which}")
+    _sigma_band(ax, sigma)
     ax.set_xlim(x[0], x[-1])
     ax.set_title(f"{ax_name}, in time: residuals before, binned means before and after"
                  + ("" if moving is None else "\n(grey: the table moves)"), fontsize=9)
@@ -262,6 +250,27 @@ def _time_panel(ax: Axes, report: GapReport, k: int) -> None:
     ax.set_ylabel(f"residual {ax_name} (m/s²)")
     if k == 0:
         ax.legend(loc="upper right", fontsize=7, markerscale=4)
+
+
+def _binned_line(ax: Axes, x: np.ndarray, y: np.ndarray, sigma: float, color, alpha: float,
+                 lw: float, label: str, band_label: str | None = None) -> None:
+    """The binned mean of ``y`` against ``x`` (:data:`BINS` bins of equal sample counts) with
+    its ±σ/√n band (1 std of a bin's mean, the figure's one level); ``band_label`` may say n
+    as ``{n}``."""
+    cx, cy, _ = binned_mean(x, y, BINS)
+    n_bin = max(1, y.shape[0] // BINS)
+    half = sigma / np.sqrt(n_bin)
+    ax.fill_between(cx, cy - half, cy + half, color=color, alpha=alpha, lw=0, zorder=3.5,
+                    label=None if band_label is None else band_label.format(n=n_bin))
+    ax.plot(cx, cy, "-", color=color, lw=lw, zorder=4, label=label)
+
+
+def _sigma_band(ax: Axes, sigma: float, label: str | None = None) -> None:
+    """The ±σ band of the per-sample noise (m/s²), its dashed edges and the zero line."""
+    ax.axhspan(-sigma, sigma, color=(0.95, 0.7, 0.2), alpha=0.25, zorder=1, label=label)
+    for sign in (-1.0, 1.0):
+        ax.axhline(sign * sigma, color=(0.85, 0.55, 0.1), lw=1.0, ls="--", zorder=3)
+    ax.axhline(0.0, color="k", lw=0.6)
 
 
 def _frame(ax: Axes) -> None:
