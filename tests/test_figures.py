@@ -486,3 +486,26 @@ def test_fit_quality_says_when_no_degree_of_freedom_is_left():
     for chi2_dof, dof in ((float("nan"), 0), (0.0, 0), (float("inf"), 3)):
         text = fit_quality(chi2_dof, dof)
         assert "nan" not in text and "no degrees of freedom left" in text
+
+
+def test_one_figure_module_imports_without_the_others():
+    """Importing ``bench.figures.save`` (what ``gap --report`` draws with) leaves the other
+    figure modules, calib.design and scipy.stats unimported; every name the package exports
+    still resolves, to the object its module defines."""
+    import subprocess
+    import sys
+
+    code = ("import sys, bench.figures.save; "
+            "print(sorted(m for m in ('bench.figures.design', 'bench.figures.nmin', "
+            "'bench.figures.write', 'calib.design', 'scipy.stats') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=Path(__file__).resolve().parents[1])
+    assert out.stdout.strip() == "[]", out.stdout
+    import bench.figures as figs
+    from bench.figures import nmin, save
+
+    assert set(figs.__all__) >= set(figs.FIGURES) | {"save_figure", "DPI"}
+    assert figs.nmin_figure is nmin.nmin_figure and figs.FORMATS is save.FORMATS
+    assert all(callable(getattr(figs, n)) for n in figs.FIGURES)
+    with pytest.raises(AttributeError, match="no attribute 'not_a_figure'"):
+        figs.not_a_figure  # noqa: B018
