@@ -336,3 +336,41 @@ def test_a_bias_while_moving_taken_by_angle_shaped_effects_is_not_named(seed):
     assert 0.1 < found["coefficient"] < 0.3
     said = [u for u in res.unexplained if u["signature"] == "move_bias"]
     assert said and "while the table moves" in said[0]["description"], _words(res)
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_a_bias_while_moving_taken_by_a_walk_is_not_named_a_walk(seed):
+    """A bias of 0.2 m/s² (0.25 σ) on y during the two moves (30 % of the run) of a shuttle
+    between −1.8 and 3.3 rad: in time a square wave of two pulses, which a random walk
+    follows, and the selection names the walk (the drive part's seed 13: "explained" by it).
+    In its place the bias while moving fits better beyond the margin: the walk is not named,
+    the verdict says the bias and the pair is listed
+    (:func:`calib.gap.drive_bias.walk_or_drive_bias`)."""
+    t, th, moving = _shuttle(slots=2, a=-1.8, b=3.3, share=0.3)
+    _, y = course_readings(th, seed)
+    y[:, 1] += 0.2 * moving
+    res = _analyse(t, th, y)
+    assert res.verdict == "unexplained" and res.named == [], res.summary()
+    (found,) = [f for f in res.adequacy["drive_bias"] if f["names"] == ["bias_random_walk"]]
+    assert found["bias"] == "move_bias" and found["decision"] == "leans", found
+    assert found["axis"] == "y" and 0.1 < found["coefficient"] < 0.3
+    said = [u for u in res.unexplained if u["signature"] == "move_bias"]
+    assert said and "while the table moves" in said[0]["description"], _words(res)
+    assert any(p["names"] == ["bias_random_walk", "move_bias"] for p in res.not_identifiable)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_true_walk_on_a_shuttle_keeps_its_name(seed):
+    """A random walk on y (q√T = 1.5 σ, made with numpy) on the same two-move shuttle: the
+    walk is named, and no drive-state column leans against it (a walk wanders in the holds
+    as in the moves)."""
+    t, th, _ = _shuttle(slots=2, a=-1.8, b=3.3, share=0.3)
+    _, y = course_readings(th, seed)
+    rng = np.random.default_rng([seed, 17])
+    sigma_y = np.sqrt(STATED[1])
+    steps = rng.standard_normal(t.size) * 1.5 * sigma_y / np.sqrt(t.size)
+    y[:, 1] += np.cumsum(steps)
+    res = _analyse(t, th, y)
+    assert ("bias_random_walk", "y") in res.named, res.summary()
+    assert not [f for f in res.adequacy["drive_bias"]
+                if f["names"] == ["bias_random_walk"] and f["decision"] == "leans"]

@@ -19,7 +19,13 @@ from calib.gap.asymmetry import signature as asymmetry_signature
 from calib.gap.confusions import merge_tilt, not_identifiable, prefer_less_assuming
 from calib.gap.cubic import K3, named_or_k3
 from calib.gap.cubic import signature as cubic_signature
-from calib.gap.drive_bias import LEVER, lever_or_drive_bias, structured_or_drive_bias
+from calib.gap.drive_bias import (
+    LEVER,
+    WALK,
+    lever_or_drive_bias,
+    structured_or_drive_bias,
+    walk_or_drive_bias,
+)
 from calib.gap.drive_bias import signature as drive_bias_signature
 from calib.gap.drive_noise import LEVEL as NOISE_LEVEL
 from calib.gap.drive_noise import level_or_drive_noise
@@ -195,10 +201,10 @@ def _outside_terms(ext: Extensions, state: ModelState, effects: list[EffectEstim
     """Terms outside the catalog against the named effects: a scale asymmetry in place of a
     named K2 (:mod:`calib.gap.asymmetry`), a K3 in place of the structured effects of an axis
     (:mod:`calib.gap.cubic`; IEEE 1293), one step of the bias in place of them and the drift
-    (:mod:`calib.gap.step_swap`), a bias tied to the drive in place of a lever arm or of the
-    angle-shaped effects (:mod:`calib.gap.drive_bias`), noise added while the table moves in
-    place of a noise level (:mod:`calib.gap.drive_noise`; ``resid`` the final model's
-    residuals, (N, 2) m/s²).
+    (:mod:`calib.gap.step_swap`), a bias tied to the drive in place of a lever arm, of the
+    angle-shaped effects or of a random walk (:mod:`calib.gap.drive_bias`), noise added while
+    the table moves in place of a noise level (:mod:`calib.gap.drive_noise`; ``resid`` the
+    final model's residuals, (N, 2) m/s²).
     Effects a term leans against are not named (they stay in the model meanwhile). Returns the
     effects still named, the ``unexplained`` entries (the asymmetry's not again where
     ``rival_shapes`` already failed), the ``not_identifiable`` pairs and the ``adequacy``
@@ -215,6 +221,8 @@ def _outside_terms(ext: Extensions, state: ModelState, effects: list[EffectEstim
     effects, shaped_by_drive = _swap_set(
         effects, lambda k, named: structured_or_drive_bias(ext, state, k, named))
     drive += shaped_by_drive
+    effects, walk_by_drive = _swap_one(effects, WALK, lambda k: walk_or_drive_bias(ext, state, k))
+    drive += walk_by_drive
     said += [drive_bias_signature(f) for f in drive if f["decision"] == "leans"]
     effects, noise = _swap_one(effects, NOISE_LEVEL,
                                lambda k: level_or_drive_noise(ext, state, k, resid[:, k]))

@@ -32,6 +32,15 @@ A true lever arm has a tangential part ``α`` that is odd in the acceleration, w
 the three even columns follows, and a centripetal part that differs from ``|ω|`` wherever the
 speed varies: it keeps its name unless the run has neither.
 
+The same review stands a **random walk** named on an axis against the three columns
+(:func:`walk_or_drive_bias`; the walk charged its one parameter q, its path integrated out as
+in the selection): on a stop-and-go run or a shuttle a bias present while the table moves is a
+square wave in time, which a walk follows step by step, and the walk's own review (steps,
+two-level switching) at best lists the pair. A true walk wanders in the held stretches as in
+the moving ones and rarely follows the moving indicator better than itself after the charges
+(the drive part's catalog walks and ``python -m validation.switching.score --analysis``,
+``docs/gap.md``).
+
 Why by hand: a swap of columns in this model's own whitened space; no library knows it.
 """
 
@@ -96,6 +105,22 @@ def lever_or_drive_bias(ext: Extensions, state: ModelState, k: int) -> dict | No
     return _against_drive_bias(ext, state, k, [LEVER])
 
 
+WALK = "bias_random_walk"
+
+
+def walk_or_drive_bias(ext: Extensions, state: ModelState, k: int) -> dict | None:
+    """A random walk named on axis k against a bias tied to the drive in its place (module
+    docstring): the lever arm's review with the walk's one parameter,
+    ``D = max_c (LR_c − 2) − 2·ln 3 − (LR_walk − 2)``, ``LR_walk`` its marginal likelihood
+    ratio. Returns the dict of :func:`lever_or_drive_bias` (``names``: the walk), or None when
+    no walk is named on axis k, a sensor profile states its q (``ext.walk_bounds``: the walk
+    is the sensor's known noise, not a fitted explanation), the run has no sample times, or
+    ``D ≤ −AMBIGUITY_LR``."""
+    if (WALK, AXES[k]) not in state.effects() or k in getattr(ext, "walk_bounds", {}):
+        return None
+    return _against_drive_bias(ext, state, k, [WALK])
+
+
 STRUCTURED = tuple(n for n in cubic.SWAPPED if n != LEVER)
 """Named per-axis effects whose columns follow the table's angle (K2, the cross-axis term, a
 misalignment, saturation, low-pass lag): on a shuttle between two poses or a tour at one speed
@@ -139,6 +164,11 @@ def _against_drive_bias(ext: Extensions, state: ModelState, k: int, names: list[
     if names == [LEVER]:
         them, held, dropped = "the lever arm", "the lever arm", "the lever arm is"
         parts, split = "the lever arm's 2 parameters", "moves at several speeds, each way"
+    elif names == [WALK]:
+        them, held, dropped = "a random walk", "the random walk", "it is"
+        parts = "the walk's 1 parameter q, its path integrated out"
+        split = ("long holds, where a walk wanders and a drive bias does not, and moves at "
+                 "irregular times")
     else:
         them, held, dropped = " + ".join(names), "the named set", "they are"
         parts = f"their {cost:g} parameter(s)"
