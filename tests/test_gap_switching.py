@@ -185,6 +185,11 @@ def test_the_whole_analysis_study_counts_its_runs(capsys):
         runs = sum(r is not None and r["kind"] == kind for r in made)
         line = next(x for x in out.splitlines() if x.startswith(label))
         assert int(line.split()[1]) == runs, (line, made)
+        # the drive-bias review against the walk: counted on the stop-and-go runs
+        stop_go = sum(r is not None and r["kind"] == kind and r["design"] == "stop_and_go"
+                      for r in made)
+        tiers, of = line.rsplit("|", 1)[1].split(" of ")
+        assert int(of) == stop_go and sum(int(v) for v in tiers.split("/")) <= stop_go, line
 
 
 def test_a_staircase_path_rises_by_its_steps_and_the_study_counts_it(capsys):

@@ -28,7 +28,10 @@ walks and telegraphs, the verdicts, whether the walk on x is named, and the deci
 steps or switching against it (``--staircases K`` adds K staircases of 2–6 steps of one
 sign and size, 0.25–0.6 σ; ``"describes"``: the pair listed, the walk named; ``"leans"``:
 beyond :data:`calib.gap.walk.LEAN_MARGIN`, the walk not named; ``"steps"``: beyond the
-margin) with the largest gain of each kind. Two processes by default (``--jobs``).
+margin) with the largest gain of each kind, and on the stop-and-go runs how often a bias tied
+to the drive ties with, describes or leans against the walk on x
+(:func:`calib.gap.drive_bias.walk_or_drive_bias`; ``"leans"``: the walk not named). Two
+processes by default (``--jobs``).
 """
 
 from __future__ import annotations
@@ -70,10 +73,13 @@ def analysed(job: tuple[int, str, bool]) -> dict | None:
     res = analyze_gap(Ensayo(run["tita"], run["datos"], run["t"]), run["noise_var"])
     walk = [w for w in res.adequacy.get("walk", []) if w["axis"] == "x"]
     steps = walk[0]["steps"] if walk else None
+    drive = [f["decision"] for f in res.adequacy.get("drive_bias", [])
+             if f["names"] == ["bias_random_walk"] and f["axis"] == "x"]
     return {"kind": kind, "verdict": res.verdict,
             "walk_named": ("bias_random_walk", "x") in res.named,
             "decision": None if steps is None else steps["decision"],
-            "gain": None if steps is None else float(steps["gain"]), **run["info"]}
+            "gain": None if steps is None else float(steps["gain"]),
+            "drive_bias": drive[0] if drive else None, **run["info"]}
 
 
 def analysis_study(walks: int, telegraphs: int, seed: int, jobs: int, staircases: int = 0
@@ -93,7 +99,9 @@ def analysis_study(walks: int, telegraphs: int, seed: int, jobs: int, staircases
     print(file=sys.stderr)
     print(f"whole analysis (seed {seed}, N ≤ 6001): runs | verdict explained / unexplained / "
           "nothing | walk on x named | steps or switching against it: describes (pair, walk "
-          "named) / leans (walk not named) / steps (replaced) | largest gain of each")
+          "named) / leans (walk not named) / steps (replaced) | largest gain of each | a bias "
+          "tied to the drive against the walk (calib.gap.drive_bias.walk_or_drive_bias): ties / "
+          "describes / leans, stop-and-go runs")
     for kind in ("walk", "telegraph", "staircase"):
         rs = [r for r in rows if r["kind"] == kind]
         if not rs:
@@ -104,8 +112,12 @@ def analysis_study(walks: int, telegraphs: int, seed: int, jobs: int, staircases
                          for d in ("describes", "leans", "steps"))
         top = ", ".join(f"{d} {max((r['gain'] for r in rs if r['decision'] == d), default=0):.1f}"
                         for d in ("describes", "leans", "steps"))
+        drive = "/".join(str(sum(r["drive_bias"] == d for r in rs))
+                         for d in ("ties", "describes", "leans"))
+        stop_go = sum(r["design"] == "stop_and_go" for r in rs)
         print(f"{kind + 's':<11s} {len(rs):>5d} | {verdicts:>11s} | "
-              f"{sum(r['walk_named'] for r in rs):>5d} | {tiers:>9s} | {top}")
+              f"{sum(r['walk_named'] for r in rs):>5d} | {tiers:>9s} | {top} | {drive} "
+              f"of {stop_go}")
     return 0
 
 
