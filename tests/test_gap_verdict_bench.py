@@ -380,6 +380,20 @@ def test_figure_shows_the_verdict_and_marks_the_unexplained_panels(misaligned_re
         plt.close(fig)
 
 
+def _stop_and_go_copy(report):
+    """``report`` with a timed stop-and-go replay in place of its own (the residuals kept):
+    held, moving, held, … in eight stretches of ``hold`` samples, t = 2 s + 10 ms per sample.
+    Returns the copy, t (s) and ``hold``."""
+    from calib.gap.drive_state import MIN_HOLD
+
+    n = report.replay.n
+    hold = max(MIN_HOLD, n // 8)
+    tita = np.where((np.arange(n) // hold) % 2 == 0, np.arange(n) // (2 * hold) * 0.3,
+                    np.linspace(0.0, 1.0, n))
+    t = 0.01 * np.arange(n) + 2.0
+    return replace(report, replay=replace(report.replay, tita=tita, t=t)), t, hold
+
+
 def test_time_row_is_in_seconds_and_shades_the_moving_stretches(misaligned_report):
     """The bottom row plots the residuals in time order, with the binned means before and
     after: against the sample index on a run without times, against t (s) on a timed one,
@@ -387,8 +401,6 @@ def test_time_row_is_in_seconds_and_shades_the_moving_stretches(misaligned_repor
     calib.gap.drive_state), over the run's whole span."""
     import matplotlib.pyplot as plt
     from matplotlib.collections import PolyCollection
-
-    from calib.gap.drive_state import MIN_HOLD
 
     def time_panels(report):
         fig = gap_figure(report)
@@ -400,12 +412,8 @@ def test_time_row_is_in_seconds_and_shades_the_moving_stretches(misaligned_repor
         assert all("sample index" in ax.get_xlabel() for ax in panels) and len(panels) == 2
     finally:
         plt.close(fig)
-    n = misaligned_report.replay.n
-    hold = max(MIN_HOLD, n // 8)  # held, moving, held, moving, …: eight stretches
-    tita = np.where((np.arange(n) // hold) % 2 == 0, np.arange(n) // (2 * hold) * 0.3,
-                    np.linspace(0.0, 1.0, n))
-    t = 0.01 * np.arange(n) + 2.0
-    timed = replace(misaligned_report, replay=replace(misaligned_report.replay, tita=tita, t=t))
+    timed, t, hold = _stop_and_go_copy(misaligned_report)
+    n = t.size
     fig, panels = time_panels(timed)
     try:
         for ax in panels:
@@ -421,6 +429,27 @@ def test_time_row_is_in_seconds_and_shades_the_moving_stretches(misaligned_repor
             assert abs(x0 - moving_t[0]) <= 0.01  # the first moving stretch, half a step
     finally:
         plt.close(fig)
+
+
+def test_recording_has_the_row_in_time_with_the_moving_stretches(misaligned_report, tmp_path):
+    """The recording's ``plot_time`` of each axis: t in s on its axis labels, and one grey bar
+    per moving stretch, from its first to its last moving sample."""
+    from rerun.chunk import RrdReader
+
+    timed, t, hold = _stop_and_go_copy(misaligned_report)
+    path = write_recording(timed, tmp_path / "gap.rrd")
+    chunks = {c.entity_path: c for c in RrdReader(str(path)).stream().to_chunks()}
+    n = t.size
+    block = np.arange(n) // hold
+    starts = [t[block == b][0] for b in np.unique(block) if b % 2 == 1]
+    for a in AXES:
+        labels = chunks[f"/gap/{a}/plot_time/axes/labels"].to_record_batch().column(
+            "Points2D:labels").to_pylist()[-1]
+        assert "t (s)" in labels
+        strips = chunks[f"/gap/{a}/plot_time/moving"].to_record_batch().column(
+            "LineStrips2D:strips").to_pylist()[-1]
+        assert len(strips) == len(starts)
+        assert np.allclose([s[0][0] for s in strips], starts)
 
 
 def test_recording_reads_the_verdict_back(misaligned_report, tmp_path):

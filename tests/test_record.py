@@ -406,14 +406,18 @@ def test_gap_recording_entities_are_documented(tmp_path, capsys):
         if "gap" in d.kinds and not d.optional:
             assert any(d.regex().match(e.lstrip("/")) for e in ents), d.pattern
     bp = _assert_blueprint_shows_content(rrd)
-    # θ in rad: static 2-D plots with frame, tick values and axis names (not µrad indices)
-    assert sorted(v["class"] for v in bp["views"]) == ["2D"] * 4 + ["TextDocument"]
+    # θ in rad: static 2-D plots with frame, tick values and axis names (not µrad indices);
+    # and each axis in time order (an untimed run: against the sample index)
+    assert sorted(v["class"] for v in bp["views"]) == ["2D"] * 6 + ["TextDocument"]
     for v in bp["views"]:
         if v["class"] == "2D":
-            assert "θ (rad)" in v["name"], v["name"]
+            assert ("θ (rad)" in v["name"]) != ("vs sample (time order)" in v["name"]), v
             assert any(e.endswith("/axes/labels") for e in _shown(v, rrd)), v["name"]
     _assert_means_over_samples(rrd, [f"/gap/{a}/plot_{w}" for a in "xy"
-                                     for w in ("before", "after")])
+                                     for w in ("before", "after", "time")])
+    for a in "xy":
+        assert "sample" in _labels(rrd, f"/gap/{a}/plot_time/axes/labels")
+        assert f"/gap/{a}/plot_time/mean_after" in ents
     # the effects text has no image: gap.png is a path relative to the report directory
     chunk = next(c for c in RrdReader(str(rrd)).stream().to_chunks()
                  if c.entity_path == "/gap/effects")

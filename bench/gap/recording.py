@@ -28,6 +28,7 @@ from bench.record import (
     time_panel,
 )
 from calib.conventions import AXES
+from calib.gap.drive_state import drive_state, stretches
 from calib.stats.binning import binned_mean
 
 PathLike = str | os.PathLike
@@ -45,17 +46,24 @@ def recording_blueprint(report: GapReport | None = None) -> Any:
         ax: [str(u.get("description", u.get("signature", "?"))) for u in report.unexplained
              if u.get("axis") in (ax, "both")] for ax in AXES}
 
+    timed = report is None or report.replay.t is not None
+    along = "t (s)" if timed else "sample (time order)"
+
     def view(ax: str, which: str) -> Any:
         name = f"{ax}: residual {which} (dots), ±σ (orange), binned mean (white) vs θ (rad); m/s²"
         if which == "after" and flagged.get(ax):
             name = f"{ax}: residual after vs θ (rad) — UNEXPLAINED: {'; '.join(flagged[ax])}"
+        if which == "time":
+            name = (f"{ax}: residual before (dots), binned means before (white) and after "
+                    f"(red), ±σ after (orange) vs {along}; grey bar: the table moves; m/s²")
         return rrb.Spatial2DView(origin=f"gap/{ax}", name=name,
                                  contents=[f"+ gap/{ax}/plot_{which}/**"],
                                  visual_bounds=plot_bounds())
 
-    # one 3:1 plot per row (x before, x after, y before, y after: before and after of an axis
+    # one 3:1 plot per row (x before, x after, x in time, then y: before and after of an axis
     # share their y range), the text view wide enough for its tables
-    plots = rrb.Vertical(*(view(ax, which) for ax in AXES for which in ("before", "after")))
+    plots = rrb.Vertical(*(view(ax, which) for ax in AXES
+                           for which in ("before", "after", "time")))
     verdict = "" if report is None else f" — verdict: {report.verdict}"
     return rrb.Blueprint(
         rrb.Horizontal(plots, rrb.TextDocumentView(origin="gap/effects",
@@ -79,12 +87,14 @@ def _shared_box(theta: np.ndarray, residuals, variances) -> StaticPlot:
 
 
 def _log_plot(rec: Any, entity: str, plot: StaticPlot, theta: np.ndarray, res: np.ndarray,
-              sigma: float, th_mean: np.ndarray, mean: np.ndarray) -> None:
-    """Static 2-D plot at ``entity`` (θ in rad against the residual, m/s²): small translucent
-    samples under the ±σ lines, the binned mean on top, frame and tick values."""
+              sigma: float, th_mean: np.ndarray, mean: np.ndarray, xlabel: str = "θ (rad)"
+              ) -> None:
+    """Static 2-D plot at ``entity`` (θ in rad, or ``xlabel``'s abscissa, against the residual,
+    m/s²): small translucent samples under the ±σ lines, the binned mean on top, frame and
+    tick values."""
     import rerun as rr
 
-    plot.log_frame(rec, entity, zero_line=True, xlabel="θ (rad)", ylabel="residual (m/s²)")
+    plot.log_frame(rec, entity, zero_line=True, xlabel=xlabel, ylabel="residual (m/s²)")
     rec.log(f"{entity}/residual", rr.Points2D(
         np.column_stack([theta, res]), radii=rr.Radius.ui_points(0.8), colors=COLORS["sample"],
         draw_order=10.0), static=True)
@@ -105,7 +115,8 @@ def write_recording(report: GapReport, path: PathLike, force: bool = False) -> P
     object as a tree under ``gap_report`` (read back with ``tiltbench record read``), with a
     blueprint that shows the same residuals as static 2-D plots against θ in rad
     (``gap/{x,y}/plot_{before,after}``: translucent samples, ±σ lines, binned mean on top;
-    an axis with unexplained structure names it in its "after" view)."""
+    an axis with unexplained structure names it in its "after" view) and in time order
+    (``gap/{x,y}/plot_time``, :func:`_log_time_plot`)."""
     import rerun as rr
 
     theta = report.replay.tita
@@ -136,7 +147,42 @@ def write_recording(report: GapReport, path: PathLike, force: bool = False) -> P
                            color=COLORS["mean"], name=f"binned mean {which}")
                 _log_plot(rec, f"gap/{ax}/plot_{which}", plot[ax], theta, res[:, k],
                           float(np.sqrt(s2)), th, mean)
+            _log_time_plot(rec, report, k)
         rec.log("gap/effects", rr.TextDocument(recording_markdown(report),
                                                media_type=rr.MediaType.MARKDOWN), static=True)
         log_tree(rec, "gap_report", report.to_dict())
     return Path(path)
+
+
+def _log_time_plot(rec: Any, report: GapReport, k: int) -> None:
+    """Axis k in time order as a static 2-D plot at ``gap/{axis}/plot_time`` (t in s, or the
+    sample index when the run has no times, against m/s²), as the gap figure's row in time:
+    the residuals before, the binned means before (``mean``) and after (``mean_after``), the
+    ±σ lines of the model after, and a thick grey bar along the bottom under each stretch
+    where the table moves (``moving``: :func:`calib.gap.drive_state.drive_state`)."""
+    import rerun as rr
+
+    ax = AXES[k]
+    entity = f"gap/{ax}/plot_time"
+    t = report.replay.t
+    before, after = report.residual_before[:, k], report.residual_after[:, k]
+    n = before.size
+    x = np.arange(n, dtype=float) if t is None else np.asarray(t, dtype=float)
+    sigma = float(np.sqrt(report.after[ax].sigma2))
+    bins = min(100, max(1, n // 80))
+    xb, mean_before, _ = binned_mean(x, before, bins=bins)
+    xa, mean_after, _ = binned_mean(x, after, bins=bins)
+    plot = _shared_box(x, (before, after), (report.noise_var[k], report.after[ax].sigma2))
+    _log_plot(rec, entity, plot, x, before, sigma, xb, mean_before,
+              xlabel="t (s)" if t is not None else "sample")
+    rec.log(f"{entity}/mean_after", rr.LineStrips2D(
+        [np.column_stack([xa, mean_after])], radii=rr.Radius.ui_points(1.25),
+        colors=COLORS["fit"], draw_order=31.0), static=True)
+    moving = drive_state(report.replay.tita)
+    if moving is not None:  # a thick grey bar along the bottom (2-D boxes are outlines only)
+        level = plot.y0 + 0.02 * (plot.y1 - plot.y0)
+        rec.log(f"{entity}/moving", rr.LineStrips2D(
+            [np.array([[x[a], level], [x[b - 1], level]]) for a, b in stretches(moving)],
+            radii=rr.Radius.ui_points(3.0), colors=COLORS["raw"], draw_order=25.0),
+            static=True)
+

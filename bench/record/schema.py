@@ -204,6 +204,24 @@ ENTITY_DOCS: tuple[EntityDoc, ...] = (
     EntityDoc("gap/{axis}/mean_{k}", "Scalars + SeriesLines", "sample, theta_urad",
               "binned mean of the residual before / after (≈ 80 samples per θ bin, at most 100 "
               "bins), m/s²", ("gap",)),
+    EntityDoc("gap/{axis}/plot_time", "Transform3D", "static",
+              "static 2-D plot of the residuals in time order (t in s; the sample index when "
+              "the run has no times), shown by the blueprint as the gap figure's row in time",
+              ("gap",)),
+    EntityDoc("gap/{axis}/plot_time/residual", "Points2D", "static",
+              "(t s or sample, residual before m/s²) per sample, small and translucent",
+              ("gap",)),
+    EntityDoc("gap/{axis}/plot_time/band", "LineStrips2D", "static",
+              "±σ lines of the after model over the run, m/s²", ("gap",)),
+    EntityDoc("gap/{axis}/plot_time/mean", "LineStrips2D", "static",
+              "binned mean of the residual before in time (≈ 80 samples per bin, at most 100 "
+              "bins), drawn on top, m/s²", ("gap",)),
+    EntityDoc("gap/{axis}/plot_time/mean_after", "LineStrips2D", "static",
+              "binned mean of the residual after in time (red), m/s²", ("gap",)),
+    EntityDoc("gap/{axis}/plot_time/moving", "LineStrips2D", "static",
+              "a thick grey bar along the bottom under each stretch where the table moves "
+              "(calib.gap.drive_state); only on a run with moving and held stretches", ("gap",),
+              optional=True),
     EntityDoc("gap/{axis}/plot_{k}", "Transform3D", "static",
               "static 2-D plot of the residual before / after against θ (rad), shown by the "
               "blueprint (as `theta_plot`; before and after share the y range)", ("gap",)),
