@@ -161,6 +161,7 @@ def gap_figure(report: GapReport) -> Figure:
             axs[k, j] = fig.add_subplot(grid[k, j], sharex=axs[0, 0] if k or j else None,
                                         sharey=axs[k, 0] if j else None)
     unexplained = report.unexplained if report.verdict == "unexplained" else []
+    moving = drive_state(theta)  # the stretches where the table moves, for the row in time
     for k, ax_name in enumerate(AXES):
         for j, (which, res, gaps) in enumerate((
                 ("before", report.residual_before, report.gap_before),
@@ -193,7 +194,7 @@ def gap_figure(report: GapReport) -> Figure:
                 ax.legend(loc="upper right", fontsize=7, markerscale=4)
         mine = [u for u in unexplained if u.get("axis") in (ax_name, "both")]
         timed = fig.add_subplot(grid[2, k], sharey=axs[k, 0])
-        _time_panel(timed, report, k)
+        _time_panel(timed, report, k, moving)
         if mine:
             _mark_unexplained(axs[k, 1], mine)
             _frame(timed)
@@ -217,20 +218,20 @@ def gap_figure(report: GapReport) -> Figure:
     return fig
 
 
-def _time_panel(ax: Axes, report: GapReport, k: int) -> None:
+def _time_panel(ax: Axes, report: GapReport, k: int, moving: np.ndarray | None) -> None:
     """Axis k's residuals (m/s²) against the sample time (s; the sample index when the run has
     no times: its samples are in time order): the residuals before as dots, the binned means
     (equal sample counts) before and after, each ±σ/√n, and the ±σ band of the model after;
-    shaded where the table moves (:func:`calib.gap.drive_state.drive_state`: not in a hold),
-    when the run has both states. Against θ a step, a switching bias or an effect present
-    only while moving is spread over every angle; in time it stands where it happened, and
-    the mean after shows whether the named effects took it."""
+    shaded where the table moves (``moving``: :func:`calib.gap.drive_state.drive_state` of
+    the run, not in a hold; None when the run lacks either state). Against θ a step, a
+    switching bias or an effect present only while moving is spread over every angle; in
+    time it stands where it happened, and the mean after shows whether the named effects
+    took it."""
     ax_name = AXES[k]
     t = report.replay.t
     n = report.residual_before.shape[0]
     x = np.arange(n, dtype=float) if t is None else np.asarray(t, dtype=float)
     sigma = float(np.sqrt(report.after[ax_name].sigma2))
-    moving = drive_state(report.replay.tita)
     if moving is not None:
         ax.fill_between(x, 0.0, 1.0, where=moving, step="mid", color="0.85", lw=0,
                         transform=ax.get_xaxis_transform(), zorder=0,

@@ -128,6 +128,7 @@ def write_recording(report: GapReport, path: PathLike, force: bool = False) -> P
     plot = {ax: _shared_box(theta, (report.residual_before[:, k], report.residual_after[:, k]),
                             (report.noise_var[k], report.after[ax].sigma2))
             for k, ax in enumerate(AXES)}
+    moving = drive_state(theta)  # the stretches where the table moves, for the plots in time
     with open_recording(path, force=force, blueprint=recording_blueprint(report),
                         name="tiltbench gap") as rec:
         for k, ax in enumerate(AXES):
@@ -147,19 +148,20 @@ def write_recording(report: GapReport, path: PathLike, force: bool = False) -> P
                            color=COLORS["mean"], name=f"binned mean {which}")
                 _log_plot(rec, f"gap/{ax}/plot_{which}", plot[ax], theta, res[:, k],
                           float(np.sqrt(s2)), th, mean)
-            _log_time_plot(rec, report, k)
+            _log_time_plot(rec, report, k, moving)
         rec.log("gap/effects", rr.TextDocument(recording_markdown(report),
                                                media_type=rr.MediaType.MARKDOWN), static=True)
         log_tree(rec, "gap_report", report.to_dict())
     return Path(path)
 
 
-def _log_time_plot(rec: Any, report: GapReport, k: int) -> None:
+def _log_time_plot(rec: Any, report: GapReport, k: int, moving: np.ndarray | None) -> None:
     """Axis k in time order as a static 2-D plot at ``gap/{axis}/plot_time`` (t in s, or the
     sample index when the run has no times, against m/s²), as the gap figure's row in time:
     the residuals before, the binned means before (``mean``) and after (``mean_after``), the
     ±σ lines of the model after, and a thick grey bar along the bottom under each stretch
-    where the table moves (``moving``: :func:`calib.gap.drive_state.drive_state`)."""
+    where the table moves (``moving``: :func:`calib.gap.drive_state.drive_state` of the run;
+    None when it lacks either state)."""
     import rerun as rr
 
     ax = AXES[k]
@@ -178,7 +180,6 @@ def _log_time_plot(rec: Any, report: GapReport, k: int) -> None:
     rec.log(f"{entity}/mean_after", rr.LineStrips2D(
         [np.column_stack([xa, mean_after])], radii=rr.Radius.ui_points(1.25),
         colors=COLORS["fit"], draw_order=31.0), static=True)
-    moving = drive_state(report.replay.tita)
     if moving is not None:  # a thick grey bar along the bottom (2-D boxes are outlines only)
         level = plot.y0 + 0.02 * (plot.y1 - plot.y0)
         rec.log(f"{entity}/moving", rr.LineStrips2D(

@@ -247,8 +247,8 @@ def _swap_set(effects: list[EffectEstimate],
               review: Callable[[int, list[str]], dict | None]
               ) -> tuple[list[EffectEstimate], list[dict]]:
     """``review(k, named)`` on each axis k with the names named there (a swap of a set of
-    effects: K3, a step of the bias); the effects without those a review leans against, and
-    the reviews found."""
+    effects: K3, a step of the bias, a bias tied to the drive in place of the angle-shaped
+    effects); the effects without those a review leans against, and the reviews found."""
     found = [f for k in range(2)
              if (f := review(k, [e.name for e in effects if e.axis == AXES[k]])) is not None]
     dropped = {(n, f["axis"]) for f in found if f["decision"] == "leans" for n in f["names"]}

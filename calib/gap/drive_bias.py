@@ -52,7 +52,7 @@ from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap import cubic, swaps
 from calib.gap.drive_state import drive_state, where_moving
-from calib.gap.swaps import FITS, leaning, swap_gain, tier
+from calib.gap.swaps import FITS, leaning, swap_base, swap_gain, tier
 
 LEVER = "lever_arm"
 BIASES = ("speed_bias", "move_bias", "accel_bias")
@@ -150,8 +150,9 @@ def _against_drive_bias(ext: Extensions, state: ModelState, k: int, names: list[
         return None
     moving = drive_state(run.tita)
     cols = _columns(run, moving)
+    base = swap_base(ext, state, k, names)  # the model without them: once for the columns
     found = {name: f for name, c in cols.items()
-             if np.ptp(c) > 0.0 and (f := swap_gain(ext, state, k, names, c)) is not None}
+             if np.ptp(c) > 0.0 and (f := swap_gain(ext, state, k, names, c, base)) is not None}
     if not found:
         return None
     best = max(found, key=lambda name: found[name][0])
@@ -185,5 +186,6 @@ def _against_drive_bias(ext: Extensions, state: ModelState, k: int, names: list[
 
 
 def signature(found: dict) -> dict:
-    """The ``unexplained`` entry of a lever arm a drive-state bias leans against."""
+    """The ``unexplained`` entry of named effects (a lever arm, angle-shaped effects, a walk)
+    a drive-state bias leans against."""
     return swaps.signature(found, found["bias"], "a bias tied to the drive")

@@ -36,11 +36,10 @@ from __future__ import annotations
 import numpy as np
 
 from calib.conventions import AXES
-from calib.effects import Extensions, ModelState, effect
+from calib.effects import Extensions, ModelState
 from calib.gap import cubic, swaps
-from calib.gap.space import AxisSpace
 from calib.gap.steps import MIN_SEGMENT, StepFit, describe
-from calib.gap.swaps import FITS, leaning, tier
+from calib.gap.swaps import FITS, leaning, swap_base, tier
 from calib.gap.walk import step_charge
 
 STEP = "bias_step"
@@ -49,6 +48,7 @@ STEP = "bias_step"
 SWAPPED = (*cubic.SWAPPED, "bias_drift")
 """Named per-axis effects a step of the bias may stand for on a run whose angle follows the
 clock: those whose columns follow the angle or the motion, and the drift in time."""
+
 
 def named_or_step(ext: Extensions, state: ModelState, k: int, named: list[str]
                   ) -> dict | None:
@@ -67,10 +67,7 @@ def named_or_step(ext: Extensions, state: ModelState, k: int, named: list[str]
     run = ext.run
     if run.n < 2 * MIN_SEGMENT + 1:
         return None
-    reduced = state
-    for name in names:
-        reduced = reduced.without(name, axis)
-    space = AxisSpace(ext, reduced, k)
+    space, lr_named, cost = swap_base(ext, state, k, names)
     gains = space.step_scan()  # entry i − 1: the step at place i
     if gains is None:
         return None
@@ -78,8 +75,6 @@ def named_or_step(ext: Extensions, state: ModelState, k: int, named: list[str]
     fit = space.test((np.arange(run.n) >= best).astype(float)[:, None])
     if fit is None:
         return None
-    lr_named = float(ext.nll(reduced) - ext.nll(state))
-    cost = float(sum(effect(name).n_free for name in names))
     gain = (float(fit[0]) - 2.0 * step_charge(run.n)) - (lr_named - 2.0 * cost)
     decision = tier(gain)
     if decision is None:

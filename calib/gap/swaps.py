@@ -22,17 +22,28 @@ from calib.gap.space import AxisSpace
 from calib.gap.walk import LEAN_MARGIN
 
 
-def swap_gain(ext: Extensions, state: ModelState, k: int, names: list[str],
-              column: np.ndarray) -> tuple[float, float, float] | None:
-    """(D, the column's coefficient, the effects' parameters p) of the module docstring, or
-    None when the column is in the model's span without the effects."""
+def swap_base(ext: Extensions, state: ModelState, k: int, names: list[str]
+              ) -> tuple[AxisSpace, float, float]:
+    """The model without the effects ``names`` of axis k, made once for every column tried in
+    their place: its :class:`AxisSpace` on axis k, the effects' likelihood ratio
+    ``LR_named`` (``−2 log L`` without them less with them) and their parameters p."""
     axis = AXES[k]
     reduced = state
     for n in names:
         reduced = reduced.without(n, axis)
     lr_named = float(ext.nll(reduced) - ext.nll(state))
     cost = float(sum(effect(n).n_free for n in names))
-    fit = AxisSpace(ext, reduced, k).test(np.asarray(column, dtype=float)[:, None])
+    return AxisSpace(ext, reduced, k), lr_named, cost
+
+
+def swap_gain(ext: Extensions, state: ModelState, k: int, names: list[str],
+              column: np.ndarray, base: tuple[AxisSpace, float, float] | None = None
+              ) -> tuple[float, float, float] | None:
+    """(D, the column's coefficient, the effects' parameters p) of the module docstring, or
+    None when the column is in the model's span without the effects. ``base``: the
+    :func:`swap_base` of ``names``, when several columns are tried in their place."""
+    space, lr_named, cost = swap_base(ext, state, k, names) if base is None else base
+    fit = space.test(np.asarray(column, dtype=float)[:, None])
     if fit is None:
         return None
     return (float(fit[0]) - 2.0) - (lr_named - 2.0 * cost), float(fit[2][0]), cost
