@@ -202,7 +202,7 @@ def analyze_design(experiments: Sequence[Experiment], effects: Sequence[str],
     >>> res = analyze_design([Experiment("uniform", 2001, 0.314),
     ...                       Experiment("reversal", 2001, 0.314)], ["misalignment"])
     >>> [round(r["power"], 2) for r in res.effects["misalignment"]["per_experiment"]]
-    [0.18, 0.17]
+    [0.18, 0.16]
     """
     say = progress or (lambda _msg: None)
     sizes = {**DEFAULT_SIZES, **dict(sizes or {})}

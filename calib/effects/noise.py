@@ -4,7 +4,8 @@
   (REML, :meth:`Extensions.nll`); q ≥ 0 on the boundary, ``LR ~ ½χ²₀ + ½χ²₁`` (χ̄²; for a
   variance component the true point mass at 0 is larger than ½, so this p-value is
   conservative).
-* noise_level: σ² free (profile); ``RSS/σ²_stated ~ χ²(dof)`` exactly, two-sided.
+* noise_level: σ² free (profile); ``RSS/σ²_stated ~ χ²(dof)`` exactly, two-sided; on
+  ``"both"`` axes the two statistics pooled (a stated σ² off by one factor on both axes).
 * quantization: found from the lattice of the readings (step 0 of the selection, not a
   likelihood-ratio test); adds lsb²/12 to σ² (Sheppard).
 """
@@ -16,10 +17,13 @@ from dataclasses import replace
 import numpy as np
 
 from calib import distributions as stats
+from calib.calibration.ls import NotIdentifiableError
 from calib.conventions import AXES
 from calib.effects import base
 from calib.effects.response import BoundaryEffect, ProfiledEffect
 from calib.stats.diagnostics import chi2_two_sided_logp
+
+BOTH = "both"
 
 
 @base.register
@@ -98,17 +102,59 @@ class NoiseLevel(ProfiledEffect):
     def remove(self, st: base.AxisState) -> base.AxisState:
         return replace(st, sigma2_fitted=None)  # the stated σ² is in use again
 
+    def in_model(self, state: base.ModelState, axis: str) -> bool:
+        """On one axis, or on ``"both"``: a fitted σ² on each axis."""
+        if axis == BOTH:
+            return all(self.present(st) for st in state.axes)
+        return super().in_model(state, axis)
+
+    def drop(self, state: base.ModelState, axis: str) -> base.ModelState:
+        if axis == BOTH:
+            return replace(state, axes=tuple(self.remove(st) for st in state.axes))
+        return super().drop(state, axis)
+
+    @staticmethod
+    def _test_dof(ext: base.Likelihood, state: base.ModelState, k: int) -> int:
+        """Degrees of freedom of axis k's whitened RSS: ``N − 1 − (p_k − 1)``."""
+        return ext.run.n - 1 - (ext.n_params(state, k) - 1)
+
     def test(self, ext: base.Likelihood, state: base.ModelState, axis: str) -> base.Trial:
+        if axis == BOTH:
+            return self._test_both(ext, state)
         k = AXES.index(axis)
         nll0 = ext.nll(state)
         fit = ext.fit(state)
-        dof = ext.run.n - 1 - (ext.n_params(state, k) - 1)
+        dof = self._test_dof(ext, state, k)
         if dof < 2:  # σ² fitted would leave no degree of freedom (N = 3): not testable
             return base.Trial(self.name, axis, state, 0.0, 0.0, nll0, f"chi2({dof})")
         logp = chi2_two_sided_logp(fit.rss[k], dof)
         s2, nll1 = self.profile(ext, state, k)
         new = state.with_axis(k, self.add(state.axes[k], s2))
         return base.Trial(self.name, axis, new, max(nll0 - nll1, 0.0), logp, nll1, f"chi2({dof})")
+
+    def _test_both(self, ext: base.Likelihood, state: base.ModelState) -> base.Trial:
+        """The stated σ² of both axes off by one common factor ρ (``σ² = ρ·σ²_stated``, one
+        parameter): the pooled statistic ``RSS_x/σ_x² + RSS_y/σ_y² ~ χ²(dof_x + dof_y)`` under
+        "both stated right", two-sided (the per-axis test's statistic, summed). Against a
+        common ρ it is the most powerful of the three noise-level tests: two axes each
+        ≈ 3.8 σ above their χ² mean give ≈ 5.4 σ pooled. When it is named, each axis keeps
+        its own σ² (profiled), so nothing downstream assumes the ratio common. Not
+        testable where either axis has a noise level already (its χ² is then fitted)."""
+        if any(self.present(st) for st in state.axes):
+            raise NotIdentifiableError("noise_level on both axes: an axis has its own already")
+        nll0 = ext.nll(state)
+        fit = ext.fit(state)
+        dof = sum(self._test_dof(ext, state, k) for k in range(2))
+        if dof < 4:
+            return base.Trial(self.name, BOTH, state, 0.0, 0.0, nll0, f"chi2({dof})")
+        logp = chi2_two_sided_logp(float(fit.rss[0] + fit.rss[1]), dof)
+        new = state
+        for k in range(2):
+            s2, _ = self.profile(ext, new, k)
+            new = new.with_axis(k, self.add(new.axes[k], s2))
+        nll1 = ext.nll(new)
+        return base.Trial(self.name, BOTH, new, max(nll0 - nll1, 0.0), logp, nll1,
+                          f"chi2({dof}), both axes pooled")
 
     def profile(self, ext: base.Likelihood, state: base.ModelState, k: int,
                 window: float | None = None) -> tuple[float, float]:

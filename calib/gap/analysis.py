@@ -44,7 +44,15 @@ from calib.gap.practical import (
     worse_signature,
 )
 from calib.gap.results import EffectEstimate, ExtendedModel, GapAnalysis
-from calib.gap.selection import FAMILY_ALPHA, candidate_list, initial_state, select, try_test
+from calib.gap.selection import (
+    FAMILY_ALPHA,
+    JOINT_NOISE,
+    candidate_list,
+    initial_state,
+    joint_noise,
+    select,
+    try_test,
+)
 from calib.gap.space import AxisSpace
 from calib.gap.sponges import review_sponges
 from calib.gap.step_swap import STEP, named_or_step
@@ -127,7 +135,8 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     state, sponges = review_sponges(ext, state, lattice, float(np.log(sel.alpha_step)))
 
     rep = Reporter(ext, state, lattice)
-    effects, reported = _practical(ext, rep, state, _named_effects(ext, rep, state, lattice))
+    effects, reported = _practical(ext, rep, state,
+                                   _named_effects(ext, rep, state, lattice, steps))
     before, after, resid_before, resid_after, fitted = _gaps(ext, rep, state, nominal)
     final = _final_model(ext, rep, state, gains)
     reviews = {k: review_walk(ext, state, k, rep.walk_input(k), rep.innov[k])
@@ -404,15 +413,18 @@ def _adequacy(battery: Battery, drifting: list[WalkReview], reviews: dict[int, W
     return out
 
 
-def _named_effects(ext: Extensions, rep: Reporter, state: ModelState, lattice: list[Lattice]
-                   ) -> list[EffectEstimate]:
-    """Each effect of the final model: estimate ± std, drop-one statistic, interval."""
+def _named_effects(ext: Extensions, rep: Reporter, state: ModelState, lattice: list[Lattice],
+                   steps: list[dict]) -> list[EffectEstimate]:
+    """Each effect of the final model: estimate ± std, drop-one statistic, interval (a noise
+    level named on both axes at once: the pair's pooled test, on each axis' line)."""
     effects = []
+    pair = joint_noise(state, steps)
     for name, axis in state.effects():
         e = effect(name)
         params, std = e.estimate(rep, axis)
         if e.lr_tested:
-            t = try_test(ext, state.without(name, axis), name, axis)
+            drop = JOINT_NOISE if pair and name == JOINT_NOISE[0] else (name, axis)
+            t = try_test(ext, state.without(*drop), *drop)
             stat, p = (t.lr, t.p_value) if t is not None else (float("nan"), float("nan"))
         else:  # the lattice test of step 0: number of levels, its p-value
             lat = lattice[AXES.index(axis)]

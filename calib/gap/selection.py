@@ -10,7 +10,8 @@ error rate:
    the noise variance of every later test).
 2. Every step — every remaining candidate (per axis: misalignment, nonlinearity_k2,
    cross_axis, bias_drift, bias_random_walk, saturation, noise_level, and with timing
-   lowpass_lag, lever_arm; both axes: tilt_offset) is fitted on top of the current model and
+   lowpass_lag, lever_arm; both axes: tilt_offset, and noise_level on both at once, the two
+   axes' χ² pooled) is fitted on top of the current model and
    tested by its likelihood ratio (reference distributions in :meth:`Extensions.test`). The
    candidate with the smallest p-value is added if ``p < α_step = family_alpha / m``, m the
    number of tests at the first step (testable candidates + 2 lattice tests); all nonlinear
@@ -40,6 +41,14 @@ error rate:
    the swap comparison and the adequacy battery's rival shapes
    (:mod:`calib.gap.adequacy`) keep the walk from explaining structured or unknown effects.
 4. One backward pass: an effect whose drop-one test no longer passes ``α_step`` is removed.
+
+Noise level on both axes. A stated σ² off by one factor on both axes (a datasheet density
+read at the wrong bandwidth) puts each axis' χ² a few σ above its mean; a lone axis must pass
+``α_step`` alone, the two pooled (``calib.effects.noise``) reach √2 times the z of either.
+The pooled candidate is one more test in m. Where one axis alone carries the excess, its own
+test is the stronger and is named first; the pooled one is then not testable (that axis' σ²
+is fitted). Named through the pooled test, the pair is kept or dropped together by the
+backward pass (:data:`JOINT_NOISE`).
 
 Noise level last. ``noise_level`` competes at every step, so a mere change of σ² is never
 taken by a noise-like structured candidate (random walk, low-pass). It cannot take the place of
@@ -72,7 +81,8 @@ from calib.stats.diagnostics import Lattice
 PER_AXIS_CANDIDATES: tuple[str, ...] = (
     "noise_level", "misalignment", "nonlinearity_k2", "cross_axis", "bias_drift",
     "bias_random_walk", "saturation", "lowpass_lag", "lever_arm")
-"""Per-axis extensions tested at every step (``tilt_offset`` is tested for both axes)."""
+"""Per-axis extensions tested at every step (``tilt_offset`` is tested for both axes, and
+``noise_level`` also on both at once: :data:`JOINT_NOISE`)."""
 
 FLEXIBLE: tuple[str, ...] = ("bias_random_walk",)
 """Flexible candidates: tested only after the structured ones, charged their effective dof."""
@@ -174,6 +184,7 @@ def candidate_list(run: RunData) -> tuple[list[tuple[str, str]], tuple[str, ...]
     needs_timing = () if run.timed else NEEDS_TIMING
     candidates = [(n, a) for n in PER_AXIS_CANDIDATES if n not in needs_timing for a in AXES]
     candidates.insert(2, ("tilt_offset", "both"))
+    candidates.append(("noise_level", "both"))
     return candidates, needs_timing
 
 
@@ -278,11 +289,30 @@ def _flexible_swap(ext: Extensions, state: ModelState, candidates: list[tuple[st
     return state
 
 
+JOINT_NOISE = ("noise_level", "both")
+"""The noise level of both axes tested at once (pooled χ², :mod:`calib.effects.noise`)."""
+
+
+def joint_noise(state: ModelState, steps: list[dict] | tuple[dict, ...]) -> bool:
+    """Whether the noise level of both axes was named at once (:data:`JOINT_NOISE`, the
+    pooled test) and is in ``state``: then it is tested, kept and reported as a pair."""
+    return [*JOINT_NOISE] in (s.get("added") for s in steps) and state.has(*JOINT_NOISE)
+
+
 def _backward(ext: Extensions, state: ModelState, log_alpha: float, steps: list[dict]
               ) -> ModelState:
-    """One backward pass: drop what the later additions made unnecessary."""
+    """One backward pass: drop what the later additions made unnecessary. A noise level
+    added on both axes at once is tested as it was added (the pooled test), the pair kept
+    or dropped together: each axis alone is the weaker test it was added for want of."""
+    joint_kept = False
+    if joint_noise(state, steps):
+        t = try_test(ext, state.without(*JOINT_NOISE), *JOINT_NOISE)
+        joint_kept = t is None or t.logp < log_alpha
+        if not joint_kept:
+            state = ext.refine(state.without(*JOINT_NOISE))
+            steps.append({"removed": [*JOINT_NOISE], "p_value": t.p_value})
     for name, axis in state.effects():
-        if not effect(name).lr_tested:
+        if not effect(name).lr_tested or (joint_kept and name == JOINT_NOISE[0]):
             continue
         t = try_test(ext, state.without(name, axis), name, axis)
         if t is not None and t.logp >= log_alpha:
