@@ -55,8 +55,12 @@ TARGET_GROWTH = 3.0
 
 
 def _env() -> dict[str, str]:
+    """BLAS at one thread, and MuJoCo's GL context off as the CLI sets it (``bench.cli``), so
+    the imports timed alone are the command's."""
     path = os.pathsep.join(filter(None, (str(REPO), os.environ.get("PYTHONPATH"))))
-    return dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=path)
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=path)
+    env.setdefault("MUJOCO_GL", "disable")
+    return env
 
 
 def _child_cpu() -> float:
