@@ -45,28 +45,44 @@ near 3.6·√2 = 5.1 (sd ≈ 1.08 at ρ = 1.08) against a two-sided per-step lev
 (α = 0.001 over 23 tests): Φ(0.93) ≈ 0.82."""
 
 
-def test_a_common_excess_below_each_axis_level_is_named_on_both():
+COUNTS_LSB = 0.5 * float(np.sqrt(STATED[1]))
+"""A counts log: readings rounded to 0.4 m/s² (half of y's σ, 0.8 of x's): quantization is
+named on both axes, and the sponge review (``calib.gap.sponges``) reviews the pair."""
+
+
+@pytest.mark.parametrize("counts", [False, True], ids=["float", "counts"])
+def test_a_common_excess_below_each_axis_level_is_named_on_both(counts):
     """Each axis 3.6 σ above its χ² mean, below the per-step level a lone axis must pass
     (near 4.1 σ). Over 12 runs the noise level is named on both axes in at least
     ``binom.ppf(0.001, 12, 0.75)`` of them, always through the pooled test, with the pair kept
     by the backward pass (each axis alone would fail its drop-one test) and reported with the
-    pooled test's statistic and p-value; more often than the
-    lone tests of the first step would both pass; and never on one axis only."""
+    pooled test's statistic and p-value; more often than the lone tests of the first step
+    would both pass; and never on one axis only. In counts, also beside quantization: the
+    sponge review pools the two axes as the selection did (reviewed one axis at a time, 5 of
+    the 9 pairs lost an axis)."""
     both = lone_both = 0
     for seed in range(COMMON_RUNS):
-        res = analyze_gap(_run(seed, COMMON_Z, COMMON_Z), STATED)
+        run = _run(seed, COMMON_Z, COMMON_Z)
+        if counts:
+            run = Ensayo(run.tita, np.round(run.datos / COUNTS_LSB) * COUNTS_LSB, run.t)
+        res = analyze_gap(run, STATED)
         first = {(n, a): p for n, a, _, p in res.steps[0]["candidates"]}
         alpha = res.criterion["alpha_step"]
         lone_both += all(first[("noise_level", a)] < alpha for a in "xy")
-        named = sorted(res.named)
+        named = sorted(n for n in res.named if n[0] == "noise_level")
         assert named in ([], [("noise_level", "x"), ("noise_level", "y")]), (seed, res.steps)
+        if counts:
+            assert {("quantization", a) for a in "xy"} <= set(res.named), res.named
+            sponges = [n for n in res.adequacy["sponges"] if n["name"] == "noise_level"]
+            assert len({n["statistic"] for n in sponges}) <= 1, sponges  # one pooled review
         if named:
             both += 1
             assert [*JOINT_NOISE] in _added(res), (seed, res.steps)
             assert not any("removed" in s for s in res.steps), (seed, res.steps)
             # each line states the test the pair was named and kept by: the pooled one
-            assert all(e.p_value < alpha for e in res.effects), (seed, res.effects)
-            assert res.effects[0].statistic == res.effects[1].statistic
+            noise = [e for e in res.effects if e.name == "noise_level"]
+            assert all(e.p_value < alpha for e in noise), (seed, noise)
+            assert noise[0].statistic == noise[1].statistic
     assert both >= stats.binom.ppf(0.001, COMMON_RUNS, COMMON_POWER), both
     assert both > lone_both, (both, lone_both)
 

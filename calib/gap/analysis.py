@@ -132,7 +132,8 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     steps = list(sel.steps)
     state = prefer_less_assuming(ext, sel.state, sel.candidates, steps)
     state = merge_tilt(ext, state, sel.candidates, steps)
-    state, sponges = review_sponges(ext, state, lattice, float(np.log(sel.alpha_step)))
+    state, sponges = review_sponges(ext, state, lattice, float(np.log(sel.alpha_step)),
+                                    joint=joint_noise(state, steps))
 
     rep = Reporter(ext, state, lattice)
     effects, reported = _practical(ext, rep, state,

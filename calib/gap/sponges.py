@@ -15,7 +15,8 @@ the readings are standardised by the *exact* moments of the structured effect
 than 4σ inside them, by the stated noise; :func:`calib.gap.quantization.quantized_moments`
 for a lattice), and its own test is made again on them at the selection's per-step α:
 
-* ``noise_level``: ``Σz² ~ χ²(n - p)`` two-sided;
+* ``noise_level``: ``Σz² ~ χ²(n - p)`` two-sided (named on both axes at once by the pooled
+  test: the two axes' Σz² pooled, the pair kept or dropped together);
 * ``bias_random_walk``: the walk's likelihood ratio on z (q profiled, the differenced local
   level of :mod:`calib.gap.walk`) against ``½χ²₀ + ½χ²₁``.
 
@@ -34,6 +35,7 @@ from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
 from calib.gap.estimates import Reporter
 from calib.gap.quantization import quantized_moments, rails
+from calib.gap.selection import JOINT_NOISE
 from calib.gap.walk import gls_nll, walk_nll
 from calib.stats.diagnostics import Lattice, chi2_two_sided_logp
 
@@ -65,15 +67,60 @@ def standardized(rep: Reporter, k: int) -> tuple[np.ndarray, str, np.ndarray | N
     return (y - mu) / np.sqrt(st.sigma2_eff), "the stated noise", None
 
 
+def _structured(st) -> list[str]:
+    """The structured effects of an axis state that change the reading's distribution."""
+    return [n for n, on in (("saturation", np.isfinite(st.limit)), ("quantization", st.lsb > 0))
+            if on]
+
+
+def _review_pair(ext: Extensions, state: ModelState, lattice: list[Lattice], log_alpha: float
+                 ) -> tuple[ModelState, list[dict]]:
+    """The noise level named on both axes at once (the pooled test,
+    :func:`calib.gap.selection.joint_noise`) reviewed as it was named: both removed, the
+    model refitted, each axis standardised (by its structured effect's moments, or by the
+    stated noise on an axis without one) and the two ``Σz²`` pooled, ``χ²(dof_x + dof_y)``
+    two-sided at the per-step α; kept or dropped together."""
+    reduced = state.without(*JOINT_NOISE)
+    beside = sorted({n for st in state.axes for n in _structured(st)})
+    try:
+        reduced = ext.refine(reduced)
+        rep = Reporter(ext, reduced, lattice)
+    except NotIdentifiableError as exc:
+        return state, [{"name": "noise_level", "axis": a, "beside": beside, "named": True,
+                        "statistic": None, "p_value": None,
+                        "reason": (f"noise_level on both axes kept beside {' and '.join(beside)}"
+                                   f": without it the model is not identifiable here ({exc})")}
+                       for a in AXES]
+    stat, dof = 0.0, 0
+    for k in range(2):
+        z, _, _ = standardized(rep, k)
+        stat += float(z @ z)
+        dof += max(z.size - ext.n_params(reduced, k), 1)
+    logp = chi2_two_sided_logp(stat, dof)
+    wins = logp < log_alpha
+    reason = (f"noise_level on both axes {'still wins' if wins else 'does not win'} after "
+              f"{' and '.join(beside)}: on the readings of both axes standardised (by the "
+              f"structured effects' exact moments, else the stated noise), pooled "
+              f"Σz²/dof = {stat / dof:.4g} (χ²({dof}), two-sided), p = {np.exp(logp):.3g} "
+              f"{'<' if wins else '≥'} the per-step α")
+    notes = [{"name": "noise_level", "axis": a, "beside": beside, "named": bool(wins),
+              "statistic": stat, "p_value": float(np.exp(logp)), "reason": reason} for a in AXES]
+    return (state if wins else reduced), notes
+
+
 def review_sponges(ext: Extensions, state: ModelState, lattice: list[Lattice],
-                   log_alpha: float) -> tuple[ModelState, list[dict]]:
-    """Apply the rule of the module docstring; returns the model and one note per decision."""
+                   log_alpha: float, joint: bool = False) -> tuple[ModelState, list[dict]]:
+    """Apply the rule of the module docstring; returns the model and one note per decision.
+    ``joint``: the noise level was named on both axes at once (the pooled test); beside a
+    structured effect on either axis it is reviewed as a pair (:func:`_review_pair`)."""
     notes: list[dict] = []
+    pair = joint and any(_structured(st) for st in state.axes)
+    if pair:
+        state, notes = _review_pair(ext, state, lattice, log_alpha)
     for k, axis in enumerate(AXES):
         st = state.axes[k]
-        structured = [n for n, on in (("saturation", np.isfinite(st.limit)),
-                                      ("quantization", st.lsb > 0)) if on]
-        sponges = [n for n in SPONGES if st.has(n)]
+        structured = _structured(st)
+        sponges = [n for n in SPONGES if st.has(n) and not (pair and n == "noise_level")]
         if not structured or not sponges:
             continue
         reduced = state
