@@ -83,6 +83,8 @@ def test_a_common_excess_below_each_axis_level_is_named_on_both(counts):
             noise = [e for e in res.effects if e.name == "noise_level"]
             assert all(e.p_value < alpha for e in noise), (seed, noise)
             assert noise[0].statistic == noise[1].statistic
+            assert all(e.pooled and e.to_dict()["pooled"] for e in noise)
+            assert "(both axes pooled)" in str(noise[0])
     assert both >= stats.binom.ppf(0.001, COMMON_RUNS, COMMON_POWER), both
     assert both > lone_both, (both, lone_both)
 
@@ -116,4 +118,25 @@ def test_an_excess_on_one_axis_is_named_there_only(seed):
     alone, and the pooled test is not asked again once y has its σ²."""
     res = analyze_gap(_run(seed, 0.0, 10.0), STATED)
     assert res.named == [("noise_level", "y")], res.steps
+    assert not res.effects[0].pooled and "pooled" not in res.effects[0].to_dict()
     assert [*JOINT_NOISE] not in _added(res)
+
+
+def test_the_command_says_the_pair_was_tested_pooled(tmp_path, capsys):
+    """``tiltbench gap`` on such a run (a course-format .mat): the text and ``gap.md`` say
+    "(both axes pooled)" after each axis' statistic, the JSON has ``"pooled": true``."""
+    import json
+
+    import scipy.io
+
+    from bench.cli import main
+
+    run = _run(1, COMMON_Z, COMMON_Z)  # named on both in the test above
+    path = tmp_path / "ensayo.mat"
+    scipy.io.savemat(path, {"tita": run.tita[:, None], "datos": run.datos})
+    noise = ",".join(f"{v:g}" for v in STATED)
+    assert main(["gap", str(path), "--noise-var", noise, "--report", str(tmp_path / "r")]) == 0
+    assert capsys.readouterr().out.count("(both axes pooled)") == 2
+    doc = json.loads((tmp_path / "r" / "gap.json").read_text())
+    assert [(e["axis"], e.get("pooled")) for e in doc["effects"]] == [("x", True), ("y", True)]
+    assert (tmp_path / "r" / "gap.md").read_text().count("(both axes pooled)") == 2

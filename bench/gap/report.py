@@ -21,7 +21,7 @@ from bench.sensors import SensorErrorModel
 from calib.conventions import AXES
 from calib.gap.confusions import design_hint
 from calib.gap.practical import gap_worse, worse_signature
-from calib.gap.results import gap_units
+from calib.gap.results import POOLED_WORDS, gap_units
 from calib.units import effect_units, format_estimate, format_p, format_stat, nest, with_units
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -466,8 +466,9 @@ class GapReport:
             params = ", ".join(
                 f"{k} = " + format_estimate(v, e["std"].get(k, float("nan")), units.get(k, ""))
                 for k, v in e["params"].items())
-            out.append(f"  {effect_name(e)}: {params}; statistic {format_stat(e['statistic'])}, "
-                       f"{format_p(e['p_value'])}"
+            pooled = POOLED_WORDS if e.get("pooled") else ""
+            out.append(f"  {effect_name(e)}: {params}; statistic {format_stat(e['statistic'])}"
+                       f"{pooled}, {format_p(e['p_value'])}"
                        + ("" if e["timing"] == "no" else f" [timing: {e['timing']}]"))
             if "params" in e.get("sysid", {}):
                 s = e["sysid"]

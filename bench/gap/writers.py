@@ -15,6 +15,7 @@ from bench.model import edit_tilt_table, load_spec
 from calib.conventions import AXES
 from calib.files.atomic import atomic_dir, write_text
 from calib.gap.confusions import design_hint
+from calib.gap.results import POOLED_WORDS
 from calib.units import format_p, format_stat
 
 PathLike = str | os.PathLike
@@ -84,7 +85,8 @@ def gap_markdown(report: GapReport) -> str:
             name = f"`{e['name']}`" + (" *(tentative)*" if e["tentative"] else "")
             p = format_p(e["p_value"]).removeprefix("p = ").removeprefix("p ")
             lines.append(f"| {name} | {e['axis']} | {est} | {sy} | "
-                         f"{format_stat(e['statistic'])} | {p} | {e['timing']} |")
+                         f"{format_stat(e['statistic'])}{POOLED_WORDS if e.get('pooled') else ''}"
+                         f" | {p} | {e['timing']} |")
     if d["reported"]:
         lines += ["", "## Seen, not named", "",
                   "Effects that change the fit by less than the practical threshold "

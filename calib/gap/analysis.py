@@ -431,7 +431,8 @@ def _named_effects(ext: Extensions, rep: Reporter, state: ModelState, lattice: l
             lat = lattice[AXES.index(axis)]
             stat, p = float(lat.levels), float(np.exp(lat.logp))
         interval = e.interval(rep, axis, params)
-        effects.append(EffectEstimate(name, axis, params, std, float(stat), float(p), interval))
+        effects.append(EffectEstimate(name, axis, params, std, float(stat), float(p), interval,
+                                      pooled=pair and name == JOINT_NOISE[0]))
     return effects
 
 

@@ -17,6 +17,10 @@ def _finite(x: float) -> float | None:
     return x if np.isfinite(x) else None
 
 
+POOLED_WORDS = " (both axes pooled)"
+"""Said after the statistic of a noise level named on both axes at once."""
+
+
 @dataclass(frozen=True)
 class EffectEstimate:
     """A named effect with its evidence.
@@ -36,16 +40,21 @@ class EffectEstimate:
     statistic: float
     p_value: float
     interval: dict = field(default_factory=dict, compare=False)
-    tentative: bool = False
-    """True when the final model fails adequacy (verdict "unexplained"): the effect is named,
-    but something not in the model remains, so its estimate may be biased by it."""
     """Optional 95 % intervals (key → (low, high)): noise_level, the χ²(dof) interval of σ²;
     bias_random_walk, the REML profile-likelihood interval of q (asymmetric; its std is
     (high - low)/(2·1.96), see :func:`q_uncertainty`)."""
+    tentative: bool = False
+    """True when the final model fails adequacy (verdict "unexplained"): the effect is named,
+    but something not in the model remains, so its estimate may be biased by it."""
+    pooled: bool = False
+    """True for a noise level named on both axes at once: ``statistic`` and ``p_value`` are
+    the pair's pooled test (both axes' χ² summed, :mod:`calib.effects.noise`), the same on
+    both axes' lines."""
 
     def to_dict(self) -> dict:
         """``{"name", "axis", "params", "std", "statistic", "p_value"}`` (documented JSON),
-        plus ``"interval": {key: [low, high]}`` only for an effect that has one (additive)."""
+        plus ``"interval": {key: [low, high]}`` only for an effect that has one, and
+        ``"pooled": true`` only for a noise level named on both axes at once (additive)."""
         out = {"name": self.name, "axis": self.axis,
                "params": {k: float(v) for k, v in self.params.items()},
                "std": {k: float(v) for k, v in self.std.items()},
@@ -54,6 +63,8 @@ class EffectEstimate:
                "tentative": bool(self.tentative)}
         if self.interval:
             out["interval"] = {k: [float(lo), float(hi)] for k, (lo, hi) in self.interval.items()}
+        if self.pooled:
+            out["pooled"] = True
         return out
 
     def __str__(self) -> str:
@@ -65,7 +76,7 @@ class EffectEstimate:
                          for k, v in self.params.items())
         ci = "".join(f"; 95% interval of {k}: [{lo:.6g}, {hi:.6g}] {units.get(k, '')}".rstrip()
                      for k, (lo, hi) in self.interval.items())
-        stat = format_stat(self.statistic)
+        stat = format_stat(self.statistic) + (POOLED_WORDS if self.pooled else "")
         return (f"{self.name} ({self.axis}): {vals}{ci}; statistic = {stat}, "
                 f"{format_p(self.p_value)}")
 
