@@ -130,6 +130,7 @@ def test_the_command_says_the_pair_was_tested_pooled(tmp_path, capsys):
     import scipy.io
 
     from bench.cli import main
+    from calib.units import missing_units
 
     run = _run(1, COMMON_Z, COMMON_Z)  # named on both in the test above
     path = tmp_path / "ensayo.mat"
@@ -139,4 +140,5 @@ def test_the_command_says_the_pair_was_tested_pooled(tmp_path, capsys):
     assert capsys.readouterr().out.count("(both axes pooled)") == 2
     doc = json.loads((tmp_path / "r" / "gap.json").read_text())
     assert [(e["axis"], e.get("pooled")) for e in doc["effects"]] == [("x", True), ("y", True)]
+    assert missing_units(doc) == []
     assert (tmp_path / "r" / "gap.md").read_text().count("(both axes pooled)") == 2
