@@ -114,9 +114,9 @@ class NoiseLevel(ProfiledEffect):
         return super().drop(state, axis)
 
     @staticmethod
-    def _test_dof(ext: base.Likelihood, state: base.ModelState, k: int) -> int:
-        """Degrees of freedom of axis k's whitened RSS: ``N − 1 − (p_k − 1)``."""
-        return ext.run.n - 1 - (ext.n_params(state, k) - 1)
+    def _dof(ext: base.Likelihood, state: base.ModelState, k: int) -> int:
+        """Degrees of freedom of axis k's whitened RSS under ``state``: ``N − p_k``."""
+        return ext.run.n - ext.n_params(state, k)
 
     def test(self, ext: base.Likelihood, state: base.ModelState, axis: str) -> base.Trial:
         if axis == BOTH:
@@ -124,7 +124,7 @@ class NoiseLevel(ProfiledEffect):
         k = AXES.index(axis)
         nll0 = ext.nll(state)
         fit = ext.fit(state)
-        dof = self._test_dof(ext, state, k)
+        dof = self._dof(ext, state, k)
         if dof < 2:  # σ² fitted would leave no degree of freedom (N = 3): not testable
             return base.Trial(self.name, axis, state, 0.0, 0.0, nll0, f"chi2({dof})")
         logp = chi2_two_sided_logp(fit.rss[k], dof)
@@ -144,7 +144,7 @@ class NoiseLevel(ProfiledEffect):
             raise NotIdentifiableError("noise_level on both axes: an axis has its own already")
         nll0 = ext.nll(state)
         fit = ext.fit(state)
-        dof = sum(self._test_dof(ext, state, k) for k in range(2))
+        dof = sum(self._dof(ext, state, k) for k in range(2))
         if dof < 4:
             return base.Trial(self.name, BOTH, state, 0.0, 0.0, nll0, f"chi2({dof})")
         logp = chi2_two_sided_logp(float(fit.rss[0] + fit.rss[1]), dof)
@@ -172,17 +172,13 @@ class NoiseLevel(ProfiledEffect):
         ls, val = base.minimise(f, np.log(guess) + np.linspace(-0.7, 0.7, 7))
         return float(np.exp(ls)), val
 
-    @staticmethod
-    def _dof(fit: base.FinalFit, k: int) -> int:
-        return fit.run.n - fit.ext.n_params(fit.state, k)
-
     def std(self, fit: base.FinalFit, k: int) -> float:
         """``σ̂²·sqrt(2/dof)`` (χ²(dof) variance)."""
-        return fit.state.axes[k].sigma2 * float(np.sqrt(2.0 / self._dof(fit, k)))
+        return fit.state.axes[k].sigma2 * float(np.sqrt(2.0 / self._dof(fit.ext, fit.state, k)))
 
     def interval(self, fit: base.FinalFit, axis: str, params: dict) -> dict:
         """``(dof·σ̂²/χ²_{0.975}, dof·σ̂²/χ²_{0.025})``."""
-        dof = self._dof(fit, AXES.index(axis))
+        dof = self._dof(fit.ext, fit.state, AXES.index(axis))
         lo, hi = dof * params["sigma2"] / stats.chi2.ppf([0.975, 0.025], dof)
         return {"sigma2": (float(lo), float(hi))}
 

@@ -423,8 +423,9 @@ def _named_effects(ext: Extensions, rep: Reporter, state: ModelState, lattice: l
     for name, axis in state.effects():
         e = effect(name)
         params, std = e.estimate(rep, axis)
+        pooled = pair and name == JOINT_NOISE[0]
         if e.lr_tested:
-            drop = JOINT_NOISE if pair and name == JOINT_NOISE[0] else (name, axis)
+            drop = JOINT_NOISE if pooled else (name, axis)
             t = try_test(ext, state.without(*drop), *drop)
             stat, p = (t.lr, t.p_value) if t is not None else (float("nan"), float("nan"))
         else:  # the lattice test of step 0: number of levels, its p-value
@@ -432,7 +433,7 @@ def _named_effects(ext: Extensions, rep: Reporter, state: ModelState, lattice: l
             stat, p = float(lat.levels), float(np.exp(lat.logp))
         interval = e.interval(rep, axis, params)
         effects.append(EffectEstimate(name, axis, params, std, float(stat), float(p), interval,
-                                      pooled=pair and name == JOINT_NOISE[0]))
+                                      pooled=pooled))
     return effects
 
 
