@@ -22,6 +22,9 @@ is consistent with noise.
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -295,6 +298,29 @@ def test_sysid_starting_far_off_converges_on_a_sweep():
     est, std = out[0]["params"]["delta"], out[0]["std"]["delta"]
     assert abs(est - 0.02) <= Z * std
     assert out[0]["cost_end"] < out[0]["cost_start"]
+
+
+def test_sysid_is_imported_without_its_html_report():
+    """The refinement imports ``mujoco.sysid`` without its report (plotly, matplotlib, jinja2:
+    ≈ 0.4 s), every name it uses is there, and the report can still be imported afterwards
+    (nothing is left blocked). In a fresh process: this one may have imported them already."""
+    code = (
+        "import sys\n"
+        "from bench.gap.sysid import SYSID_REPORT, preload_sysid\n"
+        "preload_sysid()\n"
+        "heavy = ('plotly', 'matplotlib', 'jinja2', SYSID_REPORT)\n"
+        "heavy = [m for m in heavy if m in sys.modules]\n"
+        "assert not heavy, heavy\n"
+        "import mujoco.sysid as s\n"
+        "names = ('SystemTrajectory', 'TimeSeries', 'ModelSequences', 'build_residual_fn',\n"
+        "         'Parameter', 'ParameterDict', 'optimize', 'calculate_intervals')\n"
+        "assert all(hasattr(s, n) for n in names), [n for n in names if not hasattr(s, n)]\n"
+        "import mujoco.sysid.report.defaults as r\n"
+        "assert callable(r.default_report)\n"
+        "print('ok')\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env={**os.environ, "MUJOCO_GL": "disable"}, timeout=120)
+    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr
 
 
 # ------------------------------------------------- one motion, read for every candidate
