@@ -117,7 +117,7 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
             analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate, family_alpha=alpha,
                                    sensor=sensor, drive_torque=lambda: first.result()[1])
         if _needs_sysid(analysis):
-            # the refinement's import (≈ 0.4 s, GIL-bound) while the re-simulation still runs
+            # the refinement's import (≈ 0.2 s, GIL-bound) while the re-simulation still runs
             # on the other thread, and only when the analysis named a physical effect
             from bench.gap.sysid import preload_sysid
 
