@@ -97,8 +97,9 @@ def first_order_recursion(a: np.ndarray, d: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    a, d : (n, …) coefficients (|a_k| ≤ 1 here: ``e^{-h_k/τ}``) and inputs; ``a`` may be
-        (n,) or broadcast along the other axes (one coefficient per step for every column).
+    a, d : (n, …) coefficients (|a_k| ≤ 1 here: ``e^{-h_k/τ}``, or a complex pole
+        ``e^{λ h_k}``) and inputs, real or complex; ``a`` may be (n,) or broadcast along the
+        other axes (one coefficient per step for every column); ``a_0`` is not used.
 
     Notes
     -----
@@ -107,14 +108,16 @@ def first_order_recursion(a: np.ndarray, d: np.ndarray) -> np.ndarray:
     A 1-D ``a`` (the callers' case) is one solve for every column; a broadcast ``a`` is solved
     column by column.
     """
-    d = np.asarray(d, dtype=float)
+    a = np.asarray(a)
+    dtype = np.result_type(a.dtype, np.asarray(d).dtype, float)
+    d = np.asarray(d, dtype=dtype)
     n, rest = d.shape[0], d.shape[1:]
     if n == 0:
         return d.copy()
-    rhs = np.array(d.reshape(n, -1), dtype=float, order="F", copy=True)
-    if np.ndim(a) == 1:  # one coefficient per step for every column: one solve
-        return _bidiagonal_solve(-np.asarray(a, dtype=float)[1:], rhs).reshape(n, *rest)
-    coef = np.broadcast_to(np.asarray(a, dtype=float), d.shape).reshape(n, -1)
+    rhs = np.array(d.reshape(n, -1), dtype=dtype, order="F", copy=True)
+    if a.ndim == 1:  # one coefficient per step for every column: one solve
+        return _bidiagonal_solve(-a.astype(dtype)[1:], rhs).reshape(n, *rest)
+    coef = np.broadcast_to(a.astype(dtype), d.shape).reshape(n, -1)
     out = np.empty_like(rhs)
     for j in range(rhs.shape[1]):
         out[:, j] = _bidiagonal_solve(-coef[1:, j], rhs[:, j:j + 1])[:, 0]

@@ -108,27 +108,42 @@ def test_order_columns_are_cos_and_sin_of_the_order_whatever_the_sequence():
     assert worst < 32 * 1e-15 * np.max(np.abs(th)) * 4  # ORDER_CHAIN products (space.py)
 
 
-def test_ring_columns_by_filter_equal_the_sum_over_stops():
-    """On a uniform grid the ringing columns come from a one-pole complex filter; they equal
-    the sum of each stop's damped cos and sin written out (``calib.gap.mechanisms``)."""
-    from dataclasses import replace
-
-    from calib.gap.mechanisms import _ring_columns, stops
+def test_stop_responses_by_filter_equal_the_sum_over_stops():
+    """The ringing and settling columns come from one-pole filters of the stops (a complex
+    pole for the ringing, a real one for the settling; one pole on a uniform grid, one per
+    step on a jittered one). They equal each stop's damped cos and sin, and its decaying
+    exponential, written out here over the whole run after the stop
+    (``calib.gap.mechanisms``)."""
+    from calib.gap.mechanisms import _ring_columns, settling_columns, stops
 
     n = 3000
-    t = np.arange(n) / 200.0
     th = np.zeros(n)
     for a, b, to in ((100, 300, 1.0), (900, 1000, -0.5), (1500, 1700, 2.0), (2400, 2450, 1.5)):
         th[a:b] = np.linspace(th[a - 1], to, b - a)
         th[b:] = to
-    run = RunData.build(th, np.zeros((n, 2)), G, t=t)
-    hold = stops(run)
-    assert len(hold) == 4 and run.h_uniform is not None
-    for f, zeta in ((4.0, 0.03), (0.7, 0.2), (20.0, 0.02)):
-        fast = _ring_columns(run, hold, f, zeta)
-        slow = _ring_columns(replace(run, h_uniform=None), hold, f, zeta)
-        np.testing.assert_allclose(fast, slow, atol=1e-6)  # RING_FLOOR: the loop's cut
-        assert np.max(np.abs(fast)) > 0.9
+    rng = np.random.default_rng(5)
+    uniform = np.arange(n) / 200.0
+    jittered = np.cumsum(rng.uniform(0.004, 0.006, n))
+    for t in (uniform, jittered):
+        run = RunData.build(th, np.zeros((n, 2)), G, t=t)
+        hold = stops(run)
+        assert len(hold) == 4 and (run.h_uniform is not None) == (t is uniform)
+        for f, zeta in ((4.0, 0.03), (0.7, 0.2), (20.0, 0.02)):
+            w = 2.0 * np.pi * f
+            ring, settle = np.zeros((n, 4)), np.zeros((n, 2))
+            for i, _, sign in hold:
+                tau = run.t[i - 1:] - run.t[i - 1]
+                env = np.exp(-zeta * w * tau)
+                c = env * np.cos(w * np.sqrt(1.0 - zeta**2) * tau)
+                si = env * np.sin(w * np.sqrt(1.0 - zeta**2) * tau)
+                ring[i - 1:] += np.column_stack([sign * c, sign * si, c, si])
+                e = np.exp(-(run.tcol[i - 1:] - run.tcol[i - 1]) / (1.0 / f))
+                settle[i - 1:] += np.column_stack([sign * e, e])
+            np.testing.assert_allclose(_ring_columns(run, hold, f, zeta), ring, rtol=0.0,
+                                       atol=1e-12)
+            np.testing.assert_allclose(settling_columns(run, hold, 1.0 / f), settle, rtol=0.0,
+                                       atol=1e-12)
+            assert np.max(np.abs(ring)) > 0.9
 
 
 @pytest.mark.parametrize("q", [0.0, 0.05])

@@ -10,7 +10,7 @@ is a catalog effect, so none is ever named).
     stop ``i`` (θ held after moving, ``s_i`` the sign of the move that stopped) the columns
     ``Σ_i s_i·e^{-ζω τ_i}·(cos ω_d τ_i, sin ω_d τ_i)`` and the same unsigned (``τ_i`` the time
     since the stop, from the stop on: the mode rings on through the hold and the next moves
-    until it has decayed; ``ω_d = ω·sqrt(1 - ζ²)``) are added to the final model
+    to the end of the run; ``ω_d = ω·sqrt(1 - ζ²)``) are added to the final model
     (GLS in its whitened space, :class:`calib.gap.space.AxisSpace`): ``ΔRSS ~ χ²(4)``,
     maximised over a grid of frequencies and damping ratios, Bonferroni over the grid. Reported:
     frequency, damping ratio, initial amplitude (the damped-mode fit on the segments after the
@@ -52,7 +52,7 @@ import numpy as np
 from calib import distributions as stats
 from calib.conventions import AXES
 from calib.effects import Extensions, ModelState
-from calib.filters import constant_recursion
+from calib.filters import constant_recursion, first_order_recursion
 from calib.gap.space import AxisSpace, Check, order_columns
 
 RING_FREQS = np.geomspace(0.5, 25.0, 24)
@@ -64,9 +64,6 @@ RING_DAMPING = (0.02, 0.05, 0.1, 0.2, 0.4)
 SETTLE_TIMES = np.geomspace(1e-3, 0.25, 16)
 """Time constants T of the settling grid, fractions of the run's span (those of at least two
 samples are used)."""
-
-RING_FLOOR = 1e-6
-"""A ring's columns stop where its envelope has decayed to this fraction of its start."""
 
 MIN_HOLD = 5
 """Fewest held samples after a stop for it to count."""
@@ -125,33 +122,34 @@ def stops(run) -> list[tuple[int, int, float]]:
     return out
 
 
+def _stop_kicks(run, hold: list[tuple[int, int, float]], dtype: type = float) -> np.ndarray:
+    """(N, 2): at each stop's last moving sample ``i − 1``, the sign of the move that stopped
+    (column 0) and 1 (column 1); zero elsewhere. The inputs of the stop responses."""
+    kicks = np.zeros((run.n, 2), dtype=dtype)
+    for i, _, s in hold:
+        kicks[i - 1] += (s, 1.0)
+    return kicks
+
+
 def _ring_columns(run, hold: list[tuple[int, int, float]], f: float, zeta: float
                   ) -> np.ndarray:
+    """(N, 4): ``Σ_i s_i·Re, Σ_i s_i·Im, Σ_i Re, Σ_i Im`` of ``e^{λτ_i}`` after each stop
+    (τ_i ≥ 0 the time since its last moving sample, λ = −ζω + iω_d, ω = 2πf,
+    ω_d = ω√(1 − ζ²)): the damped cos and sin of a mode rung by every stop.
+
+    ``e^{λτ}`` sampled at the run's times is the impulse response of the one-pole complex
+    filter ``y_k = p_k·y_{k−1} + x_k``, ``p_k = e^{λ(t_k − t_{k−1})}`` (the product of the
+    poles from a stop to sample k is ``e^{λτ}``): every stop at once, in O(N), on a uniform
+    grid (one pole) or not (a pole per step)."""
     w = 2.0 * np.pi * f
-    wd = w * np.sqrt(1.0 - zeta**2)
+    lam = complex(-zeta * w, w * np.sqrt(1.0 - zeta**2))
+    kicks = _stop_kicks(run, hold, complex)
     if run.h_uniform is not None:
-        # on a uniform grid e^{(-ζω + iω_d)τ} is the impulse response of the one-pole complex
-        # filter y_k = p·y_{k-1} + x_k, p = e^{(-ζω + iω_d)h}: every stop at once, in O(N)
-        pole = np.exp(complex(-zeta * w, wd) * run.h_uniform)
-        kicks = np.zeros((2, run.n), dtype=complex)
-        for i, _, s in hold:
-            kicks[0, i - 1] += s
-            kicks[1, i - 1] += 1.0
-        rings = constant_recursion(pole, kicks.T).T
-        return np.column_stack([rings[0].real, rings[0].imag, rings[1].real, rings[1].imag])
-    z = np.zeros((run.n, 4))
-    # the mode rings on through the next moves until it has decayed (to RING_FLOOR)
-    last = float(np.log(1.0 / RING_FLOOR) / (zeta * w))
-    for i, _, s in hold:
-        j = int(np.searchsorted(run.t, run.t[i - 1] + last, side="right"))
-        tau = run.t[i - 1:j] - run.t[i - 1]  # from the last moving sample
-        env = np.exp(-zeta * w * tau)
-        c, si = env * np.cos(wd * tau), env * np.sin(wd * tau)
-        z[i - 1:j, 0] += s * c
-        z[i - 1:j, 1] += s * si
-        z[i - 1:j, 2] += c
-        z[i - 1:j, 3] += si
-    return z
+        rings = constant_recursion(np.exp(lam * run.h_uniform), kicks)
+    else:
+        rings = first_order_recursion(np.exp(lam * np.diff(run.t, prepend=run.t[0])), kicks)
+    return np.column_stack([rings[:, 0].real, rings[:, 0].imag,
+                            rings[:, 1].real, rings[:, 1].imag])
 
 
 def ringing(space: AxisSpace, run, axis: str) -> Check | None:
@@ -186,15 +184,12 @@ def settle_times(run) -> np.ndarray:
 
 
 def settling_columns(run, hold: list[tuple[int, int, float]], tconst: float) -> np.ndarray:
-    """(N, 2): ``Σ_i s_i·e^{-τ_i/T}`` and ``Σ_i e^{-τ_i/T}`` after each stop (docstring)."""
-    z = np.zeros((run.n, 2))
+    """(N, 2): ``Σ_i s_i·e^{-τ_i/T}`` and ``Σ_i e^{-τ_i/T}`` after each stop (docstring; τ_i
+    in the run's time column): the one-pole filter of :func:`_ring_columns` with the real
+    pole ``e^{−(t_k − t_{k−1})/T}`` per step."""
     tc = run.tcol
-    for i, _, s in hold:
-        tau = tc[i - 1:] - tc[i - 1]
-        env = np.exp(-tau / tconst)
-        z[i - 1:, 0] += s * env
-        z[i - 1:, 1] += env
-    return z
+    return first_order_recursion(np.exp(-np.diff(tc, prepend=tc[0]) / tconst),
+                                 _stop_kicks(run, hold))
 
 
 def settling(space: AxisSpace, run, axis: str) -> Check | None:
