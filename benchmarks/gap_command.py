@@ -119,23 +119,33 @@ def time_floor(path: Path) -> dict:
 
 def _floor_cell(path: str) -> dict:
     """CPU seconds of importing what the command imports (the workflow, the analysis, the
-    report and ``mujoco.sysid``; GIL-bound: they cannot overlap one another), and the servo
-    replay's MuJoCo rollout alone (:func:`bench.gap.replay.record_motion`: every physics
-    step of the run at the model's timestep), with its step count."""
+    report and ``mujoco.sysid``; GIL-bound: they cannot overlap one another), of which
+    ``before_replay`` is what the replay's thread waits for (the modules of
+    :mod:`bench.gap.run`'s top and the reading of the file); the servo command
+    (:func:`bench.gap.replay.make_replay`) and the MuJoCo rollout alone
+    (:func:`bench.gap.replay.record_motion`: every physics step of the run at the model's
+    timestep), with its step count."""
     c0 = time.process_time()
+    import bench.gap.run  # noqa: F401  (what run_gap imports before its thread starts)
+    from calib.files.course import read_ensayo
+
+    ensayo = read_ensayo(path)
+    before_replay = time.process_time() - c0
+    c1 = time.process_time()
     from bench.gap.replay import make_replay, record_motion
     from bench.gap.report import GapReport  # noqa: F401
     from bench.gap.sysid import preload_sysid
-    from calib.files.course import read_ensayo
     from calib.gap import analyze_gap  # noqa: F401
 
     preload_sysid()  # as the command imports it (without its HTML report)
-    imports = time.process_time() - c0
-    ensayo = read_ensayo(path)
+    imports = before_replay + time.process_time() - c1
+    c0 = time.process_time()
     replay = make_replay(ensayo.tita, ensayo.t)
+    command = time.process_time() - c0
     c0 = time.process_time()
     record_motion(replay)
-    return {"imports": imports, "rollout": time.process_time() - c0, "steps": replay.nstep}
+    return {"imports": imports, "before_replay": before_replay, "servo": command,
+            "rollout": time.process_time() - c0, "steps": replay.nstep}
 
 
 def best(fn, arg, repeat: int) -> dict:
@@ -191,6 +201,11 @@ def main(argv: list[str] | None = None) -> int:
               f"{f['steps']} physics steps ({1e6 * f['rollout'] / max(f['steps'], 1):.2f} µs "
               f"a step), analysis {r['analysis']['cpu']:.2f} s: imports + analysis "
               f"{f['imports'] + r['analysis']['cpu']:.2f} s on the main thread")
+        path = f["before_replay"] + f["servo"] + f["rollout"]
+        print(f"{'':>7}  the replay's thread: {f['before_replay']:.2f} s before it can start "
+              f"(its modules, the file) + servo command {f['servo']:.2f} s + rollout "
+              f"{f['rollout']:.2f} s = {path:.2f} s, then the refinement and the extended "
+              f"readout: the command cannot end sooner")
     last = rows[max(rows)]["command"]
     print(f"steps of the command at N = {max(rows)}:")
     for line in last["steps"]:
