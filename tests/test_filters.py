@@ -46,7 +46,8 @@ def test_the_uniform_lowpass_agrees_with_its_general_form():
 
 def test_first_order_recursion_is_the_sequential_recursion():
     """A coefficient per step, shared by the columns (one solve) or not (column by column),
-    and 1-D: the loop ``x_k = a_k·x_{k-1} + d_k`` from ``x_{-1} = 0``."""
+    and 1-D, real or complex (a damped rotating pole, complex or real inputs): the loop
+    ``x_k = a_k·x_{k-1} + d_k`` from ``x_{-1} = 0``."""
     rng = np.random.default_rng(11)
     n = 3001
     d = rng.standard_normal((n, 3))
@@ -54,14 +55,16 @@ def test_first_order_recursion_is_the_sequential_recursion():
     a_cols = rng.uniform(0.2, 1.0, (n, 3))
 
     def loop(a, d):
-        x, acc = np.empty_like(d), np.zeros(d.shape[1:])
+        x, acc = np.empty(d.shape, np.result_type(a, d)), np.zeros(d.shape[1:])
         for k in range(d.shape[0]):
             acc = a[k] * acc + d[k]
             x[k] = acc
         return x
 
     shared = np.broadcast_to(a_step[:, None], d.shape)
-    for a, dd in ((shared, d), (a_cols, d), (a_step, d[:, 0])):
+    poles = a_step * np.exp(1j * rng.uniform(0.0, 0.3, n))  # a complex pole per step
+    kicks = d + 1j * rng.standard_normal(d.shape)
+    for a, dd in ((shared, d), (a_cols, d), (a_step, d[:, 0]), (poles, kicks), (poles, d)):
         ref = loop(a, dd)
         np.testing.assert_allclose(first_order_recursion(a, dd), ref, rtol=0.0,
                                    atol=1e-13 * max(1.0, float(np.max(np.abs(ref)))))
