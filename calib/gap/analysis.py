@@ -420,14 +420,18 @@ def _named_effects(ext: Extensions, rep: Reporter, state: ModelState, lattice: l
     level named on both axes at once: the pair's pooled test, on each axis' line)."""
     effects = []
     pair = joint_noise(state, steps)
+    drops: dict[tuple[str, str], tuple[float, float]] = {}  # the pair's test serves both lines
     for name, axis in state.effects():
         e = effect(name)
         params, std = e.estimate(rep, axis)
         pooled = pair and name == JOINT_NOISE[0]
         if e.lr_tested:
             drop = JOINT_NOISE if pooled else (name, axis)
-            t = try_test(ext, state.without(*drop), *drop)
-            stat, p = (t.lr, t.p_value) if t is not None else (float("nan"), float("nan"))
+            if drop not in drops:
+                t = try_test(ext, state.without(*drop), *drop)
+                drops[drop] = ((t.lr, t.p_value) if t is not None
+                               else (float("nan"), float("nan")))
+            stat, p = drops[drop]
         else:  # the lattice test of step 0: number of levels, its p-value
             lat = lattice[AXES.index(axis)]
             stat, p = float(lat.levels), float(np.exp(lat.logp))

@@ -73,6 +73,15 @@ def _structured(st) -> list[str]:
             if on]
 
 
+def _noise_sum(ext: Extensions, rep: Reporter, reduced: ModelState, k: int
+               ) -> tuple[np.ndarray, str, np.ndarray | None, float, int]:
+    """Axis k's readings standardised under ``reduced`` (:func:`standardized`: z, how, the
+    readings kept) with ``Σz²`` and its degrees of freedom ``n − p`` (at least 1): the
+    noise level's statistic, ``χ²(dof)`` under the model."""
+    z, how, kept = standardized(rep, k)
+    return z, how, kept, float(z @ z), max(z.size - ext.n_params(reduced, k), 1)
+
+
 def _review_pair(ext: Extensions, state: ModelState, lattice: list[Lattice], log_alpha: float
                  ) -> tuple[ModelState, list[dict]]:
     """The noise level named on both axes at once (the pooled test,
@@ -91,11 +100,8 @@ def _review_pair(ext: Extensions, state: ModelState, lattice: list[Lattice], log
                         "reason": (f"noise_level on both axes kept beside {' and '.join(beside)}"
                                    f": without it the model is not identifiable here ({exc})")}
                        for a in AXES]
-    stat, dof = 0.0, 0
-    for k in range(2):
-        z, _, _ = standardized(rep, k)
-        stat += float(z @ z)
-        dof += max(z.size - ext.n_params(reduced, k), 1)
+    sums = [_noise_sum(ext, rep, reduced, k)[3:] for k in range(2)]
+    stat, dof = sum(s for s, _ in sums), sum(d for _, d in sums)
     logp = chi2_two_sided_logp(stat, dof)
     wins = logp < log_alpha
     reason = (f"noise_level on both axes {'still wins' if wins else 'does not win'} after "
@@ -138,12 +144,11 @@ def review_sponges(ext: Extensions, state: ModelState, lattice: list[Lattice],
                                   f"without it the model is not identifiable here ({exc})")}
                       for n in sponges]
             continue
-        z, how, kept = standardized(rep, k)
-        dof = max(z.size - ext.n_params(reduced, k), 1)
+        z, how, kept, z2, dof = _noise_sum(ext, rep, reduced, k)
         keep = []
         for n in sponges:
             if n == "noise_level":
-                stat = float(z @ z)
+                stat = z2
                 logp = chi2_two_sided_logp(stat, dof)
                 what = f"Σz²/dof = {stat / dof:.4g} (χ²({dof}), two-sided)"
             else:
