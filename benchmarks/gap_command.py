@@ -16,9 +16,10 @@ refinement runs) and timed two ways, each in a fresh process:
 
 * **two parts alone** (CPU seconds, fresh process): importing what the command imports (the
   workflow, the analysis, the report, ``mujoco.sysid``: GIL-bound, so they add up on one
-  thread) and the servo replay's MuJoCo rollout (every physics step of the run at the model's
-  1 ms, one trajectory on one core) — with the analysis, what no scheduling of the command's
-  two threads can hide.
+  thread) and the servo replay (:func:`bench.gap.replay.record_motion`: MuJoCo's physics
+  steps that the samples read, each from its state on the interpolant, at the model's 1 ms;
+  of the run's steps) — with the analysis, the two threads' paths, of which the longer is
+  what no scheduling of the command can hide.
 
 Each is the best of ``--repeat`` runs. The table gives both, the ratio command / analysis and
 the growth from N = 20001 to 60001 (three times the samples: ≈ 3 when linear in N). The
@@ -122,9 +123,9 @@ def _floor_cell(path: str) -> dict:
     report and ``mujoco.sysid``; GIL-bound: they cannot overlap one another), of which
     ``before_replay`` is what the replay's thread waits for (the modules of
     :mod:`bench.gap.run`'s top and the reading of the file); the servo command
-    (:func:`bench.gap.replay.make_replay`) and the MuJoCo rollout alone
-    (:func:`bench.gap.replay.record_motion`: every physics step of the run at the model's
-    timestep), with its step count."""
+    (:func:`bench.gap.replay.make_replay`) and the MuJoCo steps alone
+    (:func:`bench.gap.replay.record_motion`: the physics steps the samples read, with their
+    servo commands), with their count and the run's."""
     c0 = time.process_time()
     import bench.gap.run  # noqa: F401  (what run_gap imports before its thread starts)
     from calib.files.course import read_ensayo
@@ -143,9 +144,10 @@ def _floor_cell(path: str) -> dict:
     replay = make_replay(ensayo.tita, ensayo.t)
     command = time.process_time() - c0
     c0 = time.process_time()
-    record_motion(replay)
+    motion = record_motion(replay)
     return {"imports": imports, "before_replay": before_replay, "servo": command,
-            "rollout": time.process_time() - c0, "steps": replay.nstep}
+            "rollout": time.process_time() - c0, "steps": int(motion.state.shape[0]),
+            "run_steps": replay.nstep}
 
 
 def best(fn, arg, repeat: int) -> dict:
@@ -194,18 +196,21 @@ def main(argv: list[str] | None = None) -> int:
               f"{c['wall'] / a['wall']:>13.1f}×{mark:>16}  "
               f"{','.join(c['effects']) or '-'}, {how}")
     print("two parts alone, in fresh processes (CPU s): the imports of the command (GIL-bound) "
-          "and the replay's MuJoCo rollout (one trajectory: one core)")
+          "and the replay's MuJoCo steps (the steps the samples read)")
     for n, r in rows.items():
         f = r["floor"]
-        print(f"{n:>7}  imports {f['imports']:.2f} s, rollout {f['rollout']:.2f} s for "
-              f"{f['steps']} physics steps ({1e6 * f['rollout'] / max(f['steps'], 1):.2f} µs "
-              f"a step), analysis {r['analysis']['cpu']:.2f} s: imports + analysis "
-              f"{f['imports'] + r['analysis']['cpu']:.2f} s on the main thread")
+        main_path = f["imports"] + r["analysis"]["cpu"]
+        print(f"{n:>7}  imports {f['imports']:.2f} s, replay {f['rollout']:.2f} s for "
+              f"{f['steps']} physics steps read of the run's {f['run_steps']} "
+              f"({1e6 * f['rollout'] / max(f['steps'], 1):.2f} µs a step read), analysis "
+              f"{r['analysis']['cpu']:.2f} s: imports + analysis {main_path:.2f} s on the main "
+              f"thread")
         path = f["before_replay"] + f["servo"] + f["rollout"]
         print(f"{'':>7}  the replay's thread: {f['before_replay']:.2f} s before it can start "
-              f"(its modules, the file) + servo command {f['servo']:.2f} s + rollout "
-              f"{f['rollout']:.2f} s = {path:.2f} s, then the refinement and the extended "
-              f"readout: the command cannot end sooner")
+              f"(its modules, the file) + servo replay {f['servo']:.2f} s + MuJoCo steps "
+              f"{f['rollout']:.2f} s = {path:.2f} s; the longer path "
+              f"({'main' if main_path >= path else 'replay'}, {max(main_path, path):.2f} s), "
+              f"then the refinement and the extended readout: the command cannot end sooner")
     last = rows[max(rows)]["command"]
     print(f"steps of the command at N = {max(rows)}:")
     for line in last["steps"]:

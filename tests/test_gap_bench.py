@@ -343,25 +343,110 @@ EDITED = TableEdits(misalignment=(0.012, -0.02), tilt_offset=0.004,
                     lever_arm=((0.25, -0.1), (-0.05, 0.3)))
 
 
+REPLAY_ROUNDING = 1e-10
+"""m/s², rad, rad/s: the replay read at its sample steps against the whole-run rollout of the
+same servo commands. Both pass through the same states and differ by rounding (≈ 2e-13
+measured); a step read from a state off by a fraction of a step (a velocity a half step
+out, a command for the wrong step) differs by ≈ 1e-3."""
+
+
 @pytest.mark.parametrize("rate", [100.0, 80.0])
 def test_recorded_motion_reads_an_edited_table_as_its_full_re_simulation(rate):
     """Site edits leave the motion unchanged: MuJoCo reading the edited table at the steps of
-    the nominal motion gives the sensordata of re-simulating the whole run with it, bit for
-    bit (holds, a jump, samples between physics steps), and every recorded step is
-    reproduced exactly; the lean motion model integrates the full model's states exactly."""
+    the nominal motion gives the sensordata and states of re-simulating the whole run with
+    it (holds, a jump, samples between physics steps) to rounding, and every recorded step
+    is reproduced exactly; the lean motion model integrates the full model's states
+    exactly."""
     tita, t = _stop_and_go(rate)
     replay = make_replay(tita, t)
     assert replay.mode == "sweep" and len(replay.jumps) == 2 and replay.holds
     assert [p.static for p in replay.pieces] == [False, True, False]
     motion = record_motion(replay, TableEdits())
+    assert motion.miss <= 1e-12
     model, _ = tilt_table(EDITED)
     sd, state, step_error = motion_sensordata(motion, model)
     sd_full, state_full = replay_sensordata([model], replay)
     assert step_error == 0.0
-    np.testing.assert_array_equal(sd, sd_full[0])
-    np.testing.assert_array_equal(state, state_full[0])
+    np.testing.assert_allclose(sd, sd_full[0], rtol=0, atol=REPLAY_ROUNDING)
+    np.testing.assert_allclose(state, state_full[0], rtol=0, atol=REPLAY_ROUNDING)
     if rate == 80.0:
         assert np.any(motion.weight > 0)
+
+
+def test_the_replay_passes_through_the_measured_angle_at_every_step():
+    """MuJoCo's whole-run rollout of the servo commands (discrete-time inverse dynamics of the
+    interpolant's steps) passes through the interpolant at every physics step, on a fast
+    reversal too: the position to 1e-12 rad, where the continuous-time torque of the same
+    motion leaves the table up to ≈ 9e-4 rad behind. So the steps the samples read, each
+    simulated from its own state, are those of the whole rollout."""
+    import mujoco
+    import mujoco.rollout
+
+    from bench.gap.replay import (
+        initial_state,
+        motion_model,
+        piece_command,
+        servo_command,
+        step_motion,
+    )
+
+    run = _dataset([], "updown", 4)
+    replay = make_replay(run.tita, run.t)
+    (piece,) = replay.pieces
+    model = motion_model()
+    steps = np.arange(piece.nstep)
+    m = step_motion(replay, piece, steps)
+    state0 = initial_state(model, replay.tita[0], piece.qvel0)
+    st, _ = mujoco.rollout.rollout(model, mujoco.MjData(model), state0[None, :],
+                                   piece_command(model, replay, piece).reshape(1, -1, 1),
+                                   nstep=piece.nstep)
+    assert np.max(np.abs(st[0, :, 1] - m.q_next)) <= 1e-12
+    assert np.max(np.abs(st[0, :, 2] - m.v_next)) <= 1e-9
+    # the interpolant itself at the steps, and the continuous-time command's lag beside it
+    assert np.max(np.abs(m.q[:: 10][: run.tita.size] - run.tita[: (piece.nstep + 9) // 10])) \
+        <= 1e-12
+    from bench.gap.replay import profile
+
+    th, om, al = profile(run.t, run.tita, run.t[0] + steps * piece.dt)
+    tau_cont = inverse_dynamics(model, th, om, al)
+    gain = float(model.actuator_gainprm[0, 0])
+    b0, b1, b2 = model.actuator_biasprm[0, :3]
+    lagged, _ = mujoco.rollout.rollout(model, mujoco.MjData(model), state0[None, :],
+                                       ((tau_cont - b0 - b1 * th - b2 * om) / gain
+                                        ).reshape(1, -1, 1), nstep=piece.nstep)
+    assert np.max(np.abs(lagged[0, :, 1] - m.q_next)) > 1e-4
+    assert servo_command(model, m.q, m.v, m.a).shape == (piece.nstep,)
+
+
+def test_a_table_that_cannot_move_as_commanded_is_rolled_out_and_said(monkeypatch):
+    """A table whose servo command is clamped (a limit no catalog edit adds) does not land
+    where the interpolant goes: record_motion sees the miss, rolls the piece out whole, and
+    the report says the replay did not follow θ (``replay_tracking``)."""
+    import bench.gap.replay as rp
+
+    lean = rp.motion_model
+
+    def clamped(table=None):
+        model = lean(table)
+        model.actuator_ctrllimited[0] = 1
+        model.actuator_ctrlrange[0] = (-0.2, 0.2)
+        return model
+
+    run = _dataset(["misalignment:x:delta=0.03"], "updown", 4)
+    replay = make_replay(run.tita, run.t)
+    assert np.max(np.abs(run.tita)) > 0.5
+    monkeypatch.setattr(rp, "motion_model", clamped)
+    motion = record_motion(replay)
+    assert motion.miss > rp.MISS_TOL
+    steps = replay.pieces[0].read_steps()
+    before, after, _ = rp._rolled_steps(clamped(), replay, replay.pieces[0], steps)
+    np.testing.assert_array_equal(motion.state, before)
+    np.testing.assert_array_equal(motion.after, after)
+    assert np.max(np.abs(motion.state[:, 1])) <= 0.2 + 0.05  # held near its clamp
+    rep = run_gap(run.ensayo(), NOISE, 9.8)
+    assert rep.tracking_failed() and rep.tracking_error > 0.1
+    assert rep.analysis.verdict == "explained" and rep.verdict == "unexplained"
+    assert [u["signature"] for u in rep.unexplained] == ["replay_tracking"]
 
 
 def test_recorded_static_poses_read_as_static_readings():

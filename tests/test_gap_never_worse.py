@@ -81,18 +81,23 @@ def test_a_replay_beyond_its_tracking_limit_is_not_an_explanation(report):
     assert not d["consistent_after"]
 
 
-def test_a_short_reversal_the_replay_cannot_follow_is_said():
-    """A real case: an up-then-down sweep of 12 s (1200 samples) reverses faster than the
-    servo replay follows (tracking error 1.06e-3 rad > 1e-3): the analysis' "explained" is
-    not presented as an explanation by the bench."""
+def test_a_short_reversal_is_followed_and_its_effect_explained():
+    """A real case: an up-then-down sweep of 12 s (1200 samples) reverses fast. The servo
+    command of continuous-time inverse dynamics left the replay 1.06e-3 rad behind (above the
+    1e-3 limit, so the named misalignment was not presented as an explanation); the
+    discrete-time command follows the measured θ to rounding, and the misalignment is the
+    explanation, its gap after consistent. (A table that cannot follow is still said:
+    ``tests/test_gap_bench.py::test_a_table_that_cannot_move_as_commanded_is_rolled_out_and_said``.)
+    """
     from bench.gap import run_gap
 
     th, y, t = synth("updown", 1200, np.random.default_rng(7),
                      [("misalignment", "x", {"delta": 0.03})])
     rep = run_gap(Ensayo(th, y, t, source="m"), STATED)
-    assert rep.analysis.verdict == "explained" and rep.tracking_failed()
-    assert rep.verdict == "unexplained"
-    assert [u["signature"] for u in rep.unexplained] == ["replay_tracking"]
+    assert rep.tracking_error <= 1e-12 and not rep.tracking_failed()
+    assert rep.verdict == "explained" and not rep.unexplained
+    assert [(e.name, e.axis) for e in rep.effects] == [("misalignment", "x")]
+    assert rep.to_dict()["consistent_after"]
 
 
 def test_nothing_named_nothing_to_confirm(report):

@@ -8,14 +8,21 @@ The rule (``docs/gap.md``):
 * **sweep** — timing and θ moving anywhere, stops included: the measured encoder angle is
   replayed through the table's position servo. A shape-preserving interpolant of θ(t)
   (:func:`profile`: a cubic spline per moving stretch, held stretches exactly flat, zero
-  slope where a stretch meets a hold) gives ω and α; inverse dynamics (``mj_inverse``)
-  gives the joint torque that produces that motion and the servo command that delivers it
-  (``u = (τ - b0 - b1·θ - b2·ω) / gain``, the actuator's affine law), so the simulated table
-  follows the measured encoder instead of lagging behind it (commanding the servo with the
-  measured angle itself would add the servo lag, ≈ 0.014 rad at 20 s/rev, a spurious tilt
-  offset) and holds still during the stops. The physics runs at the model timestep; the
-  sensors are read at the measured sample times. The largest encoder difference between
-  replay and data is reported (``replay.tracking_error``).
+  slope where a stretch meets a hold) is sampled at the physics steps; the step states are
+  those of MuJoCo's integrator passing through it (:func:`step_motion`: semi-implicit Euler,
+  ``v_{j+1} = v_j + h·a_j``, ``q_{j+1} = q_j + h·v_{j+1}``, so ``v_j = (q_j − q_{j−1})/h`` and
+  ``a_j = (v_{j+1} − v_j)/h``), and MuJoCo's discrete-time inverse dynamics
+  (``mj_inverse`` with ``mjENBL_INVDISCRETE``) gives the joint torque of each step and the
+  servo command that delivers it (``u = (τ - b0 - b1·θ - b2·ω) / gain``, the actuator's
+  affine law). The simulated table then passes through the interpolant at every step to
+  rounding (≈ 1e-15 rad), where the continuous-time torque left it up to ≈ 1e-3 rad behind on
+  a fast reversal; commanding the servo with the measured angle itself would add the servo
+  lag, ≈ 0.014 rad at 20 s/rev, a spurious tilt offset. The sensors are read at the measured
+  sample times (:func:`record_motion`): only the steps the samples read are stepped, each by
+  MuJoCo from its state, and where each lands is checked against the next state of the
+  interpolant (``Motion.miss``; a whole-run rollout of the same commands passes through the
+  same states, ``tests/test_gap_bench.py``). The largest encoder difference between replay and
+  data is reported (``replay.tracking_error``).
 
 **Jumps.** A step between two consecutive samples that no tilt table can make — a mean rate
 above :data:`MAX_TABLE_RATE` or a finite-difference acceleration at either end above
@@ -62,7 +69,13 @@ samples 10 ms apart needs ≥ 4·Δθ/Δt² (bang-bang): 0.39 rad (16 positions)
 
 TRACKING_LIMIT = 1e-3
 """rad: a replay whose encoder differs from the measured one by more did not follow θ (the
-report says so); the servo replay follows to ~1e-4 rad."""
+report says so); the servo replay passes through the interpolant at every step (≈ 1e-15
+rad), so only a table MuJoCo cannot move as commanded (a clamp, a limit) reaches it."""
+
+MISS_TOL = 1e-9
+"""rad: largest difference between where MuJoCo's step lands and the interpolant's next state
+(position, and velocity times the step) for the steps read alone to stand for the whole
+rollout (:func:`record_motion`); rounding gives ≈ 1e-15. Above it the run is rolled out."""
 
 MAX_REPLAY_STEPS = 2_000_000
 """Longest servo replay (physics steps, ≈ 2000 s at 1 kHz); longer runs use static poses,
@@ -73,26 +86,30 @@ which give the same readings for sites on the hinge axis (only a lever arm diffe
 class Piece:
     """Samples ``[first, stop)`` replayed continuously (a run without jumps is one piece).
 
-    control : (S,) servo command at the physics steps ``t[first] + j·dt``, rad; None for a
-        piece whose θ is constant (a static pose).
-    qvel0 : initial joint velocity, rad/s (the interpolant's rate at ``t[first]``).
+    nstep : physics steps of the piece, at ``t[first] + j·dt`` (0: θ is constant there, a
+        static pose). dt : the physics timestep, s.
+    qvel0 : joint velocity of the first step, rad/s: the interpolant's rate half a step
+        before ``t[first]`` (semi-implicit Euler's velocities sit half a step back).
     rows, weights : sample ``first + i`` is ``(1 - w_i)·step[rows_i] + w_i·step[rows_i + 1]``.
     """
 
     first: int
     stop: int
-    control: np.ndarray | None = None
+    nstep: int = 0
+    dt: float = 0.0
     qvel0: float = 0.0
     rows: np.ndarray | None = None
     weights: np.ndarray | None = None
 
     @property
     def static(self) -> bool:
-        return self.control is None
+        return self.nstep == 0
 
-    @property
-    def nstep(self) -> int:
-        return 0 if self.control is None else int(self.control.shape[0])
+    def read_steps(self) -> np.ndarray:
+        """The steps the samples read, sorted: ``rows``, and ``rows + 1`` where a sample falls
+        between two steps."""
+        return np.unique(np.r_[self.rows, np.minimum(self.rows + 1, self.nstep - 1)[
+            self.weights > 0]])
 
 
 @dataclass(frozen=True)
@@ -144,16 +161,24 @@ per-step ``mj_inverse`` loop is used."""
 
 
 def _inverse_loop(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
-                  alpha: np.ndarray) -> np.ndarray:
-    """Joint torque of motion (θ, ω, α) by ``mj_inverse`` at every entry (≈ 3 µs each)."""
+                  alpha: np.ndarray, discrete: bool = False) -> np.ndarray:
+    """Joint torque of motion (θ, ω, α) by ``mj_inverse`` at every entry (≈ 3 µs each);
+    ``discrete``: the inverse of the integrator's step (``mjENBL_INVDISCRETE``: the torque
+    whose step changes the velocity by ``α·dt``), else of the continuous-time dynamics."""
     data = mujoco.MjData(model)
     q = int(model.joint(TILT_JOINT).qposadr[0])
     v = int(model.joint(TILT_JOINT).dofadr[0])
     tau = np.empty_like(theta)
-    for j in range(theta.size):
-        data.qpos[q], data.qvel[v], data.qacc[v] = theta[j], omega[j], alpha[j]
-        mujoco.mj_inverse(model, data)
-        tau[j] = data.qfrc_inverse[v]
+    flags = int(model.opt.enableflags)
+    if discrete:
+        model.opt.enableflags = flags | int(mujoco.mjtEnableBit.mjENBL_INVDISCRETE)
+    try:
+        for j in range(theta.size):
+            data.qpos[q], data.qvel[v], data.qacc[v] = theta[j], omega[j], alpha[j]
+            mujoco.mj_inverse(model, data)
+            tau[j] = data.qfrc_inverse[v]
+    finally:
+        model.opt.enableflags = flags
     return tau
 
 
@@ -163,10 +188,10 @@ def _hinge_basis(theta: np.ndarray, omega: np.ndarray, alpha: np.ndarray) -> np.
 
 
 def hinge_inverse_fit(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
-                      alpha: np.ndarray) -> np.ndarray | None:
+                      alpha: np.ndarray, discrete: bool = False) -> np.ndarray | None:
     """Coefficients (6,) of the closed-form inverse dynamics of :func:`inverse_dynamics` over
     the run's (θ, ω, α), or None when the model is not of that form (checked on
-    ``mj_inverse``)."""
+    ``mj_inverse``; ``discrete`` as in :func:`_inverse_loop`)."""
     if model.nv != 1 or theta.size <= 48:
         return None
     rng = np.random.default_rng(0)  # probe states only; any draw gives the same coefficients
@@ -175,7 +200,7 @@ def hinge_inverse_fit(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarra
     a_max = max(1.0, float(np.max(np.abs(alpha))))
     th = theta[pick]
     om, al = rng.uniform(-w_max, w_max, 48), rng.uniform(-a_max, a_max, 48)
-    tau = _inverse_loop(model, th, om, al)
+    tau = _inverse_loop(model, th, om, al, discrete)
     basis = _hinge_basis(th, om, al)
     coef = np.linalg.lstsq(basis[:24], tau[:24], rcond=None)[0]
     miss = np.max(np.abs(basis[24:] @ coef - tau[24:]))
@@ -185,8 +210,10 @@ def hinge_inverse_fit(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarra
 
 
 def inverse_dynamics(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
-                     alpha: np.ndarray) -> np.ndarray:
-    """Joint torque τ (N·m) giving the hinge motion (θ rad, ω rad/s, α rad/s²), per entry.
+                     alpha: np.ndarray, discrete: bool = False) -> np.ndarray:
+    """Joint torque τ (N·m) giving the hinge motion (θ rad, ω rad/s, α rad/s²), per entry;
+    ``discrete``: the torque of one integrator step (MuJoCo's ``mjENBL_INVDISCRETE``: the
+    joint damping the Euler step takes implicitly adds ``dt·D`` to M below).
 
     ``mj_inverse`` (``qfrc_inverse``) called once per physics step is exact but a Python
     loop: ≈ 3 µs a step, 2 s for a 10-minute run at 1 kHz. MuJoCo has no batched inverse
@@ -205,18 +232,19 @@ def inverse_dynamics(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray
     limit…), the per-step loop is used.
     """
     theta, omega, alpha = (np.asarray(x, dtype=float) for x in (theta, omega, alpha))
-    coef = hinge_inverse_fit(model, theta, omega, alpha)
+    coef = hinge_inverse_fit(model, theta, omega, alpha, discrete)
     if coef is None:
-        return _inverse_loop(model, theta, omega, alpha)
+        return _inverse_loop(model, theta, omega, alpha, discrete)
     return _hinge_basis(theta, omega, alpha) @ coef
 
 
 def servo_command(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
                   alpha: np.ndarray) -> np.ndarray:
-    """Servo command giving joint motion (θ, ω, α): inverse dynamics + the actuator law."""
+    """Servo command of the steps from states (θ, ω) whose velocity changes by ``α·dt``:
+    discrete-time inverse dynamics (:func:`inverse_dynamics`) + the actuator law."""
     gain = float(model.actuator_gainprm[0, 0])
     b0, b1, b2 = (float(v) for v in model.actuator_biasprm[0, :3])
-    tau = inverse_dynamics(model, theta, omega, alpha)
+    tau = inverse_dynamics(model, theta, omega, alpha, discrete=True)
     return (tau - b0 - b1 * theta - b2 * omega) / gain
 
 
@@ -260,7 +288,8 @@ def find_jumps(tita: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 def profile(t: np.ndarray, tita: np.ndarray, ts: np.ndarray
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """θ, ω, α at times ``ts`` (sorted, within ``[t[0], t[-1]]``) from samples without jumps.
+    """θ, ω, α at times ``ts`` (sorted, from ``t[0]``) from samples without jumps; past
+    ``t[-1]`` the last stretch goes on (its cubic, or its hold).
 
     Shape-preserving where the table stops: held stretches (consecutive equal θ) are exactly
     flat (ω = α = 0); each moving stretch between holds is a cubic spline with zero slope at
@@ -289,22 +318,80 @@ def profile(t: np.ndarray, tita: np.ndarray, ts: np.ndarray
     return theta, omega, alpha
 
 
-def _piece(model: mujoco.MjModel, tita: np.ndarray, t: np.ndarray, first: int, stop: int
-           ) -> Piece:
+def _piece(dt: float, tita: np.ndarray, t: np.ndarray, first: int, stop: int) -> Piece:
     """Servo replay of samples ``[first, stop)`` (a static pose if θ is constant there)."""
     th, tt = tita[first:stop], t[first:stop]
     if np.all(th == th[0]):
         return Piece(first, stop)
-    dt = float(model.opt.timestep)
     pos = (tt - tt[0]) / dt
     rows = np.floor(pos + 1e-7).astype(int)
     weights = np.clip(pos - rows, 0.0, 1.0)
     weights[weights < 1e-7] = 0.0
-    nstep = int(rows[-1]) + 2
-    ts = np.minimum(tt[0] + dt * np.arange(nstep), tt[-1])
-    theta, omega, alpha = profile(tt, th, ts)
-    return Piece(first, stop, servo_command(model, theta, omega, alpha), float(omega[0]),
+    _, omega, alpha = profile(tt, th, tt[:1])
+    return Piece(first, stop, int(rows[-1]) + 2, dt, float(omega[0] - 0.5 * dt * alpha[0]),
                  rows, weights)
+
+
+@dataclass(frozen=True)
+class StepMotion:
+    """The replayed motion at some physics steps ``j`` of a piece (semi-implicit Euler through
+    the interpolant θ(t) sampled at the steps, ``q_j``).
+
+    q, v : (S,) state of step j: ``q_j`` rad, ``v_j = (q_j − q_{j−1})/dt`` rad/s (``v_0`` the
+        piece's ``qvel0``). a : (S,) ``(v_{j+1} − v_j)/dt``, rad/s², the acceleration the step
+        must make. q_next, v_next : (S,) the state after the step.
+    """
+
+    steps: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    q_next: np.ndarray
+    v_next: np.ndarray
+
+
+def step_motion(replay: Replay, piece: Piece, steps: np.ndarray) -> StepMotion:
+    """The states of steps ``steps`` (sorted) of a moving piece (:class:`StepMotion`).
+
+    The interpolant (:func:`profile`) at ``t[first] + j·dt`` is ``q_j`` (the last one or two
+    steps lie past the last sample: its last cubic goes on there, or its hold). MuJoCo's
+    Euler step ``v_{j+1} = v_j + dt·a_j``, ``q_{j+1} = q_j + dt·v_{j+1}`` passes through every
+    ``q_j`` when ``v_j`` and ``a_j`` are the differences above (``a_j`` is then the second
+    central difference of θ, which is θ''(t_j) exactly inside a cubic piece).
+    """
+    steps = np.asarray(steps, dtype=int)
+    dt, sl = piece.dt, slice(piece.first, piece.stop)
+    tt, th = replay.t[sl], replay.tita[sl]
+    need = np.unique(np.r_[steps - 1, steps, steps + 1])
+    need = need[need >= 0]
+    theta = profile(tt, th, tt[0] + dt * need)[0]
+
+    def at(j: np.ndarray) -> np.ndarray:
+        return theta[np.searchsorted(need, j)]
+
+    q, q_next = at(steps), at(steps + 1)
+    q_prev = np.where(steps > 0, at(np.maximum(steps - 1, 0)), q - dt * piece.qvel0)
+    v, v_next = (q - q_prev) / dt, (q_next - q) / dt
+    v[steps == 0] = piece.qvel0
+    return StepMotion(steps, q, v, (v_next - v) / dt, q_next, v_next)
+
+
+def step_states(model: mujoco.MjModel, time: np.ndarray, q: np.ndarray, v: np.ndarray
+                ) -> np.ndarray:
+    """Full-physics states (S, nstate) at time ``time`` s, angle ``q`` rad, rate ``v`` rad/s,
+    everything else at rest."""
+    out = np.tile(initial_state(model, 0.0), (q.size, 1))
+    # mjSTATE_FULLPHYSICS layout: [time, qpos (nq), qvel (nv), act, ...]
+    out[:, 0] = time
+    out[:, 1 + int(model.joint(TILT_JOINT).qposadr[0])] = q
+    out[:, 1 + model.nq + int(model.joint(TILT_JOINT).dofadr[0])] = v
+    return out
+
+
+def piece_command(model: mujoco.MjModel, replay: Replay, piece: Piece) -> np.ndarray:
+    """Servo command (nstep,) of every step of a moving piece (:func:`step_motion`)."""
+    m = step_motion(replay, piece, np.arange(piece.nstep))
+    return servo_command(model, m.q, m.v, m.a)
 
 
 def make_replay(tita: np.ndarray, t: np.ndarray | None) -> Replay:
@@ -335,13 +422,12 @@ def make_replay(tita: np.ndarray, t: np.ndarray | None) -> Replay:
         return Replay("static", tita, t, f"θ held at {np.unique(tita).size} positions, "
                       f"{jump_text}: static poses", holds=holds,
                       jumps=tuple(int(j) for j in jumps))
-    model, _ = tilt_table()
-    dt = float(model.opt.timestep)
+    dt = float(tilt_table()[0].opt.timestep)
     if (t[-1] - t[0]) / dt > MAX_REPLAY_STEPS:
         return Replay("static", tita, t, f"run of {t[-1] - t[0]:.4g} s exceeds the servo "
                       f"replay limit ({MAX_REPLAY_STEPS} steps): static poses", holds=holds,
                       jumps=tuple(int(j) for j in jumps))
-    pieces = tuple(_piece(model, tita, t, a, b) for a, b in spans)
+    pieces = tuple(_piece(dt, tita, t, a, b) for a, b in spans)
     reason = "sample times and θ moving: servo replay of the measured encoder angle"
     if holds:
         reason += f"; {holds} hold(s) kept still"
@@ -403,8 +489,9 @@ def replay_sensordata(models: Sequence[mujoco.MjModel], replay: Replay, threads:
         if p.static:
             continue
         state0 = initial_state(m0, replay.tita[p.first], p.qvel0)
+        control = piece_command(m0, replay, p)
         st, sd = mujoco.rollout.rollout(list(models), datas, state0[None, :],
-                                        p.control.reshape(1, -1, 1), nstep=p.nstep)
+                                        control.reshape(1, -1, 1), nstep=p.nstep)
         for i in range(nm):
             sd_out[i, p.first:p.stop] = sample_rows(p, sd[i])
             st_out[i, p.first:p.stop] = sample_rows(p, st[i])
@@ -449,8 +536,10 @@ class Motion:
     ----------
     state : (B, nstate) full-physics state before each recorded step.
     control : (B,) servo command of that step, rad (a static pose: the pose itself).
-    after : (B, nstate) state after the step, as the nominal run recorded it.
+    after : (B, nstate) state after the step, as MuJoCo's step of the nominal table lands.
     lo, hi, weight : (N,) sample i reads ``(1 - w_i)·step[lo_i] + w_i·step[hi_i]``.
+    miss : rad, the largest difference between where a recorded step lands and the
+        interpolant's next state (position, and velocity times the step; :data:`MISS_TOL`).
     """
 
     state: np.ndarray
@@ -459,6 +548,7 @@ class Motion:
     lo: np.ndarray
     hi: np.ndarray
     weight: np.ndarray
+    miss: float = 0.0
 
     @property
     def n(self) -> int:
@@ -475,14 +565,34 @@ def _static_steps(model: mujoco.MjModel, poses: np.ndarray) -> tuple[np.ndarray,
     return state0, st[:, 0]
 
 
-def record_motion(replay: Replay, table: TableEdits | None = None) -> Motion:
+def _rolled_steps(model: mujoco.MjModel, replay: Replay, piece: Piece, steps: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """State before and after, and command, of steps ``steps`` of a whole-piece rollout."""
+    control = piece_command(model, replay, piece)
+    state0 = initial_state(model, replay.tita[piece.first], piece.qvel0)
+    st, _ = mujoco.rollout.rollout(model, mujoco.MjData(model), state0[None, :],
+                                   control.reshape(1, -1, 1), nstep=piece.nstep)
+    st = st[0]
+    prior = np.vstack([state0[None, :], st[:-1]])  # the state step j starts from
+    return prior[steps], st[steps], control[steps]
+
+
+def record_motion(replay: Replay, table: TableEdits | None = None, threads: int = 2
+                  ) -> Motion:
     """Simulate the replayed motion once (:func:`motion_model` of ``table``'s physics).
 
     Static poses (a static replay, or the constant pieces of a sweep) are one step at rest
-    each; a moving piece is one rollout of its servo command, of which the steps the samples
-    read (and the step after, where a sample falls between two) are kept.
+    each. Of a moving piece only the steps the samples read are simulated (and the step
+    after, where a sample falls between two): each from its state of :func:`step_motion`
+    with its servo command, in one batched ``nstep = 1`` rollout over ``threads``. That is
+    the whole-piece rollout of the same commands at those steps, since that rollout passes
+    through the same states; each step's landing is checked against the next state
+    (``Motion.miss``), and a piece whose steps miss it by more than :data:`MISS_TOL` (a
+    table MuJoCo cannot move as commanded) is rolled out whole instead.
     """
     model = motion_model(table)
+    dofs = [1 + int(model.joint(TILT_JOINT).qposadr[0]),
+            1 + model.nq + int(model.joint(TILT_JOINT).dofadr[0])]
     n = replay.n
     lo, hi, weight = np.zeros(n, dtype=int), np.zeros(n, dtype=int), np.zeros(n)
     states, controls, afters = [], [], []
@@ -498,27 +608,40 @@ def record_motion(replay: Replay, table: TableEdits | None = None) -> Motion:
         controls.append(poses)
         lo[static_at] = hi[static_at] = inverse
         at = poses.size
-    for p in pieces:
-        if p.static:
-            continue
-        state0 = initial_state(model, replay.tita[p.first], p.qvel0)
-        st, _ = mujoco.rollout.rollout(model, mujoco.MjData(model), state0[None, :],
-                                       p.control.reshape(1, -1, 1), nstep=p.nstep)
-        st = st[0]
-        prior = np.vstack([state0[None, :], st[:-1]])  # the state step j starts from
-        nxt = np.minimum(p.rows + 1, p.nstep - 1)
-        steps, index = np.unique(np.r_[p.rows, nxt[p.weights > 0]], return_inverse=True)
-        states.append(prior[steps])
-        afters.append(st[steps])
-        controls.append(p.control[steps])
-        sl = slice(p.first, p.stop)
-        lo[sl] = at + index[:p.rows.size]
+    moving = [p for p in pieces if not p.static]
+    plans = []
+    for p in moving:
+        m = step_motion(replay, p, p.read_steps())
+        plans.append((m, step_states(model, m.steps * p.dt, m.q, m.v),
+                      servo_command(model, m.q, m.v, m.a)))
+    miss = 0.0
+    if moving:
+        state0 = np.vstack([plan[1] for plan in plans])
+        control = np.concatenate([plan[2] for plan in plans])
+        datas = [mujoco.MjData(model) for _ in range(max(1, min(threads, len(control) // 1000)))]
+        landed = mujoco.rollout.rollout(model, datas, state0, control.reshape(-1, 1, 1),
+                                        nstep=1)[0][:, 0]
+        bounds = np.cumsum([0] + [plan[0].steps.size for plan in plans])
+    for k, (p, (m, before, command)) in enumerate(zip(moving, plans, strict=True)):
+        after = landed[bounds[k]:bounds[k + 1]]
+        off = float(max(np.max(np.abs(after[:, dofs[0]] - m.q_next)),
+                        p.dt * np.max(np.abs(after[:, dofs[1]] - m.v_next))))
+        if not off <= MISS_TOL:
+            before, after, command = _rolled_steps(model, replay, p, m.steps)
+        miss = max(miss, off)
+        states.append(before)
+        afters.append(after)
+        controls.append(command)
+        steps, sl = m.steps, slice(p.first, p.stop)
+        lo[sl] = at + np.searchsorted(steps, p.rows)
+        between = p.weights > 0
         hi[sl] = lo[sl]
-        hi[np.arange(p.first, p.stop)[p.weights > 0]] = at + index[p.rows.size:]
+        hi[np.arange(p.first, p.stop)[between]] = at + np.searchsorted(
+            steps, np.minimum(p.rows + 1, p.nstep - 1)[between])
         weight[sl] = p.weights
         at += steps.size
     return Motion(np.vstack(states), np.concatenate(controls), np.vstack(afters), lo, hi,
-                  weight)
+                  weight, miss)
 
 
 def motion_sensordata(motion: Motion, model: mujoco.MjModel, threads: int = 2

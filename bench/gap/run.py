@@ -253,7 +253,8 @@ def _nominal_gap(replay: Replay, accel: AccelField, datos: np.ndarray, noise_var
     tita, t = replay.tita, replay.t
     a_nom = np.column_stack([accel.column(ACC_SENSORS[a])[:, 0] for a in AXES])
     enc = accel.column(ENCODER)[:, 0]
-    tracking = float(np.max(np.abs(enc - tita))) if replay.mode == "sweep" else 0.0
+    tracking = (max(float(np.max(np.abs(enc - tita))), accel.motion.miss)
+                if replay.mode == "sweep" else 0.0)
     params, residual, gap = {}, np.empty_like(datos), {}
     for k, ax in enumerate(AXES):
         bias, scale, r = fit_bias_scale(datos[:, k], a_nom[:, k])
