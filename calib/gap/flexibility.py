@@ -16,14 +16,16 @@ The 1 is the level (the bias, already in the nominal model); the walk's effectiv
 ``edf = Σ_k r_k (Σ_Δ⁻¹)_kk``, between 0 (q = 0) and N - 1 (q → ∞). For uniform steps and
 away from the ends ``(Σ_Δ⁻¹)_kk → 1/sqrt(r (r + 4σ²))``, so ``edf ≈ (N-1)·sqrt(r/(r + 4σ²))``.
 
-The diagonal of the inverse of the symmetric tridiagonal ``Σ_Δ`` comes from its forward and
-backward continued fractions (O(N), no inverse formed); no library routine returns only this
-diagonal of a banded inverse, hence the short recursion here.
+The diagonal of the inverse of the symmetric tridiagonal ``Σ_Δ`` comes from the pivots of its
+forward and backward LDLᵀ factorisations (O(N), no inverse formed: LAPACK ``dpttrf`` on the
+matrix and on its reversal); no library routine returns only this diagonal of a banded
+inverse, hence the one line that combines them here.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg import lapack
 
 
 def tridiagonal_inverse_diagonal(diag: np.ndarray, off: float) -> np.ndarray:
@@ -36,20 +38,27 @@ def tridiagonal_inverse_diagonal(diag: np.ndarray, off: float) -> np.ndarray:
     Notes
     -----
     Forward pivots ``f_0 = a_0``, ``f_i = a_i - b²/f_{i-1}``; backward ``g_{m-1} = a_{m-1}``,
-    ``g_i = a_i - b²/g_{i+1}``; then ``(A⁻¹)_ii = 1 / (f_i + g_i - a_i)``.
+    ``g_i = a_i - b²/g_{i+1}``; then ``(A⁻¹)_ii = 1 / (f_i + g_i - a_i)`` (Meurant, SIAM J.
+    Matrix Anal. Appl. 13, 1992, §2). The pivots are the D of ``A = LDLᵀ`` (LAPACK ``dpttrf``)
+    and of the same factorisation of A reversed.
     """
     a = np.asarray(diag, dtype=float)
     m = a.size
-    b2 = float(off) ** 2
-    f = np.empty(m)
-    g = np.empty(m)
-    f[0] = a[0]
-    for i in range(1, m):
-        f[i] = a[i] - b2 / f[i - 1]
-    g[-1] = a[-1]
-    for i in range(m - 2, -1, -1):
-        g[i] = a[i] - b2 / g[i + 1]
+    if m == 1:
+        return 1.0 / a
+    e = np.full(m - 1, float(off))
+    f = _pivots(a, e)
+    g = _pivots(a[::-1].copy(), e)[::-1]
     return 1.0 / (f + g - a)
+
+
+def _pivots(a: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """The pivots D of ``A = LDLᵀ`` for the tridiagonal (a, e), LAPACK ``dpttrf``."""
+    d, _, info = lapack.dpttrf(a, e)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"tridiagonal matrix not positive definite (dpttrf info "
+                                    f"{info})")
+    return d
 
 
 def walk_effective_dof(sigma2: float, q: float, dt_walk: np.ndarray) -> float:
