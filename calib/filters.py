@@ -62,7 +62,7 @@ def _bidiagonal_solve(sub: np.ndarray, d: np.ndarray) -> np.ndarray:
     forward substitution with the unit lower bidiagonal matrix whose subdiagonal is ``sub``
     (n-1,), LAPACK ``?tbtrs`` (the sequential recursion, in one compiled call)."""
     n = d.shape[0]
-    band = np.ones((2, n), dtype=d.dtype)
+    band = np.ones((2, n), dtype=d.dtype, order="F")  # LAPACK's layout: no copy
     band[1, :n - 1] = sub
     solve = lapack.ztbtrs if np.iscomplexobj(d) else lapack.dtbtrs
     x, info = solve(band, d, uplo="L", diag="U", overwrite_b=1)
