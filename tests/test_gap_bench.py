@@ -376,9 +376,10 @@ def test_recorded_motion_reads_an_edited_table_as_its_full_re_simulation(rate):
 def test_the_replay_passes_through_the_measured_angle_at_every_step():
     """MuJoCo's whole-run rollout of the servo commands (discrete-time inverse dynamics of the
     interpolant's steps) passes through the interpolant at every physics step, on a fast
-    reversal too: the position to 1e-12 rad, where the continuous-time torque of the same
-    motion leaves the table up to ≈ 9e-4 rad behind. So the steps the samples read, each
-    simulated from its own state, are those of the whole rollout."""
+    reversal too: the position to 1e-12 rad, where the torque of the interpolant's own ω and
+    α at the steps (the command before stop 53) leaves the table up to ≈ 9e-4 rad behind.
+    So the steps the samples read, each simulated from its own state, are those of the whole
+    rollout."""
     import mujoco
     import mujoco.rollout
 
@@ -402,7 +403,7 @@ def test_the_replay_passes_through_the_measured_angle_at_every_step():
                                    nstep=piece.nstep)
     assert np.max(np.abs(st[0, :, 1] - m.q_next)) <= 1e-12
     assert np.max(np.abs(st[0, :, 2] - m.v_next)) <= 1e-9
-    # the interpolant itself at the steps, and the continuous-time command's lag beside it
+    # the interpolant itself at the steps, and the lag of the command from its ω and α
     assert np.max(np.abs(m.q[:: 10][: run.tita.size] - run.tita[: (piece.nstep + 9) // 10])) \
         <= 1e-12
     from bench.gap.replay import profile

@@ -83,11 +83,12 @@ def test_a_replay_beyond_its_tracking_limit_is_not_an_explanation(report):
 
 def test_a_short_reversal_is_followed_and_its_effect_explained():
     """A real case: an up-then-down sweep of 12 s (1200 samples) reverses fast. The servo
-    command of continuous-time inverse dynamics left the replay 1.06e-3 rad behind (above the
-    1e-3 limit, so the named misalignment was not presented as an explanation); the
-    discrete-time command follows the measured θ to rounding, and the misalignment is the
-    explanation, its gap after consistent. (A table that cannot follow is still said:
-    ``tests/test_gap_bench.py::test_a_table_that_cannot_move_as_commanded_is_rolled_out_and_said``.)
+    command from the interpolant's own ω and α left the replay 1.06e-3 rad behind (above the
+    1e-3 limit, so the named misalignment was not presented as an explanation); the command
+    of the integrator's steps through θ follows the measured θ to rounding, and the
+    misalignment is the explanation, its gap after consistent. (A table that cannot follow
+    is still said: ``tests/test_gap_bench.py::
+    test_a_table_that_cannot_move_as_commanded_is_rolled_out_and_said``.)
     """
     from bench.gap import run_gap
 

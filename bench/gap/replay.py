@@ -15,14 +15,15 @@ The rule (``docs/gap.md``):
   (``mj_inverse`` with ``mjENBL_INVDISCRETE``) gives the joint torque of each step and the
   servo command that delivers it (``u = (τ - b0 - b1·θ - b2·ω) / gain``, the actuator's
   affine law). The simulated table then passes through the interpolant at every step to
-  rounding (≈ 1e-15 rad), where the continuous-time torque left it up to ≈ 1e-3 rad behind on
-  a fast reversal; commanding the servo with the measured angle itself would add the servo
-  lag, ≈ 0.014 rad at 20 s/rev, a spurious tilt offset. The sensors are read at the measured
-  sample times (:func:`record_motion`): only the steps the samples read are stepped, each by
-  MuJoCo from its state, and where each lands is checked against the next state of the
-  interpolant (``Motion.miss``; a whole-run rollout of the same commands passes through the
-  same states, ``tests/test_gap_bench.py``). The largest encoder difference between replay and
-  data is reported (``replay.tracking_error``).
+  rounding (≈ 1e-15 rad), where the torque of the interpolant's own ω and α at the steps
+  (not the integrator's differences) left it up to ≈ 1e-3 rad behind on a fast reversal;
+  commanding the servo with the measured angle itself would add the servo lag, ≈ 0.014 rad
+  at 20 s/rev, a spurious tilt offset. The sensors are read at the measured sample times
+  (:func:`record_motion`): only the steps the samples read are stepped, each by MuJoCo from
+  its state, and where each lands is checked against the next state of the interpolant
+  (``Motion.miss``; a whole-run rollout of the same commands passes through the same states,
+  ``tests/test_gap_bench.py``). The largest encoder difference between replay and data is
+  reported (``replay.tracking_error``).
 
 **Jumps.** A step between two consecutive samples that no tilt table can make — a mean rate
 above :data:`MAX_TABLE_RATE` or a finite-difference acceleration at either end above
@@ -212,8 +213,9 @@ def hinge_inverse_fit(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarra
 def inverse_dynamics(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
                      alpha: np.ndarray, discrete: bool = False) -> np.ndarray:
     """Joint torque τ (N·m) giving the hinge motion (θ rad, ω rad/s, α rad/s²), per entry;
-    ``discrete``: the torque of one integrator step (MuJoCo's ``mjENBL_INVDISCRETE``: the
-    joint damping the Euler step takes implicitly adds ``dt·D`` to M below).
+    ``discrete``: the torque of one integrator step (MuJoCo's ``mjENBL_INVDISCRETE``: where
+    the Euler step takes the joint damping implicitly it adds ``dt·D`` to M below; the tilt
+    table turns that off, ``eulerdamp="disable"``, so both agree on it).
 
     ``mj_inverse`` (``qfrc_inverse``) called once per physics step is exact but a Python
     loop: ≈ 3 µs a step, 2 s for a 10-minute run at 1 kHz. MuJoCo has no batched inverse
