@@ -117,8 +117,9 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
             analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate, family_alpha=alpha,
                                    sensor=sensor, drive_torque=lambda: first.result()[1])
         if _needs_sysid(analysis):
-            # the refinement's import (≈ 0.2 s, GIL-bound) while the re-simulation still runs
-            # on the other thread, and only when the analysis named a physical effect
+            # the refinement's import (0.1–0.2 s, GIL-bound), only when the analysis named a
+            # physical effect (the re-simulation, on the other thread, has mostly ended by now:
+            # since stop 53 it steps only where the samples read)
             from bench.gap.sysid import preload_sysid
 
             preload_sysid()
