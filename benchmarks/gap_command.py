@@ -122,8 +122,8 @@ def _floor_cell(path: str) -> dict:
     """CPU seconds of importing what the command imports (the workflow, the analysis, the
     report and ``mujoco.sysid``; GIL-bound: they cannot overlap one another), of which
     ``before_replay`` is what the replay's thread waits for (the modules of
-    :mod:`bench.gap.run`'s top and the reading of the file); the servo command
-    (:func:`bench.gap.replay.make_replay`) and the MuJoCo steps alone
+    :mod:`bench.gap.run`'s top and the reading of the file); the replay's plan
+    (:func:`bench.gap.replay.make_replay`: mode, pieces, jumps) and the MuJoCo steps alone
     (:func:`bench.gap.replay.record_motion`: the physics steps the samples read, with their
     servo commands), with their count and the run's."""
     c0 = time.process_time()
@@ -142,10 +142,10 @@ def _floor_cell(path: str) -> dict:
     imports = before_replay + time.process_time() - c1
     c0 = time.process_time()
     replay = make_replay(ensayo.tita, ensayo.t)
-    command = time.process_time() - c0
+    plan = time.process_time() - c0
     c0 = time.process_time()
     motion = record_motion(replay)
-    return {"imports": imports, "before_replay": before_replay, "servo": command,
+    return {"imports": imports, "before_replay": before_replay, "plan": plan,
             "rollout": time.process_time() - c0, "steps": int(motion.state.shape[0]),
             "run_steps": replay.nstep}
 
@@ -205,9 +205,9 @@ def main(argv: list[str] | None = None) -> int:
               f"({1e6 * f['rollout'] / max(f['steps'], 1):.2f} µs a step read), analysis "
               f"{r['analysis']['cpu']:.2f} s: imports + analysis {main_path:.2f} s on the main "
               f"thread")
-        path = f["before_replay"] + f["servo"] + f["rollout"]
+        path = f["before_replay"] + f["plan"] + f["rollout"]
         print(f"{'':>7}  the replay's thread: {f['before_replay']:.2f} s before it can start "
-              f"(its modules, the file) + servo replay {f['servo']:.2f} s + MuJoCo steps "
+              f"(its modules, the file) + its plan {f['plan']:.2f} s + MuJoCo steps "
               f"{f['rollout']:.2f} s = {path:.2f} s; the longer path "
               f"({'main' if main_path >= path else 'replay'}, {max(main_path, path):.2f} s), "
               f"then the refinement and the extended readout: the command cannot end sooner")
