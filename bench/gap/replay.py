@@ -372,21 +372,25 @@ def step_motion(replay: Replay, piece: Piece, steps: np.ndarray) -> StepMotion:
         return theta[np.searchsorted(need, j)]
 
     q, q_next = at(steps), at(steps + 1)
-    q_prev = np.where(steps > 0, at(np.maximum(steps - 1, 0)), q - dt * piece.qvel0)
-    v, v_next = (q - q_prev) / dt, (q_next - q) / dt
+    v, v_next = (q - at(np.maximum(steps - 1, 0))) / dt, (q_next - q) / dt
     v[steps == 0] = piece.qvel0
     return StepMotion(steps, q, v, (v_next - v) / dt, q_next, v_next)
 
 
-def step_states(model: mujoco.MjModel, time: np.ndarray, q: np.ndarray, v: np.ndarray
-                ) -> np.ndarray:
+def _hinge_columns(model: mujoco.MjModel) -> tuple[int, int]:
+    """The hinge's angle and rate columns in a full-physics state (``mjSTATE_FULLPHYSICS``
+    layout: ``[time, qpos (nq), qvel (nv), act, …]``)."""
+    return (1 + int(model.joint(TILT_JOINT).qposadr[0]),
+            1 + model.nq + int(model.joint(TILT_JOINT).dofadr[0]))
+
+
+def step_states(model: mujoco.MjModel, time: np.ndarray | float, q: np.ndarray,
+                v: np.ndarray | float) -> np.ndarray:
     """Full-physics states (S, nstate) at time ``time`` s, angle ``q`` rad, rate ``v`` rad/s,
     everything else at rest."""
     out = np.tile(initial_state(model, 0.0), (q.size, 1))
-    # mjSTATE_FULLPHYSICS layout: [time, qpos (nq), qvel (nv), act, ...]
-    out[:, 0] = time
-    out[:, 1 + int(model.joint(TILT_JOINT).qposadr[0])] = q
-    out[:, 1 + model.nq + int(model.joint(TILT_JOINT).dofadr[0])] = v
+    qcol, vcol = _hinge_columns(model)
+    out[:, 0], out[:, qcol], out[:, vcol] = time, q, v
     return out
 
 
@@ -479,9 +483,7 @@ def replay_sensordata(models: Sequence[mujoco.MjModel], replay: Replay, threads:
                                + [np.zeros(0, dtype=int)])
     if static_at.size:
         poses, inverse = np.unique(replay.tita[static_at], return_inverse=True)
-        state0 = np.tile(initial_state(m0, 0.0), (nm * poses.size, 1))
-        # mjSTATE_FULLPHYSICS layout: [time, qpos (nq), qvel (nv), act, ...]
-        state0[:, 1 + int(m0.joint(TILT_JOINT).qposadr[0])] = np.tile(poses, nm)
+        state0 = step_states(m0, 0.0, np.tile(poses, nm), 0.0)
         batch = [m for m in models for _ in poses]
         st, sd = mujoco.rollout.rollout(batch, datas, state0,
                                         np.tile(poses, nm).reshape(-1, 1, 1), nstep=1)
@@ -559,9 +561,7 @@ class Motion:
 
 def _static_steps(model: mujoco.MjModel, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """State before (at rest on each pose, servo target on it) and after one step."""
-    state0 = np.tile(initial_state(model, 0.0), (poses.size, 1))
-    # mjSTATE_FULLPHYSICS layout: [time, qpos (nq), qvel (nv), act, ...]
-    state0[:, 1 + int(model.joint(TILT_JOINT).qposadr[0])] = poses
+    state0 = step_states(model, 0.0, poses, 0.0)
     st, _ = mujoco.rollout.rollout(model, mujoco.MjData(model), state0,
                                    poses.reshape(-1, 1, 1), nstep=1)
     return state0, st[:, 0]
@@ -593,8 +593,7 @@ def record_motion(replay: Replay, table: TableEdits | None = None, threads: int 
     table MuJoCo cannot move as commanded) is rolled out whole instead.
     """
     model = motion_model(table)
-    dofs = [1 + int(model.joint(TILT_JOINT).qposadr[0]),
-            1 + model.nq + int(model.joint(TILT_JOINT).dofadr[0])]
+    qcol, vcol = _hinge_columns(model)
     n = replay.n
     lo, hi, weight = np.zeros(n, dtype=int), np.zeros(n, dtype=int), np.zeros(n)
     states, controls, afters = [], [], []
@@ -626,8 +625,8 @@ def record_motion(replay: Replay, table: TableEdits | None = None, threads: int 
         bounds = np.cumsum([0] + [plan[0].steps.size for plan in plans])
     for k, (p, (m, before, command)) in enumerate(zip(moving, plans, strict=True)):
         after = landed[bounds[k]:bounds[k + 1]]
-        off = float(max(np.max(np.abs(after[:, dofs[0]] - m.q_next)),
-                        p.dt * np.max(np.abs(after[:, dofs[1]] - m.v_next))))
+        off = float(max(np.max(np.abs(after[:, qcol] - m.q_next)),
+                        p.dt * np.max(np.abs(after[:, vcol] - m.v_next))))
         if not off <= MISS_TOL:
             before, after, command = _rolled_steps(model, replay, p, m.steps)
         miss = max(miss, off)
