@@ -12,7 +12,8 @@ refinement runs) and timed two ways, each in a fresh process:
   — start-up, imports, reading, analysis, re-simulation, sysid, JSON — wall clock
   (``time.perf_counter`` around the process) and CPU (user + system of the child);
 * **analysis**: the estimation side alone, one :func:`calib.gap.analyze_gap` call on the same
-  file in a fresh process (wall and CPU of the call), BLAS at one thread as the CLI sets it.
+  file in a fresh process (wall and CPU of the call), BLAS at one thread and the memory kept
+  where it was freed as the program sets them (:func:`bench.cli.keep_freed_memory`).
 
 * **two parts alone** (CPU seconds, fresh process): importing what the command imports (the
   workflow, the analysis, the report, ``mujoco.sysid``: GIL-bound, so they add up on one
@@ -45,6 +46,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from bench.cli import keep_freed_memory  # no domain module: numpy is not imported yet
 
 REPO = Path(__file__).resolve().parents[1]
 SIZES = (20001, 60001)
@@ -101,6 +104,7 @@ def time_analysis(path: Path) -> dict:
 
 
 def _analysis_cell(path: str) -> dict:
+    keep_freed_memory()  # the process settings of the command (before numpy is imported)
     from calib.files.course import read_ensayo
     from calib.gap import analyze_gap
 
@@ -126,6 +130,7 @@ def _floor_cell(path: str) -> dict:
     (:func:`bench.gap.replay.make_replay`: mode, pieces, jumps) and the MuJoCo steps alone
     (:func:`bench.gap.replay.record_motion`: the physics steps the samples read, with their
     servo commands), with their count and the run's."""
+    keep_freed_memory()
     c0 = time.process_time()
     import bench.gap.run  # noqa: F401  (what run_gap imports before its thread starts)
     from calib.files.course import read_ensayo
