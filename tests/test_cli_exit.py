@@ -22,11 +22,12 @@ REPO = Path(__file__).resolve().parents[1]
 def test_console_collects_then_freezes_and_returns_the_commands_code(monkeypatch):
     calls: list[str] = []
     monkeypatch.setattr(cli, "keep_freed_memory", lambda: calls.append("memory") or True)
+    monkeypatch.setattr(gc, "set_threshold", lambda *a: calls.append(("threshold", a[0])))
     monkeypatch.setattr(cli, "main", lambda: calls.append("main") or 3)
     monkeypatch.setattr(gc, "collect", lambda *a: calls.append("collect") or 0)
     monkeypatch.setattr(gc, "freeze", lambda: calls.append("freeze"))
     assert cli.console() == 3
-    assert calls == ["memory", "main", "collect", "freeze"]
+    assert calls == [("threshold", cli.GC_YOUNG), "memory", "main", "collect", "freeze"]
 
 
 def test_main_in_process_leaves_the_collector_alone(capsys):
