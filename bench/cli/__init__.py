@@ -156,9 +156,10 @@ def keep_freed_memory() -> bool:
     when freed, so the next array faults every page in again; and numpy asks for transparent
     huge pages on arrays of 4 MB or more (``madvise``), which on a kernel whose THP defrag is
     ``madvise`` compacts memory in the page fault. Measured on ``tiltbench gap`` at N = 60001
-    (2 cores, 5 alternating runs each): 0.56 → 0.37 s of system time and ≈ 0.3 s
-    of wall time. So: a fixed mmap threshold (:data:`MMAP_THRESHOLD`), the top of the heap kept
-    up to :data:`TRIM_THRESHOLD` (``mallopt``, glibc only: elsewhere nothing changes), and
+    (2 cores, old and new code alternating, 6 runs each): median 4.29 → 3.04 s wall, 1.27 →
+    0.36 s of system time (``docs/development.md``). So: a fixed mmap threshold
+    (:data:`MMAP_THRESHOLD`), the top of the heap kept up to :data:`TRIM_THRESHOLD`
+    (``mallopt``, glibc only: elsewhere nothing changes), and
     ``NUMPY_MADVISE_HUGEPAGE=0`` unless the environment sets it (read when numpy is imported,
     which no command has done yet). The peak memory is the same; it is returned at exit.
     The program alone does this (:func:`console`): library callers keep their process's.
