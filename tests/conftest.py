@@ -4,11 +4,22 @@ import os
 
 # One BLAS thread: numpy's and scipy's OpenBLAS pools otherwise fight (~10x slower LS).
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-from pathlib import Path
+import gc  # noqa: E402
+from pathlib import Path  # noqa: E402
 
-import matplotlib
-import pytest
-from hypothesis import settings
+from bench.cli import GC_YOUNG, keep_freed_memory  # noqa: E402  (no domain module)
+
+# The program's process settings (bench.cli.console), before numpy is imported: freed arrays
+# stay in the process and numpy asks for no huge pages, and the collector's youngest
+# generation runs every GC_YOUNG new objects. Measured on five test modules (test_angles,
+# test_sixface, test_region, test_multiposition3d, test_gap_switching), two alternating runs
+# each: 97.1 and 88.2 s → 89.0 and 83.2 s, system time 5.6 and 4.5 s → 2.2 and 1.5 s.
+gc.set_threshold(GC_YOUNG, *gc.get_threshold()[1:])
+keep_freed_memory()
+
+import matplotlib  # noqa: E402
+import pytest  # noqa: E402
+from hypothesis import settings  # noqa: E402
 
 matplotlib.use("Agg")
 
