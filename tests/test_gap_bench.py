@@ -387,6 +387,7 @@ def test_the_replay_passes_through_the_measured_angle_at_every_step():
         initial_state,
         motion_model,
         piece_command,
+        profile,
         servo_command,
         step_motion,
     )
@@ -406,15 +407,10 @@ def test_the_replay_passes_through_the_measured_angle_at_every_step():
     # the interpolant itself at the steps, and the lag of the command from its ω and α
     assert np.max(np.abs(m.q[:: 10][: run.tita.size] - run.tita[: (piece.nstep + 9) // 10])) \
         <= 1e-12
-    from bench.gap.replay import profile
-
     th, om, al = profile(run.t, run.tita, run.t[0] + steps * piece.dt)
-    tau_cont = inverse_dynamics(model, th, om, al)
-    gain = float(model.actuator_gainprm[0, 0])
-    b0, b1, b2 = model.actuator_biasprm[0, :3]
     lagged, _ = mujoco.rollout.rollout(model, mujoco.MjData(model), state0[None, :],
-                                       ((tau_cont - b0 - b1 * th - b2 * om) / gain
-                                        ).reshape(1, -1, 1), nstep=piece.nstep)
+                                       servo_command(model, th, om, al, discrete=False
+                                                     ).reshape(1, -1, 1), nstep=piece.nstep)
     assert np.max(np.abs(lagged[0, :, 1] - m.q_next)) > 1e-4
     assert servo_command(model, m.q, m.v, m.a).shape == (piece.nstep,)
 

@@ -241,12 +241,14 @@ def inverse_dynamics(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray
 
 
 def servo_command(model: mujoco.MjModel, theta: np.ndarray, omega: np.ndarray,
-                  alpha: np.ndarray) -> np.ndarray:
+                  alpha: np.ndarray, discrete: bool = True) -> np.ndarray:
     """Servo command of the steps from states (θ, ω) whose velocity changes by ``α·dt``:
-    discrete-time inverse dynamics (:func:`inverse_dynamics`) + the actuator law."""
+    discrete-time inverse dynamics (:func:`inverse_dynamics`) + the actuator law
+    (``discrete=False``: the continuous-time torque of (θ, ω, α), which a step does not
+    follow exactly)."""
     gain = float(model.actuator_gainprm[0, 0])
     b0, b1, b2 = (float(v) for v in model.actuator_biasprm[0, :3])
-    tau = inverse_dynamics(model, theta, omega, alpha, discrete=True)
+    tau = inverse_dynamics(model, theta, omega, alpha, discrete=discrete)
     return (tau - b0 - b1 * theta - b2 * omega) / gain
 
 
@@ -492,10 +494,7 @@ def replay_sensordata(models: Sequence[mujoco.MjModel], replay: Replay, threads:
     for p in pieces:
         if p.static:
             continue
-        state0 = initial_state(m0, replay.tita[p.first], p.qvel0)
-        control = piece_command(m0, replay, p)
-        st, sd = mujoco.rollout.rollout(list(models), datas, state0[None, :],
-                                        control.reshape(1, -1, 1), nstep=p.nstep)
+        _, _, st, sd = piece_rollout(models, datas, replay, p)
         for i in range(nm):
             sd_out[i, p.first:p.stop] = sample_rows(p, sd[i])
             st_out[i, p.first:p.stop] = sample_rows(p, st[i])
@@ -567,13 +566,24 @@ def _static_steps(model: mujoco.MjModel, poses: np.ndarray) -> tuple[np.ndarray,
     return state0, st[:, 0]
 
 
+def piece_rollout(models: Sequence[mujoco.MjModel], datas: Sequence[mujoco.MjData],
+                  replay: Replay, piece: Piece
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A moving piece rolled out whole on each of ``models`` (same size signature) from
+    (θ_first, ``qvel0``) with the servo commands of :func:`piece_command` (those of the
+    first model): start state (nstate,), commands (nstep,), states (M, nstep, nstate) and
+    sensordata (M, nstep, nsensordata) after each step."""
+    state0 = initial_state(models[0], replay.tita[piece.first], piece.qvel0)
+    control = piece_command(models[0], replay, piece)
+    st, sd = mujoco.rollout.rollout(list(models), list(datas), state0[None, :],
+                                    control.reshape(1, -1, 1), nstep=piece.nstep)
+    return state0, control, st, sd
+
+
 def _rolled_steps(model: mujoco.MjModel, replay: Replay, piece: Piece, steps: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """State before and after, and command, of steps ``steps`` of a whole-piece rollout."""
-    control = piece_command(model, replay, piece)
-    state0 = initial_state(model, replay.tita[piece.first], piece.qvel0)
-    st, _ = mujoco.rollout.rollout(model, mujoco.MjData(model), state0[None, :],
-                                   control.reshape(1, -1, 1), nstep=piece.nstep)
+    state0, control, st, _ = piece_rollout([model], [mujoco.MjData(model)], replay, piece)
     st = st[0]
     prior = np.vstack([state0[None, :], st[:-1]])  # the state step j starts from
     return prior[steps], st[steps], control[steps]

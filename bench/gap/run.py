@@ -119,7 +119,7 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
         if _needs_sysid(analysis):
             # the refinement's import (0.1–0.2 s, GIL-bound), only when the analysis named a
             # physical effect (the re-simulation, on the other thread, has mostly ended by now:
-            # since stop 53 it steps only where the samples read)
+            # it steps only where the samples read)
             from bench.gap.sysid import preload_sysid
 
             preload_sysid()
