@@ -7,10 +7,14 @@ STAMP  := $(VENV)/.installed
 
 .PHONY: demo test lint bench octave-check data clean
 
+# The project's bytecode is compiled at install, as pip does for a wheel (an editable install
+# leaves it to the first import, which machines with PYTHONDONTWRITEBYTECODE never write: each
+# command then compiles the ~110 modules it imports, ≈ 0.3 s of `tiltbench gap`).
 $(STAMP): pyproject.toml setup.py
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e ".[rrd,test]"
+	$(BIN)/python -m compileall -q bench calib > /dev/null
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -83,6 +83,20 @@ MAX_REPLAY_STEPS = 2_000_000
 which give the same readings for sites on the hinge axis (only a lever arm differs)."""
 
 
+def _step_union(*steps: np.ndarray) -> np.ndarray:
+    """The sorted distinct non-negative step numbers among ``steps`` (integer arrays).
+
+    A mark per step, not ``np.unique``: numpy 2.4 finds distinct integers with a hash table
+    and then sorts them, 0.12 s for the 3·10⁵ steps of a 60001-sample sweep, against 1.3 ms
+    for these marks (the steps are at most the run's, a few 10⁵)."""
+    if not any(s.size for s in steps):
+        return np.zeros(0, dtype=int)
+    mark = np.zeros(max(int(s.max()) for s in steps if s.size) + 1, dtype=bool)
+    for s in steps:
+        mark[s[s >= 0]] = True
+    return np.flatnonzero(mark)
+
+
 @dataclass(frozen=True)
 class Piece:
     """Samples ``[first, stop)`` replayed continuously (a run without jumps is one piece).
@@ -109,8 +123,8 @@ class Piece:
     def read_steps(self) -> np.ndarray:
         """The steps the samples read, sorted: ``rows``, and ``rows + 1`` where a sample falls
         between two steps."""
-        return np.unique(np.r_[self.rows, np.minimum(self.rows + 1, self.nstep - 1)[
-            self.weights > 0]])
+        return _step_union(self.rows, np.minimum(self.rows + 1, self.nstep - 1)[
+            self.weights > 0])
 
 
 @dataclass(frozen=True)
@@ -366,8 +380,7 @@ def step_motion(replay: Replay, piece: Piece, steps: np.ndarray) -> StepMotion:
     steps = np.asarray(steps, dtype=int)
     dt, sl = piece.dt, slice(piece.first, piece.stop)
     tt, th = replay.t[sl], replay.tita[sl]
-    need = np.unique(np.r_[steps - 1, steps, steps + 1])
-    need = need[need >= 0]
+    need = _step_union(steps - 1, steps, steps + 1)
     theta = profile(tt, th, tt[0] + dt * need)[0]
 
     def at(j: np.ndarray) -> np.ndarray:
