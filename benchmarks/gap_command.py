@@ -17,10 +17,11 @@ refinement runs) and timed two ways, each in a fresh process:
 
 * **two parts alone** (CPU seconds, fresh process): importing what the command imports (the
   workflow, the analysis, the report, ``mujoco.sysid``: GIL-bound, so they add up on one
-  thread) and the servo replay (:func:`bench.gap.replay.record_motion`: MuJoCo's physics
+  thread) and the servo replay (:func:`bench.gap.readout.record_field`: MuJoCo's physics
   steps that the samples read, each from its state on the interpolant, at the model's 1 ms;
-  of the run's steps) — with the analysis, the two threads' paths, of which the longer is
-  what no scheduling of the command can hide.
+  of the run's steps, with the probe accelerometers read in the same steps) — with the
+  analysis, the two threads' paths, of which the longer is what no scheduling of the command
+  can hide.
 
 The project's modules are compiled to bytecode first (``compileall``, as ``make`` does at
 install and pip for a wheel): on a machine with ``PYTHONDONTWRITEBYTECODE`` an editable
@@ -133,8 +134,8 @@ def _floor_cell(path: str) -> dict:
     ``before_replay`` is what the replay's thread waits for (the modules of
     :mod:`bench.gap.run`'s top and the reading of the file); the replay's plan
     (:func:`bench.gap.replay.make_replay`: mode, pieces, jumps) and the MuJoCo steps alone
-    (:func:`bench.gap.replay.record_motion`: the physics steps the samples read, with their
-    servo commands), with their count and the run's."""
+    (:func:`bench.gap.readout.record_field`: the physics steps the samples read, with their
+    servo commands and the probes read in them), with their count and the run's."""
     keep_freed_memory()
     c0 = time.process_time()
     import bench.gap.run  # noqa: F401  (what run_gap imports before its thread starts)
@@ -143,7 +144,8 @@ def _floor_cell(path: str) -> dict:
     ensayo = read_ensayo(path)
     before_replay = time.process_time() - c0
     c1 = time.process_time()
-    from bench.gap.replay import make_replay, record_motion
+    from bench.gap.readout import record_field
+    from bench.gap.replay import make_replay
     from bench.gap.report import GapReport  # noqa: F401
     from bench.gap.sysid import preload_sysid
     from calib.gap import analyze_gap  # noqa: F401
@@ -154,7 +156,7 @@ def _floor_cell(path: str) -> dict:
     replay = make_replay(ensayo.tita, ensayo.t)
     plan = time.process_time() - c0
     c0 = time.process_time()
-    motion = record_motion(replay)
+    motion = record_field(replay).motion
     return {"imports": imports, "before_replay": before_replay, "plan": plan,
             "rollout": time.process_time() - c0, "steps": int(motion.state.shape[0]),
             "run_steps": replay.nstep}

@@ -38,6 +38,7 @@ from bench.gap.readout import (
     accel_field,
     readout,
     readout_error,
+    record_field,
 )
 from bench.gap.replay import (
     MOTION_TOL,
@@ -419,20 +420,25 @@ def test_a_table_that_cannot_move_as_commanded_is_rolled_out_and_said(monkeypatc
     """A table whose servo command is clamped (a limit no catalog edit adds) does not land
     where the interpolant goes: record_motion sees the miss, rolls the piece out whole, and
     the report says the replay did not follow θ (``replay_tracking``)."""
+    import bench.gap.readout as ro
     import bench.gap.replay as rp
 
-    lean = rp.motion_model
+    def clamp(build):
+        def clamped(table=None):
+            model = build(table)
+            model.actuator_ctrllimited[0] = 1
+            model.actuator_ctrlrange[0] = (-0.2, 0.2)
+            return model
+        return clamped
 
-    def clamped(table=None):
-        model = lean(table)
-        model.actuator_ctrllimited[0] = 1
-        model.actuator_ctrlrange[0] = (-0.2, 0.2)
-        return model
-
+    clamped = clamp(rp.motion_model)
     run = _dataset(["misalignment:x:delta=0.03"], "updown", 4)
     replay = make_replay(run.tita, run.t)
     assert np.max(np.abs(run.tita)) > 0.5
+    # the table's physics, both where the motion is planned and where the workflow steps it
+    # with its probes (bench.gap.readout.record_field)
     monkeypatch.setattr(rp, "motion_model", clamped)
+    monkeypatch.setattr(ro, "probe_model", clamp(ro.probe_model))
     motion = record_motion(replay)
     assert motion.miss > rp.MISS_TOL
     steps = replay.pieces[0].read_steps()
@@ -479,6 +485,28 @@ def test_kinematic_readout_equals_mujoco_sensors(edits):
         np.testing.assert_allclose(readout(field, model), sd, rtol=0, atol=READOUT_TOL)
     if edits.cutoff[0]:
         assert np.max(np.abs(sd[:, sensor_slice(model, ACC_SENSORS["x"]).start])) == 6.0
+
+
+def test_the_field_recorded_with_the_motion_is_the_field_read_after_it():
+    """``record_field`` steps the probe model while recording the motion (one MuJoCo pass):
+    the motion and the field are, bit for bit, those of recording the motion on the lean
+    model and reading the probes along it (``accel_field``), on static poses, a sweep, and a
+    sweep with holds (static and moving pieces), nominal and with gravity edited."""
+    # holds reached by jumps (unsampled moves: static pieces), then a sampled ramp (moving)
+    holds = np.concatenate([np.repeat([-1.0, 0.5, 1.5], 40), np.linspace(1.5, 0.0, 150)])
+    sweep = _dataset([], "sine", 3)
+    for replay in (make_replay(np.linspace(-3.0, 9.0, 301), None),
+                   make_replay(sweep.tita, sweep.t),
+                   make_replay(holds, np.arange(holds.size) / 100.0)):
+        for table in (TableEdits(), TableEdits(g=9.79)):
+            one, two = record_field(replay, table), accel_field(record_motion(replay, table),
+                                                                table)
+            for name in ("origin", "gradient", "sensordata", "state"):
+                np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
+            for name in ("state", "control", "after", "lo", "hi", "weight"):
+                np.testing.assert_array_equal(getattr(one.motion, name),
+                                              getattr(two.motion, name))
+    assert {p.static for p in replay.pieces} == {True, False}
 
 
 def test_readout_refuses_a_sensor_it_does_not_reproduce():

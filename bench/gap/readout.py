@@ -28,7 +28,7 @@ from dataclasses import dataclass, field, replace
 import mujoco
 import numpy as np
 
-from bench.gap.replay import Motion, motion_sensordata
+from bench.gap.replay import Motion, Replay, motion_sensordata, record_motion_read
 from bench.model import TABLE_BODY, TableEdits, edit_tilt_table, load_spec, tilt_table
 
 PROBE_SITES = ("probe_o", "probe_x", "probe_y", "probe_z")
@@ -113,6 +113,27 @@ def accel_field(motion: Motion, table: TableEdits | None = None, threads: int = 
     ``nstep = 1`` rollout, :func:`bench.gap.replay.motion_sensordata`)."""
     model = probe_model(table)
     sd, state, _ = motion_sensordata(motion, model, threads)
+    return _field(model, motion, sd, state)
+
+
+def record_field(replay: Replay, table: TableEdits | None = None, threads: int = 2
+                 ) -> AccelField:
+    """``accel_field(record_motion(replay, table), table)`` in one rollout: the motion's
+    steps are stepped on :func:`probe_model` and its sensordata kept
+    (:func:`bench.gap.replay.record_motion_read`; the same states and sensordata bit for
+    bit, one MuJoCo pass over the steps instead of two)."""
+    model = probe_model(table)
+    motion, sd = record_motion_read(replay, table, threads, read=model)
+    if sd is None:  # a piece was rolled out whole: read its steps again, one by one
+        sd, state, _ = motion_sensordata(motion, model, threads)
+        return _field(model, motion, sd, state)
+    return _field(model, motion, motion.at_samples(sd), motion.at_samples(motion.after))
+
+
+def _field(model: mujoco.MjModel, motion: Motion, sd: np.ndarray, state: np.ndarray
+           ) -> AccelField:
+    """The :class:`AccelField` of the probe model's sensordata ``sd`` and states ``state``
+    (N, …) at the samples."""
     cols = [sd[:, int(model.sensor(p).adr[0]):int(model.sensor(p).adr[0]) + 3]
             for p in PROBE_SITES]
     origin = cols[0]

@@ -570,13 +570,21 @@ class Motion:
     def n(self) -> int:
         return int(self.lo.shape[0])
 
+    def at_samples(self, x: np.ndarray) -> np.ndarray:
+        """Rows (B, …) of the recorded steps at the N samples: ``(1 - w)·x[lo] + w·x[hi]``."""
+        w = self.weight[:, None]
+        lo, hi = x[self.lo], x[self.hi]
+        return np.where(w == 0.0, lo, (1.0 - w) * lo + w * hi)
 
-def _static_steps(model: mujoco.MjModel, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """State before (at rest on each pose, servo target on it) and after one step."""
+
+def _static_steps(model: mujoco.MjModel, poses: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """State before (at rest on each pose, servo target on it) and after one step, and the
+    step's sensordata."""
     state0 = step_states(model, 0.0, poses, 0.0)
-    st, _ = mujoco.rollout.rollout(model, mujoco.MjData(model), state0,
-                                   poses.reshape(-1, 1, 1), nstep=1)
-    return state0, st[:, 0]
+    st, sd = mujoco.rollout.rollout(model, mujoco.MjData(model), state0,
+                                    poses.reshape(-1, 1, 1), nstep=1)
+    return state0, st[:, 0], sd[:, 0]
 
 
 def piece_rollout(models: Sequence[mujoco.MjModel], datas: Sequence[mujoco.MjData],
@@ -604,7 +612,25 @@ def _rolled_steps(model: mujoco.MjModel, replay: Replay, piece: Piece, steps: np
 
 def record_motion(replay: Replay, table: TableEdits | None = None, threads: int = 2
                   ) -> Motion:
-    """Simulate the replayed motion once (:func:`motion_model` of ``table``'s physics).
+    """Simulate the replayed motion once (:func:`motion_model` of ``table``'s physics):
+    :func:`record_motion_read` without a model to read."""
+    return record_motion_read(replay, table, threads)[0]
+
+
+def record_motion_read(replay: Replay, table: TableEdits | None = None, threads: int = 2,
+                       read: mujoco.MjModel | None = None
+                       ) -> tuple[Motion, np.ndarray | None]:
+    """Simulate the replayed motion once (:func:`motion_model` of ``table``'s physics), and
+    read ``read`` along it in the same rollouts.
+
+    ``read``: a model of ``table``'s physics with its sensors on (sites and sensors added,
+    no mass moved: the bench's probe model): the rollouts then step it instead of
+    :func:`motion_model` — the same states bit for bit, with the sensors and collision
+    stages its steps compute — and its sensordata before each recorded step (B, nsensordata)
+    is returned beside the motion: what :func:`motion_sensordata` of ``read`` along the
+    motion computes, from the same calls, without a second rollout. None without ``read``,
+    and when a piece was rolled out whole (its steps then come from a long rollout, which
+    :func:`motion_sensordata` reads again step by step).
 
     Static poses (a static replay, or the constant pieces of a sweep) are one step at rest
     each. Of a moving piece only the steps the samples read are simulated (and the step
@@ -616,19 +642,22 @@ def record_motion(replay: Replay, table: TableEdits | None = None, threads: int 
     table MuJoCo cannot move as commanded) is rolled out whole instead.
     """
     model = motion_model(table)
+    stepped = model if read is None else read
     qcol, vcol = _hinge_columns(model)
     n = replay.n
     lo, hi, weight = np.zeros(n, dtype=int), np.zeros(n, dtype=int), np.zeros(n)
-    states, controls, afters = [], [], []
+    states, controls, afters, reads = [], [], [], []
+    whole = False
     pieces = replay.pieces or (Piece(0, n),)
     at = 0
     static_at = np.concatenate([np.arange(p.first, p.stop) for p in pieces if p.static]
                                + [np.zeros(0, dtype=int)])
     if static_at.size:
         poses, inverse = np.unique(replay.tita[static_at], return_inverse=True)
-        before, after = _static_steps(model, poses)
+        before, after, sd = _static_steps(stepped, poses)
         states.append(before)
         afters.append(after)
+        reads.append(sd)
         controls.append(poses)
         lo[static_at] = hi[static_at] = inverse
         at = poses.size
@@ -642,9 +671,11 @@ def record_motion(replay: Replay, table: TableEdits | None = None, threads: int 
     if moving:
         state0 = np.vstack([plan[1] for plan in plans])
         control = np.concatenate([plan[2] for plan in plans])
-        datas = [mujoco.MjData(model) for _ in range(max(1, min(threads, len(control) // 1000)))]
-        landed = mujoco.rollout.rollout(model, datas, state0, control.reshape(-1, 1, 1),
-                                        nstep=1)[0][:, 0]
+        datas = [mujoco.MjData(stepped)
+                 for _ in range(max(1, min(threads, len(control) // 1000)))]
+        landed, landed_sd = mujoco.rollout.rollout(stepped, datas, state0,
+                                                   control.reshape(-1, 1, 1), nstep=1)
+        landed, landed_sd = landed[:, 0], landed_sd[:, 0]
         bounds = np.cumsum([0] + [plan[0].steps.size for plan in plans])
     for k, (p, (m, before, command)) in enumerate(zip(moving, plans, strict=True)):
         after = landed[bounds[k]:bounds[k + 1]]
@@ -652,10 +683,12 @@ def record_motion(replay: Replay, table: TableEdits | None = None, threads: int 
                         p.dt * np.max(np.abs(after[:, vcol] - m.v_next))))
         if not off <= MISS_TOL:
             before, after, command = _rolled_steps(model, replay, p, m.steps)
+            whole = True  # these steps come from a long rollout of the motion model
         miss = max(miss, off)
         states.append(before)
         afters.append(after)
         controls.append(command)
+        reads.append(landed_sd[bounds[k]:bounds[k + 1]])
         steps, sl = m.steps, slice(p.first, p.stop)
         lo[sl] = at + np.searchsorted(steps, p.rows)
         between = p.weights > 0
@@ -664,8 +697,9 @@ def record_motion(replay: Replay, table: TableEdits | None = None, threads: int 
             steps, np.minimum(p.rows + 1, p.nstep - 1)[between])
         weight[sl] = p.weights
         at += steps.size
-    return Motion(np.vstack(states), np.concatenate(controls), np.vstack(afters), lo, hi,
-                  weight, miss)
+    motion = Motion(np.vstack(states), np.concatenate(controls), np.vstack(afters), lo, hi,
+                    weight, miss)
+    return motion, (None if read is None or whole else np.vstack(reads))
 
 
 def motion_sensordata(motion: Motion, model: mujoco.MjModel, threads: int = 2
@@ -683,13 +717,7 @@ def motion_sensordata(motion: Motion, model: mujoco.MjModel, threads: int = 2
                                     motion.control.reshape(-1, 1, 1), nstep=1)
     st, sd = st[:, 0], sd[:, 0]
     step_error = float(np.max(np.abs(st - motion.after))) if nb else 0.0
-    w = motion.weight[:, None]
-
-    def at_samples(x: np.ndarray) -> np.ndarray:
-        lo, hi = x[motion.lo], x[motion.hi]
-        return np.where(w == 0.0, lo, (1.0 - w) * lo + w * hi)
-
-    return at_samples(sd), at_samples(st), step_error
+    return motion.at_samples(sd), motion.at_samples(st), step_error
 
 
 def simulate(replay: Replay, table: TableEdits | None = None

@@ -27,12 +27,11 @@ import numpy as np
 # starts on its thread before the analysis side is imported (the catalog and the checks take
 # ≈ 0.3 s to import, GIL-bound; MuJoCo's rollout runs without the GIL meanwhile). The other
 # modules are imported where they are used.
-from bench.gap.readout import accel_field
+from bench.gap.readout import record_field
 from bench.gap.replay import (
     MOTION_TOL,
     Replay,
     make_replay,
-    record_motion,
     sample_torque,
     simulate,
     timing,
@@ -177,11 +176,11 @@ def _replay_and_torque(tita: np.ndarray, t: np.ndarray | None
 def _motion_run(first, base: TableEdits) -> tuple[Replay, AccelField, float]:
     """The replay (``first``: the future of :func:`_replay_and_torque`), its motion simulated
     once on ``base``'s table and read as an acceleration field
-    (:func:`bench.gap.replay.record_motion`, :func:`bench.gap.readout.accel_field`), and the
+    (:func:`bench.gap.readout.record_field`: MuJoCo's steps and the probes in one pass), and the
     seconds replay and motion took."""
     replay, _, seconds = first.result()
     clock = time.perf_counter()
-    accel = accel_field(record_motion(replay, base), base)
+    accel = record_field(replay, base)
     return replay, accel, seconds + time.perf_counter() - clock
 
 
@@ -244,7 +243,7 @@ def _nominal_gap(replay: Replay, accel: AccelField, datos: np.ndarray, noise_var
 
     The replay was simulated once (:func:`_motion_run`); the nominal readings are MuJoCo's
     sensors along it, read together with the probe accelerometers that later give any edited
-    table's readout (``accel``, :func:`bench.gap.readout.accel_field`). Runs on the worker
+    table's readout (``accel``, :func:`bench.gap.readout.record_field`). Runs on the worker
     thread: what it imports here and in :func:`_known_lattice` is imported beforehand
     (:func:`_import_nominal_gap_modules`).
     """

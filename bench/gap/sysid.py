@@ -40,16 +40,15 @@ from bench.gap.readout import (
     READOUT_TOL,
     AccelField,
     ReadoutUnsupportedError,
-    accel_field,
     readout,
     readout_error,
+    record_field,
 )
 from bench.gap.replay import (
     MOTION_TOL,
     Replay,
     accel_columns,
     initial_state,
-    record_motion,
     replay_sensordata,
 )
 from bench.model import TableEdits, edit_tilt_table, load_spec
@@ -276,7 +275,7 @@ def sysid_refine(effects: Sequence[EffectSpec], replay: Replay, datos: np.ndarra
         return _optimize(params, residual_fn, max_iters, xtol), projection
 
     if accel is None:
-        accel = accel_field(record_motion(replay, table), table)
+        accel = record_field(replay, table)
     try:
         fit, projection = solve(_readout_rollout(accel))
         ok, check = confirm_readout(accel, table_at(_split(target_effects, fit.xs)))
