@@ -36,6 +36,7 @@ from bench.gap.readout import (
     READOUT_TOL,
     ReadoutUnsupportedError,
     accel_field,
+    probe_model,
     readout,
     readout_error,
     record_field,
@@ -43,6 +44,7 @@ from bench.gap.readout import (
 from bench.gap.replay import (
     MOTION_TOL,
     hinge_inverse_fit,
+    idle_stages,
     inverse_dynamics,
     motion_sensordata,
     record_motion,
@@ -506,7 +508,14 @@ def test_the_field_recorded_with_the_motion_is_the_field_read_after_it():
             for name in ("state", "control", "after", "lo", "hi", "weight"):
                 np.testing.assert_array_equal(getattr(one.motion, name),
                                               getattr(two.motion, name))
+            # the probe model's idle stages off: the values of the model with them on
+            full = probe_model(table)
+            full.opt.disableflags &= ~idle_stages(full)
+            sd, state, _ = motion_sensordata(one.motion, full)
+            np.testing.assert_array_equal(one.sensordata, sd)
+            np.testing.assert_array_equal(one.state, state)
     assert {p.static for p in replay.pieces} == {True, False}
+    assert idle_stages(probe_model()) != 0  # something was switched off
 
 
 def test_readout_refuses_a_sensor_it_does_not_reproduce():

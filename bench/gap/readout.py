@@ -28,7 +28,13 @@ from dataclasses import dataclass, field, replace
 import mujoco
 import numpy as np
 
-from bench.gap.replay import Motion, Replay, motion_sensordata, record_motion_read
+from bench.gap.replay import (
+    Motion,
+    Replay,
+    idle_stages,
+    motion_sensordata,
+    record_motion_read,
+)
 from bench.model import TABLE_BODY, TableEdits, edit_tilt_table, load_spec, tilt_table
 
 PROBE_SITES = ("probe_o", "probe_x", "probe_y", "probe_z")
@@ -54,7 +60,8 @@ def _physics_only(table: TableEdits) -> TableEdits:
 
 def probe_model(table: TableEdits | None = None) -> mujoco.MjModel:
     """The table of ``table``'s physics (no site edits) with the probe accelerometers
-    :data:`PROBE_SITES` (identity orientation) added after its own sensors."""
+    :data:`PROBE_SITES` (identity orientation) added after its own sensors; the stages with
+    nothing to act on switched off (:func:`bench.gap.replay.idle_stages`: the same values)."""
     spec = load_spec()
     edit_tilt_table(spec, _physics_only(table or TableEdits()))
     body = spec.body(TABLE_BODY)
@@ -62,7 +69,9 @@ def probe_model(table: TableEdits | None = None) -> mujoco.MjModel:
         body.add_site(name=name, pos=pos.tolist(), quat=[1.0, 0.0, 0.0, 0.0])
         spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_ACCELEROMETER,
                         objtype=mujoco.mjtObj.mjOBJ_SITE, objname=name)
-    return spec.compile()
+    model = spec.compile()
+    model.opt.disableflags |= idle_stages(model)
+    return model
 
 
 @dataclass(frozen=True)
