@@ -192,7 +192,9 @@ def hinge_columns(a_ref: np.ndarray, levels: np.ndarray) -> np.ndarray:
     """(N, G) columns ``clip(a_ref, ±L) - a_ref`` for each L: the change a limit L makes."""
     a = np.asarray(a_ref, dtype=float)[:, None]
     lv = np.asarray(levels, dtype=float)[None, :]
-    return np.clip(a, -lv, lv) - a
+    h = np.clip(a, -lv, lv)
+    h -= a  # in place: one (N, G) array, not two (a long run's G columns are MBs)
+    return h
 
 
 def davies_logp(z: np.ndarray) -> tuple[float, float, float]:
@@ -501,7 +503,9 @@ def _flat_top_z(r: np.ndarray, a: np.ndarray, sigma: float) -> float | None:
         return None
     n = r.size
     design = np.column_stack([np.ones(n), a]) / sigma
-    _, logp = flat_top_score(r / sigma, design, hinge_columns(a, levels) / sigma)
+    hinges = hinge_columns(a, levels)
+    hinges /= sigma  # in place (N, G)
+    _, logp = flat_top_score(r / sigma, design, hinges)
     return z_from_logp(logp)
 
 
