@@ -135,8 +135,9 @@ def record_field(replay: Replay, table: TableEdits | None = None, threads: int =
     motion, sd = record_motion_read(replay, table, threads, read=model)
     if sd is None:  # a piece was rolled out whole: read its steps again, one by one
         sd, state, _ = motion_sensordata(motion, model, threads)
-        return _field(model, motion, sd, state)
-    return _field(model, motion, motion.at_samples(sd), motion.at_samples(motion.after))
+    else:
+        sd, state = motion.at_samples(sd), motion.at_samples(motion.after)
+    return _field(model, motion, sd, state)
 
 
 def _field(model: mujoco.MjModel, motion: Motion, sd: np.ndarray, state: np.ndarray
