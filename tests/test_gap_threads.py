@@ -11,7 +11,9 @@ imported when its job is queued.
 Checked in a fresh interpreter (in this one every module is imported already) with an import
 finder that records the imports made off the main thread, on a short timed sweep (its replay
 is done early, while the main thread still imports: the case that raced) and on held poses
-(a static replay). The finder sees every import of a module not yet loaded, so the check
+(a static replay), and on a sweep with a misalignment: the analysis names it, and its
+``mujoco.sysid`` refinement and the extended re-simulation then run on the worker thread beside
+the adequacy checks. The finder sees every import of a module not yet loaded, so the check
 fails whenever the worker would import anything, whichever thread got there first.
 """
 
@@ -47,20 +49,28 @@ from tests.gap_synthetic import STATED, synth
 from calib.files.course import Ensayo
 from bench.gap import run_gap
 
-th, y, t = synth(sys.argv[1], int(sys.argv[2]), np.random.default_rng(5))
+effects = json.loads(sys.argv[3])
+th, y, t = synth(sys.argv[1], int(sys.argv[2]), np.random.default_rng(5), effects)
 report = run_gap(Ensayo(th, y, t), STATED)
-print(json.dumps({"mode": report.replay.mode, "off_main": off_main}))
+print(json.dumps({"mode": report.replay.mode, "off_main": off_main,
+                  "named": [e.name for e in report.effects], "sysid": len(report.sysid)}))
 """
 
+MISALIGNED = [["misalignment", "x", {"delta": 0.02}]]
 
-@pytest.mark.parametrize(("design", "n", "mode"), [("sine", 1500, "sweep"),
-                                                   ("held", 600, "static")])
-def test_the_worker_thread_imports_nothing(design, n, mode):
+
+@pytest.mark.parametrize(("design", "n", "mode", "effects"), [
+    ("sine", 1500, "sweep", []),
+    ("held", 600, "static", []),
+    ("sine", 1500, "sweep", MISALIGNED)])
+def test_the_worker_thread_imports_nothing(design, n, mode, effects):
     env = dict(os.environ, PYTHONPATH=str(REPO), OPENBLAS_NUM_THREADS="1",
                MUJOCO_GL="disable")
-    done = subprocess.run([sys.executable, "-c", PROBE, design, str(n)], cwd=REPO, env=env,
-                          capture_output=True, text=True, timeout=300)
+    done = subprocess.run([sys.executable, "-c", PROBE, design, str(n), json.dumps(effects)],
+                          cwd=REPO, env=env, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
     got = json.loads(done.stdout.strip().splitlines()[-1])
     assert got["mode"] == mode
     assert got["off_main"] == [], got["off_main"]
+    if effects:  # the refinement ran (on the worker thread, beside the checks)
+        assert got["named"] == ["misalignment"] and got["sysid"] == 1

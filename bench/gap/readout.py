@@ -98,10 +98,12 @@ class AccelField:
     def mujoco_read(self, table: TableEdits) -> tuple[mujoco.MjModel, np.ndarray, float]:
         """The table ``table`` compiled, MuJoCo's sensordata (N, nsensordata) of it along the
         motion and the step error (:func:`bench.gap.replay.motion_sensordata`). Kept per
-        table: the sysid confirmation and the extended gap read the same one."""
+        table: the sysid confirmation and the extended gap read the same one. On one thread:
+        the gap run reads it on its worker thread beside the analysis (``bench.gap.run``),
+        whose core a second rollout thread would take (``docs/development.md``, stop 56)."""
         if table not in self._mujoco:
             model, _ = tilt_table(table)
-            sd, _, step_error = motion_sensordata(self.motion, model)
+            sd, _, step_error = motion_sensordata(self.motion, model, threads=1)
             self._mujoco.clear()  # one entry: the last table asked for
             self._mujoco[table] = (model, sd, step_error)
         return self._mujoco[table]

@@ -15,7 +15,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -47,7 +47,6 @@ if TYPE_CHECKING:
     from bench.gap.report import GapReport
     from bench.sensors import SensorErrorModel
     from calib.files.course import Ensayo
-    from calib.gap import GapAnalysis
     from calib.noise.sensor_profile import SensorProfile
 
 PathLike = str | os.PathLike
@@ -111,30 +110,24 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
         _import_nominal_gap_modules()
         job = pool.submit(_nominal_run, motion, datos, noise_var)
         alpha = FAMILY_ALPHA if family_alpha is None else float(family_alpha)
+        ahead = _Ahead(pool, job, datos, noise_var, base)
 
         with _step(progress, f"analysing {ensayo.n} samples (calib.gap)…", "analysis done"):
             analysis = analyze_gap(ensayo, noise_var, g=g, rate=rate, family_alpha=alpha,
-                                   sensor=sensor, drive_torque=lambda: first.result()[1])
-        if _needs_sysid(analysis):
-            # the refinement's import (0.1–0.2 s, GIL-bound), only when the analysis named a
-            # physical effect (the re-simulation, on the other thread, has mostly ended by now:
-            # it steps only where the samples read)
-            from bench.gap.sysid import preload_sysid
-
-            preload_sysid()
+                                   sensor=sensor, drive_torque=lambda: first.result()[1],
+                                   on_named=ahead.start)
+        named = _named(analysis.effects, analysis.reported)
+        extension = ahead.result(named)
         replay, nominal, seconds = job.result()
     if progress is not None:
         progress(f"nominal re-simulation ({replay.mode}) done in {seconds:.1f} s")
-
-    effects, table_after, sensor_after, sysid_out = _extension(
-        analysis, replay, datos, noise_var, base, nominal.accel, progress)
-    reported = [_effect_spec(r) for r in getattr(analysis, "reported", ())]
-
-    with _step(progress, "reading the extended table (MuJoCo)…",
-               "extended re-simulation") as note:
-        after = _extended_gap(replay, [*effects, *reported], table_after, sensor_after,
-                              nominal, datos, noise_var, base)
-        note(f" ({after.how})")
+    if extension is None:  # the checks withdrew a named effect: extend the final model now
+        _import_extension_modules(named)
+        extension = _extend(named, replay, datos, noise_var, base, nominal, progress)
+    elif progress is not None:
+        extension.tell(progress, " (alongside the analysis)")
+    effects, table_after, sysid_out, after = (extension.effects, extension.table_after,
+                                              extension.sysid, extension.after)
 
     report = GapReport(analysis=analysis, effects=tuple(effects), sysid=sysid_out,
                        replay=replay, tracking_error=nominal.tracking, noise_var=noise_var,
@@ -194,11 +187,11 @@ def _nominal_run(motion, datos: np.ndarray, noise_var: np.ndarray
     return replay, nominal, seconds + time.perf_counter() - clock
 
 
-def _needs_sysid(analysis: GapAnalysis) -> bool:
-    """True when the analysis named a physical effect that ``mujoco.sysid`` refines."""
+def _needs_sysid(effects: Sequence[EffectSpec]) -> bool:
+    """True when ``effects`` hold a physical effect that ``mujoco.sysid`` refines."""
     from bench.gap.sysid import SYSID_EFFECTS
 
-    return any(str(e.name) in SYSID_EFFECTS for e in analysis.effects)
+    return any(e.name in SYSID_EFFECTS for e in effects)
 
 
 def _check_inputs(noise_var: Sequence[float] | np.ndarray, report_dir: PathLike | None,
@@ -309,41 +302,148 @@ def _bench_model(effects: Sequence[EffectSpec], base: TableEdits
     return apply_to_model([e for e in effects if e.name != "gravity_mismatch"], base, sensor0)
 
 
-def _extension(analysis: GapAnalysis, replay: Replay, datos: np.ndarray,
-               noise_var: np.ndarray, base: TableEdits, accel: AccelField, progress: Progress
+def _extension(effects: Sequence[EffectSpec], reported: Sequence[EffectSpec], replay: Replay,
+               datos: np.ndarray, noise_var: np.ndarray, base: TableEdits, accel: AccelField
                ) -> tuple[list[EffectSpec], TableEdits, SensorErrorModel, dict[int, dict]]:
     """The named effects in the bench model; physical ones refined by ``mujoco.sysid``
     (each candidate read along the recorded motion ``accel``, :mod:`bench.gap.sysid`).
 
     A refinement replaces the ``calib`` estimate when it lowered the cost and has finite
     intervals (:func:`bench.gap.sysid.sysid_usable`); when sysid fails, the reason is kept in
-    its entry and the estimate stays. Effects the analysis reported but did not name (below
-    the practical threshold, :mod:`calib.gap.practical`) are in the model too, as
-    estimated (not refined, not listed among the named ones).
+    its entry and the estimate stays. Effects the analysis reported but did not name
+    (``reported``: below the practical threshold, :mod:`calib.gap.practical`) are in the
+    model too, as estimated (not refined, not listed among the named ones).
     """
     from bench.effects import EffectSpec
     from bench.gap.sysid import SYSID_EFFECTS, sysid_refine, sysid_usable
 
-    effects = [_effect_spec(e) for e in analysis.effects]
-    reported = [_effect_spec(r) for r in getattr(analysis, "reported", ())]
     table_after, sensor_after = _bench_model([*effects, *reported], base)
-    if not _needs_sysid(analysis):
-        return effects, table_after, sensor_after, {}
-    with _step(progress, "refining physical effects (mujoco.sysid)…", "sysid done"):
-        sigma2 = np.array([sensor_after.axis(a).noise_var or noise_var[k]
-                           for k, a in enumerate(AXES)])
-        try:
-            sysid_out = sysid_refine(effects, replay, datos, sigma2, table_after, sensor_after,
-                                     accel=accel)
-        except Exception as exc:  # the LS estimate stays usable; say why sysid did not run
-            sysid_out = {i: {"error": f"{type(exc).__name__}: {exc}"}
-                         for i, e in enumerate(effects) if e.name in SYSID_EFFECTS}
-        used = list(effects)
-        for i, s in sysid_out.items():
-            if "params" in s and sysid_usable(s):
-                used[i] = EffectSpec(effects[i].name, effects[i].axis, s["params"])
-        table_after, sensor_after = _bench_model([*used, *reported], base)
+    if not _needs_sysid(effects):
+        return list(effects), table_after, sensor_after, {}
+    sigma2 = np.array([sensor_after.axis(a).noise_var or noise_var[k]
+                       for k, a in enumerate(AXES)])
+    try:
+        sysid_out = sysid_refine(effects, replay, datos, sigma2, table_after, sensor_after,
+                                 accel=accel)
+    except Exception as exc:  # the LS estimate stays usable; say why sysid did not run
+        sysid_out = {i: {"error": f"{type(exc).__name__}: {exc}"}
+                     for i, e in enumerate(effects) if e.name in SYSID_EFFECTS}
+    used = list(effects)
+    for i, s in sysid_out.items():
+        if "params" in s and sysid_usable(s):
+            used[i] = EffectSpec(effects[i].name, effects[i].axis, s["params"])
+    table_after, sensor_after = _bench_model([*used, *reported], base)
     return used, table_after, sensor_after, sysid_out
+
+
+@dataclass(frozen=True)
+class _Named:
+    """The effects an analysis named and those it reported without naming them, as catalog
+    specs (:func:`_effect_spec`): what the extension of the bench model depends on."""
+
+    effects: tuple[EffectSpec, ...]
+    reported: tuple[EffectSpec, ...]
+
+
+def _named(effects: Sequence[Any], reported: Sequence[Any]) -> _Named:
+    return _Named(tuple(_effect_spec(e) for e in effects),
+                  tuple(_effect_spec(r) for r in reported))
+
+
+def _import_extension_modules(named: _Named) -> None:
+    """Import, on the calling (main) thread, what :func:`_extend` uses (the worker thread
+    never imports: :func:`run_gap`); ``mujoco.sysid`` (0.1–0.2 s, GIL-bound) only when a
+    physical effect is named."""
+    import bench.effects  # noqa: F401
+    import bench.gap.prediction  # noqa: F401
+    import bench.gap.sysid  # noqa: F401
+    import bench.sensors  # noqa: F401
+
+    if _needs_sysid(named.effects):
+        from bench.gap.sysid import preload_sysid
+
+        preload_sysid()
+
+
+@dataclass(frozen=True)
+class _Extension:
+    """The bench model extended by the named effects (:func:`_extension`) and its gap
+    (:func:`_extended_gap`), with the seconds each took (sysid's None when it did not run)."""
+
+    effects: list[EffectSpec]
+    table_after: TableEdits
+    sysid: dict[int, dict]
+    after: _Extended
+    sysid_seconds: float | None
+    extended_seconds: float
+
+    def tell(self, progress: Callable[[str], None], where: str = "") -> None:
+        """The progress lines of the two steps."""
+        if self.sysid_seconds is not None:
+            progress(f"sysid done in {self.sysid_seconds:.1f} s{where}")
+        progress(f"extended re-simulation ({self.after.how}) in "
+                 f"{self.extended_seconds:.1f} s{where}")
+
+
+def _extend(named: _Named, replay: Replay, datos: np.ndarray, noise_var: np.ndarray,
+            base: TableEdits, nominal: _Nominal, progress: Progress = None) -> _Extension:
+    """Steps 3 and 4 of the run (module docstring): the extension, physical effects refined
+    by ``mujoco.sysid``, and the extended re-simulation's gap. ``progress``: the step lines
+    as each step starts and ends (None on the worker thread: :meth:`_Extension.tell`)."""
+    sysid = _needs_sysid(named.effects)
+    if progress is not None and sysid:
+        progress("refining physical effects (mujoco.sysid)…")
+    clock = time.perf_counter()
+    used, table_after, sensor_after, sysid_out = _extension(
+        named.effects, named.reported, replay, datos, noise_var, base, nominal.accel)
+    sysid_seconds = time.perf_counter() - clock if sysid else None
+    if progress is not None:
+        if sysid_seconds is not None:
+            progress(f"sysid done in {sysid_seconds:.1f} s")
+        progress("reading the extended table (MuJoCo)…")
+    clock = time.perf_counter()
+    after = _extended_gap(replay, [*used, *named.reported], table_after, sensor_after,
+                          nominal, datos, noise_var, base)
+    done = _Extension(used, table_after, sysid_out, after, sysid_seconds,
+                      time.perf_counter() - clock)
+    if progress is not None:
+        progress(f"extended re-simulation ({after.how}) in {done.extended_seconds:.1f} s")
+    return done
+
+
+class _Ahead:
+    """The extension started on the worker thread as soon as the analysis has named its
+    effects (``analyze_gap(on_named=…)``), alongside the analysis' adequacy checks (≈ 0.4 s
+    at N = 60 000, the same time as the refinement and the extended re-simulation).
+
+    Its result is used only when the analysis ends with the same named and reported effects
+    (the checks may withdraw one: a walk that did not earn its place, a swap for a term
+    outside the catalog); otherwise the final model is extended afterwards, as it always
+    was. Either way the numbers are those of :func:`_extend` on the final effects."""
+
+    def __init__(self, pool: ThreadPoolExecutor, nominal_job: Future, datos: np.ndarray,
+                 noise_var: np.ndarray, base: TableEdits) -> None:
+        self._pool, self._nominal_job = pool, nominal_job
+        self._args = (datos, noise_var, base)
+        self._named: _Named | None = None
+        self._job: Future | None = None
+
+    def start(self, effects: Sequence[Any], reported: Sequence[Any]) -> None:
+        """``on_named`` of :func:`calib.gap.analyze_gap` (main thread): import what the
+        extension uses, then queue it behind the nominal re-simulation."""
+        self._named = _named(effects, reported)
+        _import_extension_modules(self._named)
+        self._job = self._pool.submit(self._run, self._named)
+
+    def _run(self, named: _Named) -> _Extension:
+        replay, nominal, _ = self._nominal_job.result()
+        return _extend(named, replay, *self._args, nominal)
+
+    def result(self, named: _Named) -> _Extension | None:
+        """The extension started ahead when it is that of ``named``, else None."""
+        if self._job is None or named != self._named:
+            return None
+        return self._job.result()
 
 
 @dataclass(frozen=True)

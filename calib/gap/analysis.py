@@ -65,7 +65,8 @@ from calib.stats.diagnostics import GapMeasure, Lattice, detect_lattice, gap_mea
 def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = None,
                 family_alpha: float = FAMILY_ALPHA, adequacy_alpha: float = ADEQUACY_ALPHA,
                 sensor: SensorProfile | None = None,
-                drive_torque: np.ndarray | Callable[[], np.ndarray | None] | None = None
+                drive_torque: np.ndarray | Callable[[], np.ndarray | None] | None = None,
+                on_named: Callable[[list[EffectEstimate], list[dict]], None] | None = None
                 ) -> GapAnalysis:
     """Find where the nominal model and a measured calibration run disagree, name the effect.
 
@@ -90,6 +91,12 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
         callable that returns it (or None) when asked (computed alongside): the
         drive-state checks (:mod:`calib.gap.drive_state`) then test a level and a gain that
         follow it. A quantity derived from the measured encoder, never from a truth.
+    on_named : called once, as ``on_named(effects, reported)``, when the selection has named
+        its effects (:class:`EffectEstimate` list) and the practical rule has set aside the
+        reported ones (dicts, as in ``GapAnalysis.reported``), before the adequacy checks: a
+        caller may start work that depends on them alongside (the bench refines the physical
+        ones with ``mujoco.sysid``). The checks that follow may still withdraw a named effect,
+        so the caller compares with the returned ``effects`` before using such work.
 
     Returns
     -------
@@ -138,6 +145,8 @@ def analyze_gap(ensayo: Ensayo, noise_var, g: float = G, rate: float | None = No
     rep = Reporter(ext, state, lattice)
     effects, reported = _practical(ext, rep, state,
                                    _named_effects(ext, rep, state, lattice, steps))
+    if on_named is not None:
+        on_named(list(effects), list(reported))
     before, after, resid_before, resid_after, fitted = _gaps(ext, rep, state, nominal)
     final = _final_model(ext, rep, state, gains)
     reviews = {k: review_walk(ext, state, k, rep.walk_input(k), rep.innov[k])
