@@ -231,8 +231,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{'':>7}  the replay's thread: {f['before_replay']:.2f} s before it can start "
               f"(its modules, the file) + its plan {f['plan']:.2f} s + MuJoCo steps "
               f"{f['rollout']:.2f} s = {path:.2f} s; the longer path "
-              f"({'main' if main_path >= path else 'replay'}, {max(main_path, path):.2f} s), "
-              f"then the refinement and the extended readout: the command cannot end sooner")
+              f"({'main' if main_path >= path else 'replay'}, {max(main_path, path):.2f} s): "
+              f"the command cannot end sooner (the refinement and the extended readout run "
+              f"on the replay's thread beside the analysis' checks)")
     last = rows[max(rows)]["command"]
     print(f"steps of the command at N = {max(rows)}:")
     for line in last["steps"]:

@@ -4,7 +4,8 @@
 2. the nominal re-simulation and its gap (:func:`_nominal_gap`), alongside step 1;
 3. the extension: the named effects in the bench model, physical ones refined by
    ``mujoco.sysid`` (:func:`_extension`);
-4. the extended re-simulation and its gap (:func:`_extended_gap`);
+4. the extended re-simulation and its gap (:func:`_extended_gap`); steps 3 and 4 start
+   beside step 1's adequacy checks once it has named its effects (:class:`_Ahead`);
 5. the outputs (:func:`_write_outputs`).
 
 The library never prints: progress messages go to the ``progress`` callable when one is given.
@@ -125,7 +126,7 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
         _import_extension_modules(named)
         extension = _extend(named, replay, datos, noise_var, base, nominal, progress)
     elif progress is not None:
-        extension.tell(progress, " (alongside the analysis)")
+        extension.tell(progress)
     effects, table_after, sysid_out, after = (extension.effects, extension.table_after,
                                               extension.sysid, extension.after)
 
@@ -377,12 +378,12 @@ class _Extension:
     sysid_seconds: float | None
     extended_seconds: float
 
-    def tell(self, progress: Callable[[str], None], where: str = "") -> None:
-        """The progress lines of the two steps."""
+    def tell(self, progress: Callable[[str], None]) -> None:
+        """The progress lines of the two steps, made beside the analysis' checks."""
+        progress("the extension ran beside the analysis' checks:")
         if self.sysid_seconds is not None:
-            progress(f"sysid done in {self.sysid_seconds:.1f} s{where}")
-        progress(f"extended re-simulation ({self.after.how}) in "
-                 f"{self.extended_seconds:.1f} s{where}")
+            progress(f"sysid done in {self.sysid_seconds:.1f} s")
+        progress(f"extended re-simulation ({self.after.how}) in {self.extended_seconds:.1f} s")
 
 
 def _extend(named: _Named, replay: Replay, datos: np.ndarray, noise_var: np.ndarray,
