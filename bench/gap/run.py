@@ -123,7 +123,6 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
     if progress is not None:
         progress(f"nominal re-simulation ({replay.mode}) done in {seconds:.1f} s")
     if extension is None:  # the checks withdrew a named effect: extend the final model now
-        _import_extension_modules(named)
         extension = _extend(named, replay, datos, noise_var, base, nominal, progress)
     elif progress is not None:
         extension.tell(progress)
@@ -441,8 +440,12 @@ class _Ahead:
         return _extend(named, replay, *self._args, nominal)
 
     def result(self, named: _Named) -> _Extension | None:
-        """The extension started ahead when it is that of ``named``, else None."""
-        if self._job is None or named != self._named:
+        """The extension started ahead when it is that of ``named``, else None (and the
+        job is cancelled if it has not started yet)."""
+        if self._job is None:
+            return None
+        if named != self._named:
+            self._job.cancel()
             return None
         return self._job.result()
 
