@@ -413,8 +413,9 @@ def _extend(named: _Named, replay: Replay, datos: np.ndarray, noise_var: np.ndar
 
 class _Ahead:
     """The extension started on the worker thread as soon as the analysis has named its
-    effects (``analyze_gap(on_named=…)``), alongside the analysis' adequacy checks (≈ 0.4 s
-    at N = 60 000, the same time as the refinement and the extended re-simulation).
+    effects (``analyze_gap(on_named=…)``), alongside the analysis' adequacy checks (at
+    N = 60 000 the checks take ≈ 0.5 s, the refinement and the extended re-simulation ≈ 0.3 s;
+    the extension's MuJoCo reading runs on one thread, :meth:`AccelField.mujoco_read`).
 
     Its result is used only when the analysis ends with the same named and reported effects
     (the checks may withdraw one: a walk that did not earn its place, a swap for a term
