@@ -166,3 +166,35 @@ def test_each_column_alone_is_its_own_test_and_the_joint_is_test(q):
         assert drss[j] == pytest.approx(one[0], rel=1e-9)
         assert alone[j] == pytest.approx(one[2][0], rel=1e-9)
     assert drss[2] == 0.0 and drss[0] > 0.0
+
+
+@pytest.mark.parametrize("q", [0.0, 0.05])
+def test_test_is_the_regression_of_the_whole_design(q):
+    """``AxisSpace.test`` against the whitened system refitted whole by ``numpy.linalg.lstsq``
+    (the model's columns and the block together): its ΔRSS is the drop of the RSS, and the
+    block's coefficients are those of the joint fit (Frisch–Waugh–Lovell). With a column of
+    the block in the model (the constant) and one repeated, the rank counts the new
+    directions only and the fitted part of the block is the joint fit's."""
+    space, run = _space(q)
+    th = run.tita
+    harmonics = [f(j * th) for j in (2, 3, 5, 7) for f in (np.cos, np.sin)]
+    full = np.column_stack([*harmonics, np.sin(7.3 * th)])
+    yw, hw, _, _, _ = space.ext.axis_system(0, space.st, False)
+
+    def rss(x):
+        return float(np.sum((yw - x @ np.linalg.lstsq(x, yw, rcond=None)[0]) ** 2))
+
+    zw = space.ext.whiten(space.st, full)
+    got = space.test(full)
+    coef = np.linalg.lstsq(np.column_stack([hw, zw]), yw, rcond=None)[0][hw.shape[1]:]
+    assert got[1] == full.shape[1]
+    assert got[0] == pytest.approx(rss(hw) - rss(np.column_stack([hw, zw])), rel=1e-9)
+    np.testing.assert_allclose(got[2], coef, rtol=1e-8, atol=1e-12)
+    assert got[0] > 100.0  # the 7.3 rad⁻¹ line of _space is found
+
+    deficient = np.column_stack([full, np.ones(th.size), full[:, -1]])
+    got = space.test(deficient)
+    assert got[1] == full.shape[1]
+    assert got[0] == pytest.approx(rss(hw) - rss(np.column_stack([hw, zw])), rel=1e-9)
+    fitted = space.ext.whiten(space.st, deficient) @ got[2]
+    np.testing.assert_allclose(fitted, zw @ coef, rtol=0.0, atol=1e-8 * np.abs(zw @ coef).max())
