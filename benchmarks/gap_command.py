@@ -32,12 +32,13 @@ The table gives both, the ratio command / analysis and the growth from N = 20001
 (``[gap] … in x s``, stderr) of its best run are shown below it.
 
 Targets (issue 33, item 5): the whole command at N = 60001 within 2 s on an idle 2-core
-machine, and its growth 20001 → 60001 at most 3× (linear in N); printed PASS / FAIL beside
-the ratio to the analysis alone, for wall and for CPU seconds. The machine may be shared:
-the load average is printed with the results (absolute wall times move with it, the ratios
-less so; CPU seconds — user + system of the process, both threads — are the better guide on
-a loaded machine, and on an idle 2-core machine the wall time of the two-threaded command is
-at most its CPU time).
+machine, and its growth 20001 → 60001 at most 3× (linear in N); printed PASS / FAIL for the
+wall time (the exit code), beside the ratio to the analysis alone. The CPU seconds (user +
+system of the process, both threads) are printed too, not judged: the command's second
+thread works beside the analysis (the re-simulation, then the refinement and the extended
+readout beside the analysis' checks), so on an idle 2-core machine they exceed the wall
+time. The machine may be shared: the load average is printed with the results (absolute
+wall times move with it, the ratio to the analysis timed in the same run less so).
 """
 
 from __future__ import annotations
@@ -212,8 +213,7 @@ def main(argv: list[str] | None = None) -> int:
         how = "readout" if all("readout" in m for m in c["sysid"]) else "re-simulation"
         mark = ""
         if n == 60001:
-            mark = (f"wall {'PASS' if c['wall'] <= TARGET_S else 'FAIL'}, "
-                    f"CPU {'PASS' if c['cpu'] <= TARGET_S else 'FAIL'}")
+            mark = f"wall {'PASS' if c['wall'] <= TARGET_S else 'FAIL'}"
         print(f"{n:>7}{c['wall']:>11.2f}{c['cpu']:>8.2f}{a['wall']:>12.2f}{a['cpu']:>8.2f}"
               f"{c['wall'] / a['wall']:>13.1f}×{mark:>16}  "
               f"{','.join(c['effects']) or '-'}, {how}")
@@ -243,8 +243,7 @@ def main(argv: list[str] | None = None) -> int:
         t, cpu = rows[60001]["command"]["wall"], rows[60001]["command"]["cpu"]
         ok &= t <= TARGET_S
         print(f"command at N = 60001: {t:.2f} s wall, {cpu:.2f} s CPU (target ≤ {TARGET_S:g} s "
-              f"on an idle 2-core machine): wall {'PASS' if t <= TARGET_S else 'FAIL'}, "
-              f"CPU {'PASS' if cpu <= TARGET_S else 'FAIL'}")
+              f"on an idle 2-core machine, wall): {'PASS' if t <= TARGET_S else 'FAIL'}")
     if 20001 in rows and 60001 in rows:
         g = {w: rows[60001][w]["wall"] / rows[20001][w]["wall"] for w in ("command", "analysis")}
         gc = {w: rows[60001][w]["cpu"] / rows[20001][w]["cpu"] for w in ("command", "analysis")}
