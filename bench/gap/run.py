@@ -122,10 +122,14 @@ def run_gap(ensayo: Ensayo, noise_var: Sequence[float] | np.ndarray, g: float = 
         replay, nominal, seconds = job.result()
     if progress is not None:
         progress(f"nominal re-simulation ({replay.mode}) done in {seconds:.1f} s")
+    where = "the extension ran beside the analysis' checks:"
     if extension is None:  # the checks withdrew a named effect: extend the final model now
-        extension = _extend(named, replay, datos, noise_var, base, nominal, progress)
-    elif progress is not None:
-        extension.tell(progress)
+        if progress is not None:
+            progress("extending the final model (mujoco.sysid, MuJoCo)…")
+        extension = _extend(named, replay, datos, noise_var, base, nominal)
+        where = "the final model extended:"
+    if progress is not None:
+        extension.tell(progress, where)
     effects, table_after, sysid_out, after = (extension.effects, extension.table_after,
                                               extension.sysid, extension.after)
 
@@ -379,38 +383,28 @@ class _Extension:
     sysid_seconds: float | None
     extended_seconds: float
 
-    def tell(self, progress: Callable[[str], None]) -> None:
-        """The progress lines of the two steps, made beside the analysis' checks."""
-        progress("the extension ran beside the analysis' checks:")
+    def tell(self, progress: Callable[[str], None], where: str) -> None:
+        """The progress lines of the two steps, after a line saying ``where`` they ran."""
+        progress(where)
         if self.sysid_seconds is not None:
             progress(f"sysid done in {self.sysid_seconds:.1f} s")
         progress(f"extended re-simulation ({self.after.how}) in {self.extended_seconds:.1f} s")
 
 
 def _extend(named: _Named, replay: Replay, datos: np.ndarray, noise_var: np.ndarray,
-            base: TableEdits, nominal: _Nominal, progress: Progress = None) -> _Extension:
+            base: TableEdits, nominal: _Nominal) -> _Extension:
     """Steps 3 and 4 of the run (module docstring): the extension, physical effects refined
-    by ``mujoco.sysid``, and the extended re-simulation's gap. ``progress``: the step lines
-    as each step starts and ends (None on the worker thread: :meth:`_Extension.tell`)."""
-    sysid = _needs_sysid(named.effects)
-    if progress is not None and sysid:
-        progress("refining physical effects (mujoco.sysid)…")
+    by ``mujoco.sysid``, and the extended re-simulation's gap, timed (progress lines:
+    :meth:`_Extension.tell`; this runs on the worker thread, which never prints)."""
     clock = time.perf_counter()
     used, table_after, sensor_after, sysid_out = _extension(
         named.effects, named.reported, replay, datos, noise_var, base, nominal.accel)
-    sysid_seconds = time.perf_counter() - clock if sysid else None
-    if progress is not None:
-        if sysid_seconds is not None:
-            progress(f"sysid done in {sysid_seconds:.1f} s")
-        progress("reading the extended table (MuJoCo)…")
+    sysid_seconds = time.perf_counter() - clock if _needs_sysid(named.effects) else None
     clock = time.perf_counter()
     after = _extended_gap(replay, [*used, *named.reported], table_after, sensor_after,
                           nominal, datos, noise_var, base)
-    done = _Extension(used, table_after, sysid_out, after, sysid_seconds,
+    return _Extension(used, table_after, sysid_out, after, sysid_seconds,
                       time.perf_counter() - clock)
-    if progress is not None:
-        progress(f"extended re-simulation ({after.how}) in {done.extended_seconds:.1f} s")
-    return done
 
 
 class _Ahead:
