@@ -424,3 +424,26 @@ def test_main_releases_every_lock(tmp_path, files, capsys):
     assert not atomic.holds_lock(out) and _leftovers(tmp_path) == []
     with atomic.output_lock(out):  # free for the next run
         pass
+
+
+@pytest.mark.parametrize("writes", [True, False])
+def test_a_refused_run_waits_for_the_holders_pid(tmp_path, writes):
+    """The holder writes its pid right after its ``flock``; a run refused in between reads
+    the lock file again until the pid is there (it said "pid unknown" before, once in CI),
+    and says "unknown" when it never comes."""
+    import fcntl
+    import threading
+
+    out = tmp_path / "cal.json"
+    fd = os.open(atomic._lock_path(out), os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # held, the pid not written yet
+        late = threading.Timer(0.01, os.pwrite, (fd, b"424242\n" if writes else b"", 0))
+        late.start()
+        with pytest.raises(atomic.OutputBusyError) as err:
+            with atomic.output_lock(out):
+                pass
+        late.join()
+        assert f"(pid {'424242' if writes else 'unknown'})" in str(err.value)
+    finally:
+        os.close(fd)

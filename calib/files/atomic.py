@@ -275,6 +275,23 @@ def holds_lock(target: str | os.PathLike) -> bool:
     return (os.getpid(), str(_lock_path(target))) in _HELD
 
 
+HOLDER_PID_WAIT = 0.05
+"""Seconds a refused run waits for the holder's pid in the lock file: the holder writes it
+right after taking the lock, and may not have yet."""
+
+
+def _holder_pid(fd: int) -> str:
+    """The pid the lock's holder wrote in the lock file ``fd``, read again for up to
+    :data:`HOLDER_PID_WAIT` while it is still empty (the holder between its ``flock`` and its
+    write); "unknown" after that (a full disk, or a holder that stopped there)."""
+    end = time.monotonic() + HOLDER_PID_WAIT
+    while True:
+        pid = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+        if pid or time.monotonic() >= end:
+            return pid or "unknown"
+        time.sleep(0.002)
+
+
 @contextlib.contextmanager
 def output_lock(target: str | os.PathLike) -> Iterator[Path]:
     """Hold the exclusive lock of ``target`` (``.NAME.lock`` beside it; removed on release).
@@ -298,7 +315,7 @@ def output_lock(target: str | os.PathLike) -> Iterator[Path]:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             try:
-                pid = os.pread(fd, 32, 0).decode("ascii", "replace").strip() or "unknown"
+                pid = _holder_pid(fd)
             finally:
                 os.close(fd)
             raise OutputBusyError(f"another tiltbench run is writing {target} (pid {pid}); "
